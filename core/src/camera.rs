@@ -1,0 +1,198 @@
+//! Eye-ray generation for a pinhole camera (Purcell 2002 §3.1.1, the eye-ray kernel).
+
+use core::fmt;
+
+use glam::Vec3;
+
+use crate::image::CameraRecord;
+use crate::ray::Ray;
+
+/// A pinhole camera: where it is, what it looks at, which way is up, and the image size.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    /// Eye position.
+    pub eye: Vec3,
+    /// Point looked at.
+    pub look_at: Vec3,
+    /// Up direction.
+    pub up: Vec3,
+    /// Vertical field of view, degrees, in `(0, 180)`.
+    pub vfov_deg: f32,
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+}
+
+/// Why a camera cannot produce rays.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CameraError {
+    /// Width or height is zero.
+    ZeroSize,
+    /// A coordinate or the field of view is NaN or infinite.
+    NonFinite,
+    /// The field of view is not strictly between 0 and 180 degrees.
+    BadFov,
+    /// The eye is at the point it looks at.
+    NoViewDirection,
+    /// The view direction is parallel to the up vector (or up is zero).
+    UpParallelToView,
+}
+
+impl fmt::Display for CameraError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            CameraError::ZeroSize => "image size is zero",
+            CameraError::NonFinite => "camera has a NaN or infinite value",
+            CameraError::BadFov => "field of view must be strictly between 0 and 180 degrees",
+            CameraError::NoViewDirection => "camera eye and look-at point coincide",
+            CameraError::UpParallelToView => "camera looks along its up vector",
+        })
+    }
+}
+
+impl From<&CameraRecord> for Camera {
+    fn from(r: &CameraRecord) -> Camera {
+        Camera {
+            eye: Vec3::from(r.eye),
+            look_at: Vec3::from(r.look_at),
+            up: Vec3::from(r.up),
+            vfov_deg: r.vfov_deg,
+            width: r.width,
+            height: r.height,
+        }
+    }
+}
+
+/// A validated camera with its orthonormal frame precomputed: the eye-ray kernel's
+/// constant registers.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EyeRays {
+    eye: Vec3,
+    forward: Vec3,
+    right: Vec3,
+    up: Vec3,
+    half_w: f32,
+    half_h: f32,
+    inv_w: f32,
+    inv_h: f32,
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+}
+
+impl EyeRays {
+    /// Validates the camera and derives its frame. The image's right is
+    /// `forward × up` (right-handed), so the Cornell box's red wall is on the left.
+    pub fn new(cam: &Camera) -> Result<EyeRays, CameraError> {
+        if cam.width == 0 || cam.height == 0 {
+            return Err(CameraError::ZeroSize);
+        }
+        if !(cam.eye.is_finite() && cam.look_at.is_finite() && cam.up.is_finite() && cam.vfov_deg.is_finite()) {
+            return Err(CameraError::NonFinite);
+        }
+        if !(cam.vfov_deg > 0.0 && cam.vfov_deg < 180.0) {
+            return Err(CameraError::BadFov);
+        }
+        let view = cam.look_at - cam.eye;
+        if view.length_squared() == 0.0 || !view.length_squared().is_finite() {
+            return Err(CameraError::NoViewDirection);
+        }
+        let forward = view.normalize();
+        let right = forward.cross(cam.up);
+        // Parallel within about 0.06 degrees counts as parallel: the frame would be noise.
+        if cam.up.length_squared() == 0.0 || right.length() <= 1e-3 * cam.up.length() {
+            return Err(CameraError::UpParallelToView);
+        }
+        let right = right.normalize();
+        let up = right.cross(forward);
+        let half_h = libm::tanf(cam.vfov_deg.to_radians() * 0.5);
+        let half_w = half_h * cam.width as f32 / cam.height as f32;
+        Ok(EyeRays {
+            eye: cam.eye,
+            forward,
+            right,
+            up,
+            half_w,
+            half_h,
+            inv_w: 1.0 / cam.width as f32,
+            inv_h: 1.0 / cam.height as f32,
+            width: cam.width,
+            height: cam.height,
+        })
+    }
+
+    /// The primary ray through the centre of pixel `(x, y)`, `y` growing downwards;
+    /// its direction has unit length, so `t` is a distance.
+    #[inline]
+    pub fn ray(&self, x: u32, y: u32) -> Ray {
+        let sx = ((x as f32 + 0.5) * self.inv_w) * 2.0 - 1.0;
+        let sy = 1.0 - ((y as f32 + 0.5) * self.inv_h) * 2.0;
+        let d = self.forward + self.right * (sx * self.half_w) + self.up * (sy * self.half_h);
+        Ray::new(self.eye, d.normalize())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cam() -> Camera {
+        Camera {
+            eye: Vec3::new(0.0, 0.0, -5.0),
+            look_at: Vec3::ZERO,
+            up: Vec3::Y,
+            vfov_deg: 90.0,
+            width: 4,
+            height: 2,
+        }
+    }
+
+    #[test]
+    fn centre_ray_looks_forward_and_corners_are_symmetric() {
+        let e = EyeRays::new(&Camera {
+            width: 3,
+            height: 3,
+            ..cam()
+        })
+        .unwrap();
+        let r = e.ray(1, 1);
+        assert!((r.dir - Vec3::Z).length() < 1e-6);
+        let a = e.ray(0, 0).dir;
+        let b = e.ray(2, 2).dir;
+        assert!((a.x + b.x).abs() < 1e-6 && (a.y + b.y).abs() < 1e-6);
+        // Top-left pixel looks up and to the left (+x is image-left for forward +z, up +y).
+        assert!(a.y > 0.0 && a.x > 0.0);
+    }
+
+    #[test]
+    fn rejects_impossible_cameras() {
+        assert_eq!(EyeRays::new(&Camera { width: 0, ..cam() }), Err(CameraError::ZeroSize));
+        assert_eq!(
+            EyeRays::new(&Camera { up: Vec3::Z, ..cam() }),
+            Err(CameraError::UpParallelToView)
+        );
+        assert_eq!(
+            EyeRays::new(&Camera {
+                look_at: cam().eye,
+                ..cam()
+            }),
+            Err(CameraError::NoViewDirection)
+        );
+        assert_eq!(
+            EyeRays::new(&Camera {
+                vfov_deg: 180.0,
+                ..cam()
+            }),
+            Err(CameraError::BadFov)
+        );
+        assert_eq!(
+            EyeRays::new(&Camera {
+                vfov_deg: f32::NAN,
+                ..cam()
+            }),
+            Err(CameraError::NonFinite)
+        );
+    }
+}

@@ -1,0 +1,165 @@
+//! The image header and the section table.
+
+use bytemuck::{Pod, Zeroable};
+
+/// The eight bytes every scene image starts with.
+pub const MAGIC: [u8; 8] = *b"RPSCENE\0";
+/// The format version this crate reads and writes.
+pub const FORMAT_VERSION: u32 = 1;
+
+/// Image header, 64 bytes at offset 0.
+///
+/// | offset | field |
+/// |---|---|
+/// | 0  | magic `"RPSCENE\0"` |
+/// | 8  | version |
+/// | 12 | flags (must be 0 in version 1) |
+/// | 16 | acceleration structure kind |
+/// | 20 | number of sections |
+/// | 24 | total image size in bytes |
+/// | 28 | CRC-32 of the image with this field read as zero |
+/// | 32 | scene bounds min (3 × f32) |
+/// | 44 | scene bounds max (3 × f32) |
+/// | 56 | triangle count |
+/// | 60 | vertex count |
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct Header {
+    /// [`MAGIC`].
+    pub magic: [u8; 8],
+    /// [`FORMAT_VERSION`].
+    pub version: u32,
+    /// Reserved feature flags; zero in version 1.
+    pub flags: u32,
+    /// [`AccelKind`] as a number.
+    pub accel: u32,
+    /// Entries in the section table that follows the header.
+    pub section_count: u32,
+    /// Size of the whole image in bytes.
+    pub total_size: u32,
+    /// CRC-32 of the whole image with these four bytes read as zero.
+    pub checksum: u32,
+    /// Lower corner of the box around all vertices.
+    pub bounds_min: [f32; 3],
+    /// Upper corner of the box around all vertices.
+    pub bounds_max: [f32; 3],
+    /// Number of triangles (equals the TRIANGLES section count).
+    pub triangle_count: u32,
+    /// Number of vertices (equals the POSITIONS section count).
+    pub vertex_count: u32,
+}
+const _: () = assert!(core::mem::size_of::<Header>() == 64);
+const _: () = assert!(core::mem::align_of::<Header>() == 4);
+
+/// Byte offset of [`Header::checksum`].
+pub(crate) const CHECKSUM_OFFSET: usize = 28;
+
+/// One entry of the section table, 16 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq)]
+pub struct SectionEntry {
+    /// [`SectionKind`] as a number.
+    pub kind: u32,
+    /// Byte offset from the start of the image; a multiple of 64.
+    pub offset: u32,
+    /// Size in bytes: `count × record size`.
+    pub size: u32,
+    /// Number of records.
+    pub count: u32,
+}
+const _: () = assert!(core::mem::size_of::<SectionEntry>() == 16);
+const _: () = assert!(core::mem::align_of::<SectionEntry>() == 4);
+
+/// Which acceleration structure the image holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u32)]
+pub enum AccelKind {
+    /// No structure: only brute force can trace it.
+    None = 0,
+    /// Purcell's uniform grid (sections GRID, GRID_CELLS, PRIM_LISTS).
+    Grid = 1,
+}
+
+impl AccelKind {
+    /// Decodes the header field.
+    pub fn from_u32(v: u32) -> Option<AccelKind> {
+        match v {
+            0 => Some(AccelKind::None),
+            1 => Some(AccelKind::Grid),
+            _ => None,
+        }
+    }
+}
+
+/// The kinds of section, with their record sizes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u32)]
+pub enum SectionKind {
+    /// Vertex positions, [`crate::image::Position`], 12 bytes each.
+    Positions = 1,
+    /// Triangles as three vertex indices, [`crate::image::TriangleRecord`], 12 bytes.
+    Triangles = 2,
+    /// The grid's parameters, one [`crate::image::GridRecord`], 64 bytes.
+    Grid = 3,
+    /// One `u32` per grid cell: first entry of its list in PRIM_LISTS, or null.
+    GridCells = 4,
+    /// `u32` triangle indices; each list ends with a null entry.
+    PrimLists = 5,
+    /// Per-vertex shading data, [`crate::image::ShadingVertex`], 32 bytes.
+    ShadingVertices = 6,
+    /// One `u32` material index per triangle.
+    TriangleMaterials = 7,
+    /// [`crate::image::MaterialRecord`], 64 bytes each.
+    Materials = 8,
+    /// [`crate::image::LightRecord`], 32 bytes each.
+    Lights = 9,
+    /// The default camera, one [`crate::image::CameraRecord`], 64 bytes.
+    Camera = 10,
+}
+
+impl SectionKind {
+    /// Every kind, in table order.
+    pub const ALL: [SectionKind; 10] = [
+        SectionKind::Positions,
+        SectionKind::Triangles,
+        SectionKind::Grid,
+        SectionKind::GridCells,
+        SectionKind::PrimLists,
+        SectionKind::ShadingVertices,
+        SectionKind::TriangleMaterials,
+        SectionKind::Materials,
+        SectionKind::Lights,
+        SectionKind::Camera,
+    ];
+
+    /// Decodes a section-table kind.
+    pub fn from_u32(v: u32) -> Option<SectionKind> {
+        SectionKind::ALL.iter().copied().find(|k| *k as u32 == v)
+    }
+
+    /// Size in bytes of one record of this section.
+    pub const fn record_size(self) -> u32 {
+        match self {
+            SectionKind::Positions | SectionKind::Triangles => 12,
+            SectionKind::Grid | SectionKind::Materials | SectionKind::Camera => 64,
+            SectionKind::GridCells | SectionKind::PrimLists | SectionKind::TriangleMaterials => 4,
+            SectionKind::ShadingVertices | SectionKind::Lights => 32,
+        }
+    }
+
+    /// Upper-case name used in documentation and error messages.
+    pub const fn name(self) -> &'static str {
+        match self {
+            SectionKind::Positions => "POSITIONS",
+            SectionKind::Triangles => "TRIANGLES",
+            SectionKind::Grid => "GRID",
+            SectionKind::GridCells => "GRID_CELLS",
+            SectionKind::PrimLists => "PRIM_LISTS",
+            SectionKind::ShadingVertices => "SHADING_VERTICES",
+            SectionKind::TriangleMaterials => "TRIANGLE_MATERIALS",
+            SectionKind::Materials => "MATERIALS",
+            SectionKind::Lights => "LIGHTS",
+            SectionKind::Camera => "CAMERA",
+        }
+    }
+}

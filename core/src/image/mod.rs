@@ -1,0 +1,20 @@
+//! The scene image: a versioned, little-endian binary format read in place.
+//!
+//! The byte-level format is documented for RTL engineers in `docs/scene-format.md`.
+//! Layout: a 64-byte [`Header`], a table of 16-byte [`SectionEntry`] records, then the
+//! sections, each starting on a 64-byte boundary. Every record is `#[repr(C)]` with its
+//! size and alignment asserted at compile time.
+
+mod crc32;
+mod embed;
+mod header;
+mod records;
+mod view;
+
+pub use crc32::{crc32, Crc32};
+pub use embed::Aligned64;
+pub use header::{AccelKind, Header, SectionEntry, SectionKind, FORMAT_VERSION, MAGIC};
+pub use records::{
+    CameraRecord, GridRecord, LightRecord, MaterialRecord, Position, ShadingVertex, TriangleRecord, NULL_INDEX,
+};
+pub use view::{GridView, SceneError, SceneView, IMAGE_ALIGN, SECTION_ALIGN};

@@ -1,0 +1,153 @@
+//! Fixed-layout records stored in the sections. Each states its size and why.
+
+use bytemuck::{Pod, Zeroable};
+
+/// The null value: an empty grid cell, and the terminator of a primitive list
+/// (Purcell 2002, Figure 4).
+pub const NULL_INDEX: u32 = u32::MAX;
+
+/// A vertex position, 12 bytes: the only vertex data the intersection unit reads.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct Position(pub [f32; 3]);
+const _: () = assert!(core::mem::size_of::<Position>() == 12);
+const _: () = assert!(core::mem::align_of::<Position>() == 4);
+
+/// A triangle as three indices into POSITIONS, 12 bytes (Purcell's triangle texture:
+/// triangles index vertex data). Shading data is elsewhere, indexed the same way.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq)]
+pub struct TriangleRecord(pub [u32; 3]);
+const _: () = assert!(core::mem::size_of::<TriangleRecord>() == 12);
+const _: () = assert!(core::mem::align_of::<TriangleRecord>() == 4);
+
+/// Uniform grid parameters, 64 bytes (one cache line), in four 16-byte rows.
+///
+/// Cell `(i, j, k)` covers `bounds_min + (i, j, k) * cell_size` to
+/// `bounds_min + (i+1, j+1, k+1) * cell_size`; its index in GRID_CELLS is
+/// `i + dims[0] * (j + dims[1] * k)`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct GridRecord {
+    /// Lower corner of the grid (scene bounds grown by the build margin).
+    pub bounds_min: [f32; 3],
+    /// Unused, zero.
+    pub _pad0: u32,
+    /// Upper corner of the grid.
+    pub bounds_max: [f32; 3],
+    /// Unused, zero.
+    pub _pad1: u32,
+    /// Size of one cell along each axis.
+    pub cell_size: [f32; 3],
+    /// Unused, zero.
+    pub _pad2: u32,
+    /// Cells along x, y and z.
+    pub dims: [u32; 3],
+    /// `dims[0] * dims[1] * dims[2]`.
+    pub cell_count: u32,
+}
+const _: () = assert!(core::mem::size_of::<GridRecord>() == 64);
+const _: () = assert!(core::mem::align_of::<GridRecord>() == 4);
+
+/// Per-vertex shading data, 32 bytes, indexed like POSITIONS but stored apart from it
+/// (Wald 2001: keep shading data out of the intersection unit's cache lines).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct ShadingVertex {
+    /// Shading normal; all zero when the input had none (the geometric normal is used).
+    pub normal: [f32; 3],
+    /// Texture coordinates.
+    pub uv: [f32; 2],
+    /// Vertex colour, multiplied into the material's diffuse colour (1,1,1 when absent).
+    pub color: [f32; 3],
+}
+const _: () = assert!(core::mem::size_of::<ShadingVertex>() == 32);
+const _: () = assert!(core::mem::align_of::<ShadingVertex>() == 4);
+
+/// A material, 64 bytes, from MTL: `Kd`, `Ks`/`Ns`, `Ke`, `Ni`, `d`, `illum`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct MaterialRecord {
+    /// Diffuse reflectance `Kd`.
+    pub diffuse: [f32; 3],
+    /// Specular exponent `Ns`.
+    pub shininess: f32,
+    /// Specular reflectance `Ks`.
+    pub specular: [f32; 3],
+    /// Index of refraction `Ni`.
+    pub ior: f32,
+    /// Emitted radiance `Ke`.
+    pub emission: [f32; 3],
+    /// Opacity `d` (1 = opaque).
+    pub dissolve: f32,
+    /// MTL illumination model `illum`.
+    pub illum: u32,
+    /// Diffuse texture index, or [`NULL_INDEX`].
+    pub texture: u32,
+    /// Unused, zero.
+    pub _pad: [u32; 2],
+}
+const _: () = assert!(core::mem::size_of::<MaterialRecord>() == 64);
+const _: () = assert!(core::mem::align_of::<MaterialRecord>() == 4);
+
+impl MaterialRecord {
+    /// The material used when a triangle has none: light grey, matte.
+    pub const DEFAULT: MaterialRecord = MaterialRecord {
+        diffuse: [0.8, 0.8, 0.8],
+        shininess: 0.0,
+        specular: [0.0; 3],
+        ior: 1.0,
+        emission: [0.0; 3],
+        dissolve: 1.0,
+        illum: 1,
+        texture: NULL_INDEX,
+        _pad: [0; 2],
+    };
+}
+
+/// A light, 32 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct LightRecord {
+    /// Position (point lights); unused for ambient light.
+    pub position: [f32; 3],
+    /// [`LightRecord::POINT`] or [`LightRecord::AMBIENT`].
+    pub kind: u32,
+    /// Colour times intensity.
+    pub color: [f32; 3],
+    /// Unused, zero.
+    pub _pad: u32,
+}
+const _: () = assert!(core::mem::size_of::<LightRecord>() == 32);
+const _: () = assert!(core::mem::align_of::<LightRecord>() == 4);
+
+impl LightRecord {
+    /// A point light without distance fall-off.
+    pub const POINT: u32 = 0;
+    /// Ambient light, added to every lit point.
+    pub const AMBIENT: u32 = 1;
+}
+
+/// The default pinhole camera and background, 64 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct CameraRecord {
+    /// Eye position.
+    pub eye: [f32; 3],
+    /// Vertical field of view in degrees.
+    pub vfov_deg: f32,
+    /// Point looked at.
+    pub look_at: [f32; 3],
+    /// Image width in pixels.
+    pub width: u32,
+    /// Up vector (need not be orthogonal to the view direction, must not be parallel).
+    pub up: [f32; 3],
+    /// Image height in pixels.
+    pub height: u32,
+    /// Colour of rays that hit nothing.
+    pub background: [f32; 3],
+    /// Unused, zero.
+    pub _pad: u32,
+}
+const _: () = assert!(core::mem::size_of::<CameraRecord>() == 64);
+const _: () = assert!(core::mem::align_of::<CameraRecord>() == 4);

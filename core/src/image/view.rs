@@ -1,0 +1,788 @@
+//! [`SceneView`]: the validated, zero-copy view of a scene image.
+
+use core::fmt;
+
+use bytemuck::Pod;
+use glam::Vec3;
+
+use super::crc32::Crc32;
+use super::header::{AccelKind, Header, SectionEntry, SectionKind, CHECKSUM_OFFSET, FORMAT_VERSION, MAGIC};
+use super::records::{
+    CameraRecord, GridRecord, LightRecord, MaterialRecord, Position, ShadingVertex, TriangleRecord, NULL_INDEX,
+};
+use crate::probe::{DataClass, MemoryProbe};
+
+/// Required alignment of the start of an image buffer, in bytes. Records need 4; 16
+/// leaves room for SIMD-friendly records and matches what allocators return.
+pub const IMAGE_ALIGN: usize = 16;
+/// Every section starts at a multiple of this (one cache line).
+pub const SECTION_ALIGN: u32 = 64;
+
+/// Why a byte slice is not a valid scene image. Each variant carries the values a reader
+/// needs to see what is wrong (expected and found).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SceneError {
+    /// The buffer is shorter than the header or than the size the header declares.
+    Truncated {
+        /// Bytes needed.
+        needed: usize,
+        /// Bytes present.
+        len: usize,
+    },
+    /// The buffer does not start on an [`IMAGE_ALIGN`]-byte boundary.
+    Misaligned {
+        /// Address modulo the required alignment.
+        offset: usize,
+        /// Required alignment.
+        required: usize,
+    },
+    /// The first eight bytes are not `RPSCENE\0`.
+    BadMagic,
+    /// A version this crate does not read.
+    UnsupportedVersion {
+        /// Version in the image.
+        found: u32,
+        /// Version this crate reads.
+        supported: u32,
+    },
+    /// Reserved flag bits are set.
+    UnknownFlags(u32),
+    /// The acceleration-structure kind is unknown.
+    UnknownAccel(u32),
+    /// The stored checksum does not match the bytes.
+    ChecksumMismatch {
+        /// Checksum in the header.
+        stored: u32,
+        /// Checksum of the bytes.
+        computed: u32,
+    },
+    /// The section table names a kind this version does not define.
+    UnknownSection(u32),
+    /// A section kind appears twice.
+    DuplicateSection(SectionKind),
+    /// A required section is absent.
+    MissingSection(SectionKind),
+    /// A section does not start on a 64-byte boundary.
+    SectionMisaligned {
+        /// Which section.
+        section: SectionKind,
+        /// Its offset.
+        offset: u32,
+    },
+    /// A section reaches outside the image or into the header/table.
+    SectionOutOfBounds {
+        /// Which section.
+        section: SectionKind,
+        /// Its offset.
+        offset: u32,
+        /// Its size.
+        size: u32,
+        /// Image size.
+        image_size: u32,
+    },
+    /// Two sections share bytes.
+    SectionsOverlap(SectionKind, SectionKind),
+    /// A section's byte size is not `count × record size`.
+    SectionSize {
+        /// Which section.
+        section: SectionKind,
+        /// Declared size.
+        size: u32,
+        /// Declared count.
+        count: u32,
+        /// Record size of this kind.
+        record_size: u32,
+    },
+    /// A count disagrees with another (e.g. header triangle count vs TRIANGLES).
+    CountMismatch {
+        /// Which section.
+        section: SectionKind,
+        /// Expected record count.
+        expected: u32,
+        /// Count found.
+        found: u32,
+    },
+    /// A record holds an index outside its target section.
+    IndexOutOfRange {
+        /// Section holding the bad index.
+        section: SectionKind,
+        /// Record number inside that section.
+        record: u32,
+        /// The index.
+        value: u32,
+        /// Exclusive upper limit.
+        limit: u32,
+    },
+    /// A coordinate or parameter is NaN or infinite.
+    NonFinite {
+        /// Section holding it (POSITIONS, GRID; header bounds are reported as POSITIONS).
+        section: SectionKind,
+        /// Record number.
+        record: u32,
+    },
+    /// A vertex lies outside the header's scene bounds, or the scene bounds outside the grid.
+    OutOfBounds {
+        /// Section holding it.
+        section: SectionKind,
+        /// Record number.
+        record: u32,
+    },
+    /// The grid's dimensions, cell count or cell size are impossible.
+    BadGrid,
+    /// The last primitive list is not terminated by a null entry.
+    UnterminatedList,
+}
+
+impl fmt::Display for SceneError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        use SceneError::*;
+        match *self {
+            Truncated { needed, len } => write!(f, "truncated scene image: needs {needed} bytes, has {len}"),
+            Misaligned { offset, required } => write!(
+                f,
+                "scene image buffer is misaligned: starts {offset} bytes past a {required}-byte boundary (use include_scene! or an aligned buffer)"
+            ),
+            BadMagic => write!(f, "not a raypipe scene image (bad magic)"),
+            UnsupportedVersion { found, supported } => {
+                write!(f, "unsupported scene image version {found} (this build reads version {supported})")
+            }
+            UnknownFlags(v) => write!(f, "scene image has unknown flags 0x{v:08x}"),
+            UnknownAccel(v) => write!(f, "scene image has unknown acceleration structure kind {v}"),
+            ChecksumMismatch { stored, computed } => write!(
+                f,
+                "scene image is corrupted: checksum 0x{stored:08x} stored, 0x{computed:08x} computed"
+            ),
+            UnknownSection(v) => write!(f, "scene image has unknown section kind {v}"),
+            DuplicateSection(s) => write!(f, "scene image has section {} twice", s.name()),
+            MissingSection(s) => write!(f, "scene image lacks required section {}", s.name()),
+            SectionMisaligned { section, offset } => write!(
+                f,
+                "section {} at offset {offset} is not aligned to {SECTION_ALIGN} bytes",
+                section.name()
+            ),
+            SectionOutOfBounds { section, offset, size, image_size } => write!(
+                f,
+                "section {} (offset {offset}, {size} bytes) lies outside the image ({image_size} bytes)",
+                section.name()
+            ),
+            SectionsOverlap(a, b) => write!(f, "sections {} and {} overlap", a.name(), b.name()),
+            SectionSize { section, size, count, record_size } => write!(
+                f,
+                "section {} is {size} bytes but holds {count} records of {record_size} bytes",
+                section.name()
+            ),
+            CountMismatch { section, expected, found } => write!(
+                f,
+                "section {} holds {found} records, expected {expected}",
+                section.name()
+            ),
+            IndexOutOfRange { section, record, value, limit } => write!(
+                f,
+                "section {} record {record} holds index {value}, limit is {limit}",
+                section.name()
+            ),
+            NonFinite { section, record } => {
+                write!(f, "section {} record {record} holds a NaN or infinite value", section.name())
+            }
+            OutOfBounds { section, record } => write!(
+                f,
+                "section {} record {record} lies outside the declared bounds",
+                section.name()
+            ),
+            BadGrid => write!(f, "grid dimensions, cell count or cell size are invalid"),
+            UnterminatedList => write!(f, "primitive list section does not end with a null entry"),
+        }
+    }
+}
+
+/// The uniform grid of a scene image (Purcell 2002, Figure 4).
+#[derive(Clone, Copy, Debug)]
+pub struct GridView<'a> {
+    /// Lower corner.
+    pub min: Vec3,
+    /// Upper corner.
+    pub max: Vec3,
+    /// Size of one cell.
+    pub cell_size: Vec3,
+    /// Cells per axis.
+    pub dims: [u32; 3],
+    cells: &'a [u32],
+    lists: &'a [u32],
+    cells_addr: u32,
+    lists_addr: u32,
+}
+
+impl<'a> GridView<'a> {
+    /// Number of cells.
+    pub fn cell_count(&self) -> usize {
+        self.cells.len()
+    }
+
+    /// Number of primitive-list entries, terminators included.
+    pub fn list_entry_count(&self) -> usize {
+        self.lists.len()
+    }
+
+    /// Reads cell `index`: the offset of its list in PRIM_LISTS, or [`NULL_INDEX`].
+    #[inline]
+    pub fn cell<P: MemoryProbe>(&self, index: u32, probe: &mut P) -> u32 {
+        probe.read(DataClass::Nodes, self.cells_addr.wrapping_add(index.wrapping_mul(4)), 4);
+        self.cells.get(index as usize).copied().unwrap_or(NULL_INDEX)
+    }
+
+    /// Reads primitive-list entry `pos`: a triangle index or [`NULL_INDEX`] (end of list).
+    #[inline]
+    pub fn list_entry<P: MemoryProbe>(&self, pos: u32, probe: &mut P) -> u32 {
+        probe.read(
+            DataClass::PrimLists,
+            self.lists_addr.wrapping_add(pos.wrapping_mul(4)),
+            4,
+        );
+        self.lists.get(pos as usize).copied().unwrap_or(NULL_INDEX)
+    }
+
+    /// All cells, for statistics (not an observed kernel read).
+    pub fn cells(&self) -> &'a [u32] {
+        self.cells
+    }
+}
+
+/// A validated scene image, borrowed in place. Cheap to copy.
+#[derive(Clone, Copy, Debug)]
+pub struct SceneView<'a> {
+    header: &'a Header,
+    bytes: &'a [u8],
+    positions: &'a [Position],
+    triangles: &'a [TriangleRecord],
+    grid: Option<GridView<'a>>,
+    shading: &'a [ShadingVertex],
+    tri_materials: &'a [u32],
+    materials: &'a [MaterialRecord],
+    lights: &'a [LightRecord],
+    camera: Option<&'a CameraRecord>,
+    positions_addr: u32,
+    triangles_addr: u32,
+    shading_addr: u32,
+    tri_materials_addr: u32,
+    materials_addr: u32,
+    lights_addr: u32,
+}
+
+struct Sections<'a> {
+    entries: [Option<SectionEntry>; SectionKind::ALL.len()],
+    bytes: &'a [u8],
+}
+
+impl<'a> Sections<'a> {
+    fn entry(&self, kind: SectionKind) -> Option<SectionEntry> {
+        self.entries[kind as usize - 1]
+    }
+
+    fn count(&self, kind: SectionKind) -> u32 {
+        self.entry(kind).map_or(0, |e| e.count)
+    }
+
+    fn addr(&self, kind: SectionKind) -> u32 {
+        self.entry(kind).map_or(0, |e| e.offset)
+    }
+
+    /// The records of a section, or an empty slice when it is absent.
+    fn slice<T: Pod>(&self, kind: SectionKind) -> Result<&'a [T], SceneError> {
+        let Some(e) = self.entry(kind) else { return Ok(&[]) };
+        let start = e.offset as usize;
+        let raw = self
+            .bytes
+            .get(start..start + e.size as usize)
+            .ok_or(SceneError::Truncated {
+                needed: start + e.size as usize,
+                len: self.bytes.len(),
+            })?;
+        bytemuck::try_cast_slice(raw).map_err(|_| SceneError::SectionMisaligned {
+            section: kind,
+            offset: e.offset,
+        })
+    }
+
+    fn required<T: Pod>(&self, kind: SectionKind) -> Result<&'a [T], SceneError> {
+        if self.entry(kind).is_none() {
+            return Err(SceneError::MissingSection(kind));
+        }
+        self.slice(kind)
+    }
+}
+
+fn finite3(v: [f32; 3]) -> bool {
+    v.iter().all(|c| c.is_finite())
+}
+
+impl<'a> SceneView<'a> {
+    /// Validates `bytes` once — magic, version, checksum, section bounds and alignment,
+    /// counts, every offset and index — and returns a view that kernels can use without
+    /// any further check. `bytes` may be longer than the image (e.g. a flash partition).
+    pub fn parse(bytes: &'a [u8]) -> Result<SceneView<'a>, SceneError> {
+        let head = bytes.get(..64).ok_or(SceneError::Truncated {
+            needed: 64,
+            len: bytes.len(),
+        })?;
+        let misalign = bytes.as_ptr() as usize % IMAGE_ALIGN;
+        if misalign != 0 {
+            return Err(SceneError::Misaligned {
+                offset: misalign,
+                required: IMAGE_ALIGN,
+            });
+        }
+        let header: &Header = bytemuck::try_from_bytes(head).map_err(|_| SceneError::Misaligned {
+            offset: misalign,
+            required: IMAGE_ALIGN,
+        })?;
+        if header.magic != MAGIC {
+            return Err(SceneError::BadMagic);
+        }
+        if header.version != FORMAT_VERSION {
+            return Err(SceneError::UnsupportedVersion {
+                found: header.version,
+                supported: FORMAT_VERSION,
+            });
+        }
+        let total = header.total_size as usize;
+        if bytes.len() < total || total < 64 {
+            return Err(SceneError::Truncated {
+                needed: total.max(64),
+                len: bytes.len(),
+            });
+        }
+        let bytes = &bytes[..total];
+        let mut crc = Crc32::default();
+        crc.update(&bytes[..CHECKSUM_OFFSET]);
+        crc.update(&[0; 4]);
+        crc.update(&bytes[CHECKSUM_OFFSET + 4..]);
+        let computed = crc.finish();
+        if computed != header.checksum {
+            return Err(SceneError::ChecksumMismatch {
+                stored: header.checksum,
+                computed,
+            });
+        }
+        if header.flags != 0 {
+            return Err(SceneError::UnknownFlags(header.flags));
+        }
+        let accel = AccelKind::from_u32(header.accel).ok_or(SceneError::UnknownAccel(header.accel))?;
+
+        let sections = Self::parse_table(header, bytes)?;
+        Self::from_sections(header, bytes, &sections, accel)
+    }
+
+    fn parse_table(header: &Header, bytes: &'a [u8]) -> Result<Sections<'a>, SceneError> {
+        let n = header.section_count as usize;
+        let table_end = 64 + 16 * n;
+        let table_bytes = bytes.get(64..table_end).ok_or(SceneError::Truncated {
+            needed: table_end,
+            len: bytes.len(),
+        })?;
+        let table: &[SectionEntry] = bytemuck::try_cast_slice(table_bytes).map_err(|_| SceneError::Misaligned {
+            offset: 0,
+            required: IMAGE_ALIGN,
+        })?;
+        let mut entries = [None; SectionKind::ALL.len()];
+        for e in table {
+            let kind = SectionKind::from_u32(e.kind).ok_or(SceneError::UnknownSection(e.kind))?;
+            let slot = &mut entries[kind as usize - 1];
+            if slot.is_some() {
+                return Err(SceneError::DuplicateSection(kind));
+            }
+            if e.offset % SECTION_ALIGN != 0 {
+                return Err(SceneError::SectionMisaligned {
+                    section: kind,
+                    offset: e.offset,
+                });
+            }
+            let end = e.offset as u64 + e.size as u64;
+            if (e.offset as usize) < table_end || end > bytes.len() as u64 {
+                return Err(SceneError::SectionOutOfBounds {
+                    section: kind,
+                    offset: e.offset,
+                    size: e.size,
+                    image_size: bytes.len() as u32,
+                });
+            }
+            if e.count as u64 * kind.record_size() as u64 != e.size as u64 {
+                return Err(SceneError::SectionSize {
+                    section: kind,
+                    size: e.size,
+                    count: e.count,
+                    record_size: kind.record_size(),
+                });
+            }
+            *slot = Some(*e);
+        }
+        // No two sections may share a byte.
+        for (i, a) in entries.iter().enumerate() {
+            for b in entries.iter().skip(i + 1) {
+                if let (Some(a), Some(b)) = (a, b) {
+                    let (a0, a1) = (a.offset as u64, a.offset as u64 + a.size as u64);
+                    let (b0, b1) = (b.offset as u64, b.offset as u64 + b.size as u64);
+                    if a.size > 0 && b.size > 0 && a0 < b1 && b0 < a1 {
+                        let ka = SectionKind::from_u32(a.kind).unwrap_or(SectionKind::Positions);
+                        let kb = SectionKind::from_u32(b.kind).unwrap_or(SectionKind::Positions);
+                        return Err(SceneError::SectionsOverlap(ka, kb));
+                    }
+                }
+            }
+        }
+        Ok(Sections { entries, bytes })
+    }
+
+    fn from_sections(
+        header: &'a Header,
+        bytes: &'a [u8],
+        s: &Sections<'a>,
+        accel: AccelKind,
+    ) -> Result<SceneView<'a>, SceneError> {
+        use SectionKind as K;
+        let positions: &[Position] = s.required(K::Positions)?;
+        let triangles: &[TriangleRecord] = s.required(K::Triangles)?;
+        let nv = positions.len() as u32;
+        let nt = triangles.len() as u32;
+        if header.vertex_count != nv {
+            return Err(SceneError::CountMismatch {
+                section: K::Positions,
+                expected: header.vertex_count,
+                found: nv,
+            });
+        }
+        if header.triangle_count != nt {
+            return Err(SceneError::CountMismatch {
+                section: K::Triangles,
+                expected: header.triangle_count,
+                found: nt,
+            });
+        }
+
+        // Geometry: finite, inside the declared bounds, indices in range.
+        if !finite3(header.bounds_min) || !finite3(header.bounds_max) {
+            return Err(SceneError::NonFinite {
+                section: K::Positions,
+                record: u32::MAX,
+            });
+        }
+        let (bmin, bmax) = (Vec3::from(header.bounds_min), Vec3::from(header.bounds_max));
+        if nv > 0 && !bmin.cmple(bmax).all() {
+            return Err(SceneError::OutOfBounds {
+                section: K::Positions,
+                record: u32::MAX,
+            });
+        }
+        for (i, p) in positions.iter().enumerate() {
+            if !finite3(p.0) {
+                return Err(SceneError::NonFinite {
+                    section: K::Positions,
+                    record: i as u32,
+                });
+            }
+            let v = Vec3::from(p.0);
+            if !(v.cmpge(bmin).all() && v.cmple(bmax).all()) {
+                return Err(SceneError::OutOfBounds {
+                    section: K::Positions,
+                    record: i as u32,
+                });
+            }
+        }
+        for (i, t) in triangles.iter().enumerate() {
+            if let Some(&bad) = t.0.iter().find(|&&x| x >= nv) {
+                return Err(SceneError::IndexOutOfRange {
+                    section: K::Triangles,
+                    record: i as u32,
+                    value: bad,
+                    limit: nv,
+                });
+            }
+        }
+
+        let grid = match accel {
+            AccelKind::None => None,
+            AccelKind::Grid => Some(Self::validate_grid(s, nt, bmin, bmax)?),
+        };
+
+        // Shading data: optional, but when present it must match the geometry.
+        let shading: &[ShadingVertex] = s.slice(K::ShadingVertices)?;
+        if !shading.is_empty() && shading.len() as u32 != nv {
+            return Err(SceneError::CountMismatch {
+                section: K::ShadingVertices,
+                expected: nv,
+                found: shading.len() as u32,
+            });
+        }
+        let materials: &[MaterialRecord] = s.slice(K::Materials)?;
+        let tri_materials: &[u32] = s.slice(K::TriangleMaterials)?;
+        if !tri_materials.is_empty() && tri_materials.len() as u32 != nt {
+            return Err(SceneError::CountMismatch {
+                section: K::TriangleMaterials,
+                expected: nt,
+                found: tri_materials.len() as u32,
+            });
+        }
+        let nm = materials.len() as u32;
+        for (i, &m) in tri_materials.iter().enumerate() {
+            if m >= nm {
+                return Err(SceneError::IndexOutOfRange {
+                    section: K::TriangleMaterials,
+                    record: i as u32,
+                    value: m,
+                    limit: nm,
+                });
+            }
+        }
+        let lights: &[LightRecord] = s.slice(K::Lights)?;
+        let cameras: &[CameraRecord] = s.slice(K::Camera)?;
+        if cameras.len() > 1 {
+            return Err(SceneError::CountMismatch {
+                section: K::Camera,
+                expected: 1,
+                found: cameras.len() as u32,
+            });
+        }
+
+        Ok(SceneView {
+            header,
+            bytes,
+            positions,
+            triangles,
+            grid,
+            shading,
+            tri_materials,
+            materials,
+            lights,
+            camera: cameras.first(),
+            positions_addr: s.addr(K::Positions),
+            triangles_addr: s.addr(K::Triangles),
+            shading_addr: s.addr(K::ShadingVertices),
+            tri_materials_addr: s.addr(K::TriangleMaterials),
+            materials_addr: s.addr(K::Materials),
+            lights_addr: s.addr(K::Lights),
+        })
+    }
+
+    fn validate_grid(s: &Sections<'a>, nt: u32, bmin: Vec3, bmax: Vec3) -> Result<GridView<'a>, SceneError> {
+        use SectionKind as K;
+        let rec: &[GridRecord] = s.required(K::Grid)?;
+        let rec = rec.first().ok_or(SceneError::CountMismatch {
+            section: K::Grid,
+            expected: 1,
+            found: 0,
+        })?;
+        if s.count(K::Grid) != 1 {
+            return Err(SceneError::CountMismatch {
+                section: K::Grid,
+                expected: 1,
+                found: s.count(K::Grid),
+            });
+        }
+        if !finite3(rec.bounds_min) || !finite3(rec.bounds_max) || !finite3(rec.cell_size) {
+            return Err(SceneError::NonFinite {
+                section: K::Grid,
+                record: 0,
+            });
+        }
+        let cells_expected = rec
+            .dims
+            .iter()
+            .try_fold(1u32, |acc, &d| if d == 0 { None } else { acc.checked_mul(d) });
+        let cell_count = match cells_expected {
+            Some(c) if c == rec.cell_count && c < NULL_INDEX => c,
+            _ => return Err(SceneError::BadGrid),
+        };
+        let (gmin, gmax, cs) = (
+            Vec3::from(rec.bounds_min),
+            Vec3::from(rec.bounds_max),
+            Vec3::from(rec.cell_size),
+        );
+        if !cs.cmpgt(Vec3::ZERO).all() || !gmin.cmplt(gmax).all() || rec.dims.iter().any(|&d| d > (1 << 24)) {
+            return Err(SceneError::BadGrid);
+        }
+        if !(gmin.cmple(bmin).all() && gmax.cmpge(bmax).all()) {
+            return Err(SceneError::OutOfBounds {
+                section: K::Grid,
+                record: 0,
+            });
+        }
+        let cells: &[u32] = s.required(K::GridCells)?;
+        if cells.len() as u32 != cell_count {
+            return Err(SceneError::CountMismatch {
+                section: K::GridCells,
+                expected: cell_count,
+                found: cells.len() as u32,
+            });
+        }
+        let lists: &[u32] = s.required(K::PrimLists)?;
+        let nl = lists.len() as u32;
+        for (i, &c) in cells.iter().enumerate() {
+            if c != NULL_INDEX && c >= nl {
+                return Err(SceneError::IndexOutOfRange {
+                    section: K::GridCells,
+                    record: i as u32,
+                    value: c,
+                    limit: nl,
+                });
+            }
+        }
+        // A walk from any offset ends at a null entry inside the section because the last
+        // entry is null; every other entry must name a triangle.
+        if lists.last().is_some_and(|&l| l != NULL_INDEX) {
+            return Err(SceneError::UnterminatedList);
+        }
+        for (i, &e) in lists.iter().enumerate() {
+            if e != NULL_INDEX && e >= nt {
+                return Err(SceneError::IndexOutOfRange {
+                    section: K::PrimLists,
+                    record: i as u32,
+                    value: e,
+                    limit: nt,
+                });
+            }
+        }
+        Ok(GridView {
+            min: gmin,
+            max: gmax,
+            cell_size: cs,
+            dims: rec.dims,
+            cells,
+            lists,
+            cells_addr: s.addr(K::GridCells),
+            lists_addr: s.addr(K::PrimLists),
+        })
+    }
+
+    /// The header.
+    pub fn header(&self) -> &'a Header {
+        self.header
+    }
+
+    /// The image's bytes (exactly `total_size` of them).
+    pub fn bytes(&self) -> &'a [u8] {
+        self.bytes
+    }
+
+    /// Which acceleration structure the image holds.
+    pub fn accel(&self) -> AccelKind {
+        AccelKind::from_u32(self.header.accel).unwrap_or(AccelKind::None)
+    }
+
+    /// Number of triangles.
+    pub fn triangle_count(&self) -> u32 {
+        self.triangles.len() as u32
+    }
+
+    /// Number of vertices.
+    pub fn vertex_count(&self) -> u32 {
+        self.positions.len() as u32
+    }
+
+    /// Scene bounds from the header.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        (Vec3::from(self.header.bounds_min), Vec3::from(self.header.bounds_max))
+    }
+
+    /// The uniform grid, if the image holds one.
+    pub fn grid(&self) -> Option<&GridView<'a>> {
+        self.grid.as_ref()
+    }
+
+    /// The default camera record, if the image holds one.
+    pub fn camera(&self) -> Option<&'a CameraRecord> {
+        self.camera
+    }
+
+    /// Number of lights.
+    pub fn light_count(&self) -> u32 {
+        self.lights.len() as u32
+    }
+
+    /// Reads light `index` (a default black ambient light if out of range).
+    #[inline]
+    pub fn light<P: MemoryProbe>(&self, index: u32, probe: &mut P) -> LightRecord {
+        probe.read(
+            DataClass::Shading,
+            self.lights_addr.wrapping_add(index.wrapping_mul(32)),
+            32,
+        );
+        self.lights.get(index as usize).copied().unwrap_or(LightRecord {
+            position: [0.0; 3],
+            kind: LightRecord::AMBIENT,
+            color: [0.0; 3],
+            _pad: 0,
+        })
+    }
+
+    /// The materials.
+    pub fn materials(&self) -> &'a [MaterialRecord] {
+        self.materials
+    }
+
+    /// Reads triangle `prim` and its three vertex positions (intersection data).
+    #[inline]
+    pub fn triangle<P: MemoryProbe>(&self, prim: u32, probe: &mut P) -> [Vec3; 3] {
+        probe.read(
+            DataClass::Triangles,
+            self.triangles_addr.wrapping_add(prim.wrapping_mul(12)),
+            12,
+        );
+        let idx = self.triangles.get(prim as usize).map_or([0; 3], |t| t.0);
+        idx.map(|i| self.position(i, probe))
+    }
+
+    #[inline]
+    fn position<P: MemoryProbe>(&self, index: u32, probe: &mut P) -> Vec3 {
+        probe.read(
+            DataClass::Triangles,
+            self.positions_addr.wrapping_add(index.wrapping_mul(12)),
+            12,
+        );
+        self.positions
+            .get(index as usize)
+            .map_or(Vec3::ZERO, |p| Vec3::from(p.0))
+    }
+
+    /// The vertex indices of triangle `prim` (not probed: shading re-reads them from its
+    /// own copy of the index data in hardware; here they come with the shading fetch).
+    #[inline]
+    pub fn triangle_indices(&self, prim: u32) -> [u32; 3] {
+        self.triangles.get(prim as usize).map_or([0; 3], |t| t.0)
+    }
+
+    /// Reads the shading data of vertex `index`, if the image has shading data.
+    #[inline]
+    pub fn shading_vertex<P: MemoryProbe>(&self, index: u32, probe: &mut P) -> Option<ShadingVertex> {
+        if self.shading.is_empty() {
+            return None;
+        }
+        probe.read(
+            DataClass::Shading,
+            self.shading_addr.wrapping_add(index.wrapping_mul(32)),
+            32,
+        );
+        self.shading.get(index as usize).copied()
+    }
+
+    /// Reads the material of triangle `prim` ([`MaterialRecord::DEFAULT`] if none).
+    #[inline]
+    pub fn material_of<P: MemoryProbe>(&self, prim: u32, probe: &mut P) -> MaterialRecord {
+        if self.tri_materials.is_empty() {
+            return MaterialRecord::DEFAULT;
+        }
+        probe.read(
+            DataClass::Shading,
+            self.tri_materials_addr.wrapping_add(prim.wrapping_mul(4)),
+            4,
+        );
+        let id = self.tri_materials.get(prim as usize).copied().unwrap_or(NULL_INDEX);
+        probe.read(
+            DataClass::Shading,
+            self.materials_addr.wrapping_add(id.wrapping_mul(64)),
+            64,
+        );
+        self.materials
+            .get(id as usize)
+            .copied()
+            .unwrap_or(MaterialRecord::DEFAULT)
+    }
+}

@@ -1,0 +1,54 @@
+//! # raypipe-core
+//!
+//! Fixed-layout scene image records and ray tracing kernels, `#![no_std]` and without
+//! `alloc`. Everything here reads a compiled scene image *in place* from a byte slice
+//! ([`SceneView::parse`]), validated once; after that no kernel can index out of bounds
+//! or panic.
+//!
+//! The kernels are steps over plain data (see `../shared/DESIGN.md`):
+//!
+//! * [`camera`]: pinhole eye rays and Purcell's scene-bounding-box test;
+//! * [`dda`]: the 3D-DDA of Amanatides & Woo, one voxel per step;
+//! * [`grid`]: uniform-grid traversal over Purcell's Figure 4 layout;
+//! * [`watertight`] and [`moller_trumbore`]: ray–triangle intersection;
+//! * [`brute_force`]: the reference tracer every structure must agree with;
+//! * [`shade`]: Lambert shading with one point light plus ambient.
+//!
+//! ```
+//! use raypipe_core::{SceneView, SceneError};
+//! // A buffer that is not a scene image is rejected with a typed error, never a panic.
+//! let bytes = [0u8; 8];
+//! assert!(matches!(SceneView::parse(&bytes), Err(SceneError::Truncated { .. })));
+//! ```
+#![no_std]
+#![deny(missing_docs)]
+#![deny(unsafe_code)]
+
+#[cfg(target_endian = "big")]
+compile_error!("raypipe-core reads little-endian scene images in place and needs a little-endian target");
+
+pub mod aabb;
+pub mod brute_force;
+pub mod camera;
+pub mod color;
+pub mod counters;
+pub mod dda;
+pub mod grid;
+pub mod hit;
+pub mod image;
+pub mod moller_trumbore;
+pub mod probe;
+pub mod ray;
+pub mod shade;
+pub mod triangle;
+pub mod watertight;
+
+pub use camera::{Camera, CameraError};
+pub use counters::RayCounters;
+pub use hit::Hit;
+pub use image::{SceneError, SceneView};
+pub use probe::{DataClass, MemoryProbe, NoProbe};
+pub use ray::Ray;
+pub use triangle::{Intersector, MollerTrumbore, Watertight};
+
+pub use glam::Vec3;

@@ -1,0 +1,47 @@
+//! The ray record.
+
+use glam::Vec3;
+
+/// A ray `origin + t * dir` restricted to `t_min <= t <= t_max`.
+///
+/// The direction need not be normalised; `t` is measured in units of `dir`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    /// Origin.
+    pub origin: Vec3,
+    /// Direction (not necessarily unit length, never all zero for a useful ray).
+    pub dir: Vec3,
+    /// Smallest accepted hit distance.
+    pub t_min: f32,
+    /// Largest accepted hit distance.
+    pub t_max: f32,
+}
+
+impl Ray {
+    /// A ray over `[0, +inf]`.
+    pub fn new(origin: Vec3, dir: Vec3) -> Ray {
+        Ray {
+            origin,
+            dir,
+            t_min: 0.0,
+            t_max: f32::INFINITY,
+        }
+    }
+
+    /// The point at parameter `t`.
+    #[inline]
+    pub fn at(&self, t: f32) -> Vec3 {
+        self.origin + self.dir * t
+    }
+
+    /// True when every component is finite (or `t_max` is `+inf`) and the direction is
+    /// not zero; kernels return "miss" for any other ray rather than misbehave.
+    pub fn is_valid(&self) -> bool {
+        self.origin.is_finite()
+            && self.dir.is_finite()
+            && self.dir != Vec3::ZERO
+            && !self.t_min.is_nan()
+            && !self.t_max.is_nan()
+            && self.t_min <= self.t_max
+    }
+}

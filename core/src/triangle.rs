@@ -1,0 +1,45 @@
+//! The ray–triangle intersection interface and the one place a candidate hit is accepted.
+
+use glam::Vec3;
+
+use crate::hit::{keep_closest, Hit};
+use crate::ray::Ray;
+
+pub use crate::moller_trumbore::MollerTrumbore;
+pub use crate::watertight::Watertight;
+
+/// A ray–triangle test. `prepare` computes the per-ray constants once (the watertight
+/// test's shear), `intersect` tests one triangle. The result depends only on the ray and
+/// the three vertices, so every structure that tests the same triangle gets the same bits.
+pub trait Intersector {
+    /// Per-ray constants.
+    type Prepared: Copy;
+    /// A short name for reports.
+    const NAME: &'static str;
+    /// Computes the per-ray constants.
+    fn prepare(ray: &Ray) -> Self::Prepared;
+    /// `(t, u, v)` where `u` and `v` weight the second and third vertex, or `None`.
+    /// `t` is not range-checked here; [`test_triangle`] does that.
+    fn intersect(prep: &Self::Prepared, v: &[Vec3; 3]) -> Option<(f32, f32, f32)>;
+}
+
+/// Tests triangle `prim` and keeps the hit if it lies in `[t_min, t_max]` and is closer
+/// under the `(t, prim)` order. Returns true if `best` changed.
+#[inline]
+pub fn test_triangle<I: Intersector>(
+    prep: &I::Prepared,
+    ray: &Ray,
+    verts: &[Vec3; 3],
+    prim: u32,
+    best: &mut Option<Hit>,
+) -> bool {
+    if let Some((t, u, v)) = I::intersect(prep, verts) {
+        // Written so NaN is rejected.
+        if t >= ray.t_min && t <= ray.t_max {
+            let before = *best;
+            keep_closest(best, Hit { t, u, v, prim });
+            return before != *best;
+        }
+    }
+    false
+}

@@ -1,0 +1,96 @@
+//! Watertight ray–triangle intersection: Woop, Benthin & Wald, "Watertight Ray/Triangle
+//! Intersection", JCGT 2(1), 2013. The ray is sheared so that it runs along +z through
+//! the origin; the 2D edge functions U, V, W then decide the hit with no epsilon, and a
+//! ray through a shared edge or vertex hits at least one of the triangles sharing it.
+//! When an edge function is exactly zero it is recomputed in double precision (§3.4).
+
+use glam::Vec3;
+
+use crate::ray::Ray;
+use crate::triangle::Intersector;
+
+/// The watertight test (default).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Watertight;
+
+/// Per-ray shear constants (paper, Fig. 1 lines 1–14).
+#[derive(Clone, Copy, Debug)]
+pub struct ShearedRay {
+    org: Vec3,
+    kx: usize,
+    ky: usize,
+    kz: usize,
+    sx: f32,
+    sy: f32,
+    sz: f32,
+}
+
+impl Intersector for Watertight {
+    type Prepared = ShearedRay;
+    const NAME: &'static str = "watertight";
+
+    #[inline]
+    fn prepare(ray: &Ray) -> ShearedRay {
+        let d = ray.dir;
+        let a = d.abs();
+        // kz: the dimension where the direction is largest in magnitude.
+        let kz = if a.x >= a.y && a.x >= a.z {
+            0
+        } else if a.y >= a.z {
+            1
+        } else {
+            2
+        };
+        let mut kx = (kz + 1) % 3;
+        let mut ky = (kx + 1) % 3;
+        // Swap to preserve the winding of the triangle.
+        if d[kz] < 0.0 {
+            core::mem::swap(&mut kx, &mut ky);
+        }
+        ShearedRay {
+            org: ray.origin,
+            kx,
+            ky,
+            kz,
+            sx: d[kx] / d[kz],
+            sy: d[ky] / d[kz],
+            sz: 1.0 / d[kz],
+        }
+    }
+
+    #[inline]
+    fn intersect(s: &ShearedRay, v: &[Vec3; 3]) -> Option<(f32, f32, f32)> {
+        let a = v[0] - s.org;
+        let b = v[1] - s.org;
+        let c = v[2] - s.org;
+        let (kx, ky, kz) = (s.kx, s.ky, s.kz);
+        let ax = a[kx] - s.sx * a[kz];
+        let ay = a[ky] - s.sy * a[kz];
+        let bx = b[kx] - s.sx * b[kz];
+        let by = b[ky] - s.sy * b[kz];
+        let cx = c[kx] - s.sx * c[kz];
+        let cy = c[ky] - s.sy * c[kz];
+        let mut eu = cx * by - cy * bx;
+        let mut ev = ax * cy - ay * cx;
+        let mut ew = bx * ay - by * ax;
+        if eu == 0.0 || ev == 0.0 || ew == 0.0 {
+            let (ax, ay, bx, by, cx, cy) = (ax as f64, ay as f64, bx as f64, by as f64, cx as f64, cy as f64);
+            eu = (cx * by - cy * bx) as f32;
+            ev = (ax * cy - ay * cx) as f32;
+            ew = (bx * ay - by * ax) as f32;
+        }
+        if (eu < 0.0 || ev < 0.0 || ew < 0.0) && (eu > 0.0 || ev > 0.0 || ew > 0.0) {
+            return None;
+        }
+        let det = eu + ev + ew;
+        if det == 0.0 {
+            return None;
+        }
+        let az = s.sz * a[kz];
+        let bz = s.sz * b[kz];
+        let cz = s.sz * c[kz];
+        let t_scaled = eu * az + ev * bz + ew * cz;
+        let inv = 1.0 / det;
+        Some((t_scaled * inv, ev * inv, ew * inv))
+    }
+}
