@@ -1,1 +1,23 @@
+//! # raypipe (host)
+//!
+//! The `std` side of raypipe: loading OBJ/MTL scenes, building the uniform grid, writing
+//! and reading scene images, the multithreaded tile renderer, Purcell's scene
+//! statistics, benchmarks and the `raypipe` command line. Geometry kernels are never
+//! re-implemented here: everything that touches a ray calls `raypipe-core`.
 
+pub mod aligned;
+pub mod bench;
+pub mod camera_file;
+pub mod cli;
+pub mod default_scene;
+pub mod grid_builder;
+pub mod image_writer;
+pub mod mesh;
+pub mod obj;
+pub mod output;
+pub mod progress;
+pub mod render;
+pub mod scene;
+pub mod stats;
+pub mod tracer;
+pub mod tri_box;

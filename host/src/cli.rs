@@ -1,0 +1,446 @@
+//! The `raypipe` command line: clap parses into one options struct per subcommand; every
+//! error becomes one line on stderr and a non-zero exit.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+
+use anyhow::{anyhow, bail, Result};
+use clap::{Args, Parser, Subcommand};
+use raypipe_core::image::CameraRecord;
+use raypipe_core::DataClass;
+
+use crate::bench::{self, median};
+use crate::camera_file::CameraSpec;
+use crate::grid_builder::{GridResolution, DEFAULT_CELLS_PER_TRIANGLE};
+use crate::output;
+use crate::render::{self, RenderOptions};
+use crate::scene::{self, Accel, BuildOptions, Scene};
+use crate::stats;
+use crate::tracer::IntersectorKind;
+
+/// raypipe: a ray tracing engine whose no_std kernels drive both this host renderer and
+/// a cycle-level hardware model.
+#[derive(Parser, Debug)]
+#[command(name = "raypipe", version, about, long_about = None)]
+pub struct Cli {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The subcommands.
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Compile an OBJ scene (with its MTL) into a scene image.
+    Build(BuildArgs),
+    /// Render a scene to a PNG (the built-in Cornell box when no scene is given).
+    Render(RenderArgs),
+    /// Print Purcell's scene statistics for a view: hits, voxels and triangles per ray.
+    Stats(StatsArgs),
+    /// Measure build time, image size and primary-ray throughput.
+    Bench(BenchArgs),
+}
+
+/// How to build the acceleration structure when the scene is an OBJ.
+#[derive(Args, Debug, Clone)]
+pub struct StructureArgs {
+    /// Acceleration structure.
+    #[arg(long, value_enum, default_value_t = Accel::Grid)]
+    pub accel: Accel,
+    /// Grid cells along the scene's shortest axis (Purcell used 64 for the bunny);
+    /// default: derived from the triangle count.
+    #[arg(long, value_name = "N")]
+    pub grid_min_dim: Option<u32>,
+    /// Target grid cells per triangle when --grid-min-dim is not given.
+    #[arg(long, value_name = "F", default_value_t = DEFAULT_CELLS_PER_TRIANGLE)]
+    pub grid_density: f64,
+}
+
+impl StructureArgs {
+    fn options(&self) -> BuildOptions {
+        BuildOptions {
+            accel: self.accel,
+            grid: match self.grid_min_dim {
+                Some(n) => GridResolution::MinDim(n),
+                None => GridResolution::Auto { cells_per_triangle: self.grid_density },
+            },
+        }
+    }
+}
+
+/// Camera selection: a camera file and/or individual overrides.
+#[derive(Args, Debug, Clone, Default)]
+pub struct CameraArgs {
+    /// Camera file (see fixtures/cornell_box.camera); overrides the scene's default camera.
+    #[arg(long, value_name = "FILE")]
+    pub camera: Option<PathBuf>,
+    /// Eye position, "x,y,z".
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true)]
+    pub eye: Option<[f32; 3]>,
+    /// Point to look at, "x,y,z".
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true)]
+    pub look_at: Option<[f32; 3]>,
+    /// Up vector, "x,y,z".
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true)]
+    pub up: Option<[f32; 3]>,
+    /// Vertical field of view in degrees.
+    #[arg(long, value_name = "DEG")]
+    pub fov: Option<f32>,
+    /// Image size, "WIDTHxHEIGHT".
+    #[arg(long, value_name = "WxH", value_parser = parse_size)]
+    pub size: Option<(u32, u32)>,
+}
+
+impl CameraArgs {
+    /// The scene's default camera with the file and then the flags applied.
+    pub fn resolve(&self, base: &CameraRecord) -> Result<CameraRecord> {
+        let mut spec = CameraSpec::default();
+        if let Some(path) = &self.camera {
+            spec = CameraSpec::load(path)?;
+        }
+        let flags = CameraSpec { eye: self.eye, look_at: self.look_at, up: self.up, fov: self.fov, size: self.size, background: None };
+        let cam = spec.merged(flags).apply(base);
+        let what = self.camera.as_ref().map_or("camera".to_string(), |p| p.display().to_string());
+        render::eye_rays(&cam, &what)?;
+        Ok(cam)
+    }
+}
+
+fn parse_vec3(s: &str) -> Result<[f32; 3], String> {
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|c| c.trim().parse::<f32>().map_err(|_| format!("'{c}' is not a number")))
+        .collect::<Result<_, _>>()?;
+    match v.as_slice() {
+        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok([*x, *y, *z]),
+        [_, _, _] => Err("coordinates must be finite".into()),
+        _ => Err(format!("expected x,y,z, got {} values", v.len())),
+    }
+}
+
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("expected WIDTHxHEIGHT, got '{s}'"))?;
+    let w: u32 = w.parse().map_err(|_| format!("'{w}' is not a pixel count"))?;
+    let h: u32 = h.parse().map_err(|_| format!("'{h}' is not a pixel count"))?;
+    if w == 0 || h == 0 {
+        return Err(format!("image size {w}x{h} is zero"));
+    }
+    if w as u64 * h as u64 > 1 << 28 {
+        return Err(format!("image size {w}x{h} is too large (at most 2^28 pixels)"));
+    }
+    Ok((w, h))
+}
+
+/// `raypipe build`.
+#[derive(Args, Debug)]
+pub struct BuildArgs {
+    /// The OBJ file to compile.
+    pub scene: PathBuf,
+    /// Where to write the scene image (.rpsi).
+    #[arg(short, long, value_name = "OUT")]
+    pub output: PathBuf,
+    #[command(flatten)]
+    pub structure: StructureArgs,
+    #[command(flatten)]
+    pub camera: CameraArgs,
+}
+
+/// `raypipe render`.
+#[derive(Args, Debug)]
+pub struct RenderArgs {
+    /// An OBJ file or a scene image; the built-in Cornell box when omitted.
+    pub scene: Option<PathBuf>,
+    /// Output PNG.
+    #[arg(short, long, value_name = "PNG", default_value = "raypipe.png")]
+    pub output: PathBuf,
+    #[command(flatten)]
+    pub camera: CameraArgs,
+    #[command(flatten)]
+    pub structure: StructureArgs,
+    /// Worker threads (default: all cores).
+    #[arg(long, value_name = "N")]
+    pub threads: Option<usize>,
+    /// Ray–triangle intersection test.
+    #[arg(long, value_enum, default_value_t = IntersectorKind::Watertight)]
+    pub intersector: IntersectorKind,
+}
+
+/// `raypipe stats`.
+#[derive(Args, Debug)]
+pub struct StatsArgs {
+    /// An OBJ file or a scene image; the built-in Cornell box when omitted.
+    pub scene: Option<PathBuf>,
+    #[command(flatten)]
+    pub camera: CameraArgs,
+    #[command(flatten)]
+    pub structure: StructureArgs,
+    /// Worker threads (default: all cores).
+    #[arg(long, value_name = "N")]
+    pub threads: Option<usize>,
+    /// Ray–triangle intersection test.
+    #[arg(long, value_enum, default_value_t = IntersectorKind::Watertight)]
+    pub intersector: IntersectorKind,
+}
+
+/// `raypipe bench`.
+#[derive(Args, Debug)]
+pub struct BenchArgs {
+    /// OBJ files or scene images to measure besides the built-in Cornell box.
+    pub scenes: Vec<PathBuf>,
+    /// Image size of the primary-ray frame.
+    #[arg(long, value_name = "WxH", value_parser = parse_size, default_value = "1024x1024")]
+    pub size: (u32, u32),
+    /// Timed runs per figure (the median is reported).
+    #[arg(long, default_value_t = 5)]
+    pub runs: usize,
+    /// Threads for the all-threads figure (default: all cores).
+    #[arg(long, value_name = "N")]
+    pub threads: Option<usize>,
+    /// Leave out the built-in Cornell box.
+    #[arg(long)]
+    pub no_default: bool,
+    #[command(flatten)]
+    pub structure: StructureArgs,
+    /// Ray–triangle intersection test.
+    #[arg(long, value_enum, default_value_t = IntersectorKind::Watertight)]
+    pub intersector: IntersectorKind,
+}
+
+/// Parses the process arguments, runs, and turns any error into one line on stderr.
+pub fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            let msg = format!("{e:#}").replace('\n', " ");
+            eprintln!("error: {msg}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// Runs a parsed command.
+pub fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Build(a) => cmd_build(a),
+        Command::Render(a) => cmd_render(a),
+        Command::Stats(a) => cmd_stats(a),
+        Command::Bench(a) => cmd_bench(a),
+    }
+}
+
+fn warn(scene: &Scene) {
+    if let Some(r) = &scene.report {
+        for w in &r.warnings {
+            eprintln!("warning: {w}");
+        }
+    }
+}
+
+fn fmt_bytes(b: usize) -> String {
+    if b >= 1 << 20 {
+        format!("{:.2} MiB", b as f64 / (1u64 << 20) as f64)
+    } else {
+        format!("{:.1} KiB", b as f64 / 1024.0)
+    }
+}
+
+fn cmd_build(a: BuildArgs) -> Result<()> {
+    let ext = a.scene.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    if ext == "rpsi" {
+        bail!("{}: is already a scene image; build takes an OBJ file", a.scene.display());
+    }
+    let start = Instant::now();
+    let mut scene = scene::load(Some(&a.scene), &a.structure.options())?;
+    warn(&scene);
+    let has_camera_flags = a.camera.camera.is_some()
+        || a.camera.eye.is_some()
+        || a.camera.look_at.is_some()
+        || a.camera.up.is_some()
+        || a.camera.fov.is_some()
+        || a.camera.size.is_some();
+    if has_camera_flags {
+        // Rebuild with the chosen camera as the image's default.
+        let base = *scene.view()?.camera().ok_or_else(|| anyhow!("internal error: built image lacks a camera"))?;
+        let cam = a.camera.resolve(&base)?;
+        let (mesh, notes) = crate::obj::load_obj_file(&a.scene)?;
+        let spec = CameraSpec {
+            eye: Some(cam.eye),
+            look_at: Some(cam.look_at),
+            up: Some(cam.up),
+            fov: Some(cam.vfov_deg),
+            size: Some((cam.width, cam.height)),
+            background: Some(cam.background),
+        };
+        scene = scene::build(a.scene.display().to_string(), mesh, notes.warnings, spec, &a.structure.options())?;
+    }
+    let elapsed = start.elapsed().as_secs_f64();
+    output::write_bytes(&a.output, &scene.image)?;
+    let r = scene.report.as_ref().ok_or_else(|| anyhow!("internal error: no build report"))?;
+    println!("scene        {}", a.scene.display());
+    println!("triangles    {} ({} degenerate), vertices {}", r.triangles, r.degenerate, r.vertices);
+    if a.structure.accel == Accel::Grid {
+        let [x, y, z] = r.dims;
+        println!("grid         {x} x {y} x {z} = {} cells, {} non-empty ({:.1}%)", r.cells, r.full_cells, 100.0 * r.full_cells as f64 / r.cells.max(1) as f64);
+        println!(
+            "lists        {} entries ({} triangle references, {:.2} per triangle)",
+            r.list_entries,
+            r.references,
+            r.references as f64 / r.triangles.max(1) as f64
+        );
+        println!("grid build   {:.3} s", r.grid_seconds);
+    }
+    println!("image        {} bytes ({}), {:.1} bytes/triangle", r.image_bytes, fmt_bytes(r.image_bytes), r.image_bytes as f64 / r.triangles.max(1) as f64);
+    println!("total        {elapsed:.3} s -> {}", a.output.display());
+    Ok(())
+}
+
+fn camera_for(scene: &Scene, args: &CameraArgs) -> Result<CameraRecord> {
+    let view = scene.view()?;
+    let base = match view.camera() {
+        Some(c) => *c,
+        None => {
+            let (lo, hi) = view.bounds();
+            scene::framing_camera(lo.to_array(), hi.to_array())
+        }
+    };
+    args.resolve(&base)
+}
+
+fn cmd_render(a: RenderArgs) -> Result<()> {
+    if a.threads == Some(0) {
+        bail!("--threads must be at least 1");
+    }
+    check_png_path(&a.output)?;
+    let scene = scene::load(a.scene.as_deref(), &a.structure.options())?;
+    warn(&scene);
+    let view = scene.view()?;
+    let cam = camera_for(&scene, &a.camera)?;
+    let opts = RenderOptions { threads: a.threads, intersector: a.intersector, progress: true };
+    let start = Instant::now();
+    let frame = render::render(&view, &cam, &opts)?;
+    let secs = start.elapsed().as_secs_f64();
+    output::write_png(&a.output, frame.width, frame.height, &frame.pixels)?;
+    println!(
+        "rendered {} ({} triangles) at {}x{} in {:.3} s ({:.2} Mrays/s) -> {}",
+        scene.name,
+        view.triangle_count(),
+        frame.width,
+        frame.height,
+        secs,
+        (frame.width as f64 * frame.height as f64) / secs / 1e6,
+        a.output.display()
+    );
+    Ok(())
+}
+
+fn check_png_path(p: &Path) -> Result<()> {
+    match p.extension().and_then(|e| e.to_str()) {
+        Some(e) if e.eq_ignore_ascii_case("png") => Ok(()),
+        _ => bail!("{}: output must be a .png file", p.display()),
+    }
+}
+
+fn cmd_stats(a: StatsArgs) -> Result<()> {
+    if a.threads == Some(0) {
+        bail!("--threads must be at least 1");
+    }
+    let scene = scene::load(a.scene.as_deref(), &a.structure.options())?;
+    warn(&scene);
+    let view = scene.view()?;
+    let cam = camera_for(&scene, &a.camera)?;
+    let opts = RenderOptions { threads: a.threads, intersector: a.intersector, progress: false };
+    let s = stats::gather(&view, &cam, &opts)?;
+    println!("scene                     {} ({} triangles)", scene.name, view.triangle_count());
+    match view.grid() {
+        Some(g) => println!("structure                 grid {} x {} x {}", g.dims[0], g.dims[1], g.dims[2]),
+        None => println!("structure                 none (brute force)"),
+    }
+    println!("view                      {}x{} = {} primary rays", cam.width, cam.height, s.rays);
+    println!("rays that hit             {:.2}%", 100.0 * s.hits as f64 / s.rays.max(1) as f64);
+    println!("rays missing scene bounds {:.2}%", 100.0 * s.missed_bounds as f64 / s.rays.max(1) as f64);
+    println!("voxels visited per ray    avg {:.2}, max {}", s.per_ray(s.total.voxels), s.max_voxels);
+    println!("non-empty voxels per ray  avg {:.2}", s.per_ray(s.total.full_voxels));
+    println!("triangles tested per ray  avg {:.2}, max {}", s.per_ray(s.total.tri_tests), s.max_tri_tests);
+    println!("list entries read         {} total, {:.2} per ray", s.total.list_entries, s.per_ray(s.total.list_entries));
+    let classes: Vec<String> = DataClass::ALL
+        .iter()
+        .map(|c| format!("{} {:.1}", c.name(), s.per_ray(s.bytes.bytes[*c as usize])))
+        .collect();
+    println!("bytes read per ray        {}", classes.join(", "));
+    Ok(())
+}
+
+fn cmd_bench(a: BenchArgs) -> Result<()> {
+    if a.threads == Some(0) {
+        bail!("--threads must be at least 1");
+    }
+    if a.runs == 0 {
+        bail!("--runs must be at least 1");
+    }
+    let mut targets: Vec<Option<PathBuf>> = Vec::new();
+    if !a.no_default {
+        targets.push(None);
+    }
+    targets.extend(a.scenes.iter().cloned().map(Some));
+    if targets.is_empty() {
+        bail!("nothing to measure: --no-default without scenes");
+    }
+    println!(
+        "primary rays {}x{}, trace only (eye ray + {} + {}), median of {} runs",
+        a.size.0,
+        a.size.1,
+        match a.structure.accel {
+            Accel::Grid => "grid",
+            Accel::None => "brute force",
+        },
+        match a.intersector {
+            IntersectorKind::Watertight => "watertight",
+            IntersectorKind::MollerTrumbore => "moller-trumbore",
+        },
+        a.runs
+    );
+    println!(
+        "{:<28} {:>9} {:>16} {:>9} {:>10} {:>7} {:>10} {:>10} {:>7}",
+        "scene", "tris", "grid", "build s", "image", "B/tri", "Mrays/s 1t", "Mrays/s", "threads"
+    );
+    for t in targets {
+        // Build time: median of up to three builds (one for large scenes).
+        let mut builds = Vec::new();
+        let mut scene = None;
+        for _ in 0..3 {
+            let start = Instant::now();
+            let s = scene::load(t.as_deref(), &a.structure.options())?;
+            builds.push(start.elapsed().as_secs_f64());
+            let big = s.view()?.triangle_count() > 20_000;
+            scene = Some(s);
+            if big {
+                break;
+            }
+        }
+        let scene = scene.ok_or_else(|| anyhow!("no scene"))?;
+        let view = scene.view()?;
+        let base = camera_for(&scene, &CameraArgs::default())?;
+        let cam = CameraRecord { width: a.size.0, height: a.size.1, ..base };
+        let r = bench::primary_rays(&view, &cam, a.intersector, a.runs, a.threads)?;
+        let grid = view.grid().map_or("-".to_string(), |g| format!("{}x{}x{}", g.dims[0], g.dims[1], g.dims[2]));
+        let name = t.as_ref().map_or("built-in Cornell box".to_string(), |p| {
+            p.file_name().map_or(p.display().to_string(), |f| f.to_string_lossy().into_owned())
+        });
+        println!(
+            "{:<28} {:>9} {:>16} {:>9.3} {:>10} {:>7.1} {:>10.2} {:>10.2} {:>7}",
+            name,
+            view.triangle_count(),
+            grid,
+            median(&builds),
+            fmt_bytes(view.bytes().len()),
+            view.bytes().len() as f64 / view.triangle_count().max(1) as f64,
+            r.mrays_single,
+            r.mrays_all,
+            r.threads
+        );
+        let _ = r.hits;
+    }
+    Ok(())
+}

@@ -1,0 +1,108 @@
+//! Lays out a scene image: header, section table, 64-byte-aligned sections, checksum.
+//! The inverse of `raypipe_core::SceneView::parse`; docs/scene-format.md describes the bytes.
+
+use anyhow::{bail, Result};
+use bytemuck::Pod;
+use raypipe_core::image::{
+    crc32, AccelKind, CameraRecord, Header, Position, SectionEntry, SectionKind, TriangleRecord, FORMAT_VERSION, MAGIC,
+    SECTION_ALIGN,
+};
+
+use crate::aligned::AlignedBytes;
+use crate::grid_builder::BuiltGrid;
+use crate::mesh::Mesh;
+
+/// Sections collected before layout.
+#[derive(Default)]
+pub struct ImageWriter {
+    accel: u32,
+    bounds: ([f32; 3], [f32; 3]),
+    counts: (u32, u32),
+    sections: Vec<(SectionKind, Vec<u8>, u32)>,
+}
+
+impl ImageWriter {
+    /// Starts an image for `mesh`: geometry and shading sections.
+    pub fn new(mesh: &Mesh) -> ImageWriter {
+        let mut w = ImageWriter {
+            accel: AccelKind::None as u32,
+            bounds: mesh.bounds(),
+            counts: (mesh.triangles.len() as u32, mesh.positions.len() as u32),
+            sections: Vec::new(),
+        };
+        let positions: Vec<Position> = mesh.positions.iter().map(|&p| Position(p)).collect();
+        let triangles: Vec<TriangleRecord> = mesh.triangles.iter().map(|&t| TriangleRecord(t)).collect();
+        w.add(SectionKind::Positions, &positions);
+        w.add(SectionKind::Triangles, &triangles);
+        if !mesh.shading.is_empty() {
+            w.add(SectionKind::ShadingVertices, &mesh.shading);
+        }
+        if !mesh.materials.is_empty() {
+            w.add(SectionKind::Materials, &mesh.materials);
+            w.add(SectionKind::TriangleMaterials, &mesh.tri_materials);
+        }
+        if !mesh.lights.is_empty() {
+            w.add(SectionKind::Lights, &mesh.lights);
+        }
+        w
+    }
+
+    fn add<T: Pod>(&mut self, kind: SectionKind, records: &[T]) {
+        debug_assert_eq!(std::mem::size_of::<T>() as u32, kind.record_size());
+        self.sections.push((kind, bytemuck::cast_slice(records).to_vec(), records.len() as u32));
+    }
+
+    /// Adds the uniform grid.
+    pub fn grid(&mut self, grid: &BuiltGrid) -> &mut Self {
+        self.accel = AccelKind::Grid as u32;
+        self.add(SectionKind::Grid, &[grid.record]);
+        self.add(SectionKind::GridCells, &grid.cells);
+        self.add(SectionKind::PrimLists, &grid.lists);
+        self
+    }
+
+    /// Adds the default camera.
+    pub fn camera(&mut self, camera: &CameraRecord) -> &mut Self {
+        self.add(SectionKind::Camera, &[*camera]);
+        self
+    }
+
+    /// Lays the sections out and computes the checksum.
+    pub fn finish(&self) -> Result<AlignedBytes> {
+        let align = SECTION_ALIGN as u64;
+        let table_end = 64 + 16 * self.sections.len() as u64;
+        let mut offset = table_end.div_ceil(align) * align;
+        let mut table = Vec::new();
+        for (kind, bytes, count) in &self.sections {
+            table.push(SectionEntry { kind: *kind as u32, offset: offset as u32, size: bytes.len() as u32, count: *count });
+            offset = (offset + bytes.len() as u64).div_ceil(align) * align;
+            if offset > u32::MAX as u64 {
+                bail!("scene image would exceed 4 GiB");
+            }
+        }
+        let total = offset as usize;
+        let header = Header {
+            magic: MAGIC,
+            version: FORMAT_VERSION,
+            flags: 0,
+            accel: self.accel,
+            section_count: self.sections.len() as u32,
+            total_size: total as u32,
+            checksum: 0,
+            bounds_min: self.bounds.0,
+            bounds_max: self.bounds.1,
+            triangle_count: self.counts.0,
+            vertex_count: self.counts.1,
+        };
+        let mut out = AlignedBytes::from_slice(&vec![0u8; total]);
+        out[..64].copy_from_slice(bytemuck::bytes_of(&header));
+        out[64..table_end as usize].copy_from_slice(bytemuck::cast_slice(&table));
+        for ((_, bytes, _), entry) in self.sections.iter().zip(&table) {
+            let o = entry.offset as usize;
+            out[o..o + bytes.len()].copy_from_slice(bytes);
+        }
+        let checksum = crc32(&out);
+        out[28..32].copy_from_slice(&checksum.to_le_bytes());
+        Ok(out)
+    }
+}

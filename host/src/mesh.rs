@@ -1,0 +1,81 @@
+//! The in-memory triangle mesh the builder works from, and its validation.
+
+use anyhow::{bail, Result};
+use raypipe_core::image::{LightRecord, MaterialRecord, ShadingVertex};
+
+/// A triangle mesh with shading data, in the input's face order after triangulation
+/// (triangle ids in every output refer to this order).
+#[derive(Clone, Debug, Default)]
+pub struct Mesh {
+    /// Vertex positions.
+    pub positions: Vec<[f32; 3]>,
+    /// Triangles as vertex indices.
+    pub triangles: Vec<[u32; 3]>,
+    /// Per-vertex shading data (same length as `positions`), or empty.
+    pub shading: Vec<ShadingVertex>,
+    /// Material per triangle (same length as `triangles`), or empty.
+    pub tri_materials: Vec<u32>,
+    /// Materials.
+    pub materials: Vec<MaterialRecord>,
+    /// Material names, parallel to `materials`.
+    pub material_names: Vec<String>,
+    /// Lights.
+    pub lights: Vec<LightRecord>,
+}
+
+impl Mesh {
+    /// Checks what the builder relies on; `name` is the input named in errors.
+    pub fn validate(&self, name: &str) -> Result<()> {
+        if self.triangles.is_empty() {
+            bail!("{name}: the mesh has no triangles");
+        }
+        if let Some(i) = self.positions.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
+            bail!("{name}: vertex {} has a NaN or infinite coordinate", i + 1);
+        }
+        let nv = self.positions.len() as u32;
+        if let Some(i) = self.triangles.iter().position(|t| t.iter().any(|&v| v >= nv)) {
+            bail!("{name}: triangle {i} references a vertex that does not exist");
+        }
+        if !self.shading.is_empty() && self.shading.len() != self.positions.len() {
+            bail!("{name}: shading data does not match the vertices");
+        }
+        for (i, m) in self.materials.iter().enumerate() {
+            let vals = m.diffuse.iter().chain(&m.specular).chain(&m.emission);
+            if vals.clone().any(|c| !c.is_finite() || *c < 0.0) {
+                bail!(
+                    "{name}: material '{}' has a negative, NaN or infinite colour",
+                    self.material_names.get(i).map_or("?", |s| s.as_str())
+                );
+            }
+        }
+        Ok(())
+    }
+
+    /// Number of triangles with zero area (they can never be hit; they are kept so that
+    /// triangle ids follow the input's face order).
+    pub fn degenerate_count(&self) -> usize {
+        self.triangles
+            .iter()
+            .filter(|t| {
+                let [a, b, c] = t.map(|i| glam::DVec3::from(self.positions[i as usize].map(f64::from)));
+                (b - a).cross(c - a).length_squared() == 0.0
+            })
+            .count()
+    }
+
+    /// The box around all vertices.
+    pub fn bounds(&self) -> ([f32; 3], [f32; 3]) {
+        let mut lo = [f32::INFINITY; 3];
+        let mut hi = [f32::NEG_INFINITY; 3];
+        for p in &self.positions {
+            for a in 0..3 {
+                lo[a] = lo[a].min(p[a]);
+                hi[a] = hi[a].max(p[a]);
+            }
+        }
+        if self.positions.is_empty() {
+            return ([0.0; 3], [0.0; 3]);
+        }
+        (lo, hi)
+    }
+}

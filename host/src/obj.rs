@@ -1,0 +1,171 @@
+//! OBJ/MTL loading through tobj: polygons are triangulated (fans), objects merged in file
+//! order, and vertices that share position, normal and texture coordinate are unified so
+//! that positions and shading data share one index.
+
+use std::path::Path;
+
+use anyhow::{anyhow, bail, Context, Result};
+use raypipe_core::image::{MaterialRecord, ShadingVertex, NULL_INDEX};
+
+use crate::mesh::Mesh;
+
+/// What the loader noticed but did not reject.
+#[derive(Clone, Debug, Default)]
+pub struct LoadNotes {
+    /// One-line warnings for the user.
+    pub warnings: Vec<String>,
+}
+
+fn load_options() -> tobj::LoadOptions {
+    tobj::LoadOptions { triangulate: true, single_index: true, ignore_points: true, ignore_lines: true }
+}
+
+/// Loads an OBJ file (and the MTL files it names) into a [`Mesh`].
+pub fn load_obj_file(path: &Path) -> Result<(Mesh, LoadNotes)> {
+    let name = path.display().to_string();
+    let meta = std::fs::metadata(path).map_err(|e| anyhow!("{name}: cannot read: {e}"))?;
+    if meta.is_dir() {
+        bail!("{name}: is a directory, not an OBJ file");
+    }
+    let result = tobj::load_obj(path, &load_options());
+    convert(&name, result)
+}
+
+/// Loads an OBJ from memory; `mtl` resolves material library names to their text.
+pub fn load_obj_str(name: &str, obj: &str, mtl: &dyn Fn(&Path) -> Option<String>) -> Result<(Mesh, LoadNotes)> {
+    let mut reader = std::io::BufReader::new(obj.as_bytes());
+    let result = tobj::load_obj_buf(&mut reader, &load_options(), |p| match mtl(p) {
+        Some(text) => tobj::load_mtl_buf(&mut std::io::BufReader::new(text.as_bytes())),
+        None => Err(tobj::LoadError::OpenFileFailed),
+    });
+    convert(name, result)
+}
+
+fn convert(name: &str, result: tobj::LoadResult) -> Result<(Mesh, LoadNotes)> {
+    let (models, materials) = result.map_err(|e| anyhow!("{name}: malformed OBJ: {}", describe(&e)))?;
+    let mut notes = LoadNotes::default();
+    let materials = match materials {
+        Ok(m) => m,
+        Err(tobj::LoadError::OpenFileFailed) => {
+            notes.warnings.push(format!("{name}: material library not found; using the default material"));
+            Vec::new()
+        }
+        Err(e) => bail!("{name}: malformed MTL: {}", describe(&e)),
+    };
+
+    let mut mesh = Mesh::default();
+    for m in &materials {
+        mesh.materials.push(material_record(name, m, &mut notes)?);
+        mesh.material_names.push(m.name.clone());
+    }
+    let mut default_material = None;
+    let any_normals = models.iter().any(|m| !m.mesh.normals.is_empty());
+    let any_colors = models.iter().any(|m| !m.mesh.vertex_color.is_empty());
+    let any_uv = models.iter().any(|m| !m.mesh.texcoords.is_empty());
+    let shading = any_normals || any_colors || any_uv;
+
+    for model in &models {
+        let m = &model.mesh;
+        if m.positions.len() % 3 != 0 || m.indices.len() % 3 != 0 {
+            bail!("{name}: malformed OBJ: object '{}' has incomplete data", model.name);
+        }
+        let base = mesh.positions.len() as u32;
+        let nv = m.positions.len() / 3;
+        for i in 0..nv {
+            mesh.positions.push([m.positions[3 * i], m.positions[3 * i + 1], m.positions[3 * i + 2]]);
+            if shading {
+                let get3 = |v: &Vec<f32>, d: [f32; 3]| if v.len() >= 3 * nv { [v[3 * i], v[3 * i + 1], v[3 * i + 2]] } else { d };
+                let uv = if m.texcoords.len() >= 2 * nv { [m.texcoords[2 * i], m.texcoords[2 * i + 1]] } else { [0.0; 2] };
+                mesh.shading.push(ShadingVertex {
+                    normal: get3(&m.normals, [0.0; 3]),
+                    uv,
+                    color: get3(&m.vertex_color, [1.0; 3]),
+                });
+            }
+        }
+        let material = match m.material_id {
+            Some(id) if id < mesh.materials.len() => id as u32,
+            _ => *default_material.get_or_insert_with(|| {
+                mesh.materials.push(MaterialRecord::DEFAULT);
+                mesh.material_names.push("default".into());
+                (mesh.materials.len() - 1) as u32
+            }),
+        };
+        for t in m.indices.chunks_exact(3) {
+            let tri = [t[0] + base, t[1] + base, t[2] + base];
+            if tri.iter().any(|&v| v >= base + nv as u32) {
+                bail!("{name}: malformed OBJ: a face in object '{}' references a missing vertex", model.name);
+            }
+            mesh.triangles.push(tri);
+            mesh.tri_materials.push(material);
+        }
+    }
+    mesh.validate(name)?;
+    let degenerate = mesh.degenerate_count();
+    if degenerate > 0 {
+        notes.warnings.push(format!(
+            "{name}: {degenerate} degenerate (zero-area) triangles kept; they can never be hit"
+        ));
+    }
+    Ok((mesh, notes))
+}
+
+fn material_record(file: &str, m: &tobj::Material, notes: &mut LoadNotes) -> Result<MaterialRecord> {
+    let mut r = MaterialRecord::DEFAULT;
+    if let Some(kd) = m.diffuse {
+        r.diffuse = kd;
+    }
+    if let Some(ks) = m.specular {
+        r.specular = ks;
+    }
+    r.shininess = m.shininess.unwrap_or(0.0);
+    r.ior = m.optical_density.unwrap_or(1.0);
+    r.dissolve = m.dissolve.unwrap_or(1.0);
+    r.illum = m.illumination_model.map_or(1, u32::from);
+    r.texture = NULL_INDEX;
+    if let Some(ke) = m.emissive {
+        r.emission = ke;
+    }
+    let all = r.diffuse.iter().chain(&r.specular).chain(&r.emission).chain([&r.shininess, &r.ior, &r.dissolve]);
+    if all.clone().any(|c| !c.is_finite() || *c < 0.0) {
+        bail!("{file}: material '{}' has a negative, NaN or infinite value", m.name);
+    }
+    if m.diffuse_texture.is_some() {
+        notes.warnings.push(format!(
+            "{file}: material '{}': textures are not supported yet; using its diffuse colour",
+            m.name
+        ));
+    }
+    Ok(r)
+}
+
+fn describe(e: &tobj::LoadError) -> String {
+    use tobj::LoadError::*;
+    match e {
+        OpenFileFailed => "file cannot be opened".into(),
+        ReadError => "read error".into(),
+        UnrecognizedCharacter => "unrecognized character".into(),
+        PositionParseError => "a vertex position is not three numbers".into(),
+        NormalParseError => "a normal is not three numbers".into(),
+        TexcoordParseError => "a texture coordinate is not a number pair".into(),
+        FaceParseError => "a face is not a list of vertex indices".into(),
+        MaterialParseError => "a material statement cannot be parsed".into(),
+        InvalidObjectName => "invalid object name".into(),
+        InvalidPolygon => "a face has fewer than three vertices".into(),
+        FaceVertexOutOfBounds => "a face references a vertex that does not exist".into(),
+        FaceTexCoordOutOfBounds => "a face references a texture coordinate that does not exist".into(),
+        FaceNormalOutOfBounds => "a face references a normal that does not exist".into(),
+        FaceColorOutOfBounds => "a face references a colour that does not exist".into(),
+        other => format!("{other}"),
+    }
+}
+
+/// Reads a file with the OBJ's name in errors (for `.rpsi` sniffing).
+pub fn read_head(path: &Path, n: usize) -> Result<Vec<u8>> {
+    use std::io::Read;
+    let mut f = std::fs::File::open(path).with_context(|| format!("{}: cannot open", path.display()))?;
+    let mut buf = vec![0; n];
+    let got = f.read(&mut buf).with_context(|| format!("{}: cannot read", path.display()))?;
+    buf.truncate(got);
+    Ok(buf)
+}

@@ -1,0 +1,113 @@
+//! The host runner: eye rays → traversal/intersection → shading, over image tiles on all
+//! cores. Every pixel is computed independently by the same kernels, so the image is
+//! identical for any thread count and tile order.
+
+use anyhow::{anyhow, Result};
+use glam::Vec3;
+use rayon::prelude::*;
+use raypipe_core::camera::{Camera, EyeRays};
+use raypipe_core::color::rgb8;
+use raypipe_core::image::CameraRecord;
+use raypipe_core::shade::shade;
+use raypipe_core::{Intersector, NoProbe, RayCounters, SceneView};
+
+use crate::progress;
+use crate::tracer::{trace, IntersectorKind};
+use crate::with_intersector;
+
+/// Side of the square tiles rendered as one unit of work.
+pub const TILE: u32 = 16;
+
+/// Host runner settings.
+#[derive(Clone, Copy, Debug)]
+pub struct RenderOptions {
+    /// Worker threads (`None`: all cores).
+    pub threads: Option<usize>,
+    /// Ray–triangle test.
+    pub intersector: IntersectorKind,
+    /// Show a progress bar on a terminal.
+    pub progress: bool,
+}
+
+impl Default for RenderOptions {
+    fn default() -> Self {
+        RenderOptions { threads: None, intersector: IntersectorKind::Watertight, progress: false }
+    }
+}
+
+/// An 8-bit sRGB image, rows top to bottom.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Frame {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Pixels, row-major.
+    pub pixels: Vec<[u8; 3]>,
+}
+
+/// Validates a camera record into eye-ray constants; `what` names it in errors.
+pub fn eye_rays(camera: &CameraRecord, what: &str) -> Result<EyeRays> {
+    EyeRays::new(&Camera::from(camera)).map_err(|e| anyhow!("{what}: {e}"))
+}
+
+/// Runs `f` on a pool of `threads` workers (all cores when `None`).
+pub fn in_pool<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Send) -> Result<T> {
+    let mut b = rayon::ThreadPoolBuilder::new();
+    if let Some(n) = threads {
+        b = b.num_threads(n.max(1));
+    }
+    let pool = b.build().map_err(|e| anyhow!("cannot start worker threads: {e}"))?;
+    Ok(pool.install(f))
+}
+
+/// The tiles of a `w × h` image as `(x0, y0, x1, y1)`.
+pub fn tiles(w: u32, h: u32) -> Vec<(u32, u32, u32, u32)> {
+    let mut v = Vec::new();
+    for ty in (0..h).step_by(TILE as usize) {
+        for tx in (0..w).step_by(TILE as usize) {
+            v.push((tx, ty, (tx + TILE).min(w), (ty + TILE).min(h)));
+        }
+    }
+    v
+}
+
+/// Renders the scene as the camera sees it.
+pub fn render(scene: &SceneView<'_>, camera: &CameraRecord, opts: &RenderOptions) -> Result<Frame> {
+    let eye = eye_rays(camera, "camera")?;
+    with_intersector!(opts.intersector, I => render_with::<I>(scene, &eye, Vec3::from(camera.background), opts))
+}
+
+fn render_with<I: Intersector>(scene: &SceneView<'_>, eye: &EyeRays, background: Vec3, opts: &RenderOptions) -> Result<Frame> {
+    let (w, h) = (eye.width, eye.height);
+    let tiles = tiles(w, h);
+    let bar = progress::bar(tiles.len() as u64, "render", opts.progress);
+    let done: Vec<Vec<[u8; 3]>> = in_pool(opts.threads, || {
+        tiles
+            .par_iter()
+            .map(|&(x0, y0, x1, y1)| {
+                let mut out = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
+                let mut counters = RayCounters::default();
+                for y in y0..y1 {
+                    for x in x0..x1 {
+                        let ray = eye.ray(x, y);
+                        let hit = trace::<I, _>(scene, &ray, &mut NoProbe, &mut counters);
+                        out.push(rgb8(shade(scene, &ray, hit, background, &mut NoProbe)));
+                    }
+                }
+                bar.inc(1);
+                out
+            })
+            .collect()
+    })?;
+    bar.finish_and_clear();
+    let mut pixels = vec![[0u8; 3]; (w * h) as usize];
+    for (&(x0, y0, x1, _), tile) in tiles.iter().zip(done) {
+        let tw = (x1 - x0) as usize;
+        for (row, chunk) in tile.chunks(tw).enumerate() {
+            let start = (y0 as usize + row) * w as usize + x0 as usize;
+            pixels[start..start + tw].copy_from_slice(chunk);
+        }
+    }
+    Ok(Frame { width: w, height: h, pixels })
+}

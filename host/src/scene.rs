@@ -1,0 +1,212 @@
+//! Getting a scene image from what the user named: the built-in default, an OBJ file
+//! (built in memory), or a compiled `.rpsi` image (read and validated in place).
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{anyhow, bail, Result};
+use glam::Vec3;
+use raypipe_core::image::{CameraRecord, LightRecord, MAGIC};
+use raypipe_core::SceneView;
+
+use crate::aligned::AlignedBytes;
+use crate::camera_file::CameraSpec;
+use crate::default_scene;
+use crate::grid_builder::{build_grid, GridResolution};
+use crate::image_writer::ImageWriter;
+use crate::mesh::Mesh;
+use crate::obj;
+
+/// Which acceleration structure to build.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Accel {
+    /// Purcell's uniform grid.
+    #[default]
+    Grid,
+    /// None: every ray tests every triangle (the reference).
+    None,
+}
+
+/// How to build a scene image from a mesh.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct BuildOptions {
+    /// Acceleration structure.
+    pub accel: Accel,
+    /// Grid resolution.
+    pub grid: GridResolution,
+}
+
+/// What a build produced, for `raypipe build` and `bench`.
+#[derive(Clone, Debug, Default)]
+pub struct BuildReport {
+    /// Triangles.
+    pub triangles: usize,
+    /// Vertices.
+    pub vertices: usize,
+    /// Zero-area triangles.
+    pub degenerate: usize,
+    /// Grid cells per axis (zero without a grid).
+    pub dims: [u32; 3],
+    /// Grid cells.
+    pub cells: u64,
+    /// Cells with a list.
+    pub full_cells: u64,
+    /// Triangle references in the lists.
+    pub references: u64,
+    /// List entries including terminators.
+    pub list_entries: u64,
+    /// Bytes of the image.
+    pub image_bytes: usize,
+    /// Seconds spent building the grid.
+    pub grid_seconds: f64,
+    /// Warnings to show the user.
+    pub warnings: Vec<String>,
+}
+
+/// A scene image in memory, with its name for messages.
+pub struct Scene {
+    /// What the user called it.
+    pub name: String,
+    /// The image bytes, 64-byte aligned.
+    pub image: AlignedBytes,
+    /// Present when the image was built in this run.
+    pub report: Option<BuildReport>,
+}
+
+impl Scene {
+    /// The validated view.
+    pub fn view(&self) -> Result<SceneView<'_>> {
+        SceneView::parse(&self.image).map_err(|e| anyhow!("{}: {e}", self.name))
+    }
+}
+
+/// Loads the scene the user named, or the built-in default when `path` is `None`.
+pub fn load(path: Option<&Path>, opts: &BuildOptions) -> Result<Scene> {
+    let Some(path) = path else { return load_default(opts) };
+    let name = path.display().to_string();
+    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    let is_image = match ext.as_str() {
+        "obj" => false,
+        "rpsi" => true,
+        _ => obj::read_head(path, 8)? == MAGIC,
+    };
+    if is_image {
+        let image = AlignedBytes::read_file(path).map_err(|e| anyhow!("{name}: cannot read: {e}"))?;
+        SceneView::parse(&image).map_err(|e| anyhow!("{name}: {e}"))?;
+        return Ok(Scene { name, image, report: None });
+    }
+    let (mesh, notes) = obj::load_obj_file(path)?;
+    let camera_path = sidecar_camera(path);
+    let spec = match &camera_path {
+        Some(p) => CameraSpec::load(p)?,
+        None => CameraSpec::default(),
+    };
+    build(name, mesh, notes.warnings, spec, opts)
+}
+
+/// The built-in Cornell box.
+pub fn load_default(opts: &BuildOptions) -> Result<Scene> {
+    let (mesh, notes) = obj::load_obj_str(default_scene::NAME, default_scene::OBJ, &|_| Some(default_scene::MTL.into()))?;
+    let spec = CameraSpec::parse(default_scene::NAME, default_scene::CAMERA)?;
+    build(default_scene::NAME.into(), mesh, notes.warnings, spec, opts)
+}
+
+/// `scene.camera` next to `scene.obj`, if it exists: the scene's default camera.
+fn sidecar_camera(obj: &Path) -> Option<PathBuf> {
+    let p = obj.with_extension("camera");
+    p.is_file().then_some(p)
+}
+
+/// A camera that frames the whole scene from +z (OBJ's usual front), 45° vertical view.
+pub fn framing_camera(lo: [f32; 3], hi: [f32; 3]) -> CameraRecord {
+    let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
+    let centre = (lo + hi) * 0.5;
+    let radius = ((hi - lo).length() * 0.5).max(1e-3);
+    let fov: f32 = 45.0;
+    let dist = radius / (fov.to_radians() * 0.5).sin() * 1.05;
+    CameraRecord {
+        eye: (centre + Vec3::Z * dist).to_array(),
+        vfov_deg: fov,
+        look_at: centre.to_array(),
+        width: 512,
+        up: [0.0, 1.0, 0.0],
+        height: 512,
+        background: [0.05, 0.05, 0.08],
+        _pad: 0,
+    }
+}
+
+/// Lights when the input has none of its own: a point light just inside the emissive
+/// triangles' area-weighted centre if there are emitters, else a headlight above the
+/// camera; plus a dim ambient term.
+fn default_lights(mesh: &Mesh, camera: &CameraRecord) -> Vec<LightRecord> {
+    let (lo, hi) = mesh.bounds();
+    let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
+    let centre = (lo + hi) * 0.5;
+    let mut area_sum = 0.0f64;
+    let mut weighted = glam::DVec3::ZERO;
+    let mut emission = Vec3::ZERO;
+    for (t, &m) in mesh.triangles.iter().zip(&mesh.tri_materials) {
+        let ke = Vec3::from(mesh.materials[m as usize].emission);
+        if ke.max_element() <= 0.0 {
+            continue;
+        }
+        let [a, b, c] = t.map(|i| glam::DVec3::from(mesh.positions[i as usize].map(f64::from)));
+        let area = 0.5 * (b - a).cross(c - a).length();
+        area_sum += area;
+        weighted += (a + b + c) / 3.0 * area;
+        emission = emission.max(ke);
+    }
+    let mut lights = Vec::new();
+    if area_sum > 0.0 {
+        let p = (weighted / area_sum).as_vec3();
+        // Nudge the light off the emitter, towards the middle of the scene.
+        let p = p + (centre - p).normalize_or_zero() * (hi - lo).length() * 0.01;
+        let color = emission / emission.max_element();
+        lights.push(LightRecord { position: p.to_array(), kind: LightRecord::POINT, color: color.to_array(), _pad: 0 });
+    } else {
+        let eye = Vec3::from(camera.eye);
+        let up = Vec3::from(camera.up).normalize_or_zero();
+        let p = eye + up * (eye - centre).length() * 0.25;
+        lights.push(LightRecord { position: p.to_array(), kind: LightRecord::POINT, color: [0.9; 3], _pad: 0 });
+    }
+    lights.push(LightRecord { position: [0.0; 3], kind: LightRecord::AMBIENT, color: [0.1; 3], _pad: 0 });
+    lights
+}
+
+/// Builds a scene image from a mesh.
+pub fn build(name: String, mut mesh: Mesh, warnings: Vec<String>, camera: CameraSpec, opts: &BuildOptions) -> Result<Scene> {
+    mesh.validate(&name)?;
+    let (lo, hi) = mesh.bounds();
+    let camera = camera.apply(&framing_camera(lo, hi));
+    if mesh.lights.is_empty() {
+        mesh.lights = default_lights(&mesh, &camera);
+    }
+    let mut report = BuildReport {
+        triangles: mesh.triangles.len(),
+        vertices: mesh.positions.len(),
+        degenerate: mesh.degenerate_count(),
+        warnings,
+        ..Default::default()
+    };
+    let mut writer = ImageWriter::new(&mesh);
+    writer.camera(&camera);
+    if opts.accel == Accel::Grid {
+        let start = Instant::now();
+        let grid = build_grid(&mesh, opts.grid).map_err(|e| anyhow!("{name}: {e}"))?;
+        report.grid_seconds = start.elapsed().as_secs_f64();
+        report.dims = grid.record.dims;
+        report.cells = grid.cells.len() as u64;
+        report.full_cells = grid.full_cells;
+        report.references = grid.references;
+        report.list_entries = grid.lists.len() as u64;
+        writer.grid(&grid);
+    }
+    let image = writer.finish().map_err(|e| anyhow!("{name}: {e}"))?;
+    report.image_bytes = image.len();
+    let scene = Scene { name, image, report: Some(report) };
+    if let Err(e) = scene.view() {
+        bail!("internal error: built an invalid image: {e}");
+    }
+    Ok(scene)
+}
