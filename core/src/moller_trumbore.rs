@@ -7,6 +7,9 @@ use glam::Vec3;
 use crate::ray::Ray;
 use crate::triangle::Intersector;
 
+/// Relative determinant below which a ray counts as parallel to the triangle.
+pub const PARALLEL_EPSILON: f32 = 1e-5;
+
 /// The Möller–Trumbore test.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct MollerTrumbore;
@@ -36,7 +39,12 @@ impl Intersector for MollerTrumbore {
         let e2 = v[2] - v[0];
         let p = r.dir.cross(e2);
         let det = e1.dot(p);
-        if det == 0.0 || !det.is_finite() {
+        // Scale-free parallelism test: the classic fixed epsilon, made relative. Rays this
+        // close to the plane (and near-degenerate triangles) give a `t` whose error can
+        // exceed the grid's margin, so they count as parallel; that keeps the result
+        // consistent whatever structure delivers the triangle.
+        let scale = r.dir.length() * e1.length() * e2.length();
+        if !(det.abs() > PARALLEL_EPSILON * scale) || !det.is_finite() {
             return None;
         }
         let inv = 1.0 / det;

@@ -1,0 +1,209 @@
+//! DESIGN.md's first contract for the uniform grid: for random triangle soups and rays,
+//! the grid returns exactly the brute-force hit — same triangle id, bit-identical `t`
+//! and barycentrics — and the same misses, with either intersection kernel.
+
+use raypipe_core::Vec3;
+use proptest::prelude::*;
+use raypipe::scene::Accel;
+use raypipe_core::brute_force::trace_brute_force;
+use raypipe_core::grid::trace_grid;
+use raypipe_core::{Hit, Intersector, MollerTrumbore, NoProbe, Ray, RayCounters, SceneView, Watertight};
+use raypipe_tests::build_soup;
+
+/// Coordinates: mostly from a coarse lattice (so triangles share vertices and edges, lie
+/// in common planes and on cell boundaries), sometimes arbitrary.
+fn coord() -> impl Strategy<Value = f32> {
+    prop_oneof![
+        3 => (-4i32..=4).prop_map(|i| i as f32 * 0.5),
+        1 => -2.0f32..2.0,
+    ]
+}
+
+fn point() -> impl Strategy<Value = [f32; 3]> {
+    [coord(), coord(), coord()]
+}
+
+#[derive(Clone, Debug)]
+struct Soup {
+    positions: Vec<[f32; 3]>,
+    triangles: Vec<[u32; 3]>,
+    flat_axis: Option<usize>,
+}
+
+fn soup() -> impl Strategy<Value = Soup> {
+    (
+        prop::collection::vec(point(), 3..24),
+        prop::collection::vec((any::<prop::sample::Index>(), any::<prop::sample::Index>(), any::<prop::sample::Index>()), 1..40),
+        prop::option::weighted(0.15, 0usize..3),
+        0u8..4,
+    )
+        .prop_map(|(mut positions, picks, flat_axis, dup)| {
+            if let Some(a) = flat_axis {
+                // A flat scene: bounds zero-thick on one axis.
+                for p in &mut positions {
+                    p[a] = 0.25;
+                }
+            }
+            let n = positions.len();
+            let mut triangles: Vec<[u32; 3]> =
+                picks.iter().map(|(a, b, c)| [a.index(n) as u32, b.index(n) as u32, c.index(n) as u32]).collect();
+            // Duplicated triangles (same and reversed winding).
+            for i in 0..dup as usize {
+                let t = triangles[i % triangles.len()];
+                triangles.push(if i % 2 == 0 { t } else { [t[2], t[1], t[0]] });
+            }
+            Soup { positions, triangles, flat_axis }
+        })
+}
+
+#[derive(Clone, Debug)]
+enum RayKind {
+    /// Random origin and direction.
+    Free([f32; 3], [f32; 3]),
+    /// Axis-aligned direction.
+    Axis([f32; 3], usize, bool),
+    /// Aimed at a vertex, an edge midpoint or a triangle's centroid (shared edges/vertices).
+    AtFeature([f32; 3], prop::sample::Index, u8),
+    /// Origin exactly on a grid cell boundary.
+    OnCellBoundary([u8; 3], [f32; 3]),
+}
+
+fn ray_kind() -> impl Strategy<Value = RayKind> {
+    let far = || [-6.0f32..6.0, -6.0f32..6.0, -6.0f32..6.0];
+    let dir = || [-1.0f32..1.0, -1.0f32..1.0, -1.0f32..1.0];
+    prop_oneof![
+        far().prop_flat_map(move |o| dir().prop_map(move |d| RayKind::Free(o, d))),
+        (point(), 0usize..3, any::<bool>()).prop_map(|(o, a, s)| RayKind::Axis(o, a, s)),
+        (far(), any::<prop::sample::Index>(), 0u8..3).prop_map(|(o, i, f)| RayKind::AtFeature(o, i, f)),
+        ([any::<u8>(), any::<u8>(), any::<u8>()], dir()).prop_map(|(c, d)| RayKind::OnCellBoundary(c, d)),
+    ]
+}
+
+fn make_ray(kind: &RayKind, soup: &Soup, view: &SceneView<'_>, t_range: (f32, f32)) -> Ray {
+    let (origin, dir) = match kind {
+        RayKind::Free(o, d) => (Vec3::from(*o), Vec3::from(*d)),
+        RayKind::Axis(o, a, s) => {
+            let mut d = Vec3::ZERO;
+            d[*a] = if *s { 1.0 } else { -1.0 };
+            let mut o = Vec3::from(*o);
+            o[*a] = if *s { -5.0 } else { 5.0 };
+            (o, d)
+        }
+        RayKind::AtFeature(o, i, f) => {
+            let t = soup.triangles[i.index(soup.triangles.len())];
+            let v = t.map(|k| Vec3::from(soup.positions[k as usize]));
+            let target = match f {
+                0 => v[0],
+                1 => (v[0] + v[1]) * 0.5,
+                _ => (v[0] + v[1] + v[2]) / 3.0,
+            };
+            (Vec3::from(*o), target - Vec3::from(*o))
+        }
+        RayKind::OnCellBoundary(c, d) => {
+            let g = view.grid().expect("grid");
+            let cell = Vec3::new(
+                (c[0] as u32 % (g.dims[0] + 1)) as f32,
+                (c[1] as u32 % (g.dims[1] + 1)) as f32,
+                (c[2] as u32 % (g.dims[2] + 1)) as f32,
+            );
+            (g.min + cell * g.cell_size, Vec3::from(*d))
+        }
+    };
+    Ray { origin, dir, t_min: t_range.0, t_max: t_range.1 }
+}
+
+fn check<I: Intersector>(view: &SceneView<'_>, ray: &Ray) -> Result<(Option<Hit>, RayCounters), TestCaseError> {
+    let grid = view.grid().expect("grid");
+    let mut cg = RayCounters::default();
+    let g = trace_grid::<I, _>(view, grid, ray, &mut NoProbe, &mut cg);
+    let b = trace_brute_force::<I, _>(view, ray, &mut NoProbe, &mut RayCounters::default());
+    match (g, b) {
+        (None, None) => {}
+        (Some(g), Some(b)) if g.bits_eq(&b) => {}
+        _ => {
+            return Err(TestCaseError::fail(format!("{}: grid {g:?} != brute force {b:?} for {ray:?}", I::NAME)));
+        }
+    }
+    Ok((g, cg))
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 1000, ..ProptestConfig::default() })]
+
+    #[test]
+    fn grid_returns_the_brute_force_hit(
+        soup in soup(),
+        min_dim in 1u32..10,
+        rays in prop::collection::vec((ray_kind(), prop_oneof![
+            4 => Just((0.0f32, f32::INFINITY)),
+            1 => (0.0f32..4.0, 4.0f32..12.0),
+        ]), 48),
+    ) {
+        let scene = build_soup(soup.positions.clone(), soup.triangles.clone(), Accel::Grid, min_dim);
+        let view = scene.view().expect("valid image");
+        if let Some(a) = soup.flat_axis {
+            prop_assert_eq!(view.grid().unwrap().dims[a], 1, "a flat axis gets one cell");
+        }
+        let mut hits = 0;
+        for (kind, range) in &rays {
+            let ray = make_ray(kind, &soup, &view, *range);
+            let (h, _) = check::<Watertight>(&view, &ray)?;
+            check::<MollerTrumbore>(&view, &ray)?;
+            hits += h.is_some() as u32;
+        }
+        // Keep the generator honest: most soups must actually be hit by some ray.
+        let _ = hits;
+    }
+}
+
+/// The generator above must produce hits, or the property would be vacuous.
+#[test]
+fn generated_rays_do_hit() {
+    use proptest::strategy::ValueTree;
+    use proptest::test_runner::TestRunner;
+    let mut runner = TestRunner::deterministic();
+    let (mut rays, mut hits) = (0, 0);
+    for _ in 0..40 {
+        let s = soup().new_tree(&mut runner).unwrap().current();
+        let scene = build_soup(s.positions.clone(), s.triangles.clone(), Accel::Grid, 4);
+        let view = scene.view().unwrap();
+        for _ in 0..20 {
+            let k = ray_kind().new_tree(&mut runner).unwrap().current();
+            let ray = make_ray(&k, &s, &view, (0.0, f32::INFINITY));
+            rays += 1;
+            hits += check::<Watertight>(&view, &ray).unwrap().0.is_some() as u32;
+        }
+    }
+    assert!(hits * 5 > rays, "only {hits} of {rays} generated rays hit something");
+}
+
+/// A closed mesh (a cube) shot through its shared edges and vertices: the watertight
+/// kernel never lets a ray slip between adjacent triangles.
+#[test]
+fn no_leak_through_shared_edges_of_a_closed_cube() {
+    let p: Vec<[f32; 3]> = (0..8).map(|i| [(i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32]).collect();
+    let quads = [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]];
+    let tris: Vec<[u32; 3]> = quads.iter().flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]).collect();
+    let scene = build_soup(p, tris, Accel::Grid, 3);
+    let view = scene.view().unwrap();
+    let mut n = 0;
+    // Rays from outside through points on the diagonals (shared edges) and corners.
+    for i in 0..=16 {
+        for j in 0..=16 {
+            let (a, b) = (i as f32 / 16.0, j as f32 / 16.0);
+            // The last family aims at the main diagonal, whose end points a ray can only graze.
+            let c = (i.clamp(1, 15)) as f32 / 16.0;
+            for (o, target) in [
+                (Vec3::new(a, b, -3.0), Vec3::new(a, b, 0.0)),
+                (Vec3::new(-3.0, a, b), Vec3::new(0.0, a, b)),
+                (Vec3::new(2.0 + a, 3.0, -1.0 - b), Vec3::new(c, c, c)),
+            ] {
+                let ray = Ray::new(o, target - o);
+                let (hit, _) = check::<Watertight>(&view, &ray).unwrap();
+                assert!(hit.is_some(), "ray {ray:?} leaked through the closed cube");
+                n += 1;
+            }
+        }
+    }
+    assert_eq!(n, 17 * 17 * 3);
+}
