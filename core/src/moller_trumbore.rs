@@ -44,7 +44,7 @@ impl Intersector for MollerTrumbore {
         // exceed the grid's margin, so they count as parallel; that keeps the result
         // consistent whatever structure delivers the triangle.
         let scale = r.dir.length() * e1.length() * e2.length();
-        if !(det.abs() > PARALLEL_EPSILON * scale) || !det.is_finite() {
+        if det.abs() <= PARALLEL_EPSILON * scale || !det.is_finite() || !scale.is_finite() {
             return None;
         }
         let inv = 1.0 / det;
@@ -75,7 +75,9 @@ mod tests {
         ]
     }
 
-    fn both(o: Vec3, d: Vec3) -> (Option<(f32, f32, f32)>, Option<(f32, f32, f32)>) {
+    type Tuv = Option<(f32, f32, f32)>;
+
+    fn both(o: Vec3, d: Vec3) -> (Tuv, Tuv) {
         let r = Ray::new(o, d);
         (
             MollerTrumbore::intersect(&MollerTrumbore::prepare(&r), &tri()),

@@ -72,7 +72,12 @@ fn trace_all<I: Intersector>(scene: &SceneView<'_>, eye: &EyeRays, tiles: &[(u32
         .sum()
 }
 
-fn run<I: Intersector>(scene: &SceneView<'_>, eye: &EyeRays, runs: usize, threads: Option<usize>) -> Result<BenchResult> {
+fn run<I: Intersector>(
+    scene: &SceneView<'_>,
+    eye: &EyeRays,
+    runs: usize,
+    threads: Option<usize>,
+) -> Result<BenchResult> {
     let tiles = tiles(eye.width, eye.height);
     let rays = eye.width as u64 * eye.height as u64;
     let time = |n: Option<usize>| -> Result<(Vec<f64>, u64, usize)> {

@@ -63,7 +63,9 @@ impl StructureArgs {
             accel: self.accel,
             grid: match self.grid_min_dim {
                 Some(n) => GridResolution::MinDim(n),
-                None => GridResolution::Auto { cells_per_triangle: self.grid_density },
+                None => GridResolution::Auto {
+                    cells_per_triangle: self.grid_density,
+                },
             },
         }
     }
@@ -99,9 +101,19 @@ impl CameraArgs {
         if let Some(path) = &self.camera {
             spec = CameraSpec::load(path)?;
         }
-        let flags = CameraSpec { eye: self.eye, look_at: self.look_at, up: self.up, fov: self.fov, size: self.size, background: None };
+        let flags = CameraSpec {
+            eye: self.eye,
+            look_at: self.look_at,
+            up: self.up,
+            fov: self.fov,
+            size: self.size,
+            background: None,
+        };
         let cam = spec.merged(flags).apply(base);
-        let what = self.camera.as_ref().map_or("camera".to_string(), |p| p.display().to_string());
+        let what = self
+            .camera
+            .as_ref()
+            .map_or("camera".to_string(), |p| p.display().to_string());
         render::eye_rays(&cam, &what)?;
         Ok(cam)
     }
@@ -120,7 +132,9 @@ fn parse_vec3(s: &str) -> Result<[f32; 3], String> {
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("expected WIDTHxHEIGHT, got '{s}'"))?;
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("expected WIDTHxHEIGHT, got '{s}'"))?;
     let w: u32 = w.parse().map_err(|_| format!("'{w}' is not a pixel count"))?;
     let h: u32 = h.parse().map_err(|_| format!("'{h}' is not a pixel count"))?;
     if w == 0 || h == 0 {
@@ -247,9 +261,17 @@ fn fmt_bytes(b: usize) -> String {
 }
 
 fn cmd_build(a: BuildArgs) -> Result<()> {
-    let ext = a.scene.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    let ext = a
+        .scene
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase();
     if ext == "rpsi" {
-        bail!("{}: is already a scene image; build takes an OBJ file", a.scene.display());
+        bail!(
+            "{}: is already a scene image; build takes an OBJ file",
+            a.scene.display()
+        );
     }
     let start = Instant::now();
     let mut scene = scene::load(Some(&a.scene), &a.structure.options())?;
@@ -262,7 +284,10 @@ fn cmd_build(a: BuildArgs) -> Result<()> {
         || a.camera.size.is_some();
     if has_camera_flags {
         // Rebuild with the chosen camera as the image's default.
-        let base = *scene.view()?.camera().ok_or_else(|| anyhow!("internal error: built image lacks a camera"))?;
+        let base = *scene
+            .view()?
+            .camera()
+            .ok_or_else(|| anyhow!("internal error: built image lacks a camera"))?;
         let cam = a.camera.resolve(&base)?;
         let (mesh, notes) = crate::obj::load_obj_file(&a.scene)?;
         let spec = CameraSpec {
@@ -273,16 +298,33 @@ fn cmd_build(a: BuildArgs) -> Result<()> {
             size: Some((cam.width, cam.height)),
             background: Some(cam.background),
         };
-        scene = scene::build(a.scene.display().to_string(), mesh, notes.warnings, spec, &a.structure.options())?;
+        scene = scene::build(
+            a.scene.display().to_string(),
+            mesh,
+            notes.warnings,
+            spec,
+            &a.structure.options(),
+        )?;
     }
     let elapsed = start.elapsed().as_secs_f64();
     output::write_bytes(&a.output, &scene.image)?;
-    let r = scene.report.as_ref().ok_or_else(|| anyhow!("internal error: no build report"))?;
+    let r = scene
+        .report
+        .as_ref()
+        .ok_or_else(|| anyhow!("internal error: no build report"))?;
     println!("scene        {}", a.scene.display());
-    println!("triangles    {} ({} degenerate), vertices {}", r.triangles, r.degenerate, r.vertices);
+    println!(
+        "triangles    {} ({} degenerate), vertices {}",
+        r.triangles, r.degenerate, r.vertices
+    );
     if a.structure.accel == Accel::Grid {
         let [x, y, z] = r.dims;
-        println!("grid         {x} x {y} x {z} = {} cells, {} non-empty ({:.1}%)", r.cells, r.full_cells, 100.0 * r.full_cells as f64 / r.cells.max(1) as f64);
+        println!(
+            "grid         {x} x {y} x {z} = {} cells, {} non-empty ({:.1}%)",
+            r.cells,
+            r.full_cells,
+            100.0 * r.full_cells as f64 / r.cells.max(1) as f64
+        );
         println!(
             "lists        {} entries ({} triangle references, {:.2} per triangle)",
             r.list_entries,
@@ -291,7 +333,12 @@ fn cmd_build(a: BuildArgs) -> Result<()> {
         );
         println!("grid build   {:.3} s", r.grid_seconds);
     }
-    println!("image        {} bytes ({}), {:.1} bytes/triangle", r.image_bytes, fmt_bytes(r.image_bytes), r.image_bytes as f64 / r.triangles.max(1) as f64);
+    println!(
+        "image        {} bytes ({}), {:.1} bytes/triangle",
+        r.image_bytes,
+        fmt_bytes(r.image_bytes),
+        r.image_bytes as f64 / r.triangles.max(1) as f64
+    );
     println!("total        {elapsed:.3} s -> {}", a.output.display());
     Ok(())
 }
@@ -317,7 +364,11 @@ fn cmd_render(a: RenderArgs) -> Result<()> {
     warn(&scene);
     let view = scene.view()?;
     let cam = camera_for(&scene, &a.camera)?;
-    let opts = RenderOptions { threads: a.threads, intersector: a.intersector, progress: true };
+    let opts = RenderOptions {
+        threads: a.threads,
+        intersector: a.intersector,
+        progress: true,
+    };
     let start = Instant::now();
     let frame = render::render(&view, &cam, &opts)?;
     let secs = start.elapsed().as_secs_f64();
@@ -350,20 +401,52 @@ fn cmd_stats(a: StatsArgs) -> Result<()> {
     warn(&scene);
     let view = scene.view()?;
     let cam = camera_for(&scene, &a.camera)?;
-    let opts = RenderOptions { threads: a.threads, intersector: a.intersector, progress: false };
+    let opts = RenderOptions {
+        threads: a.threads,
+        intersector: a.intersector,
+        progress: false,
+    };
     let s = stats::gather(&view, &cam, &opts)?;
-    println!("scene                     {} ({} triangles)", scene.name, view.triangle_count());
+    println!(
+        "scene                     {} ({} triangles)",
+        scene.name,
+        view.triangle_count()
+    );
     match view.grid() {
-        Some(g) => println!("structure                 grid {} x {} x {}", g.dims[0], g.dims[1], g.dims[2]),
+        Some(g) => println!(
+            "structure                 grid {} x {} x {}",
+            g.dims[0], g.dims[1], g.dims[2]
+        ),
         None => println!("structure                 none (brute force)"),
     }
-    println!("view                      {}x{} = {} primary rays", cam.width, cam.height, s.rays);
-    println!("rays that hit             {:.2}%", 100.0 * s.hits as f64 / s.rays.max(1) as f64);
-    println!("rays missing scene bounds {:.2}%", 100.0 * s.missed_bounds as f64 / s.rays.max(1) as f64);
-    println!("voxels visited per ray    avg {:.2}, max {}", s.per_ray(s.total.voxels), s.max_voxels);
+    println!(
+        "view                      {}x{} = {} primary rays",
+        cam.width, cam.height, s.rays
+    );
+    println!(
+        "rays that hit             {:.2}%",
+        100.0 * s.hits as f64 / s.rays.max(1) as f64
+    );
+    println!(
+        "rays missing scene bounds {:.2}%",
+        100.0 * s.missed_bounds as f64 / s.rays.max(1) as f64
+    );
+    println!(
+        "voxels visited per ray    avg {:.2}, max {}",
+        s.per_ray(s.total.voxels),
+        s.max_voxels
+    );
     println!("non-empty voxels per ray  avg {:.2}", s.per_ray(s.total.full_voxels));
-    println!("triangles tested per ray  avg {:.2}, max {}", s.per_ray(s.total.tri_tests), s.max_tri_tests);
-    println!("list entries read         {} total, {:.2} per ray", s.total.list_entries, s.per_ray(s.total.list_entries));
+    println!(
+        "triangles tested per ray  avg {:.2}, max {}",
+        s.per_ray(s.total.tri_tests),
+        s.max_tri_tests
+    );
+    println!(
+        "list entries read         {} total, {:.2} per ray",
+        s.total.list_entries,
+        s.per_ray(s.total.list_entries)
+    );
     let classes: Vec<String> = DataClass::ALL
         .iter()
         .map(|c| format!("{} {:.1}", c.name(), s.per_ray(s.bytes.bytes[*c as usize])))
@@ -422,11 +505,18 @@ fn cmd_bench(a: BenchArgs) -> Result<()> {
         let scene = scene.ok_or_else(|| anyhow!("no scene"))?;
         let view = scene.view()?;
         let base = camera_for(&scene, &CameraArgs::default())?;
-        let cam = CameraRecord { width: a.size.0, height: a.size.1, ..base };
+        let cam = CameraRecord {
+            width: a.size.0,
+            height: a.size.1,
+            ..base
+        };
         let r = bench::primary_rays(&view, &cam, a.intersector, a.runs, a.threads)?;
-        let grid = view.grid().map_or("-".to_string(), |g| format!("{}x{}x{}", g.dims[0], g.dims[1], g.dims[2]));
+        let grid = view.grid().map_or("-".to_string(), |g| {
+            format!("{}x{}x{}", g.dims[0], g.dims[1], g.dims[2])
+        });
         let name = t.as_ref().map_or("built-in Cornell box".to_string(), |p| {
-            p.file_name().map_or(p.display().to_string(), |f| f.to_string_lossy().into_owned())
+            p.file_name()
+                .map_or(p.display().to_string(), |f| f.to_string_lossy().into_owned())
         });
         println!(
             "{:<28} {:>9} {:>16} {:>9.3} {:>10} {:>7.1} {:>10.2} {:>10.2} {:>7}",

@@ -41,7 +41,9 @@ pub enum GridResolution {
 
 impl Default for GridResolution {
     fn default() -> Self {
-        GridResolution::Auto { cells_per_triangle: DEFAULT_CELLS_PER_TRIANGLE }
+        GridResolution::Auto {
+            cells_per_triangle: DEFAULT_CELLS_PER_TRIANGLE,
+        }
     }
 }
 
@@ -95,7 +97,7 @@ pub fn choose_dims(gmin: DVec3, gmax: DVec3, triangles: usize, res: GridResoluti
         GridResolution::MinDim(0) => bail!("--grid-min-dim must be at least 1"),
         GridResolution::MinDim(n) => thick.iter().map(|&a| ext[a]).fold(f64::INFINITY, f64::min) / n as f64,
         GridResolution::Auto { cells_per_triangle } => {
-            if !(cells_per_triangle > 0.0) {
+            if cells_per_triangle.is_nan() || cells_per_triangle <= 0.0 || cells_per_triangle.is_infinite() {
                 bail!("grid density must be positive");
             }
             let target = (cells_per_triangle * triangles as f64).max(1.0);
@@ -192,5 +194,11 @@ pub fn build_grid(mesh: &Mesh, res: GridResolution) -> Result<BuiltGrid> {
         dims,
         cell_count: cell_count as u32,
     };
-    Ok(BuiltGrid { record, cells, lists, references: refs.len() as u64, full_cells })
+    Ok(BuiltGrid {
+        record,
+        cells,
+        lists,
+        references: refs.len() as u64,
+        full_cells,
+    })
 }

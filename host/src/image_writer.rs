@@ -49,7 +49,8 @@ impl ImageWriter {
 
     fn add<T: Pod>(&mut self, kind: SectionKind, records: &[T]) {
         debug_assert_eq!(std::mem::size_of::<T>() as u32, kind.record_size());
-        self.sections.push((kind, bytemuck::cast_slice(records).to_vec(), records.len() as u32));
+        self.sections
+            .push((kind, bytemuck::cast_slice(records).to_vec(), records.len() as u32));
     }
 
     /// Adds the uniform grid.
@@ -74,7 +75,12 @@ impl ImageWriter {
         let mut offset = table_end.div_ceil(align) * align;
         let mut table = Vec::new();
         for (kind, bytes, count) in &self.sections {
-            table.push(SectionEntry { kind: *kind as u32, offset: offset as u32, size: bytes.len() as u32, count: *count });
+            table.push(SectionEntry {
+                kind: *kind as u32,
+                offset: offset as u32,
+                size: bytes.len() as u32,
+                count: *count,
+            });
             offset = (offset + bytes.len() as u64).div_ceil(align) * align;
             if offset > u32::MAX as u64 {
                 bail!("scene image would exceed 4 GiB");

@@ -17,7 +17,12 @@ pub struct LoadNotes {
 }
 
 fn load_options() -> tobj::LoadOptions {
-    tobj::LoadOptions { triangulate: true, single_index: true, ignore_points: true, ignore_lines: true }
+    tobj::LoadOptions {
+        triangulate: true,
+        single_index: true,
+        ignore_points: true,
+        ignore_lines: true,
+    }
 }
 
 /// Loads an OBJ file (and the MTL files it names) into a [`Mesh`].
@@ -47,7 +52,9 @@ fn convert(name: &str, result: tobj::LoadResult) -> Result<(Mesh, LoadNotes)> {
     let materials = match materials {
         Ok(m) => m,
         Err(tobj::LoadError::OpenFileFailed) => {
-            notes.warnings.push(format!("{name}: material library not found; using the default material"));
+            notes.warnings.push(format!(
+                "{name}: material library not found; using the default material"
+            ));
             Vec::new()
         }
         Err(e) => bail!("{name}: malformed MTL: {}", describe(&e)),
@@ -72,10 +79,21 @@ fn convert(name: &str, result: tobj::LoadResult) -> Result<(Mesh, LoadNotes)> {
         let base = mesh.positions.len() as u32;
         let nv = m.positions.len() / 3;
         for i in 0..nv {
-            mesh.positions.push([m.positions[3 * i], m.positions[3 * i + 1], m.positions[3 * i + 2]]);
+            mesh.positions
+                .push([m.positions[3 * i], m.positions[3 * i + 1], m.positions[3 * i + 2]]);
             if shading {
-                let get3 = |v: &Vec<f32>, d: [f32; 3]| if v.len() >= 3 * nv { [v[3 * i], v[3 * i + 1], v[3 * i + 2]] } else { d };
-                let uv = if m.texcoords.len() >= 2 * nv { [m.texcoords[2 * i], m.texcoords[2 * i + 1]] } else { [0.0; 2] };
+                let get3 = |v: &Vec<f32>, d: [f32; 3]| {
+                    if v.len() >= 3 * nv {
+                        [v[3 * i], v[3 * i + 1], v[3 * i + 2]]
+                    } else {
+                        d
+                    }
+                };
+                let uv = if m.texcoords.len() >= 2 * nv {
+                    [m.texcoords[2 * i], m.texcoords[2 * i + 1]]
+                } else {
+                    [0.0; 2]
+                };
                 mesh.shading.push(ShadingVertex {
                     normal: get3(&m.normals, [0.0; 3]),
                     uv,
@@ -94,7 +112,10 @@ fn convert(name: &str, result: tobj::LoadResult) -> Result<(Mesh, LoadNotes)> {
         for t in m.indices.chunks_exact(3) {
             let tri = [t[0] + base, t[1] + base, t[2] + base];
             if tri.iter().any(|&v| v >= base + nv as u32) {
-                bail!("{name}: malformed OBJ: a face in object '{}' references a missing vertex", model.name);
+                bail!(
+                    "{name}: malformed OBJ: a face in object '{}' references a missing vertex",
+                    model.name
+                );
             }
             mesh.triangles.push(tri);
             mesh.tri_materials.push(material);
@@ -126,7 +147,12 @@ fn material_record(file: &str, m: &tobj::Material, notes: &mut LoadNotes) -> Res
     if let Some(ke) = m.emissive {
         r.emission = ke;
     }
-    let all = r.diffuse.iter().chain(&r.specular).chain(&r.emission).chain([&r.shininess, &r.ior, &r.dissolve]);
+    let all = r
+        .diffuse
+        .iter()
+        .chain(&r.specular)
+        .chain(&r.emission)
+        .chain([&r.shininess, &r.ior, &r.dissolve]);
     if all.clone().any(|c| !c.is_finite() || *c < 0.0) {
         bail!("{file}: material '{}' has a negative, NaN or infinite value", m.name);
     }
@@ -165,7 +191,9 @@ pub fn read_head(path: &Path, n: usize) -> Result<Vec<u8>> {
     use std::io::Read;
     let mut f = std::fs::File::open(path).with_context(|| format!("{}: cannot open", path.display()))?;
     let mut buf = vec![0; n];
-    let got = f.read(&mut buf).with_context(|| format!("{}: cannot read", path.display()))?;
+    let got = f
+        .read(&mut buf)
+        .with_context(|| format!("{}: cannot read", path.display()))?;
     buf.truncate(got);
     Ok(buf)
 }

@@ -31,7 +31,11 @@ pub struct RenderOptions {
 
 impl Default for RenderOptions {
     fn default() -> Self {
-        RenderOptions { threads: None, intersector: IntersectorKind::Watertight, progress: false }
+        RenderOptions {
+            threads: None,
+            intersector: IntersectorKind::Watertight,
+            progress: false,
+        }
     }
 }
 
@@ -78,7 +82,12 @@ pub fn render(scene: &SceneView<'_>, camera: &CameraRecord, opts: &RenderOptions
     with_intersector!(opts.intersector, I => render_with::<I>(scene, &eye, Vec3::from(camera.background), opts))
 }
 
-fn render_with<I: Intersector>(scene: &SceneView<'_>, eye: &EyeRays, background: Vec3, opts: &RenderOptions) -> Result<Frame> {
+fn render_with<I: Intersector>(
+    scene: &SceneView<'_>,
+    eye: &EyeRays,
+    background: Vec3,
+    opts: &RenderOptions,
+) -> Result<Frame> {
     let (w, h) = (eye.width, eye.height);
     let tiles = tiles(w, h);
     let bar = progress::bar(tiles.len() as u64, "render", opts.progress);
@@ -109,5 +118,9 @@ fn render_with<I: Intersector>(scene: &SceneView<'_>, eye: &EyeRays, background:
             pixels[start..start + tw].copy_from_slice(chunk);
         }
     }
-    Ok(Frame { width: w, height: h, pixels })
+    Ok(Frame {
+        width: w,
+        height: h,
+        pixels,
+    })
 }

@@ -84,7 +84,11 @@ impl Scene {
 pub fn load(path: Option<&Path>, opts: &BuildOptions) -> Result<Scene> {
     let Some(path) = path else { return load_default(opts) };
     let name = path.display().to_string();
-    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase();
     let is_image = match ext.as_str() {
         "obj" => false,
         "rpsi" => true,
@@ -93,7 +97,11 @@ pub fn load(path: Option<&Path>, opts: &BuildOptions) -> Result<Scene> {
     if is_image {
         let image = AlignedBytes::read_file(path).map_err(|e| anyhow!("{name}: cannot read: {e}"))?;
         SceneView::parse(&image).map_err(|e| anyhow!("{name}: {e}"))?;
-        return Ok(Scene { name, image, report: None });
+        return Ok(Scene {
+            name,
+            image,
+            report: None,
+        });
     }
     let (mesh, notes) = obj::load_obj_file(path)?;
     let camera_path = sidecar_camera(path);
@@ -106,7 +114,9 @@ pub fn load(path: Option<&Path>, opts: &BuildOptions) -> Result<Scene> {
 
 /// The built-in Cornell box.
 pub fn load_default(opts: &BuildOptions) -> Result<Scene> {
-    let (mesh, notes) = obj::load_obj_str(default_scene::NAME, default_scene::OBJ, &|_| Some(default_scene::MTL.into()))?;
+    let (mesh, notes) = obj::load_obj_str(default_scene::NAME, default_scene::OBJ, &|_| {
+        Some(default_scene::MTL.into())
+    })?;
     let spec = CameraSpec::parse(default_scene::NAME, default_scene::CAMERA)?;
     build(default_scene::NAME.into(), mesh, notes.warnings, spec, opts)
 }
@@ -163,19 +173,40 @@ fn default_lights(mesh: &Mesh, camera: &CameraRecord) -> Vec<LightRecord> {
         // Nudge the light off the emitter, towards the middle of the scene.
         let p = p + (centre - p).normalize_or_zero() * (hi - lo).length() * 0.01;
         let color = emission / emission.max_element();
-        lights.push(LightRecord { position: p.to_array(), kind: LightRecord::POINT, color: color.to_array(), _pad: 0 });
+        lights.push(LightRecord {
+            position: p.to_array(),
+            kind: LightRecord::POINT,
+            color: color.to_array(),
+            _pad: 0,
+        });
     } else {
         let eye = Vec3::from(camera.eye);
         let up = Vec3::from(camera.up).normalize_or_zero();
         let p = eye + up * (eye - centre).length() * 0.25;
-        lights.push(LightRecord { position: p.to_array(), kind: LightRecord::POINT, color: [0.9; 3], _pad: 0 });
+        lights.push(LightRecord {
+            position: p.to_array(),
+            kind: LightRecord::POINT,
+            color: [0.9; 3],
+            _pad: 0,
+        });
     }
-    lights.push(LightRecord { position: [0.0; 3], kind: LightRecord::AMBIENT, color: [0.1; 3], _pad: 0 });
+    lights.push(LightRecord {
+        position: [0.0; 3],
+        kind: LightRecord::AMBIENT,
+        color: [0.1; 3],
+        _pad: 0,
+    });
     lights
 }
 
 /// Builds a scene image from a mesh.
-pub fn build(name: String, mut mesh: Mesh, warnings: Vec<String>, camera: CameraSpec, opts: &BuildOptions) -> Result<Scene> {
+pub fn build(
+    name: String,
+    mut mesh: Mesh,
+    warnings: Vec<String>,
+    camera: CameraSpec,
+    opts: &BuildOptions,
+) -> Result<Scene> {
     mesh.validate(&name)?;
     let (lo, hi) = mesh.bounds();
     let camera = camera.apply(&framing_camera(lo, hi));
@@ -204,7 +235,11 @@ pub fn build(name: String, mut mesh: Mesh, warnings: Vec<String>, camera: Camera
     }
     let image = writer.finish().map_err(|e| anyhow!("{name}: {e}"))?;
     report.image_bytes = image.len();
-    let scene = Scene { name, image, report: Some(report) };
+    let scene = Scene {
+        name,
+        image,
+        report: Some(report),
+    };
     if let Err(e) = scene.view() {
         bail!("internal error: built an invalid image: {e}");
     }

@@ -107,7 +107,8 @@ fn gather_with<I: Intersector>(
                         let ray = eye.ray(x, y);
                         let mut c = RayCounters::default();
                         let hit = trace::<I, _>(scene, &ray, &mut s.bytes, &mut c);
-                        let missed = grid_box.is_some_and(|(lo, hi)| raypipe_core::aabb::clip_ray(&ray, lo, hi).is_none());
+                        let missed =
+                            grid_box.is_some_and(|(lo, hi)| raypipe_core::aabb::clip_ray(&ray, lo, hi).is_none());
                         s.add_ray(&c, hit.is_some(), missed);
                     }
                 }

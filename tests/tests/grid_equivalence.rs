@@ -2,11 +2,11 @@
 //! the grid returns exactly the brute-force hit — same triangle id, bit-identical `t`
 //! and barycentrics — and the same misses, with either intersection kernel.
 
-use raypipe_core::Vec3;
 use proptest::prelude::*;
 use raypipe::scene::Accel;
 use raypipe_core::brute_force::trace_brute_force;
 use raypipe_core::grid::trace_grid;
+use raypipe_core::Vec3;
 use raypipe_core::{Hit, Intersector, MollerTrumbore, NoProbe, Ray, RayCounters, SceneView, Watertight};
 use raypipe_tests::build_soup;
 
@@ -33,7 +33,14 @@ struct Soup {
 fn soup() -> impl Strategy<Value = Soup> {
     (
         prop::collection::vec(point(), 3..24),
-        prop::collection::vec((any::<prop::sample::Index>(), any::<prop::sample::Index>(), any::<prop::sample::Index>()), 1..40),
+        prop::collection::vec(
+            (
+                any::<prop::sample::Index>(),
+                any::<prop::sample::Index>(),
+                any::<prop::sample::Index>(),
+            ),
+            1..40,
+        ),
         prop::option::weighted(0.15, 0usize..3),
         0u8..4,
     )
@@ -45,14 +52,20 @@ fn soup() -> impl Strategy<Value = Soup> {
                 }
             }
             let n = positions.len();
-            let mut triangles: Vec<[u32; 3]> =
-                picks.iter().map(|(a, b, c)| [a.index(n) as u32, b.index(n) as u32, c.index(n) as u32]).collect();
+            let mut triangles: Vec<[u32; 3]> = picks
+                .iter()
+                .map(|(a, b, c)| [a.index(n) as u32, b.index(n) as u32, c.index(n) as u32])
+                .collect();
             // Duplicated triangles (same and reversed winding).
             for i in 0..dup as usize {
                 let t = triangles[i % triangles.len()];
                 triangles.push(if i % 2 == 0 { t } else { [t[2], t[1], t[0]] });
             }
-            Soup { positions, triangles, flat_axis }
+            Soup {
+                positions,
+                triangles,
+                flat_axis,
+            }
         })
 }
 
@@ -109,7 +122,12 @@ fn make_ray(kind: &RayKind, soup: &Soup, view: &SceneView<'_>, t_range: (f32, f3
             (g.min + cell * g.cell_size, Vec3::from(*d))
         }
     };
-    Ray { origin, dir, t_min: t_range.0, t_max: t_range.1 }
+    Ray {
+        origin,
+        dir,
+        t_min: t_range.0,
+        t_max: t_range.1,
+    }
 }
 
 fn check<I: Intersector>(view: &SceneView<'_>, ray: &Ray) -> Result<(Option<Hit>, RayCounters), TestCaseError> {
@@ -121,7 +139,10 @@ fn check<I: Intersector>(view: &SceneView<'_>, ray: &Ray) -> Result<(Option<Hit>
         (None, None) => {}
         (Some(g), Some(b)) if g.bits_eq(&b) => {}
         _ => {
-            return Err(TestCaseError::fail(format!("{}: grid {g:?} != brute force {b:?} for {ray:?}", I::NAME)));
+            return Err(TestCaseError::fail(format!(
+                "{}: grid {g:?} != brute force {b:?} for {ray:?}",
+                I::NAME
+            )));
         }
     }
     Ok((g, cg))
@@ -181,9 +202,21 @@ fn generated_rays_do_hit() {
 /// kernel never lets a ray slip between adjacent triangles.
 #[test]
 fn no_leak_through_shared_edges_of_a_closed_cube() {
-    let p: Vec<[f32; 3]> = (0..8).map(|i| [(i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32]).collect();
-    let quads = [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]];
-    let tris: Vec<[u32; 3]> = quads.iter().flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]).collect();
+    let p: Vec<[f32; 3]> = (0..8)
+        .map(|i| [(i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32])
+        .collect();
+    let quads = [
+        [0, 1, 3, 2],
+        [4, 6, 7, 5],
+        [0, 4, 5, 1],
+        [2, 3, 7, 6],
+        [0, 2, 6, 4],
+        [1, 5, 7, 3],
+    ];
+    let tris: Vec<[u32; 3]> = quads
+        .iter()
+        .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+        .collect();
     let scene = build_soup(p, tris, Accel::Grid, 3);
     let view = scene.view().unwrap();
     let mut n = 0;
