@@ -25,7 +25,7 @@ pub trait Intersector {
 
 /// Tests triangle `prim` and keeps the hit if it lies in `[t_min, t_max]` and is closer
 /// under the `(t, prim)` order. Returns true if `best` changed.
-#[inline]
+#[inline(always)]
 pub fn test_triangle<I: Intersector>(
     prep: &I::Prepared,
     ray: &Ray,

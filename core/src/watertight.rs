@@ -58,11 +58,12 @@ impl Intersector for Watertight {
         }
     }
 
-    #[inline]
+    #[inline(always)]
     fn intersect(s: &ShearedRay, v: &[Vec3; 3]) -> Option<(f32, f32, f32)> {
-        let a = v[0] - s.org;
-        let b = v[1] - s.org;
-        let c = v[2] - s.org;
+        // Arrays, not `Vec3` indexing: a plain bounds-checked load per coordinate.
+        let a = (v[0] - s.org).to_array();
+        let b = (v[1] - s.org).to_array();
+        let c = (v[2] - s.org).to_array();
         let (kx, ky, kz) = (s.kx, s.ky, s.kz);
         let ax = a[kx] - s.sx * a[kz];
         let ay = a[ky] - s.sy * a[kz];
