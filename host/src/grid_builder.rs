@@ -19,7 +19,7 @@ use crate::mesh::Mesh;
 use crate::tri_box;
 
 /// Default target of grid cells per triangle.
-pub const DEFAULT_CELLS_PER_TRIANGLE: f64 = 8.0;
+pub const DEFAULT_CELLS_PER_TRIANGLE: f64 = 2.0;
 /// Margin added around each cell in the overlap test, as a fraction of the smallest cell side.
 pub const CELL_MARGIN: f64 = 1e-3;
 /// Largest number of cells along one axis.

@@ -32,8 +32,37 @@ pub fn load_obj_file(path: &Path) -> Result<(Mesh, LoadNotes)> {
     if meta.is_dir() {
         bail!("{name}: is a directory, not an OBJ file");
     }
+    if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("gz")) {
+        return load_obj_gz(path, &name);
+    }
     let result = tobj::load_obj(path, &load_options());
     convert(&name, result)
+}
+
+/// A gzip-compressed OBJ (`scene.obj.gz`); its MTL files are read from beside it,
+/// compressed or not.
+fn load_obj_gz(path: &Path, name: &str) -> Result<(Mesh, LoadNotes)> {
+    use std::io::Read;
+    let file = std::fs::File::open(path).map_err(|e| anyhow!("{name}: cannot read: {e}"))?;
+    let mut text = Vec::new();
+    flate2::read::GzDecoder::new(file)
+        .read_to_end(&mut text)
+        .map_err(|e| anyhow!("{name}: cannot decompress: {e}"))?;
+    let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
+    let mut reader = std::io::BufReader::new(text.as_slice());
+    let result = tobj::load_obj_buf(&mut reader, &load_options(), |mtl| {
+        let plain = dir.join(mtl);
+        let mut gz = plain.clone().into_os_string();
+        gz.push(".gz");
+        if let Ok(f) = std::fs::File::open(&plain) {
+            tobj::load_mtl_buf(&mut std::io::BufReader::new(f))
+        } else if let Ok(f) = std::fs::File::open(&gz) {
+            tobj::load_mtl_buf(&mut std::io::BufReader::new(flate2::read::GzDecoder::new(f)))
+        } else {
+            Err(tobj::LoadError::OpenFileFailed)
+        }
+    });
+    convert(name, result)
 }
 
 /// Loads an OBJ from memory; `mtl` resolves material library names to their text.
@@ -60,9 +89,15 @@ fn convert(name: &str, result: tobj::LoadResult) -> Result<(Mesh, LoadNotes)> {
         Err(e) => bail!("{name}: malformed MTL: {}", describe(&e)),
     };
 
+    let textured = materials.iter().filter(|m| m.diffuse_texture.is_some()).count();
+    if textured > 0 {
+        notes.warnings.push(format!(
+            "{name}: {textured} materials have diffuse textures, not supported yet; their diffuse colours are used"
+        ));
+    }
     let mut mesh = Mesh::default();
     for m in &materials {
-        mesh.materials.push(material_record(name, m, &mut notes)?);
+        mesh.materials.push(material_record(name, m)?);
         mesh.material_names.push(m.name.clone());
     }
     let mut default_material = None;
@@ -131,7 +166,7 @@ fn convert(name: &str, result: tobj::LoadResult) -> Result<(Mesh, LoadNotes)> {
     Ok((mesh, notes))
 }
 
-fn material_record(file: &str, m: &tobj::Material, notes: &mut LoadNotes) -> Result<MaterialRecord> {
+fn material_record(file: &str, m: &tobj::Material) -> Result<MaterialRecord> {
     let mut r = MaterialRecord::DEFAULT;
     if let Some(kd) = m.diffuse {
         r.diffuse = kd;
@@ -155,12 +190,6 @@ fn material_record(file: &str, m: &tobj::Material, notes: &mut LoadNotes) -> Res
         .chain([&r.shininess, &r.ior, &r.dissolve]);
     if all.clone().any(|c| !c.is_finite() || *c < 0.0) {
         bail!("{file}: material '{}' has a negative, NaN or infinite value", m.name);
-    }
-    if m.diffuse_texture.is_some() {
-        notes.warnings.push(format!(
-            "{file}: material '{}': textures are not supported yet; using its diffuse colour",
-            m.name
-        ));
     }
     Ok(r)
 }

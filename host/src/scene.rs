@@ -90,7 +90,7 @@ pub fn load(path: Option<&Path>, opts: &BuildOptions) -> Result<Scene> {
         .unwrap_or("")
         .to_ascii_lowercase();
     let is_image = match ext.as_str() {
-        "obj" => false,
+        "obj" | "gz" => false,
         "rpsi" => true,
         _ => obj::read_head(path, 8)? == MAGIC,
     };
@@ -123,7 +123,9 @@ pub fn load_default(opts: &BuildOptions) -> Result<Scene> {
 
 /// `scene.camera` next to `scene.obj`, if it exists: the scene's default camera.
 fn sidecar_camera(obj: &Path) -> Option<PathBuf> {
-    let p = obj.with_extension("camera");
+    let stem = obj.file_name()?.to_str()?;
+    let stem = stem.strip_suffix(".gz").unwrap_or(stem);
+    let p = obj.with_file_name(stem).with_extension("camera");
     p.is_file().then_some(p)
 }
 

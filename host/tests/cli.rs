@@ -260,3 +260,30 @@ fn failed_writes_leave_no_half_written_file() {
     assert_eq!(std::fs::read(d.join("keep.png")).unwrap(), b"old");
     assert_eq!(only_files(d), vec!["keep.png".to_string()]);
 }
+
+#[test]
+fn gzipped_obj_renders_like_the_plain_file() {
+    use std::io::Write;
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let text = std::fs::read(fixtures().join("tetra.obj")).unwrap();
+    std::fs::copy(fixtures().join("tetra.mtl"), d.join("tetra.mtl")).unwrap();
+    std::fs::write(d.join("tetra.obj"), &text).unwrap();
+    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+    gz.write_all(&text).unwrap();
+    std::fs::write(d.join("packed.obj.gz"), gz.finish().unwrap()).unwrap();
+    let a = raypipe(d, &["render", "tetra.obj", "-o", "a.png", "--size", "40x30"]);
+    let b = raypipe(d, &["render", "packed.obj.gz", "-o", "b.png", "--size", "40x30"]);
+    assert!(
+        a.status.success() && b.status.success(),
+        "{} {}",
+        stderr(&a),
+        stderr(&b)
+    );
+    assert_eq!(decode(&d.join("a.png")), decode(&d.join("b.png")));
+    std::fs::write(d.join("broken.obj.gz"), b"\x1f\x8b\x08\x00garbage").unwrap();
+    assert_one_line_error(
+        &raypipe(d, &["build", "broken.obj.gz", "-o", "x.rpsi"]),
+        "broken.obj.gz",
+    );
+}

@@ -5,6 +5,7 @@
 
 use std::path::{Path, PathBuf};
 
+use raypipe::grid_builder::GridResolution;
 use raypipe::render::{render, Frame, RenderOptions};
 use raypipe::scene::{self, BuildOptions};
 use raypipe::tracer::IntersectorKind;
@@ -105,10 +106,14 @@ fn tetra_fixture() {
 /// The image embedded by the no_std proof is what `raypipe build` makes today.
 #[test]
 fn tetra_image_fixture_is_up_to_date() {
-    let built = scene::load(Some(&root().join("fixtures/tetra.obj")), &BuildOptions::default()).unwrap();
+    let opts = BuildOptions {
+        grid: GridResolution::MinDim(4),
+        ..Default::default()
+    };
+    let built = scene::load(Some(&root().join("fixtures/tetra.obj")), &opts).unwrap();
     let committed = std::fs::read(root().join("fixtures/tetra.rpsi")).unwrap();
     assert!(
         committed == *built.image,
-        "fixtures/tetra.rpsi is stale: run `cargo run --release -p raypipe -- build fixtures/tetra.obj -o fixtures/tetra.rpsi`"
+        "fixtures/tetra.rpsi is stale: run `cargo run --release -p raypipe -- build fixtures/tetra.obj -o fixtures/tetra.rpsi --grid-min-dim 4`"
     );
 }
