@@ -4,6 +4,7 @@ use core::fmt;
 
 use glam::Vec3;
 
+use crate::aabb::clip_ray;
 use crate::image::CameraRecord;
 use crate::ray::Ray;
 
@@ -131,6 +132,15 @@ impl EyeRays {
         let sy = 1.0 - ((y as f32 + 0.5) * self.inv_h) * 2.0;
         let d = self.forward + self.right * (sx * self.half_w) + self.up * (sy * self.half_h);
         Ray::new(self.eye, d.normalize())
+    }
+
+    /// Purcell 2002 §3.1.1: the eye-ray kernel also tests the ray against the scene's
+    /// bounding box and ends a ray that misses it at once (`None`). The ray's own
+    /// interval is left as it is, so traversal computes the same hits either way.
+    #[inline]
+    pub fn ray_in_scene(&self, x: u32, y: u32, bounds_min: Vec3, bounds_max: Vec3) -> Option<Ray> {
+        let ray = self.ray(x, y);
+        clip_ray(&ray, bounds_min, bounds_max).map(|_| ray)
     }
 }
 

@@ -57,6 +57,7 @@ pub fn primary_rays(
 }
 
 fn trace_all<I: Intersector>(scene: &SceneView<'_>, eye: &EyeRays, tiles: &[(u32, u32, u32, u32)]) -> u64 {
+    let (lo, hi) = scene.bounds();
     tiles
         .par_iter()
         .map(|&(x0, y0, x1, y1)| {
@@ -64,7 +65,9 @@ fn trace_all<I: Intersector>(scene: &SceneView<'_>, eye: &EyeRays, tiles: &[(u32
             let mut c = RayCounters::default();
             for y in y0..y1 {
                 for x in x0..x1 {
-                    hits += trace::<I, _>(scene, &eye.ray(x, y), &mut NoProbe, &mut c).is_some() as u64;
+                    if let Some(ray) = eye.ray_in_scene(x, y, lo, hi) {
+                        hits += trace::<I, _>(scene, &ray, &mut NoProbe, &mut c).is_some() as u64;
+                    }
                 }
             }
             hits

@@ -89,6 +89,7 @@ fn render_with<I: Intersector>(
     opts: &RenderOptions,
 ) -> Result<Frame> {
     let (w, h) = (eye.width, eye.height);
+    let (lo, hi) = scene.bounds();
     let tiles = tiles(w, h);
     let bar = progress::bar(tiles.len() as u64, "render", opts.progress);
     let done: Vec<Vec<[u8; 3]>> = in_pool(opts.threads, || {
@@ -99,9 +100,14 @@ fn render_with<I: Intersector>(
                 let mut counters = RayCounters::default();
                 for y in y0..y1 {
                     for x in x0..x1 {
-                        let ray = eye.ray(x, y);
-                        let hit = trace::<I, _>(scene, &ray, &mut NoProbe, &mut counters);
-                        out.push(rgb8(shade(scene, &ray, hit, background, &mut NoProbe)));
+                        let color = match eye.ray_in_scene(x, y, lo, hi) {
+                            Some(ray) => {
+                                let hit = trace::<I, _>(scene, &ray, &mut NoProbe, &mut counters);
+                                shade(scene, &ray, hit, background, &mut NoProbe)
+                            }
+                            None => background,
+                        };
+                        out.push(rgb8(color));
                     }
                 }
                 bar.inc(1);

@@ -96,7 +96,7 @@ fn gather_with<I: Intersector>(
     opts: &RenderOptions,
 ) -> Result<SceneStats> {
     let tiles = tiles(eye.width, eye.height);
-    let grid_box = scene.grid().map(|g| (g.min, g.max));
+    let (lo, hi) = scene.bounds();
     in_pool(opts.threads, || {
         tiles
             .par_iter()
@@ -104,12 +104,14 @@ fn gather_with<I: Intersector>(
                 let mut s = SceneStats::default();
                 for y in y0..y1 {
                     for x in x0..x1 {
-                        let ray = eye.ray(x, y);
                         let mut c = RayCounters::default();
-                        let hit = trace::<I, _>(scene, &ray, &mut s.bytes, &mut c);
-                        let missed =
-                            grid_box.is_some_and(|(lo, hi)| raypipe_core::aabb::clip_ray(&ray, lo, hi).is_none());
-                        s.add_ray(&c, hit.is_some(), missed);
+                        match eye.ray_in_scene(x, y, lo, hi) {
+                            Some(ray) => {
+                                let hit = trace::<I, _>(scene, &ray, &mut s.bytes, &mut c);
+                                s.add_ray(&c, hit.is_some(), false);
+                            }
+                            None => s.add_ray(&c, false, true),
+                        }
                     }
                 }
                 s

@@ -242,3 +242,37 @@ fn no_leak_through_shared_edges_of_a_closed_cube() {
     }
     assert_eq!(n, 17 * 17 * 3);
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 200, ..ProptestConfig::default() })]
+
+    /// Purcell's bounding-box test in the eye-ray kernel only ends rays that brute force
+    /// also finds no hit for, and every eye ray through the grid gets the brute-force hit.
+    #[test]
+    fn eye_rays_and_the_bounds_test_agree_with_brute_force(
+        soup in soup(),
+        eye in [-8.0f32..8.0, -8.0f32..8.0, -8.0f32..8.0],
+        look in point(),
+        fov in 10.0f32..120.0,
+    ) {
+        use raypipe_core::camera::{Camera, EyeRays};
+        let scene = build_soup(soup.positions.clone(), soup.triangles.clone(), Accel::Grid, 4);
+        let view = scene.view().unwrap();
+        let cam = Camera { eye: Vec3::from(eye), look_at: Vec3::from(look), up: Vec3::Y, vfov_deg: fov, width: 12, height: 9 };
+        let Ok(rays) = EyeRays::new(&cam) else { return Ok(()) };
+        let (lo, hi) = view.bounds();
+        for y in 0..9 {
+            for x in 0..12 {
+                match rays.ray_in_scene(x, y, lo, hi) {
+                    None => {
+                        let b = trace_brute_force::<Watertight, _>(&view, &rays.ray(x, y), &mut NoProbe, &mut RayCounters::default());
+                        prop_assert!(b.is_none(), "bounds test ended a ray that hits {b:?}");
+                    }
+                    Some(ray) => {
+                        check::<Watertight>(&view, &ray)?;
+                    }
+                }
+            }
+        }
+    }
+}
