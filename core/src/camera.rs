@@ -149,24 +149,12 @@ mod tests {
     use super::*;
 
     fn cam() -> Camera {
-        Camera {
-            eye: Vec3::new(0.0, 0.0, -5.0),
-            look_at: Vec3::ZERO,
-            up: Vec3::Y,
-            vfov_deg: 90.0,
-            width: 4,
-            height: 2,
-        }
+        Camera { eye: Vec3::new(0.0, 0.0, -5.0), look_at: Vec3::ZERO, up: Vec3::Y, vfov_deg: 90.0, width: 4, height: 2 }
     }
 
     #[test]
     fn centre_ray_looks_forward_and_corners_are_symmetric() {
-        let e = EyeRays::new(&Camera {
-            width: 3,
-            height: 3,
-            ..cam()
-        })
-        .unwrap();
+        let e = EyeRays::new(&Camera { width: 3, height: 3, ..cam() }).unwrap();
         let r = e.ray(1, 1);
         assert!((r.dir - Vec3::Z).length() < 1e-6);
         let a = e.ray(0, 0).dir;
@@ -179,30 +167,9 @@ mod tests {
     #[test]
     fn rejects_impossible_cameras() {
         assert_eq!(EyeRays::new(&Camera { width: 0, ..cam() }), Err(CameraError::ZeroSize));
-        assert_eq!(
-            EyeRays::new(&Camera { up: Vec3::Z, ..cam() }),
-            Err(CameraError::UpParallelToView)
-        );
-        assert_eq!(
-            EyeRays::new(&Camera {
-                look_at: cam().eye,
-                ..cam()
-            }),
-            Err(CameraError::NoViewDirection)
-        );
-        assert_eq!(
-            EyeRays::new(&Camera {
-                vfov_deg: 180.0,
-                ..cam()
-            }),
-            Err(CameraError::BadFov)
-        );
-        assert_eq!(
-            EyeRays::new(&Camera {
-                vfov_deg: f32::NAN,
-                ..cam()
-            }),
-            Err(CameraError::NonFinite)
-        );
+        assert_eq!(EyeRays::new(&Camera { up: Vec3::Z, ..cam() }), Err(CameraError::UpParallelToView));
+        assert_eq!(EyeRays::new(&Camera { look_at: cam().eye, ..cam() }), Err(CameraError::NoViewDirection));
+        assert_eq!(EyeRays::new(&Camera { vfov_deg: 180.0, ..cam() }), Err(CameraError::BadFov));
+        assert_eq!(EyeRays::new(&Camera { vfov_deg: f32::NAN, ..cam() }), Err(CameraError::NonFinite));
     }
 }

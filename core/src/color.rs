@@ -5,11 +5,7 @@
 #[inline]
 pub fn linear_to_srgb8(c: f32) -> u8 {
     let c = if c.is_nan() { 0.0 } else { c.clamp(0.0, 1.0) };
-    let s = if c <= 0.003_130_8 {
-        12.92 * c
-    } else {
-        1.055 * libm::powf(c, 1.0 / 2.4) - 0.055
-    };
+    let s = if c <= 0.003_130_8 { 12.92 * c } else { 1.055 * libm::powf(c, 1.0 / 2.4) - 0.055 };
     (s * 255.0 + 0.5) as u8
 }
 

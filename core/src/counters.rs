@@ -3,10 +3,10 @@
 /// What one ray cost. Kernels count into a local copy and the driver adds it up.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct RayCounters {
-    /// Grid voxels (or structure nodes) visited.
-    pub voxels: u32,
-    /// Voxels visited that held a non-empty triangle list.
-    pub full_voxels: u32,
+    /// Structure nodes visited: grid voxels, kd-tree or BVH nodes.
+    pub nodes: u32,
+    /// Of those, the ones whose triangles were tested: non-empty voxels, leaves.
+    pub leaves: u32,
     /// Primitive-list entries read, including each list's null terminator.
     pub list_entries: u32,
     /// Ray–triangle intersection tests performed.
@@ -16,8 +16,8 @@ pub struct RayCounters {
 impl RayCounters {
     /// Adds another ray's counters to these.
     pub fn add(&mut self, other: &RayCounters) {
-        self.voxels += other.voxels;
-        self.full_voxels += other.full_voxels;
+        self.nodes += other.nodes;
+        self.leaves += other.leaves;
         self.list_entries += other.list_entries;
         self.tri_tests += other.tri_tests;
     }

@@ -110,11 +110,7 @@ impl Dda {
             axis = 2;
         }
         let t_boundary = self.t_next[axis];
-        let t_exit = if t_boundary < self.t_end {
-            t_boundary.max(self.t_enter)
-        } else {
-            self.t_end
-        };
+        let t_exit = if t_boundary < self.t_end { t_boundary.max(self.t_enter) } else { self.t_end };
         let [x, y, z] = self.cell;
         let voxel = Voxel {
             index: (x + self.dims[0] * (y + self.dims[1] * z)) as u32,

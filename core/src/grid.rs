@@ -41,10 +41,7 @@ pub struct GridTraversal {
 impl GridTraversal {
     /// Starts a ray; a ray missing the grid box is done at once.
     pub fn new(grid: &GridView<'_>, ray: &Ray) -> GridTraversal {
-        GridTraversal {
-            dda: Dda::new(grid, ray),
-            best: None,
-        }
+        GridTraversal { dda: Dda::new(grid, ray), best: None }
     }
 
     /// True if the ray missed the grid's bounding box (Purcell's early termination).
@@ -125,8 +122,8 @@ pub fn trace_grid<I: Intersector, P: MemoryProbe>(
             }
         }
     }
-    counters.voxels += voxels;
-    counters.full_voxels += full;
+    counters.nodes += voxels;
+    counters.leaves += full;
     counters.list_entries += entries;
     counters.tri_tests += tests;
     trav.best

@@ -10,6 +10,7 @@
 //! * [`camera`]: pinhole eye rays and Purcell's scene-bounding-box test;
 //! * [`dda`]: the 3D-DDA of Amanatides & Woo, one voxel per step;
 //! * [`grid`]: uniform-grid traversal over Purcell's Figure 4 layout;
+//! * [`bvh`] and [`kdtree`]: tree traversal with a fixed-capacity stack;
 //! * [`watertight`] and [`moller_trumbore`]: ray–triangle intersection;
 //! * [`brute_force`]: the reference tracer every structure must agree with;
 //! * [`shade`]: Lambert shading with one point light plus ambient.
@@ -29,6 +30,7 @@ compile_error!("raypipe-core reads little-endian scene images in place and needs
 
 pub mod aabb;
 pub mod brute_force;
+pub mod bvh;
 pub mod camera;
 pub mod color;
 pub mod counters;
@@ -36,9 +38,11 @@ pub mod dda;
 pub mod grid;
 pub mod hit;
 pub mod image;
+pub mod kdtree;
 pub mod moller_trumbore;
 pub mod probe;
 pub mod ray;
+pub mod ray_box;
 pub mod shade;
 pub mod triangle;
 pub mod watertight;

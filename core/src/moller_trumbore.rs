@@ -27,10 +27,7 @@ impl Intersector for MollerTrumbore {
 
     #[inline]
     fn prepare(ray: &Ray) -> PlainRay {
-        PlainRay {
-            org: ray.origin,
-            dir: ray.dir,
-        }
+        PlainRay { org: ray.origin, dir: ray.dir }
     }
 
     #[inline]
@@ -68,11 +65,7 @@ mod tests {
     use crate::watertight::Watertight;
 
     fn tri() -> [Vec3; 3] {
-        [
-            Vec3::new(0.0, 0.0, 1.0),
-            Vec3::new(1.0, 0.0, 1.0),
-            Vec3::new(0.0, 1.0, 1.0),
-        ]
+        [Vec3::new(0.0, 0.0, 1.0), Vec3::new(1.0, 0.0, 1.0), Vec3::new(0.0, 1.0, 1.0)]
     }
 
     type Tuv = Option<(f32, f32, f32)>;

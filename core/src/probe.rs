@@ -21,12 +21,7 @@ pub enum DataClass {
 
 impl DataClass {
     /// Every class, in a fixed order (for reports).
-    pub const ALL: [DataClass; 4] = [
-        DataClass::Nodes,
-        DataClass::PrimLists,
-        DataClass::Triangles,
-        DataClass::Shading,
-    ];
+    pub const ALL: [DataClass; 4] = [DataClass::Nodes, DataClass::PrimLists, DataClass::Triangles, DataClass::Shading];
 
     /// A short lower-case name for reports.
     pub const fn name(self) -> &'static str {

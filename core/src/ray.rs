@@ -20,12 +20,7 @@ pub struct Ray {
 impl Ray {
     /// A ray over `[0, +inf]`.
     pub fn new(origin: Vec3, dir: Vec3) -> Ray {
-        Ray {
-            origin,
-            dir,
-            t_min: 0.0,
-            t_max: f32::INFINITY,
-        }
+        Ray { origin, dir, t_min: 0.0, t_max: f32::INFINITY }
     }
 
     /// The point at parameter `t`.

@@ -26,11 +26,9 @@ pub fn shade<P: MemoryProbe>(
 
     let idx = scene.triangle_indices(hit.prim);
     let (mut normal, mut tint) = (geometric, Vec3::ONE);
-    if let (Some(a), Some(b), Some(c)) = (
-        scene.shading_vertex(idx[0], probe),
-        scene.shading_vertex(idx[1], probe),
-        scene.shading_vertex(idx[2], probe),
-    ) {
+    if let (Some(a), Some(b), Some(c)) =
+        (scene.shading_vertex(idx[0], probe), scene.shading_vertex(idx[1], probe), scene.shading_vertex(idx[2], probe))
+    {
         let n = Vec3::from(a.normal) * w0 + Vec3::from(b.normal) * w1 + Vec3::from(c.normal) * w2;
         if n.length_squared() > 0.0 && n.is_finite() {
             normal = n;

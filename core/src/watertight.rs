@@ -47,15 +47,7 @@ impl Intersector for Watertight {
         if d[kz] < 0.0 {
             core::mem::swap(&mut kx, &mut ky);
         }
-        ShearedRay {
-            org: ray.origin,
-            kx,
-            ky,
-            kz,
-            sx: d[kx] / d[kz],
-            sy: d[ky] / d[kz],
-            sz: 1.0 / d[kz],
-        }
+        ShearedRay { org: ray.origin, kx, ky, kz, sx: d[kx] / d[kz], sy: d[ky] / d[kz], sz: 1.0 / d[kz] }
     }
 
     #[inline(always)]

@@ -19,10 +19,7 @@ impl AlignedBytes {
     pub fn from_slice(bytes: &[u8]) -> AlignedBytes {
         let mut lines = vec![Line([0; 64]); bytes.len().div_ceil(64)];
         bytemuck::cast_slice_mut::<Line, u8>(&mut lines)[..bytes.len()].copy_from_slice(bytes);
-        AlignedBytes {
-            lines,
-            len: bytes.len(),
-        }
+        AlignedBytes { lines, len: bytes.len() }
     }
 
     /// Reads a whole file into an aligned buffer.

@@ -65,19 +65,13 @@ impl CameraSpec {
                 "fov" => spec.fov = Some(floats(1)?[0]),
                 "background" => spec.background = Some(v3(3)?),
                 "size" => {
-                    let parse = |v: &str| {
-                        v.parse::<u32>()
-                            .map_err(|_| anyhow!("{}: '{v}' is not a pixel count", at()))
-                    };
+                    let parse = |v: &str| v.parse::<u32>().map_err(|_| anyhow!("{}: '{v}' is not a pixel count", at()));
                     match vals.as_slice() {
                         [w, h] => spec.size = Some((parse(w)?, parse(h)?)),
                         _ => bail!("{}: 'size' takes width and height", at()),
                     }
                 }
-                other => bail!(
-                    "{}: unknown camera key '{other}' (eye, look_at, up, fov, size, background)",
-                    at()
-                ),
+                other => bail!("{}: unknown camera key '{other}' (eye, look_at, up, fov, size, background)", at()),
             }
         }
         Ok(spec)
@@ -142,9 +136,6 @@ mod tests {
         assert_eq!(e, "c:3: 'eye' takes 3 numbers, found 2");
         let e = CameraSpec::parse("c", "fov nan\n").unwrap_err().to_string();
         assert!(e.contains("not a finite number"), "{e}");
-        assert!(CameraSpec::parse("c", "zoom 2\n")
-            .unwrap_err()
-            .to_string()
-            .contains("unknown camera key"));
+        assert!(CameraSpec::parse("c", "zoom 2\n").unwrap_err().to_string().contains("unknown camera key"));
     }
 }

@@ -36,7 +36,7 @@ pub enum Command {
     Build(BuildArgs),
     /// Render a scene to a PNG (the built-in Cornell box when no scene is given).
     Render(RenderArgs),
-    /// Print Purcell's scene statistics for a view: hits, voxels and triangles per ray.
+    /// Print Purcell's scene statistics for a view: hits, nodes and triangles per ray.
     Stats(StatsArgs),
     /// Measure build time, image size and primary-ray throughput.
     Bench(BenchArgs),
@@ -63,10 +63,9 @@ impl StructureArgs {
             accel: self.accel,
             grid: match self.grid_min_dim {
                 Some(n) => GridResolution::MinDim(n),
-                None => GridResolution::Auto {
-                    cells_per_triangle: self.grid_density,
-                },
+                None => GridResolution::Auto { cells_per_triangle: self.grid_density },
             },
+            ..Default::default()
         }
     }
 }
@@ -110,10 +109,7 @@ impl CameraArgs {
             background: None,
         };
         let cam = spec.merged(flags).apply(base);
-        let what = self
-            .camera
-            .as_ref()
-            .map_or("camera".to_string(), |p| p.display().to_string());
+        let what = self.camera.as_ref().map_or("camera".to_string(), |p| p.display().to_string());
         render::eye_rays(&cam, &what)?;
         Ok(cam)
     }
@@ -132,9 +128,7 @@ fn parse_vec3(s: &str) -> Result<[f32; 3], String> {
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s
-        .split_once(['x', 'X'])
-        .ok_or_else(|| format!("expected WIDTHxHEIGHT, got '{s}'"))?;
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("expected WIDTHxHEIGHT, got '{s}'"))?;
     let w: u32 = w.parse().map_err(|_| format!("'{w}' is not a pixel count"))?;
     let h: u32 = h.parse().map_err(|_| format!("'{h}' is not a pixel count"))?;
     if w == 0 || h == 0 {
@@ -202,6 +196,9 @@ pub struct StatsArgs {
 pub struct BenchArgs {
     /// OBJ files or scene images to measure besides the built-in Cornell box.
     pub scenes: Vec<PathBuf>,
+    /// Structures to build and measure (for OBJ scenes; an image has its own).
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Accel::Grid, Accel::Kd, Accel::Bvh])]
+    pub accel: Vec<Accel>,
     /// Image size of the primary-ray frame.
     #[arg(long, value_name = "WxH", value_parser = parse_size, default_value = "1024x1024")]
     pub size: (u32, u32),
@@ -214,8 +211,9 @@ pub struct BenchArgs {
     /// Leave out the built-in Cornell box.
     #[arg(long)]
     pub no_default: bool,
-    #[command(flatten)]
-    pub structure: StructureArgs,
+    /// Grid cells along the shortest axis (default: derived from the triangle count).
+    #[arg(long, value_name = "N")]
+    pub grid_min_dim: Option<u32>,
     /// Ray–triangle intersection test.
     #[arg(long, value_enum, default_value_t = IntersectorKind::Watertight)]
     pub intersector: IntersectorKind,
@@ -252,6 +250,28 @@ fn warn(scene: &Scene) {
     }
 }
 
+fn accel_name(a: Accel) -> &'static str {
+    match a {
+        Accel::Grid => "grid",
+        Accel::Kd => "kd-tree",
+        Accel::Bvh => "BVH",
+        Accel::None => "brute force",
+    }
+}
+
+/// A short description of the structure a scene image holds.
+fn structure_summary(view: &raypipe_core::SceneView<'_>) -> String {
+    if let Some(g) = view.grid() {
+        format!("grid {}x{}x{}", g.dims[0], g.dims[1], g.dims[2])
+    } else if let Some(b) = view.bvh() {
+        format!("BVH {} nodes", b.node_count())
+    } else if let Some(k) = view.kdtree() {
+        format!("kd {} nodes", k.node_count())
+    } else {
+        "none".to_string()
+    }
+}
+
 fn fmt_bytes(b: usize) -> String {
     if b >= 1 << 20 {
         format!("{:.2} MiB", b as f64 / (1u64 << 20) as f64)
@@ -261,17 +281,9 @@ fn fmt_bytes(b: usize) -> String {
 }
 
 fn cmd_build(a: BuildArgs) -> Result<()> {
-    let ext = a
-        .scene
-        .extension()
-        .and_then(|e| e.to_str())
-        .unwrap_or("")
-        .to_ascii_lowercase();
+    let ext = a.scene.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
     if ext == "rpsi" {
-        bail!(
-            "{}: is already a scene image; build takes an OBJ file",
-            a.scene.display()
-        );
+        bail!("{}: is already a scene image; build takes an OBJ file", a.scene.display());
     }
     let start = Instant::now();
     let mut scene = scene::load(Some(&a.scene), &a.structure.options())?;
@@ -284,10 +296,7 @@ fn cmd_build(a: BuildArgs) -> Result<()> {
         || a.camera.size.is_some();
     if has_camera_flags {
         // Rebuild with the chosen camera as the image's default.
-        let base = *scene
-            .view()?
-            .camera()
-            .ok_or_else(|| anyhow!("internal error: built image lacks a camera"))?;
+        let base = *scene.view()?.camera().ok_or_else(|| anyhow!("internal error: built image lacks a camera"))?;
         let cam = a.camera.resolve(&base)?;
         let (mesh, notes) = crate::obj::load_obj_file(&a.scene)?;
         let spec = CameraSpec {
@@ -298,40 +307,47 @@ fn cmd_build(a: BuildArgs) -> Result<()> {
             size: Some((cam.width, cam.height)),
             background: Some(cam.background),
         };
-        scene = scene::build(
-            a.scene.display().to_string(),
-            mesh,
-            notes.warnings,
-            spec,
-            &a.structure.options(),
-        )?;
+        scene = scene::build(a.scene.display().to_string(), mesh, notes.warnings, spec, &a.structure.options())?;
     }
     let elapsed = start.elapsed().as_secs_f64();
     output::write_bytes(&a.output, &scene.image)?;
-    let r = scene
-        .report
-        .as_ref()
-        .ok_or_else(|| anyhow!("internal error: no build report"))?;
+    let r = scene.report.as_ref().ok_or_else(|| anyhow!("internal error: no build report"))?;
     println!("scene        {}", a.scene.display());
-    println!(
-        "triangles    {} ({} degenerate), vertices {}",
-        r.triangles, r.degenerate, r.vertices
-    );
-    if a.structure.accel == Accel::Grid {
-        let [x, y, z] = r.dims;
-        println!(
-            "grid         {x} x {y} x {z} = {} cells, {} non-empty ({:.1}%)",
-            r.cells,
-            r.full_cells,
-            100.0 * r.full_cells as f64 / r.cells.max(1) as f64
-        );
-        println!(
-            "lists        {} entries ({} triangle references, {:.2} per triangle)",
-            r.list_entries,
-            r.references,
-            r.references as f64 / r.triangles.max(1) as f64
-        );
-        println!("grid build   {:.3} s", r.grid_seconds);
+    println!("triangles    {} ({} degenerate), vertices {}", r.triangles, r.degenerate, r.vertices);
+    match a.structure.accel {
+        Accel::Kd | Accel::Bvh => {
+            println!(
+                "{:<12} {} nodes, depth {}, {} triangle references ({:.2} per triangle)",
+                accel_name(a.structure.accel),
+                r.tree_nodes,
+                r.tree_depth,
+                r.references,
+                r.references as f64 / r.triangles.max(1) as f64
+            );
+            println!(
+                "build        {:.3} s, structure {} bytes ({:.1} bytes/triangle)",
+                r.grid_seconds,
+                r.structure_bytes,
+                r.structure_bytes as f64 / r.triangles.max(1) as f64
+            );
+        }
+        Accel::None => {}
+        Accel::Grid => {
+            let [x, y, z] = r.dims;
+            println!(
+                "grid         {x} x {y} x {z} = {} cells, {} non-empty ({:.1}%)",
+                r.cells,
+                r.full_cells,
+                100.0 * r.full_cells as f64 / r.cells.max(1) as f64
+            );
+            println!(
+                "lists        {} entries ({} triangle references, {:.2} per triangle)",
+                r.list_entries,
+                r.references,
+                r.references as f64 / r.triangles.max(1) as f64
+            );
+            println!("grid build   {:.3} s", r.grid_seconds);
+        }
     }
     println!(
         "image        {} bytes ({}), {:.1} bytes/triangle",
@@ -364,11 +380,7 @@ fn cmd_render(a: RenderArgs) -> Result<()> {
     warn(&scene);
     let view = scene.view()?;
     let cam = camera_for(&scene, &a.camera)?;
-    let opts = RenderOptions {
-        threads: a.threads,
-        intersector: a.intersector,
-        progress: true,
-    };
+    let opts = RenderOptions { threads: a.threads, intersector: a.intersector, progress: true };
     let start = Instant::now();
     let frame = render::render(&view, &cam, &opts)?;
     let secs = start.elapsed().as_secs_f64();
@@ -401,56 +413,24 @@ fn cmd_stats(a: StatsArgs) -> Result<()> {
     warn(&scene);
     let view = scene.view()?;
     let cam = camera_for(&scene, &a.camera)?;
-    let opts = RenderOptions {
-        threads: a.threads,
-        intersector: a.intersector,
-        progress: false,
-    };
+    let opts = RenderOptions { threads: a.threads, intersector: a.intersector, progress: false };
     let s = stats::gather(&view, &cam, &opts)?;
-    println!(
-        "scene                     {} ({} triangles)",
-        scene.name,
-        view.triangle_count()
-    );
-    match view.grid() {
-        Some(g) => println!(
-            "structure                 grid {} x {} x {}",
-            g.dims[0], g.dims[1], g.dims[2]
-        ),
-        None => println!("structure                 none (brute force)"),
-    }
-    println!(
-        "view                      {}x{} = {} primary rays",
-        cam.width, cam.height, s.rays
-    );
-    println!(
-        "rays that hit             {:.2}%",
-        100.0 * s.hits as f64 / s.rays.max(1) as f64
-    );
-    println!(
-        "rays missing scene bounds {:.2}%",
-        100.0 * s.missed_bounds as f64 / s.rays.max(1) as f64
-    );
-    println!(
-        "voxels visited per ray    avg {:.2}, max {}",
-        s.per_ray(s.total.voxels),
-        s.max_voxels
-    );
-    println!("non-empty voxels per ray  avg {:.2}", s.per_ray(s.total.full_voxels));
-    println!(
-        "triangles tested per ray  avg {:.2}, max {}",
-        s.per_ray(s.total.tri_tests),
-        s.max_tri_tests
-    );
+    println!("scene                     {} ({} triangles)", scene.name, view.triangle_count());
+    println!("structure                 {}", structure_summary(&view));
+    let (node, leaf) = if view.grid().is_some() { ("voxels", "non-empty voxels") } else { ("nodes", "leaves") };
+    println!("view                      {}x{} = {} primary rays", cam.width, cam.height, s.rays);
+    println!("rays that hit             {:.2}%", 100.0 * s.hits as f64 / s.rays.max(1) as f64);
+    println!("rays missing scene bounds {:.2}%", 100.0 * s.missed_bounds as f64 / s.rays.max(1) as f64);
+    println!("{:<25} avg {:.2}, max {}", format!("{node} visited per ray"), s.per_ray(s.total.nodes), s.max_nodes);
+    println!("{:<25} avg {:.2}", format!("{leaf} per ray"), s.per_ray(s.total.leaves));
+    println!("triangles tested per ray  avg {:.2}, max {}", s.per_ray(s.total.tri_tests), s.max_tri_tests);
     println!(
         "list entries read         {} total, {:.2} per ray",
         s.total.list_entries,
         s.per_ray(s.total.list_entries)
     );
-    let classes: Vec<String> = DataClass::ALL
-        .iter()
-        .map(|c| format!("{} {:.1}", c.name(), s.per_ray(s.bytes.bytes[*c as usize])))
-        .collect();
+    let classes: Vec<String> =
+        DataClass::ALL.iter().map(|c| format!("{} {:.1}", c.name(), s.per_ray(s.bytes.bytes[*c as usize]))).collect();
     println!("bytes read per ray        {}", classes.join(", "));
     Ok(())
 }
@@ -470,67 +450,67 @@ fn cmd_bench(a: BenchArgs) -> Result<()> {
     if targets.is_empty() {
         bail!("nothing to measure: --no-default without scenes");
     }
+    let kernel = match a.intersector {
+        IntersectorKind::Watertight => "watertight",
+        IntersectorKind::MollerTrumbore => "moller-trumbore",
+    };
     println!(
-        "primary rays {}x{}, trace only (eye ray + {} + {}), median of {} runs",
-        a.size.0,
-        a.size.1,
-        match a.structure.accel {
-            Accel::Grid => "grid",
-            Accel::None => "brute force",
-        },
-        match a.intersector {
-            IntersectorKind::Watertight => "watertight",
-            IntersectorKind::MollerTrumbore => "moller-trumbore",
-        },
-        a.runs
+        "primary rays {}x{}, trace only (eye ray, traversal, {kernel} intersection), median of {} runs",
+        a.size.0, a.size.1, a.runs
     );
     println!(
-        "{:<28} {:>9} {:>16} {:>9} {:>10} {:>7} {:>10} {:>10} {:>7}",
-        "scene", "tris", "grid", "build s", "image", "B/tri", "Mrays/s 1t", "Mrays/s", "threads"
+        "{:<24} {:>8} {:<22} {:>8} {:>8} {:>10} {:>10} {:>8}",
+        "scene", "tris", "structure", "build s", "B/tri", "Mrays/s 1t", "Mrays/s", "threads"
     );
     for t in targets {
-        // Build time: median of up to three builds (one for large scenes).
-        let mut builds = Vec::new();
-        let mut scene = None;
-        for _ in 0..3 {
-            let start = Instant::now();
-            let s = scene::load(t.as_deref(), &a.structure.options())?;
-            builds.push(start.elapsed().as_secs_f64());
-            let big = s.view()?.triangle_count() > 20_000;
-            scene = Some(s);
-            if big {
-                break;
-            }
-        }
-        let scene = scene.ok_or_else(|| anyhow!("no scene"))?;
-        let view = scene.view()?;
-        let base = camera_for(&scene, &CameraArgs::default())?;
-        let cam = CameraRecord {
-            width: a.size.0,
-            height: a.size.1,
-            ..base
-        };
-        let r = bench::primary_rays(&view, &cam, a.intersector, a.runs, a.threads)?;
-        let grid = view.grid().map_or("-".to_string(), |g| {
-            format!("{}x{}x{}", g.dims[0], g.dims[1], g.dims[2])
-        });
+        let source = scene::load_source(t.as_deref())?;
         let name = t.as_ref().map_or("built-in Cornell box".to_string(), |p| {
-            p.file_name()
-                .map_or(p.display().to_string(), |f| f.to_string_lossy().into_owned())
+            p.file_name().map_or(p.display().to_string(), |f| f.to_string_lossy().into_owned())
         });
-        println!(
-            "{:<28} {:>9} {:>16} {:>9.3} {:>10} {:>7.1} {:>10.2} {:>10.2} {:>7}",
-            name,
-            view.triangle_count(),
-            grid,
-            median(&builds),
-            fmt_bytes(view.bytes().len()),
-            view.bytes().len() as f64 / view.triangle_count().max(1) as f64,
-            r.mrays_single,
-            r.mrays_all,
-            r.threads
-        );
-        let _ = r.hits;
+        let accels: Vec<Option<Accel>> = match source {
+            scene::Source::Image(_) => vec![None],
+            scene::Source::Mesh { .. } => a.accel.iter().copied().map(Some).collect(),
+        };
+        for accel in accels {
+            let opts = BuildOptions {
+                accel: accel.unwrap_or_default(),
+                grid: match a.grid_min_dim {
+                    Some(n) => GridResolution::MinDim(n),
+                    None => GridResolution::default(),
+                },
+                ..Default::default()
+            };
+            // Structure build time: median of up to three builds (one for large scenes).
+            let mut builds = Vec::new();
+            let mut built = None;
+            for _ in 0..3 {
+                let s = source.build(&opts)?;
+                let big = s.view()?.triangle_count() > 20_000;
+                builds.push(s.report.as_ref().map_or(0.0, |r| r.grid_seconds));
+                built = Some(s);
+                if big {
+                    break;
+                }
+            }
+            let scene = built.ok_or_else(|| anyhow!("no scene"))?;
+            let view = scene.view()?;
+            let base = camera_for(&scene, &CameraArgs::default())?;
+            let cam = CameraRecord { width: a.size.0, height: a.size.1, ..base };
+            let r = bench::primary_rays(&view, &cam, a.intersector, a.runs, a.threads)?;
+            let bytes_per_tri = scene.report.as_ref().map_or(view.bytes().len(), |r| r.structure_bytes) as f64
+                / view.triangle_count().max(1) as f64;
+            println!(
+                "{:<24} {:>8} {:<22} {:>8.3} {:>8.1} {:>10.2} {:>10.2} {:>8}",
+                name,
+                view.triangle_count(),
+                structure_summary(&view),
+                median(&builds),
+                bytes_per_tri,
+                r.mrays_single,
+                r.mrays_all,
+                r.threads
+            );
+        }
     }
     Ok(())
 }

@@ -41,9 +41,7 @@ pub enum GridResolution {
 
 impl Default for GridResolution {
     fn default() -> Self {
-        GridResolution::Auto {
-            cells_per_triangle: DEFAULT_CELLS_PER_TRIANGLE,
-        }
+        GridResolution::Auto { cells_per_triangle: DEFAULT_CELLS_PER_TRIANGLE }
     }
 }
 
@@ -194,11 +192,5 @@ pub fn build_grid(mesh: &Mesh, res: GridResolution) -> Result<BuiltGrid> {
         dims,
         cell_count: cell_count as u32,
     };
-    Ok(BuiltGrid {
-        record,
-        cells,
-        lists,
-        references: refs.len() as u64,
-        full_cells,
-    })
+    Ok(BuiltGrid { record, cells, lists, references: refs.len() as u64, full_cells })
 }

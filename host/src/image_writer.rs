@@ -9,7 +9,9 @@ use raypipe_core::image::{
 };
 
 use crate::aligned::AlignedBytes;
+use crate::bvh_builder::BuiltBvh;
 use crate::grid_builder::BuiltGrid;
+use crate::kd_builder::BuiltKd;
 use crate::mesh::Mesh;
 
 /// Sections collected before layout.
@@ -49,8 +51,7 @@ impl ImageWriter {
 
     fn add<T: Pod>(&mut self, kind: SectionKind, records: &[T]) {
         debug_assert_eq!(std::mem::size_of::<T>() as u32, kind.record_size());
-        self.sections
-            .push((kind, bytemuck::cast_slice(records).to_vec(), records.len() as u32));
+        self.sections.push((kind, bytemuck::cast_slice(records).to_vec(), records.len() as u32));
     }
 
     /// Adds the uniform grid.
@@ -59,6 +60,22 @@ impl ImageWriter {
         self.add(SectionKind::Grid, &[grid.record]);
         self.add(SectionKind::GridCells, &grid.cells);
         self.add(SectionKind::PrimLists, &grid.lists);
+        self
+    }
+
+    /// Adds a BVH.
+    pub fn bvh(&mut self, bvh: &BuiltBvh) -> &mut Self {
+        self.accel = AccelKind::Bvh as u32;
+        self.add(SectionKind::BvhNodes, &bvh.nodes);
+        self.add(SectionKind::PrimLists, &bvh.prims);
+        self
+    }
+
+    /// Adds a kd-tree.
+    pub fn kdtree(&mut self, kd: &BuiltKd) -> &mut Self {
+        self.accel = AccelKind::KdTree as u32;
+        self.add(SectionKind::KdNodes, &kd.nodes);
+        self.add(SectionKind::PrimLists, &kd.prims);
         self
     }
 

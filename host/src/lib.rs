@@ -7,11 +7,13 @@
 
 pub mod aligned;
 pub mod bench;
+pub mod bvh_builder;
 pub mod camera_file;
 pub mod cli;
 pub mod default_scene;
 pub mod grid_builder;
 pub mod image_writer;
+pub mod kd_builder;
 pub mod mesh;
 pub mod obj;
 pub mod output;

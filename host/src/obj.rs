@@ -17,12 +17,7 @@ pub struct LoadNotes {
 }
 
 fn load_options() -> tobj::LoadOptions {
-    tobj::LoadOptions {
-        triangulate: true,
-        single_index: true,
-        ignore_points: true,
-        ignore_lines: true,
-    }
+    tobj::LoadOptions { triangulate: true, single_index: true, ignore_points: true, ignore_lines: true }
 }
 
 /// Loads an OBJ file (and the MTL files it names) into a [`Mesh`].
@@ -45,9 +40,7 @@ fn load_obj_gz(path: &Path, name: &str) -> Result<(Mesh, LoadNotes)> {
     use std::io::Read;
     let file = std::fs::File::open(path).map_err(|e| anyhow!("{name}: cannot read: {e}"))?;
     let mut text = Vec::new();
-    flate2::read::GzDecoder::new(file)
-        .read_to_end(&mut text)
-        .map_err(|e| anyhow!("{name}: cannot decompress: {e}"))?;
+    flate2::read::GzDecoder::new(file).read_to_end(&mut text).map_err(|e| anyhow!("{name}: cannot decompress: {e}"))?;
     let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
     let mut reader = std::io::BufReader::new(text.as_slice());
     let result = tobj::load_obj_buf(&mut reader, &load_options(), |mtl| {
@@ -81,9 +74,7 @@ fn convert(name: &str, result: tobj::LoadResult) -> Result<(Mesh, LoadNotes)> {
     let materials = match materials {
         Ok(m) => m,
         Err(tobj::LoadError::OpenFileFailed) => {
-            notes.warnings.push(format!(
-                "{name}: material library not found; using the default material"
-            ));
+            notes.warnings.push(format!("{name}: material library not found; using the default material"));
             Vec::new()
         }
         Err(e) => bail!("{name}: malformed MTL: {}", describe(&e)),
@@ -114,8 +105,7 @@ fn convert(name: &str, result: tobj::LoadResult) -> Result<(Mesh, LoadNotes)> {
         let base = mesh.positions.len() as u32;
         let nv = m.positions.len() / 3;
         for i in 0..nv {
-            mesh.positions
-                .push([m.positions[3 * i], m.positions[3 * i + 1], m.positions[3 * i + 2]]);
+            mesh.positions.push([m.positions[3 * i], m.positions[3 * i + 1], m.positions[3 * i + 2]]);
             if shading {
                 let get3 = |v: &Vec<f32>, d: [f32; 3]| {
                     if v.len() >= 3 * nv {
@@ -124,11 +114,8 @@ fn convert(name: &str, result: tobj::LoadResult) -> Result<(Mesh, LoadNotes)> {
                         d
                     }
                 };
-                let uv = if m.texcoords.len() >= 2 * nv {
-                    [m.texcoords[2 * i], m.texcoords[2 * i + 1]]
-                } else {
-                    [0.0; 2]
-                };
+                let uv =
+                    if m.texcoords.len() >= 2 * nv { [m.texcoords[2 * i], m.texcoords[2 * i + 1]] } else { [0.0; 2] };
                 mesh.shading.push(ShadingVertex {
                     normal: get3(&m.normals, [0.0; 3]),
                     uv,
@@ -147,10 +134,7 @@ fn convert(name: &str, result: tobj::LoadResult) -> Result<(Mesh, LoadNotes)> {
         for t in m.indices.chunks_exact(3) {
             let tri = [t[0] + base, t[1] + base, t[2] + base];
             if tri.iter().any(|&v| v >= base + nv as u32) {
-                bail!(
-                    "{name}: malformed OBJ: a face in object '{}' references a missing vertex",
-                    model.name
-                );
+                bail!("{name}: malformed OBJ: a face in object '{}' references a missing vertex", model.name);
             }
             mesh.triangles.push(tri);
             mesh.tri_materials.push(material);
@@ -159,9 +143,9 @@ fn convert(name: &str, result: tobj::LoadResult) -> Result<(Mesh, LoadNotes)> {
     mesh.validate(name)?;
     let degenerate = mesh.degenerate_count();
     if degenerate > 0 {
-        notes.warnings.push(format!(
-            "{name}: {degenerate} degenerate (zero-area) triangles kept; they can never be hit"
-        ));
+        notes
+            .warnings
+            .push(format!("{name}: {degenerate} degenerate (zero-area) triangles kept; they can never be hit"));
     }
     Ok((mesh, notes))
 }
@@ -182,12 +166,7 @@ fn material_record(file: &str, m: &tobj::Material) -> Result<MaterialRecord> {
     if let Some(ke) = m.emissive {
         r.emission = ke;
     }
-    let all = r
-        .diffuse
-        .iter()
-        .chain(&r.specular)
-        .chain(&r.emission)
-        .chain([&r.shininess, &r.ior, &r.dissolve]);
+    let all = r.diffuse.iter().chain(&r.specular).chain(&r.emission).chain([&r.shininess, &r.ior, &r.dissolve]);
     if all.clone().any(|c| !c.is_finite() || *c < 0.0) {
         bail!("{file}: material '{}' has a negative, NaN or infinite value", m.name);
     }
@@ -220,9 +199,7 @@ pub fn read_head(path: &Path, n: usize) -> Result<Vec<u8>> {
     use std::io::Read;
     let mut f = std::fs::File::open(path).with_context(|| format!("{}: cannot open", path.display()))?;
     let mut buf = vec![0; n];
-    let got = f
-        .read(&mut buf)
-        .with_context(|| format!("{}: cannot read", path.display()))?;
+    let got = f.read(&mut buf).with_context(|| format!("{}: cannot read", path.display()))?;
     buf.truncate(got);
     Ok(buf)
 }

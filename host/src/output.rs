@@ -25,8 +25,7 @@ pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut dyn Write) -> Result<()>
         fill(&mut w).map_err(|e| anyhow!("{name}: {e}"))?;
         w.flush().map_err(|e| anyhow!("{name}: cannot write: {e}"))?;
     }
-    tmp.persist(path)
-        .map_err(|e| anyhow!("{name}: cannot write: {}", e.error))?;
+    tmp.persist(path).map_err(|e| anyhow!("{name}: cannot write: {}", e.error))?;
     Ok(())
 }
 
@@ -38,9 +37,7 @@ pub fn write_png(path: &Path, width: u32, height: u32, rgb: &[[u8; 3]]) -> Resul
         enc.set_depth(png::BitDepth::Eight);
         enc.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
         let mut writer = enc.write_header().map_err(|e| anyhow!("cannot write PNG: {e}"))?;
-        writer
-            .write_image_data(rgb.as_flattened())
-            .map_err(|e| anyhow!("cannot write PNG: {e}"))?;
+        writer.write_image_data(rgb.as_flattened()).map_err(|e| anyhow!("cannot write PNG: {e}"))?;
         writer.finish().map_err(|e| anyhow!("cannot write PNG: {e}"))?;
         Ok(())
     })

@@ -31,11 +31,7 @@ pub struct RenderOptions {
 
 impl Default for RenderOptions {
     fn default() -> Self {
-        RenderOptions {
-            threads: None,
-            intersector: IntersectorKind::Watertight,
-            progress: false,
-        }
+        RenderOptions { threads: None, intersector: IntersectorKind::Watertight, progress: false }
     }
 }
 
@@ -124,9 +120,5 @@ fn render_with<I: Intersector>(
             pixels[start..start + tw].copy_from_slice(chunk);
         }
     }
-    Ok(Frame {
-        width: w,
-        height: h,
-        pixels,
-    })
+    Ok(Frame { width: w, height: h, pixels })
 }

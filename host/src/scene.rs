@@ -10,10 +10,12 @@ use raypipe_core::image::{CameraRecord, LightRecord, MAGIC};
 use raypipe_core::SceneView;
 
 use crate::aligned::AlignedBytes;
+use crate::bvh_builder::{build_bvh, BvhParams};
 use crate::camera_file::CameraSpec;
 use crate::default_scene;
 use crate::grid_builder::{build_grid, GridResolution};
 use crate::image_writer::ImageWriter;
+use crate::kd_builder::{build_kdtree, KdParams};
 use crate::mesh::Mesh;
 use crate::obj;
 
@@ -23,6 +25,10 @@ pub enum Accel {
     /// Purcell's uniform grid.
     #[default]
     Grid,
+    /// kd-tree (SAH, Wald's 8-byte nodes).
+    Kd,
+    /// Bounding volume hierarchy (binned SAH, 32-byte nodes).
+    Bvh,
     /// None: every ray tests every triangle (the reference).
     None,
 }
@@ -34,6 +40,10 @@ pub struct BuildOptions {
     pub accel: Accel,
     /// Grid resolution.
     pub grid: GridResolution,
+    /// kd-tree cost constants.
+    pub kd: KdParams,
+    /// BVH cost constants.
+    pub bvh: BvhParams,
 }
 
 /// What a build produced, for `raypipe build` and `bench`.
@@ -57,8 +67,14 @@ pub struct BuildReport {
     pub list_entries: u64,
     /// Bytes of the image.
     pub image_bytes: usize,
-    /// Seconds spent building the grid.
+    /// Seconds spent building the acceleration structure.
     pub grid_seconds: f64,
+    /// Tree nodes (kd-tree or BVH).
+    pub tree_nodes: usize,
+    /// Depth of the tree.
+    pub tree_depth: u32,
+    /// Bytes of the acceleration structure (nodes or cells, and primitive lists).
+    pub structure_bytes: usize,
     /// Warnings to show the user.
     pub warnings: Vec<String>,
 }
@@ -80,15 +96,46 @@ impl Scene {
     }
 }
 
-/// Loads the scene the user named, or the built-in default when `path` is `None`.
-pub fn load(path: Option<&Path>, opts: &BuildOptions) -> Result<Scene> {
-    let Some(path) = path else { return load_default(opts) };
+/// What a scene argument names: a compiled image, or a mesh still to be built.
+pub enum Source {
+    /// A scene image read from disk.
+    Image(Scene),
+    /// A mesh with its name, load warnings and default camera settings.
+    Mesh {
+        /// Name for messages.
+        name: String,
+        /// The mesh.
+        mesh: Mesh,
+        /// Warnings from loading.
+        warnings: Vec<String>,
+        /// Default camera settings (from a sidecar `.camera` file).
+        camera: CameraSpec,
+    },
+}
+
+impl Source {
+    /// Builds (or, for an image, returns) the scene.
+    pub fn build(&self, opts: &BuildOptions) -> Result<Scene> {
+        match self {
+            Source::Image(scene) => Ok(Scene { name: scene.name.clone(), image: scene.image.clone(), report: None }),
+            Source::Mesh { name, mesh, warnings, camera } => {
+                build(name.clone(), mesh.clone(), warnings.clone(), *camera, opts)
+            }
+        }
+    }
+}
+
+/// Reads what the user named (the built-in default when `path` is `None`) without
+/// building anything yet.
+pub fn load_source(path: Option<&Path>) -> Result<Source> {
+    let Some(path) = path else {
+        let (mesh, notes) =
+            obj::load_obj_str(default_scene::NAME, default_scene::OBJ, &|_| Some(default_scene::MTL.into()))?;
+        let camera = CameraSpec::parse(default_scene::NAME, default_scene::CAMERA)?;
+        return Ok(Source::Mesh { name: default_scene::NAME.into(), mesh, warnings: notes.warnings, camera });
+    };
     let name = path.display().to_string();
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .unwrap_or("")
-        .to_ascii_lowercase();
+    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
     let is_image = match ext.as_str() {
         "obj" | "gz" => false,
         "rpsi" => true,
@@ -97,28 +144,27 @@ pub fn load(path: Option<&Path>, opts: &BuildOptions) -> Result<Scene> {
     if is_image {
         let image = AlignedBytes::read_file(path).map_err(|e| anyhow!("{name}: cannot read: {e}"))?;
         SceneView::parse(&image).map_err(|e| anyhow!("{name}: {e}"))?;
-        return Ok(Scene {
-            name,
-            image,
-            report: None,
-        });
+        return Ok(Source::Image(Scene { name, image, report: None }));
     }
     let (mesh, notes) = obj::load_obj_file(path)?;
-    let camera_path = sidecar_camera(path);
-    let spec = match &camera_path {
-        Some(p) => CameraSpec::load(p)?,
+    let camera = match sidecar_camera(path) {
+        Some(p) => CameraSpec::load(&p)?,
         None => CameraSpec::default(),
     };
-    build(name, mesh, notes.warnings, spec, opts)
+    Ok(Source::Mesh { name, mesh, warnings: notes.warnings, camera })
+}
+
+/// Loads the scene the user named, or the built-in default when `path` is `None`.
+pub fn load(path: Option<&Path>, opts: &BuildOptions) -> Result<Scene> {
+    match load_source(path)? {
+        Source::Image(scene) => Ok(scene),
+        Source::Mesh { name, mesh, warnings, camera } => build(name, mesh, warnings, camera, opts),
+    }
 }
 
 /// The built-in Cornell box.
 pub fn load_default(opts: &BuildOptions) -> Result<Scene> {
-    let (mesh, notes) = obj::load_obj_str(default_scene::NAME, default_scene::OBJ, &|_| {
-        Some(default_scene::MTL.into())
-    })?;
-    let spec = CameraSpec::parse(default_scene::NAME, default_scene::CAMERA)?;
-    build(default_scene::NAME.into(), mesh, notes.warnings, spec, opts)
+    load(None, opts)
 }
 
 /// `scene.camera` next to `scene.obj`, if it exists: the scene's default camera.
@@ -175,29 +221,14 @@ fn default_lights(mesh: &Mesh, camera: &CameraRecord) -> Vec<LightRecord> {
         // Nudge the light off the emitter, towards the middle of the scene.
         let p = p + (centre - p).normalize_or_zero() * (hi - lo).length() * 0.01;
         let color = emission / emission.max_element();
-        lights.push(LightRecord {
-            position: p.to_array(),
-            kind: LightRecord::POINT,
-            color: color.to_array(),
-            _pad: 0,
-        });
+        lights.push(LightRecord { position: p.to_array(), kind: LightRecord::POINT, color: color.to_array(), _pad: 0 });
     } else {
         let eye = Vec3::from(camera.eye);
         let up = Vec3::from(camera.up).normalize_or_zero();
         let p = eye + up * (eye - centre).length() * 0.25;
-        lights.push(LightRecord {
-            position: p.to_array(),
-            kind: LightRecord::POINT,
-            color: [0.9; 3],
-            _pad: 0,
-        });
+        lights.push(LightRecord { position: p.to_array(), kind: LightRecord::POINT, color: [0.9; 3], _pad: 0 });
     }
-    lights.push(LightRecord {
-        position: [0.0; 3],
-        kind: LightRecord::AMBIENT,
-        color: [0.1; 3],
-        _pad: 0,
-    });
+    lights.push(LightRecord { position: [0.0; 3], kind: LightRecord::AMBIENT, color: [0.1; 3], _pad: 0 });
     lights
 }
 
@@ -224,24 +255,42 @@ pub fn build(
     };
     let mut writer = ImageWriter::new(&mesh);
     writer.camera(&camera);
-    if opts.accel == Accel::Grid {
-        let start = Instant::now();
-        let grid = build_grid(&mesh, opts.grid).map_err(|e| anyhow!("{name}: {e}"))?;
-        report.grid_seconds = start.elapsed().as_secs_f64();
-        report.dims = grid.record.dims;
-        report.cells = grid.cells.len() as u64;
-        report.full_cells = grid.full_cells;
-        report.references = grid.references;
-        report.list_entries = grid.lists.len() as u64;
-        writer.grid(&grid);
+    let start = Instant::now();
+    match opts.accel {
+        Accel::Grid => {
+            let grid = build_grid(&mesh, opts.grid).map_err(|e| anyhow!("{name}: {e}"))?;
+            report.dims = grid.record.dims;
+            report.cells = grid.cells.len() as u64;
+            report.full_cells = grid.full_cells;
+            report.references = grid.references;
+            report.list_entries = grid.lists.len() as u64;
+            report.structure_bytes = 64 + 4 * (grid.cells.len() + grid.lists.len());
+            writer.grid(&grid);
+        }
+        Accel::Kd => {
+            let kd = build_kdtree(&mesh, &opts.kd);
+            report.tree_nodes = kd.nodes.len();
+            report.tree_depth = kd.depth;
+            report.references = kd.prims.len() as u64;
+            report.list_entries = kd.prims.len() as u64;
+            report.structure_bytes = 8 * kd.nodes.len() + 4 * kd.prims.len();
+            writer.kdtree(&kd);
+        }
+        Accel::Bvh => {
+            let bvh = build_bvh(&mesh, &opts.bvh);
+            report.tree_nodes = bvh.nodes.len();
+            report.tree_depth = bvh.depth;
+            report.references = bvh.prims.len() as u64;
+            report.list_entries = bvh.prims.len() as u64;
+            report.structure_bytes = 32 * bvh.nodes.len() + 4 * bvh.prims.len();
+            writer.bvh(&bvh);
+        }
+        Accel::None => {}
     }
+    report.grid_seconds = start.elapsed().as_secs_f64();
     let image = writer.finish().map_err(|e| anyhow!("{name}: {e}"))?;
     report.image_bytes = image.len();
-    let scene = Scene {
-        name,
-        image,
-        report: Some(report),
-    };
+    let scene = Scene { name, image, report: Some(report) };
     if let Err(e) = scene.view() {
         bail!("internal error: built an invalid image: {e}");
     }

@@ -1,5 +1,5 @@
 //! Purcell 2002's scene statistics (his Table 2) for one camera: how many rays hit, how
-//! many voxels and triangles each ray visits, how many list entries it reads, and how
+//! many nodes and triangles each ray visits, how many list entries it reads, and how
 //! many bytes of each data class it touches.
 
 use anyhow::Result;
@@ -23,8 +23,8 @@ pub struct SceneStats {
     pub missed_bounds: u64,
     /// Sum of per-ray counters.
     pub total: TotalCounters,
-    /// Largest voxels visited by one ray.
-    pub max_voxels: u32,
+    /// Largest nodes visited by one ray.
+    pub max_nodes: u32,
     /// Largest triangles tested by one ray.
     pub max_tri_tests: u32,
     /// Bytes read, per data class.
@@ -35,9 +35,9 @@ pub struct SceneStats {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct TotalCounters {
     /// Voxels visited.
-    pub voxels: u64,
-    /// Non-empty voxels visited.
-    pub full_voxels: u64,
+    pub nodes: u64,
+    /// Non-empty nodes visited.
+    pub leaves: u64,
     /// List entries read.
     pub list_entries: u64,
     /// Triangle tests.
@@ -49,11 +49,11 @@ impl SceneStats {
         self.rays += 1;
         self.hits += hit as u64;
         self.missed_bounds += missed_bounds as u64;
-        self.total.voxels += c.voxels as u64;
-        self.total.full_voxels += c.full_voxels as u64;
+        self.total.nodes += c.nodes as u64;
+        self.total.leaves += c.leaves as u64;
         self.total.list_entries += c.list_entries as u64;
         self.total.tri_tests += c.tri_tests as u64;
-        self.max_voxels = self.max_voxels.max(c.voxels);
+        self.max_nodes = self.max_nodes.max(c.nodes);
         self.max_tri_tests = self.max_tri_tests.max(c.tri_tests);
     }
 
@@ -61,11 +61,11 @@ impl SceneStats {
         self.rays += o.rays;
         self.hits += o.hits;
         self.missed_bounds += o.missed_bounds;
-        self.total.voxels += o.total.voxels;
-        self.total.full_voxels += o.total.full_voxels;
+        self.total.nodes += o.total.nodes;
+        self.total.leaves += o.total.leaves;
         self.total.list_entries += o.total.list_entries;
         self.total.tri_tests += o.total.tri_tests;
-        self.max_voxels = self.max_voxels.max(o.max_voxels);
+        self.max_nodes = self.max_nodes.max(o.max_nodes);
         self.max_tri_tests = self.max_tri_tests.max(o.max_tri_tests);
         for i in 0..4 {
             self.bytes.bytes[i] += o.bytes.bytes[i];

@@ -1,7 +1,9 @@
-//! Picks the structure kernel for a scene (grid if the image has one, brute force
-//! otherwise) and the intersection kernel the user asked for.
+//! Picks the structure kernel the scene image holds (grid, BVH, kd-tree, or brute force
+//! without one) and the intersection kernel the user asked for.
 
+use raypipe_core::bvh::trace_bvh;
 use raypipe_core::grid::trace_grid;
+use raypipe_core::kdtree::trace_kdtree;
 use raypipe_core::{brute_force::trace_brute_force, Hit, Intersector, MemoryProbe, Ray, RayCounters, SceneView};
 
 /// Which ray–triangle test to use.
@@ -22,9 +24,14 @@ pub fn trace<I: Intersector, P: MemoryProbe>(
     probe: &mut P,
     counters: &mut RayCounters,
 ) -> Option<Hit> {
-    match scene.grid() {
-        Some(grid) => trace_grid::<I, P>(scene, grid, ray, probe, counters),
-        None => trace_brute_force::<I, P>(scene, ray, probe, counters),
+    if let Some(grid) = scene.grid() {
+        trace_grid::<I, P>(scene, grid, ray, probe, counters)
+    } else if let Some(bvh) = scene.bvh() {
+        trace_bvh::<I, P>(scene, bvh, ray, probe, counters)
+    } else if let Some(kd) = scene.kdtree() {
+        trace_kdtree::<I, P>(scene, kd, ray, probe, counters)
+    } else {
+        trace_brute_force::<I, P>(scene, ray, probe, counters)
     }
 }
 

@@ -6,11 +6,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 fn raypipe(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_raypipe"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("runs")
+    Command::new(env!("CARGO_BIN_EXE_raypipe")).args(args).current_dir(dir).output().expect("runs")
 }
 
 fn fixtures() -> PathBuf {
@@ -50,10 +46,8 @@ fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
 }
 
 fn only_files(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
+    let mut v: Vec<String> =
+        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
     v.sort();
     v
 }
@@ -102,17 +96,11 @@ fn build_then_render_the_image_equals_rendering_the_obj() {
     assert!(out.contains("triangles    32"), "{out}");
     assert!(out.contains("grid         5 x 5 x 5"), "{out}");
     let a = raypipe(dir.path(), &["render", "box.rpsi", "-o", "a.png", "--size", "80x60"]);
-    let b = raypipe(
-        dir.path(),
-        &["render", obj, "-o", "b.png", "--size", "80x60", "--grid-min-dim", "5"],
-    );
+    let b = raypipe(dir.path(), &["render", obj, "-o", "b.png", "--size", "80x60", "--grid-min-dim", "5"]);
     let c = raypipe(dir.path(), &["render", "-o", "c.png", "--size", "80x60"]);
     assert!(a.status.success() && b.status.success() && c.status.success());
-    let (pa, pb, pc) = (
-        decode(&dir.path().join("a.png")),
-        decode(&dir.path().join("b.png")),
-        decode(&dir.path().join("c.png")),
-    );
+    let (pa, pb, pc) =
+        (decode(&dir.path().join("a.png")), decode(&dir.path().join("b.png")), decode(&dir.path().join("c.png")));
     assert_eq!(pa, pb);
     // The built-in default is the same box; a different grid resolution, the same image.
     assert_eq!(pa, pc);
@@ -137,12 +125,7 @@ fn stats_and_bench_report_their_figures() {
     let o = raypipe(dir.path(), &["stats", "--size", "64x64"]);
     let out = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "{}", stderr(&o));
-    for key in [
-        "rays that hit",
-        "voxels visited per ray",
-        "triangles tested per ray",
-        "list entries read",
-    ] {
+    for key in ["rays that hit", "voxels visited per ray", "triangles tested per ray", "list entries read"] {
         assert!(out.contains(key), "{out}");
     }
     let o = raypipe(dir.path(), &["bench", "--size", "32x32", "--runs", "1"]);
@@ -170,10 +153,7 @@ fn malformed_and_degenerate_geometry() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     write(d, "bad.obj", "v 1 2\nv 0 0 0\nv 1 1 1\nf 1 2 3\n");
-    assert_one_line_error(
-        &raypipe(d, &["build", "bad.obj", "-o", "o.rpsi"]),
-        "bad.obj: malformed OBJ",
-    );
+    assert_one_line_error(&raypipe(d, &["build", "bad.obj", "-o", "o.rpsi"]), "bad.obj: malformed OBJ");
     write(d, "face.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n");
     assert_one_line_error(&raypipe(d, &["build", "face.obj", "-o", "o.rpsi"]), "face.obj");
     write(d, "nan.obj", "v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
@@ -182,18 +162,10 @@ fn malformed_and_degenerate_geometry() {
     assert_one_line_error(&raypipe(d, &["render", "inf.obj", "-o", "o.png"]), "NaN or infinite");
     write(d, "empty.obj", "# nothing\nv 0 0 0\n");
     assert_one_line_error(&raypipe(d, &["build", "empty.obj", "-o", "o.rpsi"]), "no triangles");
-    write(
-        d,
-        "mtl.obj",
-        "mtllib m.mtl\nusemtl a\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
-    );
+    write(d, "mtl.obj", "mtllib m.mtl\nusemtl a\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
     write(d, "m.mtl", "newmtl a\nKd 0.5 -1 0.2\n");
     assert_one_line_error(&raypipe(d, &["build", "mtl.obj", "-o", "o.rpsi"]), "material 'a'");
-    assert!(
-        !only_files(d).iter().any(|f| f.starts_with("o.")),
-        "{:?}",
-        only_files(d)
-    );
+    assert!(!only_files(d).iter().any(|f| f.starts_with("o.")), "{:?}", only_files(d));
     // Degenerate triangles are kept with a warning, not an error.
     write(d, "deg.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nf 1 2 3\nf 1 2 4\n");
     let o = raypipe(d, &["build", "deg.obj", "-o", "deg.rpsi"]);
@@ -206,15 +178,10 @@ fn truncated_and_corrupted_images() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let obj = fixtures().join("cornell_box.obj");
-    assert!(raypipe(d, &["build", obj.to_str().unwrap(), "-o", "ok.rpsi"])
-        .status
-        .success());
+    assert!(raypipe(d, &["build", obj.to_str().unwrap(), "-o", "ok.rpsi"]).status.success());
     let bytes = std::fs::read(d.join("ok.rpsi")).unwrap();
     std::fs::write(d.join("short.rpsi"), &bytes[..bytes.len() / 2]).unwrap();
-    assert_one_line_error(
-        &raypipe(d, &["render", "short.rpsi", "-o", "o.png"]),
-        "short.rpsi: truncated",
-    );
+    assert_one_line_error(&raypipe(d, &["render", "short.rpsi", "-o", "o.png"]), "short.rpsi: truncated");
     let mut flipped = bytes.clone();
     flipped[bytes.len() - 70] ^= 1;
     std::fs::write(d.join("flip.rpsi"), &flipped).unwrap();
@@ -233,15 +200,9 @@ fn impossible_cameras_and_sizes() {
     let o = raypipe(d, &["render", "--eye", "0,0,0", "--look-at", "0,5,0", "-o", "o.png"]);
     assert_one_line_error(&o, "looks along its up vector");
     write(d, "up.camera", "eye 0 0 0\nlook_at 0 0 -1\nup 0 0 2\n");
-    assert_one_line_error(
-        &raypipe(d, &["render", "--camera", "up.camera", "-o", "o.png"]),
-        "up.camera",
-    );
+    assert_one_line_error(&raypipe(d, &["render", "--camera", "up.camera", "-o", "o.png"]), "up.camera");
     write(d, "typo.camera", "eye 0 0 0\nlook_at 0 0 -1\nfvo 40\n");
-    assert_one_line_error(
-        &raypipe(d, &["render", "--camera", "typo.camera", "-o", "o.png"]),
-        "typo.camera:3",
-    );
+    assert_one_line_error(&raypipe(d, &["render", "--camera", "typo.camera", "-o", "o.png"]), "typo.camera:3");
     let o = raypipe(d, &["render", "--fov", "180", "-o", "o.png"]);
     assert_one_line_error(&o, "field of view");
     assert!(!d.join("o.png").exists());
@@ -274,16 +235,8 @@ fn gzipped_obj_renders_like_the_plain_file() {
     std::fs::write(d.join("packed.obj.gz"), gz.finish().unwrap()).unwrap();
     let a = raypipe(d, &["render", "tetra.obj", "-o", "a.png", "--size", "40x30"]);
     let b = raypipe(d, &["render", "packed.obj.gz", "-o", "b.png", "--size", "40x30"]);
-    assert!(
-        a.status.success() && b.status.success(),
-        "{} {}",
-        stderr(&a),
-        stderr(&b)
-    );
+    assert!(a.status.success() && b.status.success(), "{} {}", stderr(&a), stderr(&b));
     assert_eq!(decode(&d.join("a.png")), decode(&d.join("b.png")));
     std::fs::write(d.join("broken.obj.gz"), b"\x1f\x8b\x08\x00garbage").unwrap();
-    assert_one_line_error(
-        &raypipe(d, &["build", "broken.obj.gz", "-o", "x.rpsi"]),
-        "broken.obj.gz",
-    );
+    assert_one_line_error(&raypipe(d, &["build", "broken.obj.gz", "-o", "x.rpsi"]), "broken.obj.gz");
 }

@@ -9,15 +9,8 @@ use raypipe::scene::{self, Accel, BuildOptions, Scene};
 
 /// Builds a scene image (grid or none) from raw triangles.
 pub fn build_soup(positions: Vec<[f32; 3]>, triangles: Vec<[u32; 3]>, accel: Accel, min_dim: u32) -> Scene {
-    let mesh = Mesh {
-        positions,
-        triangles,
-        ..Default::default()
-    };
-    let opts = BuildOptions {
-        accel,
-        grid: GridResolution::MinDim(min_dim),
-    };
+    let mesh = Mesh { positions, triangles, ..Default::default() };
+    let opts = BuildOptions { accel, grid: GridResolution::MinDim(min_dim), ..Default::default() };
     scene::build("soup".into(), mesh, Vec::new(), Default::default(), &opts).expect("soup builds")
 }
 

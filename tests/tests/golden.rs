@@ -21,11 +21,7 @@ fn decode(path: &Path) -> Frame {
     let mut buf = vec![0; reader.output_buffer_size().unwrap()];
     let info = reader.next_frame(&mut buf).unwrap();
     buf.truncate(info.buffer_size());
-    Frame {
-        width: info.width,
-        height: info.height,
-        pixels: buf.chunks(3).map(|c| [c[0], c[1], c[2]]).collect(),
-    }
+    Frame { width: info.width, height: info.height, pixels: buf.chunks(3).map(|c| [c[0], c[1], c[2]]).collect() }
 }
 
 fn check(name: &str, frame: &Frame) {
@@ -35,11 +31,7 @@ fn check(name: &str, frame: &Frame) {
         return;
     }
     let golden = decode(&path);
-    assert_eq!(
-        (frame.width, frame.height),
-        (golden.width, golden.height),
-        "{name}: size"
-    );
+    assert_eq!((frame.width, frame.height), (golden.width, golden.height), "{name}: size");
     let differing = frame.pixels.iter().zip(&golden.pixels).filter(|(a, b)| a != b).count();
     assert_eq!(differing, 0, "{name}: {differing} pixels differ from the golden image");
 }
@@ -47,69 +39,35 @@ fn check(name: &str, frame: &Frame) {
 fn render_default(width: u32, height: u32, kind: IntersectorKind, threads: usize) -> Frame {
     let scene = scene::load_default(&BuildOptions::default()).unwrap();
     let view = scene.view().unwrap();
-    let cam = CameraRecord {
-        width,
-        height,
-        ..*view.camera().unwrap()
-    };
-    render(
-        &view,
-        &cam,
-        &RenderOptions {
-            threads: Some(threads),
-            intersector: kind,
-            progress: false,
-        },
-    )
-    .unwrap()
+    let cam = CameraRecord { width, height, ..*view.camera().unwrap() };
+    render(&view, &cam, &RenderOptions { threads: Some(threads), intersector: kind, progress: false }).unwrap()
 }
 
 #[test]
 fn cornell_box_watertight() {
-    check(
-        "cornell_box_128.png",
-        &render_default(128, 128, IntersectorKind::Watertight, 2),
-    );
+    check("cornell_box_128.png", &render_default(128, 128, IntersectorKind::Watertight, 2));
 }
 
 #[test]
 fn cornell_box_moller_trumbore_matches_the_same_golden_image() {
     // Away from edges both kernels find the same triangles; on this scene the 8-bit
     // image is the same.
-    check(
-        "cornell_box_128.png",
-        &render_default(128, 128, IntersectorKind::MollerTrumbore, 1),
-    );
+    check("cornell_box_128.png", &render_default(128, 128, IntersectorKind::MollerTrumbore, 1));
 }
 
 #[test]
 fn tetra_fixture() {
     let scene = scene::load(Some(&root().join("fixtures/tetra.rpsi")), &BuildOptions::default()).unwrap();
     let view = scene.view().unwrap();
-    let cam = CameraRecord {
-        width: 96,
-        height: 72,
-        ..*view.camera().unwrap()
-    };
-    let frame = render(
-        &view,
-        &cam,
-        &RenderOptions {
-            threads: Some(3),
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let cam = CameraRecord { width: 96, height: 72, ..*view.camera().unwrap() };
+    let frame = render(&view, &cam, &RenderOptions { threads: Some(3), ..Default::default() }).unwrap();
     check("tetra_96x72.png", &frame);
 }
 
 /// The image embedded by the no_std proof is what `raypipe build` makes today.
 #[test]
 fn tetra_image_fixture_is_up_to_date() {
-    let opts = BuildOptions {
-        grid: GridResolution::MinDim(4),
-        ..Default::default()
-    };
+    let opts = BuildOptions { grid: GridResolution::MinDim(4), ..Default::default() };
     let built = scene::load(Some(&root().join("fixtures/tetra.obj")), &opts).unwrap();
     let committed = std::fs::read(root().join("fixtures/tetra.rpsi")).unwrap();
     assert!(

@@ -19,11 +19,7 @@ fn table(bytes: &[u8]) -> Vec<SectionEntry> {
 }
 
 fn entry_pos(bytes: &[u8], kind: SectionKind) -> (usize, SectionEntry) {
-    let (i, e) = table(bytes)
-        .into_iter()
-        .enumerate()
-        .find(|(_, e)| e.kind == kind as u32)
-        .unwrap();
+    let (i, e) = table(bytes).into_iter().enumerate().find(|(_, e)| e.kind == kind as u32).unwrap();
     (64 + 16 * i, e)
 }
 
@@ -53,10 +49,7 @@ fn truncated_images_are_rejected() {
     let b = cornell();
     for len in [0, 10, 63, 64, 200, b.len() - 1] {
         let t = AlignedBytes::from_slice(&b[..len]);
-        assert!(
-            matches!(SceneView::parse(&t), Err(SceneError::Truncated { .. })),
-            "length {len}"
-        );
+        assert!(matches!(SceneView::parse(&t), Err(SceneError::Truncated { .. })), "length {len}");
     }
 }
 
@@ -66,41 +59,23 @@ fn misaligned_buffers_are_rejected_with_a_clear_error() {
     let mut shifted = AlignedBytes::from_slice(&vec![0u8; b.len() + 4]);
     shifted[4..].copy_from_slice(&b);
     let e = SceneView::parse(&shifted[4..]).unwrap_err();
-    assert_eq!(
-        e,
-        SceneError::Misaligned {
-            offset: 4,
-            required: 16
-        }
-    );
+    assert_eq!(e, SceneError::Misaligned { offset: 4, required: 16 });
     assert!(e.to_string().contains("misaligned"));
 }
 
 #[test]
 fn header_corruptions() {
     assert_eq!(corrupt(|b| b[0] = b'X'), SceneError::BadMagic);
-    assert_eq!(
-        corrupt(|b| put_u32(b, 8, 2)),
-        SceneError::UnsupportedVersion { found: 2, supported: 1 }
-    );
+    assert_eq!(corrupt(|b| put_u32(b, 8, 2)), SceneError::UnsupportedVersion { found: 2, supported: 1 });
     assert_eq!(corrupt(|b| put_u32(b, 12, 1)), SceneError::UnknownFlags(1));
     assert_eq!(corrupt(|b| put_u32(b, 16, 9)), SceneError::UnknownAccel(9));
     assert!(matches!(
         corrupt(|b| put_u32(b, 56, 31)),
-        SceneError::CountMismatch {
-            section: SectionKind::Triangles,
-            ..
-        }
+        SceneError::CountMismatch { section: SectionKind::Triangles, .. }
     ));
     // Bounds that do not contain the vertices.
-    assert!(matches!(
-        corrupt(|b| b[32..36].copy_from_slice(&1.0f32.to_le_bytes())),
-        SceneError::OutOfBounds { .. }
-    ));
-    assert!(matches!(
-        corrupt(|b| b[32..36].copy_from_slice(&f32::NAN.to_le_bytes())),
-        SceneError::NonFinite { .. }
-    ));
+    assert!(matches!(corrupt(|b| b[32..36].copy_from_slice(&1.0f32.to_le_bytes())), SceneError::OutOfBounds { .. }));
+    assert!(matches!(corrupt(|b| b[32..36].copy_from_slice(&f32::NAN.to_le_bytes())), SceneError::NonFinite { .. }));
 }
 
 #[test]
@@ -125,23 +100,11 @@ fn section_table_corruptions() {
     let (at, e) = entry_pos(&cornell(), SectionKind::Triangles);
     assert_eq!(
         corrupt(|b| put_u32(b, at + 4, e.offset + 4)),
-        SceneError::SectionMisaligned {
-            section: SectionKind::Triangles,
-            offset: e.offset + 4
-        }
+        SceneError::SectionMisaligned { section: SectionKind::Triangles, offset: e.offset + 4 }
     );
-    assert!(matches!(
-        corrupt(|b| put_u32(b, at + 4, 1 << 20)),
-        SceneError::SectionOutOfBounds { .. }
-    ));
-    assert!(matches!(
-        corrupt(|b| put_u32(b, at + 4, 0)),
-        SceneError::SectionOutOfBounds { .. }
-    ));
-    assert!(matches!(
-        corrupt(|b| put_u32(b, at + 8, e.size - 4)),
-        SceneError::SectionSize { .. }
-    ));
+    assert!(matches!(corrupt(|b| put_u32(b, at + 4, 1 << 20)), SceneError::SectionOutOfBounds { .. }));
+    assert!(matches!(corrupt(|b| put_u32(b, at + 4, 0)), SceneError::SectionOutOfBounds { .. }));
+    assert!(matches!(corrupt(|b| put_u32(b, at + 8, e.size - 4)), SceneError::SectionSize { .. }));
     // Point TRIANGLES at the POSITIONS bytes: overlap.
     let (_, pos) = entry_pos(&cornell(), SectionKind::Positions);
     assert!(matches!(
@@ -152,10 +115,7 @@ fn section_table_corruptions() {
     ));
     // Remove the grid's cells from the table by renaming them into an unused kind.
     let (cells_at, _) = entry_pos(&cornell(), SectionKind::GridCells);
-    assert!(matches!(
-        corrupt(|b| put_u32(b, cells_at, SectionKind::Camera as u32)),
-        SceneError::DuplicateSection(_)
-    ));
+    assert!(matches!(corrupt(|b| put_u32(b, cells_at, SectionKind::Camera as u32)), SceneError::DuplicateSection(_)));
 }
 
 #[test]
@@ -164,20 +124,12 @@ fn record_corruptions() {
     let (_, tris) = entry_pos(&base, SectionKind::Triangles);
     assert_eq!(
         corrupt(|b| put_u32(b, tris.offset as usize + 4, 1000)),
-        SceneError::IndexOutOfRange {
-            section: SectionKind::Triangles,
-            record: 0,
-            value: 1000,
-            limit: 64
-        }
+        SceneError::IndexOutOfRange { section: SectionKind::Triangles, record: 0, value: 1000, limit: 64 }
     );
     let (_, pos) = entry_pos(&base, SectionKind::Positions);
     assert_eq!(
         corrupt(|b| b[pos.offset as usize + 12..pos.offset as usize + 16].copy_from_slice(&f32::INFINITY.to_le_bytes())),
-        SceneError::NonFinite {
-            section: SectionKind::Positions,
-            record: 1
-        }
+        SceneError::NonFinite { section: SectionKind::Positions, record: 1 }
     );
     let (_, cells) = entry_pos(&base, SectionKind::GridCells);
     let first_full = (0..cells.count as usize)
@@ -188,31 +140,18 @@ fn record_corruptions() {
         .unwrap();
     assert!(matches!(
         corrupt(|b| put_u32(b, cells.offset as usize + 4 * first_full, 1 << 30)),
-        SceneError::IndexOutOfRange {
-            section: SectionKind::GridCells,
-            ..
-        }
+        SceneError::IndexOutOfRange { section: SectionKind::GridCells, .. }
     ));
     let (_, lists) = entry_pos(&base, SectionKind::PrimLists);
     let last = lists.offset as usize + lists.size as usize - 4;
     assert_eq!(corrupt(|b| put_u32(b, last, 0)), SceneError::UnterminatedList);
     assert!(matches!(
         corrupt(|b| put_u32(b, lists.offset as usize, 77)),
-        SceneError::IndexOutOfRange {
-            section: SectionKind::PrimLists,
-            value: 77,
-            ..
-        }
+        SceneError::IndexOutOfRange { section: SectionKind::PrimLists, value: 77, .. }
     ));
     let (_, grid) = entry_pos(&base, SectionKind::Grid);
-    assert_eq!(
-        corrupt(|b| put_u32(b, grid.offset as usize + 48, 0)),
-        SceneError::BadGrid
-    );
-    assert_eq!(
-        corrupt(|b| put_u32(b, grid.offset as usize + 60, 5)),
-        SceneError::BadGrid
-    );
+    assert_eq!(corrupt(|b| put_u32(b, grid.offset as usize + 48, 0)), SceneError::BadGrid);
+    assert_eq!(corrupt(|b| put_u32(b, grid.offset as usize + 60, 5)), SceneError::BadGrid);
     assert_eq!(
         corrupt(|b| b[grid.offset as usize + 32..grid.offset as usize + 36].copy_from_slice(&(-1.0f32).to_le_bytes())),
         SceneError::BadGrid
@@ -220,10 +159,7 @@ fn record_corruptions() {
     let (_, mats) = entry_pos(&base, SectionKind::TriangleMaterials);
     assert!(matches!(
         corrupt(|b| put_u32(b, mats.offset as usize, 50)),
-        SceneError::IndexOutOfRange {
-            section: SectionKind::TriangleMaterials,
-            ..
-        }
+        SceneError::IndexOutOfRange { section: SectionKind::TriangleMaterials, .. }
     ));
 }
 

@@ -78,6 +78,10 @@ pub enum AccelKind {
     None = 0,
     /// Purcell's uniform grid (sections GRID, GRID_CELLS, PRIM_LISTS).
     Grid = 1,
+    /// A bounding volume hierarchy (sections BVH_NODES, PRIM_LISTS).
+    Bvh = 2,
+    /// A kd-tree (sections KD_NODES, PRIM_LISTS).
+    KdTree = 3,
 }
 
 impl AccelKind {
@@ -86,6 +90,8 @@ impl AccelKind {
         match v {
             0 => Some(AccelKind::None),
             1 => Some(AccelKind::Grid),
+            2 => Some(AccelKind::Bvh),
+            3 => Some(AccelKind::KdTree),
             _ => None,
         }
     }
@@ -115,11 +121,15 @@ pub enum SectionKind {
     Lights = 9,
     /// The default camera, one [`crate::image::CameraRecord`], 64 bytes.
     Camera = 10,
+    /// BVH nodes, [`crate::image::BvhNode`], 32 bytes each; node 0 is the root.
+    BvhNodes = 11,
+    /// kd-tree nodes, [`crate::image::KdNode`], 8 bytes each; node 0 is the root.
+    KdNodes = 12,
 }
 
 impl SectionKind {
     /// Every kind, in table order.
-    pub const ALL: [SectionKind; 10] = [
+    pub const ALL: [SectionKind; 12] = [
         SectionKind::Positions,
         SectionKind::Triangles,
         SectionKind::Grid,
@@ -130,6 +140,8 @@ impl SectionKind {
         SectionKind::Materials,
         SectionKind::Lights,
         SectionKind::Camera,
+        SectionKind::BvhNodes,
+        SectionKind::KdNodes,
     ];
 
     /// Decodes a section-table kind.
@@ -143,7 +155,8 @@ impl SectionKind {
             SectionKind::Positions | SectionKind::Triangles => 12,
             SectionKind::Grid | SectionKind::Materials | SectionKind::Camera => 64,
             SectionKind::GridCells | SectionKind::PrimLists | SectionKind::TriangleMaterials => 4,
-            SectionKind::ShadingVertices | SectionKind::Lights => 32,
+            SectionKind::ShadingVertices | SectionKind::Lights | SectionKind::BvhNodes => 32,
+            SectionKind::KdNodes => 8,
         }
     }
 
@@ -160,6 +173,8 @@ impl SectionKind {
             SectionKind::Materials => "MATERIALS",
             SectionKind::Lights => "LIGHTS",
             SectionKind::Camera => "CAMERA",
+            SectionKind::BvhNodes => "BVH_NODES",
+            SectionKind::KdNodes => "KD_NODES",
         }
     }
 }

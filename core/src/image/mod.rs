@@ -15,6 +15,7 @@ pub use crc32::{crc32, Crc32};
 pub use embed::Aligned64;
 pub use header::{AccelKind, Header, SectionEntry, SectionKind, FORMAT_VERSION, MAGIC};
 pub use records::{
-    CameraRecord, GridRecord, LightRecord, MaterialRecord, Position, ShadingVertex, TriangleRecord, NULL_INDEX,
+    BvhNode, CameraRecord, GridRecord, KdNode, LightRecord, MaterialRecord, Position, ShadingVertex, TriangleRecord,
+    NULL_INDEX,
 };
-pub use view::{GridView, SceneError, SceneView, IMAGE_ALIGN, SECTION_ALIGN};
+pub use view::{BvhView, GridView, KdTreeView, SceneError, SceneView, IMAGE_ALIGN, MAX_TREE_DEPTH, SECTION_ALIGN};

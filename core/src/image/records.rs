@@ -151,3 +151,78 @@ pub struct CameraRecord {
 }
 const _: () = assert!(core::mem::size_of::<CameraRecord>() == 64);
 const _: () = assert!(core::mem::align_of::<CameraRecord>() == 4);
+
+/// A BVH node, 32 bytes: the "traditional" layout Ingo Wald proposed (as in tinybvh and
+/// pbrt's `LinearBVHNode`), two 16-byte rows of box corner plus one word.
+///
+/// * inner node: `count == 0`; its children are nodes `first` and `first + 1`;
+/// * leaf: `count > 0` triangles, PRIM_LISTS entries `first .. first + count`.
+///
+/// The box is the bounds of everything below, grown outwards by the build margin.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct BvhNode {
+    /// Lower corner.
+    pub min: [f32; 3],
+    /// First child (inner) or first PRIM_LISTS entry (leaf).
+    pub first: u32,
+    /// Upper corner.
+    pub max: [f32; 3],
+    /// Triangles in a leaf; 0 for an inner node.
+    pub count: u32,
+}
+const _: () = assert!(core::mem::size_of::<BvhNode>() == 32);
+const _: () = assert!(core::mem::align_of::<BvhNode>() == 4);
+
+/// A kd-tree node, 8 bytes: Wald's compact layout (Wald 2004, §7.3; Wald & Slusallek
+/// 2001): eight nodes share a 64-byte cache line.
+///
+/// `flags` holds the split axis (0, 1, 2) or 3 for a leaf in its two low bits and an
+/// index in the upper 30 bits:
+/// * inner node: `value` is the split position (f32 bits); the children are nodes
+///   `index` (below the plane) and `index + 1` (above it);
+/// * leaf: `value` is the triangle count; the triangles are PRIM_LISTS entries
+///   `index .. index + count`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq)]
+pub struct KdNode {
+    /// Axis or leaf tag (2 bits) and child / list index (30 bits).
+    pub flags: u32,
+    /// Split position as f32 bits (inner) or triangle count (leaf).
+    pub value: u32,
+}
+const _: () = assert!(core::mem::size_of::<KdNode>() == 8);
+const _: () = assert!(core::mem::align_of::<KdNode>() == 4);
+
+impl KdNode {
+    /// The tag of a leaf in the two low bits of `flags`.
+    pub const LEAF: u32 = 3;
+
+    /// An inner node splitting `axis` at `split`, children at `child` and `child + 1`.
+    pub fn inner(axis: u32, split: f32, child: u32) -> KdNode {
+        KdNode { flags: (child << 2) | axis, value: split.to_bits() }
+    }
+
+    /// A leaf of `count` triangles starting at PRIM_LISTS entry `first`.
+    pub fn leaf(first: u32, count: u32) -> KdNode {
+        KdNode { flags: (first << 2) | Self::LEAF, value: count }
+    }
+
+    /// Axis 0–2, or [`KdNode::LEAF`].
+    #[inline]
+    pub fn axis(&self) -> u32 {
+        self.flags & 3
+    }
+
+    /// Child index (inner) or first list entry (leaf).
+    #[inline]
+    pub fn index(&self) -> u32 {
+        self.flags >> 2
+    }
+
+    /// Split position of an inner node.
+    #[inline]
+    pub fn split(&self) -> f32 {
+        f32::from_bits(self.value)
+    }
+}

@@ -8,7 +8,8 @@ use glam::Vec3;
 use super::crc32::Crc32;
 use super::header::{AccelKind, Header, SectionEntry, SectionKind, CHECKSUM_OFFSET, FORMAT_VERSION, MAGIC};
 use super::records::{
-    CameraRecord, GridRecord, LightRecord, MaterialRecord, Position, ShadingVertex, TriangleRecord, NULL_INDEX,
+    BvhNode, CameraRecord, GridRecord, KdNode, LightRecord, MaterialRecord, Position, ShadingVertex, TriangleRecord,
+    NULL_INDEX,
 };
 use crate::probe::{DataClass, MemoryProbe};
 
@@ -17,6 +18,9 @@ use crate::probe::{DataClass, MemoryProbe};
 pub const IMAGE_ALIGN: usize = 16;
 /// Every section starts at a multiple of this (one cache line).
 pub const SECTION_ALIGN: u32 = 64;
+/// Deepest tree (BVH or kd-tree) a scene image may hold: traversal kernels keep a
+/// fixed-capacity stack of this many entries.
+pub const MAX_TREE_DEPTH: u32 = 64;
 
 /// Why a byte slice is not a valid scene image. Each variant carries the values a reader
 /// needs to see what is wrong (expected and found).
@@ -131,6 +135,15 @@ pub enum SceneError {
     BadGrid,
     /// The last primitive list is not terminated by a null entry.
     UnterminatedList,
+    /// A tree node is malformed: a child not after its parent, a node referenced twice or
+    /// never, a tree deeper than [`MAX_TREE_DEPTH`], a leaf range outside PRIM_LISTS, or
+    /// a NaN box or split.
+    BadTree {
+        /// BVH_NODES or KD_NODES.
+        section: SectionKind,
+        /// The node.
+        node: u32,
+    },
 }
 
 impl fmt::Display for SceneError {
@@ -191,6 +204,11 @@ impl fmt::Display for SceneError {
             ),
             BadGrid => write!(f, "grid dimensions, cell count or cell size are invalid"),
             UnterminatedList => write!(f, "primitive list section does not end with a null entry"),
+            BadTree { section, node } => write!(
+                f,
+                "section {} node {node} is malformed (child order, sharing, depth above {MAX_TREE_DEPTH}, leaf range or NaN)",
+                section.name()
+            ),
         }
     }
 }
@@ -233,11 +251,7 @@ impl<'a> GridView<'a> {
     /// Reads primitive-list entry `pos`: a triangle index or [`NULL_INDEX`] (end of list).
     #[inline]
     pub fn list_entry<P: MemoryProbe>(&self, pos: u32, probe: &mut P) -> u32 {
-        probe.read(
-            DataClass::PrimLists,
-            self.lists_addr.wrapping_add(pos.wrapping_mul(4)),
-            4,
-        );
+        probe.read(DataClass::PrimLists, self.lists_addr.wrapping_add(pos.wrapping_mul(4)), 4);
         self.lists.get(pos as usize).copied().unwrap_or(NULL_INDEX)
     }
 
@@ -245,6 +259,132 @@ impl<'a> GridView<'a> {
     pub fn cells(&self) -> &'a [u32] {
         self.cells
     }
+}
+
+/// A bounding volume hierarchy of a scene image.
+#[derive(Clone, Copy, Debug)]
+pub struct BvhView<'a> {
+    nodes: &'a [BvhNode],
+    prims: &'a [u32],
+    nodes_addr: u32,
+    prims_addr: u32,
+}
+
+impl<'a> BvhView<'a> {
+    /// Number of nodes.
+    pub fn node_count(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// All nodes (for statistics; not an observed kernel read).
+    pub fn nodes(&self) -> &'a [BvhNode] {
+        self.nodes
+    }
+
+    /// Reads node `index`.
+    #[inline]
+    pub fn node<P: MemoryProbe>(&self, index: u32, probe: &mut P) -> BvhNode {
+        probe.read(DataClass::Nodes, self.nodes_addr.wrapping_add(index.wrapping_mul(32)), 32);
+        self.nodes.get(index as usize).copied().unwrap_or(BvhNode { min: [0.0; 3], first: 0, max: [0.0; 3], count: 0 })
+    }
+
+    /// Reads primitive-list entry `pos`.
+    #[inline]
+    pub fn prim<P: MemoryProbe>(&self, pos: u32, probe: &mut P) -> u32 {
+        probe.read(DataClass::PrimLists, self.prims_addr.wrapping_add(pos.wrapping_mul(4)), 4);
+        self.prims.get(pos as usize).copied().unwrap_or(0)
+    }
+}
+
+/// A kd-tree of a scene image; its root box is the scene bounds.
+#[derive(Clone, Copy, Debug)]
+pub struct KdTreeView<'a> {
+    nodes: &'a [KdNode],
+    prims: &'a [u32],
+    nodes_addr: u32,
+    prims_addr: u32,
+    /// Lower corner of the root box.
+    pub min: Vec3,
+    /// Upper corner of the root box.
+    pub max: Vec3,
+}
+
+impl<'a> KdTreeView<'a> {
+    /// Number of nodes.
+    pub fn node_count(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// All nodes (for statistics; not an observed kernel read).
+    pub fn nodes(&self) -> &'a [KdNode] {
+        self.nodes
+    }
+
+    /// Reads node `index`.
+    #[inline]
+    pub fn node<P: MemoryProbe>(&self, index: u32, probe: &mut P) -> KdNode {
+        probe.read(DataClass::Nodes, self.nodes_addr.wrapping_add(index.wrapping_mul(8)), 8);
+        self.nodes.get(index as usize).copied().unwrap_or(KdNode::leaf(0, 0))
+    }
+
+    /// Reads primitive-list entry `pos`.
+    #[inline]
+    pub fn prim<P: MemoryProbe>(&self, pos: u32, probe: &mut P) -> u32 {
+        probe.read(DataClass::PrimLists, self.prims_addr.wrapping_add(pos.wrapping_mul(4)), 4);
+        self.prims.get(pos as usize).copied().unwrap_or(0)
+    }
+}
+
+/// Checks, with a fixed-capacity stack and no allocation, that `children(i)` describes a
+/// tree rooted at node 0: every child comes after its parent and inside the section, the
+/// walk never needs more than [`MAX_TREE_DEPTH`] stack entries (the traversal kernels'
+/// capacity, since they push at most one node per level), and it visits exactly `n`
+/// nodes. `children(i)` is `Err` for a malformed node, `Ok(None)` for a valid leaf and
+/// `Ok(Some(c))` for an inner node whose children are `c` and `c + 1`.
+fn validate_tree(
+    n: usize,
+    section: SectionKind,
+    mut children: impl FnMut(usize) -> Result<Option<u32>, ()>,
+) -> Result<(), SceneError> {
+    let bad = |node: usize| SceneError::BadTree { section, node: node as u32 };
+    if n == 0 {
+        return Err(bad(0));
+    }
+    let mut stack = [0u32; MAX_TREE_DEPTH as usize];
+    let mut sp = 0usize;
+    let mut node = 0usize;
+    let mut visited = 0usize;
+    loop {
+        visited += 1;
+        if visited > n {
+            return Err(bad(node));
+        }
+        match children(node).map_err(|_| bad(node))? {
+            Some(c) => {
+                let c = c as usize;
+                if c <= node || c + 1 >= n {
+                    return Err(bad(node));
+                }
+                if sp == stack.len() {
+                    return Err(bad(node));
+                }
+                stack[sp] = (c + 1) as u32;
+                sp += 1;
+                node = c;
+            }
+            None => {
+                if sp == 0 {
+                    break;
+                }
+                sp -= 1;
+                node = stack[sp] as usize;
+            }
+        }
+    }
+    if visited != n {
+        return Err(bad(n - 1));
+    }
+    Ok(())
 }
 
 /// A validated scene image, borrowed in place. Cheap to copy.
@@ -255,6 +395,8 @@ pub struct SceneView<'a> {
     positions: &'a [Position],
     triangles: &'a [TriangleRecord],
     grid: Option<GridView<'a>>,
+    bvh: Option<BvhView<'a>>,
+    kd: Option<KdTreeView<'a>>,
     shading: &'a [ShadingVertex],
     tri_materials: &'a [u32],
     materials: &'a [MaterialRecord],
@@ -293,14 +435,8 @@ impl<'a> Sections<'a> {
         let raw = self
             .bytes
             .get(start..start + e.size as usize)
-            .ok_or(SceneError::Truncated {
-                needed: start + e.size as usize,
-                len: self.bytes.len(),
-            })?;
-        bytemuck::try_cast_slice(raw).map_err(|_| SceneError::SectionMisaligned {
-            section: kind,
-            offset: e.offset,
-        })
+            .ok_or(SceneError::Truncated { needed: start + e.size as usize, len: self.bytes.len() })?;
+        bytemuck::try_cast_slice(raw).map_err(|_| SceneError::SectionMisaligned { section: kind, offset: e.offset })
     }
 
     fn required<T: Pod>(&self, kind: SectionKind) -> Result<&'a [T], SceneError> {
@@ -320,36 +456,22 @@ impl<'a> SceneView<'a> {
     /// counts, every offset and index — and returns a view that kernels can use without
     /// any further check. `bytes` may be longer than the image (e.g. a flash partition).
     pub fn parse(bytes: &'a [u8]) -> Result<SceneView<'a>, SceneError> {
-        let head = bytes.get(..64).ok_or(SceneError::Truncated {
-            needed: 64,
-            len: bytes.len(),
-        })?;
+        let head = bytes.get(..64).ok_or(SceneError::Truncated { needed: 64, len: bytes.len() })?;
         let misalign = bytes.as_ptr() as usize % IMAGE_ALIGN;
         if misalign != 0 {
-            return Err(SceneError::Misaligned {
-                offset: misalign,
-                required: IMAGE_ALIGN,
-            });
+            return Err(SceneError::Misaligned { offset: misalign, required: IMAGE_ALIGN });
         }
-        let header: &Header = bytemuck::try_from_bytes(head).map_err(|_| SceneError::Misaligned {
-            offset: misalign,
-            required: IMAGE_ALIGN,
-        })?;
+        let header: &Header = bytemuck::try_from_bytes(head)
+            .map_err(|_| SceneError::Misaligned { offset: misalign, required: IMAGE_ALIGN })?;
         if header.magic != MAGIC {
             return Err(SceneError::BadMagic);
         }
         if header.version != FORMAT_VERSION {
-            return Err(SceneError::UnsupportedVersion {
-                found: header.version,
-                supported: FORMAT_VERSION,
-            });
+            return Err(SceneError::UnsupportedVersion { found: header.version, supported: FORMAT_VERSION });
         }
         let total = header.total_size as usize;
         if bytes.len() < total || total < 64 {
-            return Err(SceneError::Truncated {
-                needed: total.max(64),
-                len: bytes.len(),
-            });
+            return Err(SceneError::Truncated { needed: total.max(64), len: bytes.len() });
         }
         let bytes = &bytes[..total];
         let mut crc = Crc32::default();
@@ -358,10 +480,7 @@ impl<'a> SceneView<'a> {
         crc.update(&bytes[CHECKSUM_OFFSET + 4..]);
         let computed = crc.finish();
         if computed != header.checksum {
-            return Err(SceneError::ChecksumMismatch {
-                stored: header.checksum,
-                computed,
-            });
+            return Err(SceneError::ChecksumMismatch { stored: header.checksum, computed });
         }
         if header.flags != 0 {
             return Err(SceneError::UnknownFlags(header.flags));
@@ -375,14 +494,10 @@ impl<'a> SceneView<'a> {
     fn parse_table(header: &Header, bytes: &'a [u8]) -> Result<Sections<'a>, SceneError> {
         let n = header.section_count as usize;
         let table_end = 64 + 16 * n;
-        let table_bytes = bytes.get(64..table_end).ok_or(SceneError::Truncated {
-            needed: table_end,
-            len: bytes.len(),
-        })?;
-        let table: &[SectionEntry] = bytemuck::try_cast_slice(table_bytes).map_err(|_| SceneError::Misaligned {
-            offset: 0,
-            required: IMAGE_ALIGN,
-        })?;
+        let table_bytes =
+            bytes.get(64..table_end).ok_or(SceneError::Truncated { needed: table_end, len: bytes.len() })?;
+        let table: &[SectionEntry] = bytemuck::try_cast_slice(table_bytes)
+            .map_err(|_| SceneError::Misaligned { offset: 0, required: IMAGE_ALIGN })?;
         let mut entries = [None; SectionKind::ALL.len()];
         for e in table {
             let kind = SectionKind::from_u32(e.kind).ok_or(SceneError::UnknownSection(e.kind))?;
@@ -391,10 +506,7 @@ impl<'a> SceneView<'a> {
                 return Err(SceneError::DuplicateSection(kind));
             }
             if e.offset % SECTION_ALIGN != 0 {
-                return Err(SceneError::SectionMisaligned {
-                    section: kind,
-                    offset: e.offset,
-                });
+                return Err(SceneError::SectionMisaligned { section: kind, offset: e.offset });
             }
             let end = e.offset as u64 + e.size as u64;
             if (e.offset as usize) < table_end || end > bytes.len() as u64 {
@@ -444,11 +556,7 @@ impl<'a> SceneView<'a> {
         let nv = positions.len() as u32;
         let nt = triangles.len() as u32;
         if header.vertex_count != nv {
-            return Err(SceneError::CountMismatch {
-                section: K::Positions,
-                expected: header.vertex_count,
-                found: nv,
-            });
+            return Err(SceneError::CountMismatch { section: K::Positions, expected: header.vertex_count, found: nv });
         }
         if header.triangle_count != nt {
             return Err(SceneError::CountMismatch {
@@ -460,31 +568,19 @@ impl<'a> SceneView<'a> {
 
         // Geometry: finite, inside the declared bounds, indices in range.
         if !finite3(header.bounds_min) || !finite3(header.bounds_max) {
-            return Err(SceneError::NonFinite {
-                section: K::Positions,
-                record: u32::MAX,
-            });
+            return Err(SceneError::NonFinite { section: K::Positions, record: u32::MAX });
         }
         let (bmin, bmax) = (Vec3::from(header.bounds_min), Vec3::from(header.bounds_max));
         if nv > 0 && !bmin.cmple(bmax).all() {
-            return Err(SceneError::OutOfBounds {
-                section: K::Positions,
-                record: u32::MAX,
-            });
+            return Err(SceneError::OutOfBounds { section: K::Positions, record: u32::MAX });
         }
         for (i, p) in positions.iter().enumerate() {
             if !finite3(p.0) {
-                return Err(SceneError::NonFinite {
-                    section: K::Positions,
-                    record: i as u32,
-                });
+                return Err(SceneError::NonFinite { section: K::Positions, record: i as u32 });
             }
             let v = Vec3::from(p.0);
             if !(v.cmpge(bmin).all() && v.cmple(bmax).all()) {
-                return Err(SceneError::OutOfBounds {
-                    section: K::Positions,
-                    record: i as u32,
-                });
+                return Err(SceneError::OutOfBounds { section: K::Positions, record: i as u32 });
             }
         }
         for (i, t) in triangles.iter().enumerate() {
@@ -498,10 +594,13 @@ impl<'a> SceneView<'a> {
             }
         }
 
-        let grid = match accel {
-            AccelKind::None => None,
-            AccelKind::Grid => Some(Self::validate_grid(s, nt, bmin, bmax)?),
-        };
+        let (mut grid, mut bvh, mut kd) = (None, None, None);
+        match accel {
+            AccelKind::None => {}
+            AccelKind::Grid => grid = Some(Self::validate_grid(s, nt, bmin, bmax)?),
+            AccelKind::Bvh => bvh = Some(Self::validate_bvh(s, nt)?),
+            AccelKind::KdTree => kd = Some(Self::validate_kd(s, nt, bmin, bmax)?),
+        }
 
         // Shading data: optional, but when present it must match the geometry.
         let shading: &[ShadingVertex] = s.slice(K::ShadingVertices)?;
@@ -535,11 +634,7 @@ impl<'a> SceneView<'a> {
         let lights: &[LightRecord] = s.slice(K::Lights)?;
         let cameras: &[CameraRecord] = s.slice(K::Camera)?;
         if cameras.len() > 1 {
-            return Err(SceneError::CountMismatch {
-                section: K::Camera,
-                expected: 1,
-                found: cameras.len() as u32,
-            });
+            return Err(SceneError::CountMismatch { section: K::Camera, expected: 1, found: cameras.len() as u32 });
         }
 
         Ok(SceneView {
@@ -548,6 +643,8 @@ impl<'a> SceneView<'a> {
             positions,
             triangles,
             grid,
+            bvh,
+            kd,
             shading,
             tri_materials,
             materials,
@@ -565,45 +662,24 @@ impl<'a> SceneView<'a> {
     fn validate_grid(s: &Sections<'a>, nt: u32, bmin: Vec3, bmax: Vec3) -> Result<GridView<'a>, SceneError> {
         use SectionKind as K;
         let rec: &[GridRecord] = s.required(K::Grid)?;
-        let rec = rec.first().ok_or(SceneError::CountMismatch {
-            section: K::Grid,
-            expected: 1,
-            found: 0,
-        })?;
+        let rec = rec.first().ok_or(SceneError::CountMismatch { section: K::Grid, expected: 1, found: 0 })?;
         if s.count(K::Grid) != 1 {
-            return Err(SceneError::CountMismatch {
-                section: K::Grid,
-                expected: 1,
-                found: s.count(K::Grid),
-            });
+            return Err(SceneError::CountMismatch { section: K::Grid, expected: 1, found: s.count(K::Grid) });
         }
         if !finite3(rec.bounds_min) || !finite3(rec.bounds_max) || !finite3(rec.cell_size) {
-            return Err(SceneError::NonFinite {
-                section: K::Grid,
-                record: 0,
-            });
+            return Err(SceneError::NonFinite { section: K::Grid, record: 0 });
         }
-        let cells_expected = rec
-            .dims
-            .iter()
-            .try_fold(1u32, |acc, &d| if d == 0 { None } else { acc.checked_mul(d) });
+        let cells_expected = rec.dims.iter().try_fold(1u32, |acc, &d| if d == 0 { None } else { acc.checked_mul(d) });
         let cell_count = match cells_expected {
             Some(c) if c == rec.cell_count && c < NULL_INDEX => c,
             _ => return Err(SceneError::BadGrid),
         };
-        let (gmin, gmax, cs) = (
-            Vec3::from(rec.bounds_min),
-            Vec3::from(rec.bounds_max),
-            Vec3::from(rec.cell_size),
-        );
+        let (gmin, gmax, cs) = (Vec3::from(rec.bounds_min), Vec3::from(rec.bounds_max), Vec3::from(rec.cell_size));
         if !cs.cmpgt(Vec3::ZERO).all() || !gmin.cmplt(gmax).all() || rec.dims.iter().any(|&d| d > (1 << 24)) {
             return Err(SceneError::BadGrid);
         }
         if !(gmin.cmple(bmin).all() && gmax.cmpge(bmax).all()) {
-            return Err(SceneError::OutOfBounds {
-                section: K::Grid,
-                record: 0,
-            });
+            return Err(SceneError::OutOfBounds { section: K::Grid, record: 0 });
         }
         let cells: &[u32] = s.required(K::GridCells)?;
         if cells.len() as u32 != cell_count {
@@ -650,6 +726,85 @@ impl<'a> SceneView<'a> {
             cells_addr: s.addr(K::GridCells),
             lists_addr: s.addr(K::PrimLists),
         })
+    }
+
+    fn prim_list(s: &Sections<'a>, nt: u32) -> Result<&'a [u32], SceneError> {
+        let prims: &[u32] = s.required(SectionKind::PrimLists)?;
+        for (i, &e) in prims.iter().enumerate() {
+            if e >= nt {
+                return Err(SceneError::IndexOutOfRange {
+                    section: SectionKind::PrimLists,
+                    record: i as u32,
+                    value: e,
+                    limit: nt,
+                });
+            }
+        }
+        Ok(prims)
+    }
+
+    fn validate_bvh(s: &Sections<'a>, nt: u32) -> Result<BvhView<'a>, SceneError> {
+        let nodes: &[BvhNode] = s.required(SectionKind::BvhNodes)?;
+        let prims = Self::prim_list(s, nt)?;
+        let np = prims.len() as u64;
+        validate_tree(nodes.len(), SectionKind::BvhNodes, |i| {
+            let n = &nodes[i];
+            let (lo, hi) = (Vec3::from(n.min), Vec3::from(n.max));
+            if !(finite3(n.min) && finite3(n.max) && lo.cmple(hi).all()) {
+                return Err(());
+            }
+            if n.count == 0 {
+                Ok(Some(n.first))
+            } else if n.first as u64 + n.count as u64 <= np {
+                Ok(None)
+            } else {
+                Err(())
+            }
+        })?;
+        Ok(BvhView {
+            nodes,
+            prims,
+            nodes_addr: s.addr(SectionKind::BvhNodes),
+            prims_addr: s.addr(SectionKind::PrimLists),
+        })
+    }
+
+    fn validate_kd(s: &Sections<'a>, nt: u32, bmin: Vec3, bmax: Vec3) -> Result<KdTreeView<'a>, SceneError> {
+        let nodes: &[KdNode] = s.required(SectionKind::KdNodes)?;
+        let prims = Self::prim_list(s, nt)?;
+        let np = prims.len() as u64;
+        validate_tree(nodes.len(), SectionKind::KdNodes, |i| {
+            let n = &nodes[i];
+            if n.axis() == KdNode::LEAF {
+                if n.index() as u64 + n.value as u64 <= np {
+                    Ok(None)
+                } else {
+                    Err(())
+                }
+            } else if n.split().is_finite() {
+                Ok(Some(n.index()))
+            } else {
+                Err(())
+            }
+        })?;
+        Ok(KdTreeView {
+            nodes,
+            prims,
+            nodes_addr: s.addr(SectionKind::KdNodes),
+            prims_addr: s.addr(SectionKind::PrimLists),
+            min: bmin,
+            max: bmax,
+        })
+    }
+
+    /// The BVH, if the image holds one.
+    pub fn bvh(&self) -> Option<&BvhView<'a>> {
+        self.bvh.as_ref()
+    }
+
+    /// The kd-tree, if the image holds one.
+    pub fn kdtree(&self) -> Option<&KdTreeView<'a>> {
+        self.kd.as_ref()
     }
 
     /// The header.
@@ -700,11 +855,7 @@ impl<'a> SceneView<'a> {
     /// Reads light `index` (a default black ambient light if out of range).
     #[inline]
     pub fn light<P: MemoryProbe>(&self, index: u32, probe: &mut P) -> LightRecord {
-        probe.read(
-            DataClass::Shading,
-            self.lights_addr.wrapping_add(index.wrapping_mul(32)),
-            32,
-        );
+        probe.read(DataClass::Shading, self.lights_addr.wrapping_add(index.wrapping_mul(32)), 32);
         self.lights.get(index as usize).copied().unwrap_or(LightRecord {
             position: [0.0; 3],
             kind: LightRecord::AMBIENT,
@@ -721,25 +872,15 @@ impl<'a> SceneView<'a> {
     /// Reads triangle `prim` and its three vertex positions (intersection data).
     #[inline]
     pub fn triangle<P: MemoryProbe>(&self, prim: u32, probe: &mut P) -> [Vec3; 3] {
-        probe.read(
-            DataClass::Triangles,
-            self.triangles_addr.wrapping_add(prim.wrapping_mul(12)),
-            12,
-        );
+        probe.read(DataClass::Triangles, self.triangles_addr.wrapping_add(prim.wrapping_mul(12)), 12);
         let idx = self.triangles.get(prim as usize).map_or([0; 3], |t| t.0);
         idx.map(|i| self.position(i, probe))
     }
 
     #[inline]
     fn position<P: MemoryProbe>(&self, index: u32, probe: &mut P) -> Vec3 {
-        probe.read(
-            DataClass::Triangles,
-            self.positions_addr.wrapping_add(index.wrapping_mul(12)),
-            12,
-        );
-        self.positions
-            .get(index as usize)
-            .map_or(Vec3::ZERO, |p| Vec3::from(p.0))
+        probe.read(DataClass::Triangles, self.positions_addr.wrapping_add(index.wrapping_mul(12)), 12);
+        self.positions.get(index as usize).map_or(Vec3::ZERO, |p| Vec3::from(p.0))
     }
 
     /// The vertex indices of triangle `prim` (not probed: shading re-reads them from its
@@ -755,11 +896,7 @@ impl<'a> SceneView<'a> {
         if self.shading.is_empty() {
             return None;
         }
-        probe.read(
-            DataClass::Shading,
-            self.shading_addr.wrapping_add(index.wrapping_mul(32)),
-            32,
-        );
+        probe.read(DataClass::Shading, self.shading_addr.wrapping_add(index.wrapping_mul(32)), 32);
         self.shading.get(index as usize).copied()
     }
 
@@ -769,20 +906,9 @@ impl<'a> SceneView<'a> {
         if self.tri_materials.is_empty() {
             return MaterialRecord::DEFAULT;
         }
-        probe.read(
-            DataClass::Shading,
-            self.tri_materials_addr.wrapping_add(prim.wrapping_mul(4)),
-            4,
-        );
+        probe.read(DataClass::Shading, self.tri_materials_addr.wrapping_add(prim.wrapping_mul(4)), 4);
         let id = self.tri_materials.get(prim as usize).copied().unwrap_or(NULL_INDEX);
-        probe.read(
-            DataClass::Shading,
-            self.materials_addr.wrapping_add(id.wrapping_mul(64)),
-            64,
-        );
-        self.materials
-            .get(id as usize)
-            .copied()
-            .unwrap_or(MaterialRecord::DEFAULT)
+        probe.read(DataClass::Shading, self.materials_addr.wrapping_add(id.wrapping_mul(64)), 64);
+        self.materials.get(id as usize).copied().unwrap_or(MaterialRecord::DEFAULT)
     }
 }
