@@ -40,6 +40,49 @@ pub enum Command {
     Stats(StatsArgs),
     /// Measure build time, image size and primary-ray throughput.
     Bench(BenchArgs),
+    /// Trace a batch of rays from a NumPy .npy array and write the closest hits.
+    Trace(TraceArgs),
+    /// Write the primary rays of a view as a NumPy .npy array (N × 8 float32).
+    Rays(RaysArgs),
+}
+
+/// `raypipe trace`.
+#[derive(Args, Debug)]
+pub struct TraceArgs {
+    /// An OBJ file or a scene image.
+    pub scene: PathBuf,
+    /// Rays: float32 array of shape (N, 6) — origin, direction — or (N, 8) with t_min, t_max.
+    #[arg(long, value_name = "NPY")]
+    pub rays: PathBuf,
+    /// Output: structured array of N records (t, u, v float32; prim int32, -1 on a miss).
+    #[arg(long, value_name = "NPY")]
+    pub hits: PathBuf,
+    #[command(flatten)]
+    pub structure: StructureArgs,
+    /// Worker threads (default: all cores).
+    #[arg(long, value_name = "N")]
+    pub threads: Option<usize>,
+    /// Ray–triangle intersection test.
+    #[arg(long, value_enum, default_value_t = IntersectorKind::Watertight)]
+    pub intersector: IntersectorKind,
+    /// Trace the batch this many times and report the median time.
+    #[arg(long, default_value_t = 1)]
+    pub runs: usize,
+}
+
+/// `raypipe rays`.
+#[derive(Args, Debug)]
+pub struct RaysArgs {
+    /// An OBJ file or a scene image (for its default camera); the built-in Cornell box when omitted.
+    pub scene: Option<PathBuf>,
+    /// Output .npy file.
+    #[arg(short, long, value_name = "NPY")]
+    pub output: PathBuf,
+    /// Also write the scene's triangles, in id order, as a (T, 9) float32 array.
+    #[arg(long, value_name = "NPY")]
+    pub triangles: Option<PathBuf>,
+    #[command(flatten)]
+    pub camera: CameraArgs,
 }
 
 /// How to build the acceleration structure when the scene is an OBJ.
@@ -239,6 +282,8 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Render(a) => cmd_render(a),
         Command::Stats(a) => cmd_stats(a),
         Command::Bench(a) => cmd_bench(a),
+        Command::Trace(a) => cmd_trace(a),
+        Command::Rays(a) => cmd_rays(a),
     }
 }
 
@@ -512,5 +557,71 @@ fn cmd_bench(a: BenchArgs) -> Result<()> {
             );
         }
     }
+    Ok(())
+}
+
+fn cmd_rays(a: RaysArgs) -> Result<()> {
+    let scene = scene::load(a.scene.as_deref(), &BuildOptions { accel: Accel::None, ..Default::default() })?;
+    let cam = camera_for(&scene, &a.camera)?;
+    let eye = render::eye_rays(&cam, "camera")?;
+    let mut data = Vec::with_capacity(cam.width as usize * cam.height as usize * 8);
+    for y in 0..cam.height {
+        for x in 0..cam.width {
+            let r = eye.ray(x, y);
+            data.extend_from_slice(&[r.origin.x, r.origin.y, r.origin.z, r.dir.x, r.dir.y, r.dir.z, r.t_min, r.t_max]);
+        }
+    }
+    let rows = data.len() / 8;
+    crate::npy::write_f32_2d(&a.output, &crate::npy::Array2 { rows, cols: 8, data })?;
+    if let Some(path) = &a.triangles {
+        let view = scene.view()?;
+        let mut data = Vec::with_capacity(view.triangle_count() as usize * 9);
+        for prim in 0..view.triangle_count() {
+            for v in view.triangle(prim, &mut raypipe_core::NoProbe) {
+                data.extend_from_slice(&v.to_array());
+            }
+        }
+        let tris = crate::npy::Array2 { rows: view.triangle_count() as usize, cols: 9, data };
+        crate::npy::write_f32_2d(path, &tris)?;
+        println!("wrote {} triangles -> {}", tris.rows, path.display());
+    }
+    println!("wrote {rows} primary rays ({}x{}) -> {}", cam.width, cam.height, a.output.display());
+    Ok(())
+}
+
+fn cmd_trace(a: TraceArgs) -> Result<()> {
+    if a.threads == Some(0) {
+        bail!("--threads must be at least 1");
+    }
+    let rays = crate::npy::read_f32_2d(&a.rays)?;
+    let name = a.rays.display();
+    let rays = crate::batch::rays_from_array(&rays).map_err(|e| anyhow!("{name}: {e}"))?;
+    let scene = scene::load(Some(&a.scene), &a.structure.options())?;
+    warn(&scene);
+    let view = scene.view()?;
+    if a.runs == 0 {
+        bail!("--runs must be at least 1");
+    }
+    let mut times = Vec::new();
+    let mut hits = Vec::new();
+    for _ in 0..a.runs {
+        let start = Instant::now();
+        hits = crate::batch::trace_batch(&view, &rays, a.intersector, a.threads)?;
+        times.push(start.elapsed().as_secs_f64());
+    }
+    let secs = median(&times);
+    crate::npy::write_hits(&a.hits, &hits)?;
+    let n_hit = hits.iter().filter(|h| h.prim >= 0).count();
+    println!(
+        "traced {} rays through {} ({}): {} hits ({:.2}%) in {:.3} s ({:.2} Mrays/s) -> {}",
+        rays.len(),
+        scene.name,
+        structure_summary(&view),
+        n_hit,
+        100.0 * n_hit as f64 / rays.len().max(1) as f64,
+        secs,
+        rays.len() as f64 / secs / 1e6,
+        a.hits.display()
+    );
     Ok(())
 }

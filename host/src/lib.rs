@@ -6,6 +6,7 @@
 //! re-implemented here: everything that touches a ray calls `raypipe-core`.
 
 pub mod aligned;
+pub mod batch;
 pub mod bench;
 pub mod bvh_builder;
 pub mod camera_file;
@@ -15,6 +16,7 @@ pub mod grid_builder;
 pub mod image_writer;
 pub mod kd_builder;
 pub mod mesh;
+pub mod npy;
 pub mod obj;
 pub mod output;
 pub mod progress;

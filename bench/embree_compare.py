@@ -1,0 +1,105 @@
+#!/usr/bin/env python3
+"""Compare raypipe with Embree 4 on the same mesh and the same primary rays.
+
+raypipe writes the rays and the triangles (in its triangle-id order) as .npy files and
+traces the rays single-threaded; Embree (PyPI package `embreex`, whose `run` is a
+single-ray `rtcIntersect1` loop) traces the same rays through the same triangles in
+this process. The script checks that the hits agree and prints raypipe's throughput
+divided by Embree's.
+
+    pip install embreex numpy
+    cargo build --release -p raypipe
+    python3 bench/embree_compare.py ../shared/models/stanford_bunny/stanford-bunny.obj
+
+A ray agrees when both miss, or both hit the same triangle, or both hit at the same
+distance within a relative 1e-6 (Embree's test is not watertight, so a few grazing
+rays may differ: they are counted and reported).
+"""
+import argparse
+import os
+import re
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+try:
+    from embreex import rtcore_scene as rtcs
+    from embreex.mesh_construction import TriangleMesh
+except ImportError:
+    sys.exit("error: the embreex package is missing: pip install embreex")
+
+
+def raypipe(binary, *args):
+    out = subprocess.run([binary, *args], check=True, capture_output=True, text=True)
+    return out.stdout
+
+
+def embree_trace(tris, origins, dirs, runs):
+    scene = rtcs.EmbreeScene()
+    TriangleMesh(scene, tris.reshape(-1, 3, 3))
+    res = scene.run(origins[:1024], dirs[:1024], output=1)  # warm-up, builds the BVH
+    times = []
+    for _ in range(runs):
+        t = time.perf_counter()
+        res = scene.run(origins, dirs, output=1)
+        times.append(time.perf_counter() - t)
+    return res, statistics.median(times)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("mesh", help="OBJ (or .obj.gz) file")
+    ap.add_argument("--size", default="1024x1024")
+    ap.add_argument("--accel", default="bvh", help="raypipe structure: grid, kd or bvh")
+    ap.add_argument("--runs", type=int, default=3)
+    ap.add_argument("--camera", help="raypipe camera file for the view")
+    ap.add_argument("--raypipe", default=os.path.join(os.path.dirname(__file__), "..", "target", "release", "raypipe"))
+    a = ap.parse_args()
+
+    with tempfile.TemporaryDirectory() as tmp:
+        rays_p, tris_p, hits_p = (os.path.join(tmp, n) for n in ("rays.npy", "tris.npy", "hits.npy"))
+        cam = ["--camera", a.camera] if a.camera else []
+        raypipe(a.raypipe, "rays", a.mesh, "-o", rays_p, "--triangles", tris_p, "--size", a.size, *cam)
+        out = raypipe(a.raypipe, "trace", a.mesh, "--rays", rays_p, "--hits", hits_p, "--accel", a.accel,
+                      "--threads", "1", "--runs", str(a.runs))
+        rp_secs = float(re.search(r"in ([0-9.]+) s", out).group(1))
+        rays = np.load(rays_p)
+        tris = np.load(tris_p).astype(np.float32)
+        hits = np.load(hits_p)
+
+    origins = np.ascontiguousarray(rays[:, 0:3], dtype=np.float32)
+    dirs = np.ascontiguousarray(rays[:, 3:6], dtype=np.float32)
+    res, em_secs = embree_trace(tris, origins, dirs, a.runs)
+
+    n = len(rays)
+    e_prim = np.asarray(res["primID"]).astype(np.int64)
+    e_geom = np.asarray(res["geomID"]).astype(np.int64)
+    e_hit = e_geom != -1
+    e_prim = np.where(e_hit, e_prim, -1)
+    e_t = np.asarray(res["tfar"], dtype=np.float32)
+    r_prim = hits["prim"].astype(np.int64)
+    r_t = hits["t"]
+    r_hit = r_prim >= 0
+    same_miss = ~e_hit & ~r_hit
+    same_prim = e_hit & r_hit & (e_prim == r_prim)
+    close_t = e_hit & r_hit & (np.abs(e_t - r_t) <= 1e-6 * np.maximum(np.abs(e_t), np.abs(r_t)))
+    agree = same_miss | same_prim | close_t
+    differ = n - int(agree.sum())
+
+    rp = n / rp_secs / 1e6
+    em = n / em_secs / 1e6
+    print(f"mesh        {a.mesh} ({len(tris)} triangles), {n} primary rays, single thread")
+    print(f"raypipe     {a.accel:<4} {rp:8.2f} Mrays/s")
+    print(f"embree      rtcIntersect1 {em:8.2f} Mrays/s")
+    print(f"ratio       raypipe / embree = {rp / em:.2f}")
+    print(f"agreement   {100.0 * agree.mean():.4f}% ({differ} rays differ: "
+          f"{int((e_hit != r_hit).sum())} hit/miss, {int((e_hit & r_hit & ~same_prim & ~close_t).sum())} other triangle)")
+    return 0 if agree.mean() >= 0.9999 else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,65 @@
+//! Ray batches: rays from an array, closest hits out, traced on all cores in fixed-size
+//! chunks (the result does not depend on the thread count).
+
+use anyhow::{bail, Result};
+use rayon::prelude::*;
+use raypipe_core::{Intersector, NoProbe, Ray, RayCounters, SceneView, Vec3};
+
+use crate::npy::{Array2, HitRecord};
+use crate::render::in_pool;
+use crate::tracer::{trace, IntersectorKind};
+use crate::with_intersector;
+
+/// Rays traced as one unit of work.
+const CHUNK: usize = 4096;
+
+/// Converts an (N, 6) or (N, 8) array into rays, rejecting rows no ray can be made of.
+pub fn rays_from_array(a: &Array2) -> Result<Vec<Ray>> {
+    if a.cols != 6 && a.cols != 8 {
+        bail!("array has {} columns; expected 6 (origin, direction) or 8 (and t_min, t_max)", a.cols);
+    }
+    let mut rays = Vec::with_capacity(a.rows);
+    for (i, row) in a.data.chunks_exact(a.cols).enumerate() {
+        let origin = Vec3::new(row[0], row[1], row[2]);
+        let dir = Vec3::new(row[3], row[4], row[5]);
+        let (t_min, t_max) = if a.cols == 8 { (row[6], row[7]) } else { (0.0, f32::INFINITY) };
+        if !origin.is_finite() || !dir.is_finite() {
+            bail!("row {i}: origin or direction is NaN or infinite");
+        }
+        if dir == Vec3::ZERO {
+            bail!("row {i}: direction is zero");
+        }
+        if t_min.is_nan() || t_max.is_nan() || t_min > t_max {
+            bail!("row {i}: t range [{t_min}, {t_max}] is empty or NaN");
+        }
+        rays.push(Ray { origin, dir, t_min, t_max });
+    }
+    Ok(rays)
+}
+
+/// Closest hit of every ray.
+pub fn trace_batch(
+    scene: &SceneView<'_>,
+    rays: &[Ray],
+    kind: IntersectorKind,
+    threads: Option<usize>,
+) -> Result<Vec<HitRecord>> {
+    with_intersector!(kind, I => trace_with::<I>(scene, rays, threads))
+}
+
+fn trace_with<I: Intersector>(scene: &SceneView<'_>, rays: &[Ray], threads: Option<usize>) -> Result<Vec<HitRecord>> {
+    in_pool(threads, || {
+        rays.par_chunks(CHUNK)
+            .flat_map_iter(|chunk| {
+                let mut c = RayCounters::default();
+                chunk
+                    .iter()
+                    .map(|r| match trace::<I, _>(scene, r, &mut NoProbe, &mut c) {
+                        Some(h) => HitRecord { t: h.t, u: h.u, v: h.v, prim: h.prim as i32 },
+                        None => HitRecord { t: f32::INFINITY, u: 0.0, v: 0.0, prim: -1 },
+                    })
+                    .collect::<Vec<_>>()
+            })
+            .collect()
+    })
+}

@@ -1,0 +1,167 @@
+//! NumPy `.npy` files (format version 1.0/2.0/3.0): little-endian `float32` arrays of rays
+//! in, a structured array of hits out — the formats simulation and research users
+//! already have.
+
+use std::path::Path;
+
+use anyhow::{anyhow, bail, Result};
+
+use crate::output::write_atomic;
+
+/// A 2-D float32 array.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Array2 {
+    /// Rows.
+    pub rows: usize,
+    /// Columns.
+    pub cols: usize,
+    /// Row-major data.
+    pub data: Vec<f32>,
+}
+
+/// Reads a C-order, little-endian float32 array of two dimensions.
+pub fn read_f32_2d(path: &Path) -> Result<Array2> {
+    let name = path.display();
+    let bytes = std::fs::read(path).map_err(|e| anyhow!("{name}: cannot read: {e}"))?;
+    parse_f32_2d(&bytes).map_err(|e| anyhow!("{name}: {e}"))
+}
+
+/// Parses the bytes of a `.npy` file holding a 2-D float32 array.
+pub fn parse_f32_2d(bytes: &[u8]) -> Result<Array2> {
+    if bytes.len() < 10 || &bytes[..6] != b"\x93NUMPY" {
+        bail!("not a NumPy .npy file");
+    }
+    let (header_len, start) = match bytes[6] {
+        1 => (u16::from_le_bytes([bytes[8], bytes[9]]) as usize, 10),
+        2 | 3 if bytes.len() >= 12 => (u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize, 12),
+        v => bail!("unsupported .npy version {v}"),
+    };
+    let header = bytes.get(start..start + header_len).ok_or_else(|| anyhow!("truncated .npy header"))?;
+    let header = std::str::from_utf8(header).map_err(|_| anyhow!("malformed .npy header"))?;
+    let descr = dict_value(header, "descr").ok_or_else(|| anyhow!("malformed .npy header: no descr"))?;
+    let descr = descr.trim_matches(|c| c == '\'' || c == '"');
+    if descr != "<f4" && descr != "=f4" && descr != "f4" {
+        bail!("array has dtype {descr}; expected float32 ('<f4')");
+    }
+    if dict_value(header, "fortran_order").is_some_and(|v| v.trim() == "True") {
+        bail!("array is in Fortran order; save it C-contiguous");
+    }
+    let shape = dict_value(header, "shape").ok_or_else(|| anyhow!("malformed .npy header: no shape"))?;
+    let dims: Vec<usize> = shape
+        .trim_matches(|c| c == '(' || c == ')')
+        .split(',')
+        .map(str::trim)
+        .filter(|s| !s.is_empty())
+        .map(|s| s.parse::<usize>().map_err(|_| anyhow!("malformed .npy shape {shape}")))
+        .collect::<Result<_>>()?;
+    let [rows, cols] = dims[..] else { bail!("array has shape {shape}; expected two dimensions (N, 6) or (N, 8)") };
+    let body = &bytes[start + header_len..];
+    let need = rows.checked_mul(cols).and_then(|n| n.checked_mul(4)).ok_or_else(|| anyhow!("array too large"))?;
+    if body.len() < need {
+        bail!("truncated array: shape {shape} needs {need} bytes of data, file has {}", body.len());
+    }
+    let data = body[..need].chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
+    Ok(Array2 { rows, cols, data })
+}
+
+/// The text of `'key': value` in a NumPy header dict (value up to the next top-level comma).
+fn dict_value<'a>(header: &'a str, key: &str) -> Option<&'a str> {
+    let at = header.find(&format!("'{key}'")).or_else(|| header.find(&format!("\"{key}\"")))?;
+    let rest = &header[at + key.len() + 2..];
+    let rest = rest.trim_start().strip_prefix(':')?.trim_start();
+    let mut depth = 0;
+    for (i, c) in rest.char_indices() {
+        match c {
+            '(' => depth += 1,
+            ')' => depth -= 1,
+            ',' | '}' if depth == 0 => return Some(rest[..i].trim()),
+            _ => {}
+        }
+    }
+    None
+}
+
+fn header_bytes(dict: &str) -> Vec<u8> {
+    // Version 1.0: magic, version, u16 header length; header padded with spaces to a
+    // multiple of 64 bytes and ended by a newline.
+    let mut h = dict.to_string();
+    let total = 10 + h.len() + 1;
+    h.push_str(&" ".repeat((64 - total % 64) % 64));
+    h.push('\n');
+    let mut out = b"\x93NUMPY\x01\x00".to_vec();
+    out.extend_from_slice(&(h.len() as u16).to_le_bytes());
+    out.extend_from_slice(h.as_bytes());
+    out
+}
+
+/// Writes a 2-D float32 array atomically.
+pub fn write_f32_2d(path: &Path, a: &Array2) -> Result<()> {
+    let header =
+        header_bytes(&format!("{{'descr': '<f4', 'fortran_order': False, 'shape': ({}, {}), }}", a.rows, a.cols));
+    write_atomic(path, |w| {
+        w.write_all(&header)?;
+        for v in &a.data {
+            w.write_all(&v.to_le_bytes())?;
+        }
+        Ok(())
+    })
+}
+
+/// One hit record as written: `t`, `u`, `v` (float32) and `prim` (int32, −1 on a miss).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HitRecord {
+    /// Distance (`inf` on a miss).
+    pub t: f32,
+    /// Barycentric weight of the second vertex.
+    pub u: f32,
+    /// Barycentric weight of the third vertex.
+    pub v: f32,
+    /// Triangle id in input face order, or −1.
+    pub prim: i32,
+}
+
+/// Writes hits as a structured array `[('t','<f4'),('u','<f4'),('v','<f4'),('prim','<i4')]`.
+pub fn write_hits(path: &Path, hits: &[HitRecord]) -> Result<()> {
+    let header = header_bytes(&format!(
+        "{{'descr': [('t', '<f4'), ('u', '<f4'), ('v', '<f4'), ('prim', '<i4')], 'fortran_order': False, 'shape': ({},), }}",
+        hits.len()
+    ));
+    write_atomic(path, |w| {
+        w.write_all(&header)?;
+        for h in hits {
+            w.write_all(&h.t.to_le_bytes())?;
+            w.write_all(&h.u.to_le_bytes())?;
+            w.write_all(&h.v.to_le_bytes())?;
+            w.write_all(&h.prim.to_le_bytes())?;
+        }
+        Ok(())
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn round_trip_and_rejections() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("a.npy");
+        let a = Array2 { rows: 2, cols: 6, data: (0..12).map(|i| i as f32 * 0.5).collect() };
+        write_f32_2d(&p, &a).unwrap();
+        let bytes = std::fs::read(&p).unwrap();
+        assert_eq!((bytes.len() - 12 * 4) % 64, 0, "header padded to 64 bytes");
+        assert_eq!(parse_f32_2d(&bytes).unwrap(), a);
+        // A float64 array, a 1-D array, a truncated body, junk.
+        let edit = |from: &str, to: &str| {
+            let at = bytes.windows(from.len()).position(|w| w == from.as_bytes()).unwrap();
+            let mut b = bytes.clone();
+            b.splice(at..at + from.len(), to.bytes());
+            b
+        };
+        assert!(parse_f32_2d(&edit("<f4", "<f8")).unwrap_err().to_string().contains("float32"));
+        assert!(parse_f32_2d(&edit("(2, 6)", "(12,)  ")).unwrap_err().to_string().contains("two dimensions"));
+        assert!(parse_f32_2d(&edit("False", "True ")).unwrap_err().to_string().contains("Fortran"));
+        assert!(parse_f32_2d(&bytes[..bytes.len() - 4]).unwrap_err().to_string().contains("truncated"));
+        assert!(parse_f32_2d(b"hello").is_err());
+    }
+}
