@@ -3,6 +3,8 @@
 //! `BVH::Intersect`). The stack never overflows: `SceneView::parse` rejects trees deeper
 //! than [`MAX_TREE_DEPTH`], and at most one node per level waits on it.
 
+use glam::Vec3A;
+
 use crate::counters::RayCounters;
 use crate::hit::Hit;
 use crate::image::{BvhView, SceneView, MAX_TREE_DEPTH};
@@ -30,7 +32,7 @@ pub fn trace_bvh<I: Intersector, P: MemoryProbe>(
     let mut sp = 0usize;
     let (mut nodes, mut leaves, mut tests) = (1u32, 0u32, 0u32);
     let root = bvh.node(0, probe);
-    if rb.entry(root.min.into(), root.max.into(), ray.t_min, ray.t_max).is_none() {
+    if rb.entry_a(Vec3A::from_array(root.min), Vec3A::from_array(root.max), ray.t_min, ray.t_max).is_none() {
         counters.nodes += 1;
         return None;
     }
@@ -51,8 +53,8 @@ pub fn trace_bvh<I: Intersector, P: MemoryProbe>(
             let a = bvh.node(ia, probe);
             let b = bvh.node(ib, probe);
             nodes += 2;
-            let ta = rb.entry(a.min.into(), a.max.into(), ray.t_min, t_end);
-            let tb = rb.entry(b.min.into(), b.max.into(), ray.t_min, t_end);
+            let ta = rb.entry_a(Vec3A::from_array(a.min), Vec3A::from_array(a.max), ray.t_min, t_end);
+            let tb = rb.entry_a(Vec3A::from_array(b.min), Vec3A::from_array(b.max), ray.t_min, t_end);
             match (ta, tb) {
                 (Some(ta), Some(tb)) => {
                     let (near, far_index, t_far) = if ta <= tb { (a, ib, tb) } else { (b, ia, ta) };

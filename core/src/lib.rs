@@ -31,6 +31,7 @@ compile_error!("raypipe-core reads little-endian scene images in place and needs
 pub mod aabb;
 pub mod brute_force;
 pub mod bvh;
+pub mod bvh4;
 pub mod camera;
 pub mod color;
 pub mod counters;

@@ -3,7 +3,7 @@
 //! far distance is grown by `1 + 2·gamma(3)` so that rounding never rejects a box the
 //! ray touches.
 
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 
 use crate::aabb::SLAB_GROWTH;
 use crate::ray::Ray;
@@ -11,10 +11,10 @@ use crate::ray::Ray;
 /// Per-ray constants of the slab test.
 #[derive(Clone, Copy, Debug)]
 pub struct RayBox {
-    /// Ray origin.
-    pub origin: Vec3,
+    /// Ray origin (SIMD register layout).
+    pub origin: Vec3A,
     /// `1 / dir`, clamped to `±1e30` so that it is always finite.
-    pub inv: Vec3,
+    pub inv: Vec3A,
     /// Direction components that are exactly zero (bit per axis); such axes are tested
     /// as "origin inside the slab", since `(lo − o) · ∞` would be NaN on the boundary.
     pub zero_axes: u8,
@@ -27,14 +27,20 @@ impl RayBox {
     /// Precomputes the reciprocal direction.
     #[inline]
     pub fn new(ray: &Ray) -> RayBox {
-        let inv = Vec3::new(recip(ray.dir.x), recip(ray.dir.y), recip(ray.dir.z));
+        let inv = Vec3A::new(recip(ray.dir.x), recip(ray.dir.y), recip(ray.dir.z));
         let zero_axes = (ray.dir.x == 0.0) as u8 | ((ray.dir.y == 0.0) as u8) << 1 | ((ray.dir.z == 0.0) as u8) << 2;
-        RayBox { origin: ray.origin, inv, zero_axes }
+        RayBox { origin: ray.origin.into(), inv, zero_axes }
     }
 
     /// Entry distance of the ray into the box `[lo, hi]` within `[t0, t1]`, or `None`.
     #[inline(always)]
     pub fn entry(&self, lo: Vec3, hi: Vec3, t0: f32, t1: f32) -> Option<f32> {
+        self.entry_a(lo.into(), hi.into(), t0, t1)
+    }
+
+    /// [`RayBox::entry`] on SIMD-layout corners.
+    #[inline(always)]
+    pub fn entry_a(&self, lo: Vec3A, hi: Vec3A, t0: f32, t1: f32) -> Option<f32> {
         let a = (lo - self.origin) * self.inv;
         let b = (hi - self.origin) * self.inv;
         let mut near = a.min(b);

@@ -19,11 +19,24 @@ pub struct BvhParams {
     pub intersection_cost: f64,
     /// Largest leaf (a larger one is split even if the SAH prefers not to).
     pub max_leaf: usize,
+    /// Early split clipping (Ernst & Greiner 2007): a triangle whose box is longer than
+    /// this fraction of the scene's extent is cut into pieces with tight boxes, so that
+    /// large triangles (floors, walls) do not bloat the nodes they fall in. 0 disables.
+    pub presplit_extent: f64,
+    /// At most this many references per triangle on average, whatever the splitting.
+    pub max_refs_per_triangle: f64,
 }
 
 impl Default for BvhParams {
     fn default() -> Self {
-        BvhParams { bins: 16, traversal_cost: 1.0, intersection_cost: 1.0, max_leaf: 8 }
+        BvhParams {
+            bins: 16,
+            traversal_cost: 1.0,
+            intersection_cost: 1.0,
+            max_leaf: 8,
+            presplit_extent: 1.0 / 32.0,
+            max_refs_per_triangle: 3.0,
+        }
     }
 }
 
@@ -67,15 +80,7 @@ pub fn box_margin(mesh: &Mesh) -> f64 {
 
 /// Builds the BVH.
 pub fn build_bvh(mesh: &Mesh, params: &BvhParams) -> BuiltBvh {
-    let tris: Vec<(Bounds, DVec3)> = mesh
-        .triangles
-        .iter()
-        .map(|t| {
-            let v = t.map(|i| DVec3::from(mesh.positions[i as usize].map(f64::from)));
-            let b = Bounds { lo: v[0].min(v[1]).min(v[2]), hi: v[0].max(v[1]).max(v[2]) };
-            (b, (b.lo + b.hi) * 0.5)
-        })
-        .collect();
+    let (tris, owner) = references(mesh, params);
     let mut idx: Vec<u32> = (0..tris.len() as u32).collect();
     let margin = box_margin(mesh);
     let mut out =
@@ -133,8 +138,124 @@ pub fn build_bvh(mesh: &Mesh, params: &BvhParams) -> BuiltBvh {
             }
         }
     }
-    out.prims = idx;
+    out.prims = idx.iter().map(|&r| owner[r as usize]).collect();
     out
+}
+
+/// The build references: one box per triangle, or per piece of a large triangle cut by
+/// early split clipping. Returns `(box, centroid)` per reference and its triangle id.
+fn references(mesh: &Mesh, params: &BvhParams) -> (Vec<(Bounds, DVec3)>, Vec<u32>) {
+    let verts: Vec<[DVec3; 3]> =
+        mesh.triangles.iter().map(|t| t.map(|i| DVec3::from(mesh.positions[i as usize].map(f64::from)))).collect();
+    let boxes: Vec<Bounds> =
+        verts.iter().map(|v| Bounds { lo: v[0].min(v[1]).min(v[2]), hi: v[0].max(v[1]).max(v[2]) }).collect();
+    let (lo, hi) = mesh.bounds();
+    let extent = (DVec3::from(hi.map(f64::from)) - DVec3::from(lo.map(f64::from))).max_element();
+    let limit = params.presplit_extent * extent;
+    let budget = (params.max_refs_per_triangle * mesh.triangles.len() as f64) as usize;
+    let mut refs = Vec::with_capacity(mesh.triangles.len());
+    let mut owner = Vec::with_capacity(mesh.triangles.len());
+    // Largest triangles first get pieces while the budget lasts.
+    let mut order: Vec<usize> = (0..verts.len()).collect();
+    if limit > 0.0 {
+        order.sort_by(|&a, &b| {
+            let ea = (boxes[a].hi - boxes[a].lo).max_element();
+            let eb = (boxes[b].hi - boxes[b].lo).max_element();
+            eb.total_cmp(&ea)
+        });
+    }
+    let mut spare = budget.saturating_sub(verts.len());
+    let mut pieces = Vec::new();
+    let mut split_of = vec![None; verts.len()];
+    for &t in &order {
+        if limit <= 0.0 || (boxes[t].hi - boxes[t].lo).max_element() <= limit || spare == 0 {
+            continue;
+        }
+        pieces.clear();
+        clip_split(&verts[t], boxes[t], limit, spare + 1, &mut pieces);
+        if pieces.len() > 1 {
+            spare = spare.saturating_sub(pieces.len() - 1);
+            split_of[t] = Some(pieces.clone());
+        }
+    }
+    for t in 0..verts.len() {
+        match split_of[t].take() {
+            Some(ps) => {
+                for b in ps {
+                    refs.push((b, (b.lo + b.hi) * 0.5));
+                    owner.push(t as u32);
+                }
+            }
+            None => {
+                refs.push((boxes[t], (boxes[t].lo + boxes[t].hi) * 0.5));
+                owner.push(t as u32);
+            }
+        }
+    }
+    (refs, owner)
+}
+
+/// Halves `b` along its longest axis while it is longer than `limit`, keeping the box of
+/// the triangle's part in each half (at most `max` pieces).
+fn clip_split(v: &[DVec3; 3], b: Bounds, limit: f64, max: usize, out: &mut Vec<Bounds>) {
+    let e = b.hi - b.lo;
+    let axis = if e.x >= e.y && e.x >= e.z {
+        0
+    } else if e.y >= e.z {
+        1
+    } else {
+        2
+    };
+    if e[axis] <= limit || out.len() + 2 > max {
+        out.push(b);
+        return;
+    }
+    let mid = 0.5 * (b.lo[axis] + b.hi[axis]);
+    let (mut left, mut right) = (b, b);
+    left.hi[axis] = mid;
+    right.lo[axis] = mid;
+    for half in [left, right] {
+        if let Some(c) = clipped_bounds(v, &half) {
+            clip_split(v, c, limit, max, out);
+        }
+    }
+}
+
+/// Bounds of the part of triangle `v` inside box `b` (Sutherland–Hodgman clipping).
+fn clipped_bounds(v: &[DVec3; 3], b: &Bounds) -> Option<Bounds> {
+    let mut poly: Vec<DVec3> = v.to_vec();
+    for axis in 0..3 {
+        for (plane, keep_above) in [(b.lo[axis], true), (b.hi[axis], false)] {
+            let inside = |p: &DVec3| if keep_above { p[axis] >= plane } else { p[axis] <= plane };
+            let mut next = Vec::with_capacity(poly.len() + 2);
+            for i in 0..poly.len() {
+                let (p, q) = (poly[i], poly[(i + 1) % poly.len()]);
+                let (ip, iq) = (inside(&p), inside(&q));
+                if ip {
+                    next.push(p);
+                }
+                if ip != iq {
+                    let t = (plane - p[axis]) / (q[axis] - p[axis]);
+                    let mut x = p + (q - p) * t;
+                    x[axis] = plane;
+                    next.push(x);
+                }
+            }
+            poly = next;
+            if poly.is_empty() {
+                return None;
+            }
+        }
+    }
+    let mut out = Bounds::EMPTY;
+    for p in &poly {
+        out.grow(&Bounds { lo: *p, hi: *p });
+    }
+    // Clipping may round a hair inside the triangle: keep the piece inside the half box
+    // but never smaller than what the arithmetic produced.
+    out.lo = out.lo.max(b.lo);
+    out.hi = out.hi.min(b.hi);
+    Some(out)
 }
 
 /// The best binned-SAH plane `(axis, position)` if splitting beats a leaf (or the node is
@@ -213,4 +334,70 @@ fn round_up(v: DVec3) -> [f32; 3] {
             f
         }
     })
+}
+
+/// A built 4-wide BVH.
+#[derive(Clone, Debug, Default)]
+pub struct BuiltBvh4 {
+    /// Nodes; 0 is the root.
+    pub nodes: Vec<raypipe_core::image::Bvh4Node>,
+    /// Triangle ids referenced by the leaves.
+    pub prims: Vec<u32>,
+    /// Depth of the deepest node (root = 1).
+    pub depth: u32,
+}
+
+/// Collapses a binary BVH into a 4-wide one: each 4-wide node takes the (up to) four
+/// descendants reached by repeatedly opening the largest inner child (Wald et al. 2008).
+pub fn collapse_to_bvh4(bvh: &BuiltBvh) -> BuiltBvh4 {
+    use raypipe_core::image::Bvh4Node;
+    let area = |n: &BvhNode| {
+        let e = [n.max[0] - n.min[0], n.max[1] - n.min[1], n.max[2] - n.min[2]];
+        e[0] * e[1] + e[1] * e[2] + e[2] * e[0]
+    };
+    let mut out = BuiltBvh4 { nodes: vec![Bvh4Node::EMPTY], prims: bvh.prims.clone(), depth: 1 };
+    // (binary node whose children fill 4-wide node `target`, depth)
+    let mut todo = vec![(0usize, 0usize, 1u32)];
+    while let Some((src, target, depth)) = todo.pop() {
+        out.depth = out.depth.max(depth);
+        let root = &bvh.nodes[src];
+        let mut slots: Vec<usize> = if root.count > 0 {
+            vec![src] // a leaf root becomes a single leaf slot
+        } else {
+            vec![root.first as usize, root.first as usize + 1]
+        };
+        while slots.len() < 4 {
+            let open = slots
+                .iter()
+                .enumerate()
+                .filter(|(_, &s)| bvh.nodes[s].count == 0)
+                .max_by(|a, b| area(&bvh.nodes[*a.1]).total_cmp(&area(&bvh.nodes[*b.1])));
+            let Some((k, &s)) = open else { break };
+            let f = bvh.nodes[s].first as usize;
+            slots[k] = f;
+            slots.push(f + 1);
+        }
+        let mut node = Bvh4Node::EMPTY;
+        for (k, &s) in slots.iter().enumerate() {
+            let n = &bvh.nodes[s];
+            node.min_x[k] = n.min[0];
+            node.min_y[k] = n.min[1];
+            node.min_z[k] = n.min[2];
+            node.max_x[k] = n.max[0];
+            node.max_y[k] = n.max[1];
+            node.max_z[k] = n.max[2];
+            if n.count > 0 {
+                node.child[k] = n.first;
+                node.count[k] = n.count;
+            } else {
+                let child = out.nodes.len();
+                out.nodes.push(Bvh4Node::EMPTY);
+                node.child[k] = child as u32;
+                node.count[k] = 0;
+                todo.push((s, child, depth + 1));
+            }
+        }
+        out.nodes[target] = node;
+    }
+    out
 }

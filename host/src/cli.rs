@@ -240,7 +240,7 @@ pub struct BenchArgs {
     /// OBJ files or scene images to measure besides the built-in Cornell box.
     pub scenes: Vec<PathBuf>,
     /// Structures to build and measure (for OBJ scenes; an image has its own).
-    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Accel::Grid, Accel::Kd, Accel::Bvh])]
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Accel::Grid, Accel::Kd, Accel::Bvh, Accel::Bvh4])]
     pub accel: Vec<Accel>,
     /// Image size of the primary-ray frame.
     #[arg(long, value_name = "WxH", value_parser = parse_size, default_value = "1024x1024")]
@@ -300,6 +300,7 @@ fn accel_name(a: Accel) -> &'static str {
         Accel::Grid => "grid",
         Accel::Kd => "kd-tree",
         Accel::Bvh => "BVH",
+        Accel::Bvh4 => "BVH4",
         Accel::None => "brute force",
     }
 }
@@ -308,6 +309,8 @@ fn accel_name(a: Accel) -> &'static str {
 fn structure_summary(view: &raypipe_core::SceneView<'_>) -> String {
     if let Some(g) = view.grid() {
         format!("grid {}x{}x{}", g.dims[0], g.dims[1], g.dims[2])
+    } else if let Some(b) = view.bvh4() {
+        format!("BVH4 {} nodes", b.node_count())
     } else if let Some(b) = view.bvh() {
         format!("BVH {} nodes", b.node_count())
     } else if let Some(k) = view.kdtree() {
@@ -360,7 +363,7 @@ fn cmd_build(a: BuildArgs) -> Result<()> {
     println!("scene        {}", a.scene.display());
     println!("triangles    {} ({} degenerate), vertices {}", r.triangles, r.degenerate, r.vertices);
     match a.structure.accel {
-        Accel::Kd | Accel::Bvh => {
+        Accel::Kd | Accel::Bvh | Accel::Bvh4 => {
             println!(
                 "{:<12} {} nodes, depth {}, {} triangle references ({:.2} per triangle)",
                 accel_name(a.structure.accel),

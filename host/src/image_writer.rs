@@ -9,7 +9,7 @@ use raypipe_core::image::{
 };
 
 use crate::aligned::AlignedBytes;
-use crate::bvh_builder::BuiltBvh;
+use crate::bvh_builder::{BuiltBvh, BuiltBvh4};
 use crate::grid_builder::BuiltGrid;
 use crate::kd_builder::BuiltKd;
 use crate::mesh::Mesh;
@@ -67,6 +67,14 @@ impl ImageWriter {
     pub fn bvh(&mut self, bvh: &BuiltBvh) -> &mut Self {
         self.accel = AccelKind::Bvh as u32;
         self.add(SectionKind::BvhNodes, &bvh.nodes);
+        self.add(SectionKind::PrimLists, &bvh.prims);
+        self
+    }
+
+    /// Adds a 4-wide BVH.
+    pub fn bvh4(&mut self, bvh: &BuiltBvh4) -> &mut Self {
+        self.accel = AccelKind::Bvh4 as u32;
+        self.add(SectionKind::Bvh4Nodes, &bvh.nodes);
         self.add(SectionKind::PrimLists, &bvh.prims);
         self
     }

@@ -10,7 +10,7 @@ use raypipe_core::image::{CameraRecord, LightRecord, MAGIC};
 use raypipe_core::SceneView;
 
 use crate::aligned::AlignedBytes;
-use crate::bvh_builder::{build_bvh, BvhParams};
+use crate::bvh_builder::{build_bvh, collapse_to_bvh4, BvhParams};
 use crate::camera_file::CameraSpec;
 use crate::default_scene;
 use crate::grid_builder::{build_grid, GridResolution};
@@ -29,6 +29,8 @@ pub enum Accel {
     Kd,
     /// Bounding volume hierarchy (binned SAH, 32-byte nodes).
     Bvh,
+    /// 4-wide BVH (the binary BVH collapsed, 128-byte nodes tested with SIMD).
+    Bvh4,
     /// None: every ray tests every triangle (the reference).
     None,
 }
@@ -284,6 +286,15 @@ pub fn build(
             report.list_entries = bvh.prims.len() as u64;
             report.structure_bytes = 32 * bvh.nodes.len() + 4 * bvh.prims.len();
             writer.bvh(&bvh);
+        }
+        Accel::Bvh4 => {
+            let bvh = collapse_to_bvh4(&build_bvh(&mesh, &opts.bvh));
+            report.tree_nodes = bvh.nodes.len();
+            report.tree_depth = bvh.depth;
+            report.references = bvh.prims.len() as u64;
+            report.list_entries = bvh.prims.len() as u64;
+            report.structure_bytes = 128 * bvh.nodes.len() + 4 * bvh.prims.len();
+            writer.bvh4(&bvh);
         }
         Accel::None => {}
     }

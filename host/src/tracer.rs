@@ -2,6 +2,7 @@
 //! without one) and the intersection kernel the user asked for.
 
 use raypipe_core::bvh::trace_bvh;
+use raypipe_core::bvh4::trace_bvh4;
 use raypipe_core::grid::trace_grid;
 use raypipe_core::kdtree::trace_kdtree;
 use raypipe_core::{brute_force::trace_brute_force, Hit, Intersector, MemoryProbe, Ray, RayCounters, SceneView};
@@ -26,6 +27,8 @@ pub fn trace<I: Intersector, P: MemoryProbe>(
 ) -> Option<Hit> {
     if let Some(grid) = scene.grid() {
         trace_grid::<I, P>(scene, grid, ray, probe, counters)
+    } else if let Some(bvh) = scene.bvh4() {
+        trace_bvh4::<I, P>(scene, bvh, ray, probe, counters)
     } else if let Some(bvh) = scene.bvh() {
         trace_bvh::<I, P>(scene, bvh, ray, probe, counters)
     } else if let Some(kd) = scene.kdtree() {

@@ -150,7 +150,8 @@ proptest! {
         }
         let kd = build_soup(soup.positions.clone(), soup.triangles.clone(), Accel::Kd, 1);
         let bvh = build_soup(soup.positions.clone(), soup.triangles.clone(), Accel::Bvh, 1);
-        for scene in [&grid, &kd, &bvh] {
+        let bvh4 = build_soup(soup.positions.clone(), soup.triangles.clone(), Accel::Bvh4, 1);
+        for scene in [&grid, &kd, &bvh, &bvh4] {
             let view = scene.view().expect("valid image");
             for (kind, range) in &rays {
                 // Rays on cell boundaries are placed with the grid's geometry.
@@ -194,7 +195,7 @@ fn no_leak_through_shared_edges_of_a_closed_cube() {
     let p: Vec<[f32; 3]> = (0..8).map(|i| [(i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32]).collect();
     let quads = [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]];
     let tris: Vec<[u32; 3]> = quads.iter().flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]).collect();
-    for accel in [Accel::Grid, Accel::Kd, Accel::Bvh] {
+    for accel in [Accel::Grid, Accel::Kd, Accel::Bvh, Accel::Bvh4] {
         let scene = build_soup(p.clone(), tris.clone(), accel, 3);
         let view = scene.view().unwrap();
         let mut n = 0;
@@ -231,7 +232,7 @@ proptest! {
         eye in [-8.0f32..8.0, -8.0f32..8.0, -8.0f32..8.0],
         look in point(),
         fov in 10.0f32..120.0,
-        accel in prop_oneof![Just(Accel::Grid), Just(Accel::Kd), Just(Accel::Bvh)],
+        accel in prop_oneof![Just(Accel::Grid), Just(Accel::Kd), Just(Accel::Bvh), Just(Accel::Bvh4)],
     ) {
         use raypipe_core::camera::{Camera, EyeRays};
         let scene = build_soup(soup.positions.clone(), soup.triangles.clone(), accel, 4);

@@ -4,7 +4,7 @@
 use proptest::prelude::*;
 use raypipe::aligned::AlignedBytes;
 use raypipe::scene::{self, Accel, BuildOptions};
-use raypipe_core::grid::trace_grid;
+use raypipe::tracer::trace;
 use raypipe_core::image::{SectionEntry, SectionKind, NULL_INDEX};
 use raypipe_core::{NoProbe, Ray, RayCounters, SceneError, SceneView, Vec3, Watertight};
 use raypipe_tests::{build_soup, reseal};
@@ -177,24 +177,28 @@ fn every_error_prints_one_line() {
     }
 }
 
-fn soup_image() -> AlignedBytes {
+fn soup_image(accel: Accel) -> AlignedBytes {
     build_soup(
         vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
         vec![[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]],
-        Accel::Grid,
+        accel,
         3,
     )
     .image
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 400, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 1000, ..ProptestConfig::default() })]
 
     /// Random edits anywhere (checksum resealed, so the structural checks are what is
     /// tested): parse never panics, and whatever it accepts can be traced without panic.
     #[test]
-    fn random_corruption_never_panics(edits in prop::collection::vec((any::<prop::sample::Index>(), any::<u8>()), 1..6), cut in any::<Option<prop::sample::Index>>()) {
-        let mut b = soup_image();
+    fn random_corruption_never_panics(
+        edits in prop::collection::vec((any::<prop::sample::Index>(), any::<u8>()), 1..6),
+        cut in any::<Option<prop::sample::Index>>(),
+        accel in prop_oneof![Just(Accel::Grid), Just(Accel::Kd), Just(Accel::Bvh), Just(Accel::Bvh4)],
+    ) {
+        let mut b = soup_image(accel);
         for (i, v) in &edits {
             let at = i.index(b.len());
             b[at] = *v;
@@ -205,13 +209,71 @@ proptest! {
             None => b,
         };
         if let Ok(view) = SceneView::parse(&b) {
-            if let Some(grid) = view.grid() {
-                for k in 0..16 {
-                    let o = Vec3::new(-1.0 + k as f32 * 0.1, 0.3, -2.0);
-                    let ray = Ray::new(o, Vec3::new(0.2, 0.1, 1.0));
-                    let _ = trace_grid::<Watertight, _>(&view, grid, &ray, &mut NoProbe, &mut RayCounters::default());
-                }
+            for k in 0..16 {
+                let o = Vec3::new(-1.0 + k as f32 * 0.1, 0.3, -2.0);
+                let ray = Ray::new(o, Vec3::new(0.2, 0.1, 1.0));
+                let _ = trace::<Watertight, _>(&view, &ray, &mut NoProbe, &mut RayCounters::default());
             }
         }
+    }
+}
+
+fn cornell_with(accel: Accel) -> AlignedBytes {
+    scene::load_default(&BuildOptions { accel, ..Default::default() }).unwrap().image
+}
+
+fn corrupt_image(base: &AlignedBytes, edit: impl FnOnce(&mut [u8])) -> SceneError {
+    let mut b = base.clone();
+    edit(&mut b);
+    reseal(&mut b);
+    SceneView::parse(&b).expect_err("corruption must be rejected")
+}
+
+#[test]
+fn tree_corruptions() {
+    // BVH: node 0 is inner; point its children back at itself, past the end, or make a
+    // leaf reach past PRIM_LISTS; put a NaN in a box.
+    let bvh = cornell_with(Accel::Bvh);
+    let (_, nodes) = entry_pos(&bvh, SectionKind::BvhNodes);
+    let root = nodes.offset as usize;
+    let tree = |e: SceneError| matches!(e, SceneError::BadTree { section: SectionKind::BvhNodes, .. });
+    assert!(tree(corrupt_image(&bvh, |b| put_u32(b, root + 12, 0))));
+    assert!(tree(corrupt_image(&bvh, |b| put_u32(b, root + 12, nodes.count))));
+    assert!(tree(corrupt_image(&bvh, |b| b[root..root + 4].copy_from_slice(&f32::NAN.to_le_bytes()))));
+    assert!(tree(corrupt_image(&bvh, |b| {
+        put_u32(b, root + 12, 1_000_000);
+        put_u32(b, root + 28, 5)
+    })));
+
+    let kd = cornell_with(Accel::Kd);
+    let (_, nodes) = entry_pos(&kd, SectionKind::KdNodes);
+    let root = nodes.offset as usize;
+    let tree = |e: SceneError| matches!(e, SceneError::BadTree { section: SectionKind::KdNodes, .. });
+    let flags = u32::from_le_bytes(kd[root..root + 4].try_into().unwrap());
+    assert_ne!(flags & 3, 3, "the Cornell box's kd root is an inner node");
+    assert!(tree(corrupt_image(&kd, |b| put_u32(b, root, flags & 3))));
+    assert!(tree(corrupt_image(&kd, |b| b[root + 4..root + 8].copy_from_slice(&f32::INFINITY.to_le_bytes()))));
+    assert!(tree(corrupt_image(&kd, |b| {
+        put_u32(b, root, 3 | (7 << 2));
+        put_u32(b, root + 4, 1 << 20)
+    })));
+
+    let bvh4 = cornell_with(Accel::Bvh4);
+    let (_, nodes) = entry_pos(&bvh4, SectionKind::Bvh4Nodes);
+    let root = nodes.offset as usize;
+    let tree = |e: SceneError| matches!(e, SceneError::BadTree { section: SectionKind::Bvh4Nodes, .. });
+    // Slot 0's child index (offset 96) back to the root, a leaf range past the list.
+    assert!(tree(corrupt_image(&bvh4, |b| {
+        put_u32(b, root + 96, 0);
+        put_u32(b, root + 112, 0)
+    })));
+    assert!(tree(corrupt_image(&bvh4, |b| {
+        put_u32(b, root + 96, 1_000_000);
+        put_u32(b, root + 112, 3)
+    })));
+    assert!(tree(corrupt_image(&bvh4, |b| b[root..root + 4].copy_from_slice(&f32::NAN.to_le_bytes()))));
+    // Every structure's image is otherwise valid and traceable.
+    for img in [&bvh, &kd, &bvh4] {
+        assert!(SceneView::parse(img).is_ok());
     }
 }

@@ -82,6 +82,8 @@ pub enum AccelKind {
     Bvh = 2,
     /// A kd-tree (sections KD_NODES, PRIM_LISTS).
     KdTree = 3,
+    /// A 4-wide BVH (sections BVH4_NODES, PRIM_LISTS).
+    Bvh4 = 4,
 }
 
 impl AccelKind {
@@ -92,6 +94,7 @@ impl AccelKind {
             1 => Some(AccelKind::Grid),
             2 => Some(AccelKind::Bvh),
             3 => Some(AccelKind::KdTree),
+            4 => Some(AccelKind::Bvh4),
             _ => None,
         }
     }
@@ -125,11 +128,13 @@ pub enum SectionKind {
     BvhNodes = 11,
     /// kd-tree nodes, [`crate::image::KdNode`], 8 bytes each; node 0 is the root.
     KdNodes = 12,
+    /// 4-wide BVH nodes, [`crate::image::Bvh4Node`], 128 bytes each; node 0 is the root.
+    Bvh4Nodes = 13,
 }
 
 impl SectionKind {
     /// Every kind, in table order.
-    pub const ALL: [SectionKind; 12] = [
+    pub const ALL: [SectionKind; 13] = [
         SectionKind::Positions,
         SectionKind::Triangles,
         SectionKind::Grid,
@@ -142,6 +147,7 @@ impl SectionKind {
         SectionKind::Camera,
         SectionKind::BvhNodes,
         SectionKind::KdNodes,
+        SectionKind::Bvh4Nodes,
     ];
 
     /// Decodes a section-table kind.
@@ -157,6 +163,7 @@ impl SectionKind {
             SectionKind::GridCells | SectionKind::PrimLists | SectionKind::TriangleMaterials => 4,
             SectionKind::ShadingVertices | SectionKind::Lights | SectionKind::BvhNodes => 32,
             SectionKind::KdNodes => 8,
+            SectionKind::Bvh4Nodes => 128,
         }
     }
 
@@ -175,6 +182,7 @@ impl SectionKind {
             SectionKind::Camera => "CAMERA",
             SectionKind::BvhNodes => "BVH_NODES",
             SectionKind::KdNodes => "KD_NODES",
+            SectionKind::Bvh4Nodes => "BVH4_NODES",
         }
     }
 }

@@ -15,7 +15,9 @@ pub use crc32::{crc32, Crc32};
 pub use embed::Aligned64;
 pub use header::{AccelKind, Header, SectionEntry, SectionKind, FORMAT_VERSION, MAGIC};
 pub use records::{
-    BvhNode, CameraRecord, GridRecord, KdNode, LightRecord, MaterialRecord, Position, ShadingVertex, TriangleRecord,
-    NULL_INDEX,
+    Bvh4Node, BvhNode, CameraRecord, GridRecord, KdNode, LightRecord, MaterialRecord, Position, ShadingVertex,
+    TriangleRecord, NULL_INDEX,
 };
-pub use view::{BvhView, GridView, KdTreeView, SceneError, SceneView, IMAGE_ALIGN, MAX_TREE_DEPTH, SECTION_ALIGN};
+pub use view::{
+    Bvh4View, BvhView, GridView, KdTreeView, SceneError, SceneView, IMAGE_ALIGN, MAX_TREE_DEPTH, SECTION_ALIGN,
+};

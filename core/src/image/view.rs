@@ -8,8 +8,8 @@ use glam::Vec3;
 use super::crc32::Crc32;
 use super::header::{AccelKind, Header, SectionEntry, SectionKind, CHECKSUM_OFFSET, FORMAT_VERSION, MAGIC};
 use super::records::{
-    BvhNode, CameraRecord, GridRecord, KdNode, LightRecord, MaterialRecord, Position, ShadingVertex, TriangleRecord,
-    NULL_INDEX,
+    Bvh4Node, BvhNode, CameraRecord, GridRecord, KdNode, LightRecord, MaterialRecord, Position, ShadingVertex,
+    TriangleRecord, NULL_INDEX,
 };
 use crate::probe::{DataClass, MemoryProbe};
 
@@ -296,6 +296,36 @@ impl<'a> BvhView<'a> {
     }
 }
 
+/// A 4-wide BVH of a scene image.
+#[derive(Clone, Copy, Debug)]
+pub struct Bvh4View<'a> {
+    nodes: &'a [Bvh4Node],
+    prims: &'a [u32],
+    nodes_addr: u32,
+    prims_addr: u32,
+}
+
+impl<'a> Bvh4View<'a> {
+    /// Number of nodes.
+    pub fn node_count(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// Reads node `index`.
+    #[inline]
+    pub fn node<P: MemoryProbe>(&self, index: u32, probe: &mut P) -> &'a Bvh4Node {
+        probe.read(DataClass::Nodes, self.nodes_addr.wrapping_add(index.wrapping_mul(128)), 128);
+        self.nodes.get(index as usize).unwrap_or(&Bvh4Node::EMPTY)
+    }
+
+    /// Reads primitive-list entry `pos`.
+    #[inline]
+    pub fn prim<P: MemoryProbe>(&self, pos: u32, probe: &mut P) -> u32 {
+        probe.read(DataClass::PrimLists, self.prims_addr.wrapping_add(pos.wrapping_mul(4)), 4);
+        self.prims.get(pos as usize).copied().unwrap_or(0)
+    }
+}
+
 /// A kd-tree of a scene image; its root box is the scene bounds.
 #[derive(Clone, Copy, Debug)]
 pub struct KdTreeView<'a> {
@@ -396,6 +426,7 @@ pub struct SceneView<'a> {
     triangles: &'a [TriangleRecord],
     grid: Option<GridView<'a>>,
     bvh: Option<BvhView<'a>>,
+    bvh4: Option<Bvh4View<'a>>,
     kd: Option<KdTreeView<'a>>,
     shading: &'a [ShadingVertex],
     tri_materials: &'a [u32],
@@ -594,12 +625,13 @@ impl<'a> SceneView<'a> {
             }
         }
 
-        let (mut grid, mut bvh, mut kd) = (None, None, None);
+        let (mut grid, mut bvh, mut kd, mut bvh4) = (None, None, None, None);
         match accel {
             AccelKind::None => {}
             AccelKind::Grid => grid = Some(Self::validate_grid(s, nt, bmin, bmax)?),
             AccelKind::Bvh => bvh = Some(Self::validate_bvh(s, nt)?),
             AccelKind::KdTree => kd = Some(Self::validate_kd(s, nt, bmin, bmax)?),
+            AccelKind::Bvh4 => bvh4 = Some(Self::validate_bvh4(s, nt)?),
         }
 
         // Shading data: optional, but when present it must match the geometry.
@@ -644,6 +676,7 @@ impl<'a> SceneView<'a> {
             triangles,
             grid,
             bvh,
+            bvh4,
             kd,
             shading,
             tri_materials,
@@ -795,6 +828,63 @@ impl<'a> SceneView<'a> {
             min: bmin,
             max: bmax,
         })
+    }
+
+    fn validate_bvh4(s: &Sections<'a>, nt: u32) -> Result<Bvh4View<'a>, SceneError> {
+        let section = SectionKind::Bvh4Nodes;
+        let nodes: &[Bvh4Node] = s.required(section)?;
+        let prims = Self::prim_list(s, nt)?;
+        let np = prims.len() as u64;
+        let n = nodes.len();
+        let bad = |node: usize| SceneError::BadTree { section, node: node as u32 };
+        if n == 0 {
+            return Err(bad(0));
+        }
+        // Depth-first walk with a fixed stack of (node, depth), as in `validate_tree`.
+        let mut stack = [(0u32, 0u32); 3 * MAX_TREE_DEPTH as usize + 1];
+        let mut sp = 1usize;
+        let mut visited = 0usize;
+        while sp > 0 {
+            sp -= 1;
+            let (i, depth) = stack[sp];
+            let i = i as usize;
+            visited += 1;
+            if visited > n || depth >= MAX_TREE_DEPTH {
+                return Err(bad(i));
+            }
+            let node = &nodes[i];
+            for k in 0..4 {
+                let (c, count) = (node.child[k], node.count[k]);
+                if c == NULL_INDEX {
+                    continue;
+                }
+                let lo = [node.min_x[k], node.min_y[k], node.min_z[k]];
+                let hi = [node.max_x[k], node.max_y[k], node.max_z[k]];
+                if !(finite3(lo) && finite3(hi) && Vec3::from(lo).cmple(Vec3::from(hi)).all()) {
+                    return Err(bad(i));
+                }
+                if count > 0 {
+                    if c as u64 + count as u64 > np {
+                        return Err(bad(i));
+                    }
+                } else {
+                    if c as usize <= i || c as usize >= n || sp == stack.len() {
+                        return Err(bad(i));
+                    }
+                    stack[sp] = (c, depth + 1);
+                    sp += 1;
+                }
+            }
+        }
+        if visited != n {
+            return Err(bad(n - 1));
+        }
+        Ok(Bvh4View { nodes, prims, nodes_addr: s.addr(section), prims_addr: s.addr(SectionKind::PrimLists) })
+    }
+
+    /// The 4-wide BVH, if the image holds one.
+    pub fn bvh4(&self) -> Option<&Bvh4View<'a>> {
+        self.bvh4.as_ref()
     }
 
     /// The BVH, if the image holds one.

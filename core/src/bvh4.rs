@@ -1,0 +1,144 @@
+//! 4-wide BVH traversal: one node holds the boxes of four children, tested together by a
+//! 4-lane slab test (SSE on x86-64 through glam's `Vec4`); hit children are visited
+//! nearest first, the others pushed on a fixed-capacity stack (Wald, Benthin & Boulos
+//! 2008; Embree's BVH4). Leaves are stack entries like nodes, so a leaf is intersected
+//! only when it is the nearest thing left to visit.
+
+use glam::{BVec4A, Vec4};
+
+use crate::aabb::SLAB_GROWTH;
+use crate::counters::RayCounters;
+use crate::hit::Hit;
+use crate::image::{Bvh4Node, Bvh4View, SceneView, MAX_TREE_DEPTH, NULL_INDEX};
+use crate::probe::MemoryProbe;
+use crate::ray::Ray;
+use crate::ray_box::RayBox;
+use crate::triangle::{test_triangle, Intersector};
+
+/// Stack capacity: at most three entries wait per level of a tree of [`MAX_TREE_DEPTH`].
+const STACK: usize = 3 * MAX_TREE_DEPTH as usize + 4;
+
+/// Entry distances of the ray into the four child boxes of `n`, within `[t0, t1]`, and
+/// which of them it hits (empty slots never hit).
+#[inline(always)]
+pub fn slab4(rb: &RayBox, n: &Bvh4Node, t0: f32, t1: f32) -> (Vec4, BVec4A) {
+    let (o, inv) = (rb.origin, rb.inv);
+    let ax = (Vec4::from_array(n.min_x) - o.x) * inv.x;
+    let bx = (Vec4::from_array(n.max_x) - o.x) * inv.x;
+    let ay = (Vec4::from_array(n.min_y) - o.y) * inv.y;
+    let by = (Vec4::from_array(n.max_y) - o.y) * inv.y;
+    let az = (Vec4::from_array(n.min_z) - o.z) * inv.z;
+    let bz = (Vec4::from_array(n.max_z) - o.z) * inv.z;
+    let (mut nx, mut fx) = (ax.min(bx), ax.max(bx));
+    let (mut ny, mut fy) = (ay.min(by), ay.max(by));
+    let (mut nz, mut fz) = (az.min(bz), az.max(bz));
+    let mut inside = BVec4A::splat(true);
+    if rb.zero_axes != 0 {
+        // A direction component of zero: inside the slab or never (see `RayBox`).
+        let axes = [
+            (0, &mut nx, &mut fx, n.min_x, n.max_x, o.x),
+            (1, &mut ny, &mut fy, n.min_y, n.max_y, o.y),
+            (2, &mut nz, &mut fz, n.min_z, n.max_z, o.z),
+        ];
+        for (k, near, far, lo, hi, ok) in axes {
+            if rb.zero_axes & (1 << k) != 0 {
+                let o4 = Vec4::splat(ok);
+                inside &= o4.cmpge(Vec4::from_array(lo)) & o4.cmple(Vec4::from_array(hi));
+                *near = Vec4::NEG_INFINITY;
+                *far = Vec4::INFINITY;
+            }
+        }
+    }
+    let tn = nx.max(ny).max(nz.max(Vec4::splat(t0)));
+    let tf = (fx.min(fy).min(fz) * SLAB_GROWTH).min(Vec4::splat(t1));
+    let valid = BVec4A::new(
+        n.child[0] != NULL_INDEX,
+        n.child[1] != NULL_INDEX,
+        n.child[2] != NULL_INDEX,
+        n.child[3] != NULL_INDEX,
+    );
+    (tn, tn.cmple(tf) & valid & inside)
+}
+
+/// The closest hit of `ray` through the 4-wide BVH.
+#[inline]
+pub fn trace_bvh4<I: Intersector, P: MemoryProbe>(
+    scene: &SceneView<'_>,
+    bvh: &Bvh4View<'_>,
+    ray: &Ray,
+    probe: &mut P,
+    counters: &mut RayCounters,
+) -> Option<Hit> {
+    if !ray.is_valid() {
+        return None;
+    }
+    let rb = RayBox::new(ray);
+    let prep = I::prepare(ray);
+    let mut best: Option<Hit> = None;
+    // (child or first entry, leaf count or 0, entry distance)
+    let mut stack = [(0u32, 0u32, 0f32); STACK];
+    let mut sp = 0usize;
+    let (mut nodes, mut leaves, mut tests) = (0u32, 0u32, 0u32);
+    let mut current = (0u32, 0u32);
+    loop {
+        let (index, count) = current;
+        if count == 0 {
+            nodes += 1;
+            let node = bvh.node(index, probe);
+            let t_end = best.map_or(ray.t_max, |h| h.t);
+            let (tn, hit) = slab4(&rb, node, ray.t_min, t_end);
+            let mask = hit.bitmask();
+            if mask != 0 {
+                // Sort the hit slots by entry distance (at most four: insertion sort).
+                let t = tn.to_array();
+                let mut order = [0usize; 4];
+                let mut m = 0;
+                for k in 0..4 {
+                    if mask & (1 << k) != 0 {
+                        let mut j = m;
+                        while j > 0 && t[order[j - 1]] > t[k] {
+                            order[j] = order[j - 1];
+                            j -= 1;
+                        }
+                        order[j] = k;
+                        m += 1;
+                    }
+                }
+                // Push the far ones (farthest first), continue with the nearest.
+                for &k in order[1..m].iter().rev() {
+                    if let Some(slot) = stack.get_mut(sp) {
+                        *slot = (node.child[k], node.count[k], t[k]);
+                        sp += 1;
+                    }
+                }
+                let k = order[0];
+                current = (node.child[k], node.count[k]);
+                continue;
+            }
+        } else {
+            leaves += 1;
+            for e in index..index.wrapping_add(count) {
+                let prim = bvh.prim(e, probe);
+                let verts = scene.triangle(prim, probe);
+                test_triangle::<I>(&prep, ray, &verts, prim, &mut best);
+            }
+            tests += count;
+        }
+        // Pop the next entry that may still hold a closer hit.
+        loop {
+            if sp == 0 {
+                counters.nodes += nodes;
+                counters.leaves += leaves;
+                counters.tri_tests += tests;
+                return best;
+            }
+            sp -= 1;
+            let (c, n, t) = stack[sp];
+            if best.is_some_and(|h| t > h.t) {
+                continue;
+            }
+            current = (c, n);
+            break;
+        }
+    }
+}
