@@ -1,9 +1,10 @@
-//! kd-tree traversal (Wald & Slusallek 2001 §3; pbrt-v3 `KdTreeAccel::Intersect`): one
-//! loop over a fixed-capacity stack of `(node, t_min, t_max)` entries. At an inner node
-//! the ray visits the child on its origin's side first and pushes the other if it
-//! crosses the plane inside its interval. A hit is final once it is nearer than the end
-//! of the current leaf's interval; it may lie beyond the leaf (the triangle spans
-//! several), so the walk goes on until it has passed it (as for the grid, Purcell §3.1.3).
+//! kd-tree traversal (Wald & Slusallek 2001 §3; pbrt-v3 `KdTreeAccel::Intersect`) as a
+//! step kernel over plain registers: a fixed-capacity stack of `(node, t_min, t_max)`
+//! entries. At an inner node the ray visits the child on its origin's side first and
+//! pushes the other if it crosses the plane inside its interval. A hit is final once it
+//! is nearer than the end of the current leaf's interval; it may lie beyond the leaf (the
+//! triangle spans several), so the walk goes on until it has passed it (as for the grid,
+//! Purcell §3.1.3).
 
 use crate::aabb::clip_ray;
 use crate::counters::RayCounters;
@@ -12,6 +13,104 @@ use crate::image::{KdNode, KdTreeView, SceneView, MAX_TREE_DEPTH};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::triangle::{test_triangle, Intersector};
+
+/// What one traversal step produced.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum KdEvent {
+    /// An inner node was crossed; step again.
+    Inner,
+    /// A leaf: test PRIM_LISTS entries `first .. first + count`, then call
+    /// [`KdTraversal::finish_leaf`].
+    Leaf {
+        /// First list entry.
+        first: u32,
+        /// Number of triangles.
+        count: u32,
+    },
+    /// The walk is over.
+    Done,
+}
+
+/// The traversal registers of one ray.
+#[derive(Clone, Copy, Debug)]
+pub struct KdTraversal {
+    index: u32,
+    t_min: f32,
+    t_max: f32,
+    stack: [(u32, f32, f32); MAX_TREE_DEPTH as usize],
+    sp: usize,
+    done: bool,
+    /// Closest hit so far.
+    pub best: Option<Hit>,
+}
+
+impl KdTraversal {
+    /// Starts a ray at the root, clipped to the tree's box.
+    pub fn new(kd: &KdTreeView<'_>, ray: &Ray) -> KdTraversal {
+        let clip = if ray.is_valid() { clip_ray(ray, kd.min, kd.max) } else { None };
+        let (t_min, t_max) = clip.unwrap_or((0.0, 0.0));
+        KdTraversal {
+            index: 0,
+            t_min,
+            t_max,
+            stack: [(0, 0.0, 0.0); MAX_TREE_DEPTH as usize],
+            sp: 0,
+            done: clip.is_none(),
+            best: None,
+        }
+    }
+
+    /// Reads one node and moves down (inner node) or reports a leaf.
+    #[inline]
+    pub fn step<P: MemoryProbe>(&mut self, kd: &KdTreeView<'_>, ray: &Ray, probe: &mut P) -> KdEvent {
+        if self.done {
+            return KdEvent::Done;
+        }
+        let node = kd.node(self.index, probe);
+        let axis = node.axis();
+        if axis == KdNode::LEAF {
+            return KdEvent::Leaf { first: node.index(), count: node.value };
+        }
+        let a = axis as usize;
+        let (o, d, split) = (ray.origin[a], ray.dir[a], node.split());
+        let c = node.index();
+        let below_first = o < split || (o == split && d <= 0.0);
+        let (first, second) = if below_first { (c, c.wrapping_add(1)) } else { (c.wrapping_add(1), c) };
+        if d == 0.0 {
+            self.index = first;
+            return KdEvent::Inner;
+        }
+        let t_split = (split - o) / d;
+        if t_split > self.t_max || t_split <= 0.0 {
+            self.index = first;
+        } else if t_split < self.t_min {
+            self.index = second;
+        } else {
+            if let Some(slot) = self.stack.get_mut(self.sp) {
+                *slot = (second, t_split, self.t_max);
+                self.sp += 1;
+            }
+            self.index = first;
+            self.t_max = t_split;
+        }
+        KdEvent::Inner
+    }
+
+    /// After a leaf's triangles: the hit is final once it is nearer than the leaf's end;
+    /// otherwise the walk resumes at the next pushed node.
+    #[inline]
+    pub fn finish_leaf(&mut self) {
+        if self.best.is_some_and(|h| h.t < self.t_max) || self.sp == 0 {
+            self.done = true;
+            return;
+        }
+        self.sp -= 1;
+        (self.index, self.t_min, self.t_max) = self.stack[self.sp];
+        if self.best.is_some_and(|h| h.t < self.t_min) {
+            self.done = true;
+        }
+    }
+}
 
 /// The closest hit of `ray` through the kd-tree.
 #[inline]
@@ -22,66 +121,28 @@ pub fn trace_kdtree<I: Intersector, P: MemoryProbe>(
     probe: &mut P,
     counters: &mut RayCounters,
 ) -> Option<Hit> {
-    if !ray.is_valid() {
-        return None;
-    }
-    let (mut t_min, mut t_max) = clip_ray(ray, kd.min, kd.max)?;
+    let mut trav = KdTraversal::new(kd, ray);
     let prep = I::prepare(ray);
-    let mut best: Option<Hit> = None;
-    let mut stack = [(0u32, 0f32, 0f32); MAX_TREE_DEPTH as usize];
-    let mut sp = 0usize;
     let (mut nodes, mut leaves, mut tests) = (0u32, 0u32, 0u32);
-    let mut index = 0u32;
     loop {
-        let node = kd.node(index, probe);
-        nodes += 1;
-        let axis = node.axis();
-        if axis != KdNode::LEAF {
-            let a = axis as usize;
-            let (o, d, split) = (ray.origin[a], ray.dir[a], node.split());
-            let c = node.index();
-            let below_first = o < split || (o == split && d <= 0.0);
-            let (first, second) = if below_first { (c, c.wrapping_add(1)) } else { (c.wrapping_add(1), c) };
-            if d == 0.0 {
-                index = first;
-                continue;
-            }
-            let t_split = (split - o) / d;
-            if t_split > t_max || t_split <= 0.0 {
-                index = first;
-            } else if t_split < t_min {
-                index = second;
-            } else {
-                if let Some(slot) = stack.get_mut(sp) {
-                    *slot = (second, t_split, t_max);
-                    sp += 1;
+        match trav.step(kd, ray, probe) {
+            KdEvent::Done => break,
+            KdEvent::Inner => nodes += 1,
+            KdEvent::Leaf { first, count } => {
+                nodes += 1;
+                leaves += 1;
+                for k in first..first.wrapping_add(count) {
+                    let prim = kd.prim(k, probe);
+                    let verts = scene.triangle(prim, probe);
+                    test_triangle::<I>(&prep, ray, &verts, prim, &mut trav.best);
                 }
-                index = first;
-                t_max = t_split;
+                tests += count;
+                trav.finish_leaf();
             }
-            continue;
-        }
-        // Leaf: test its triangles.
-        leaves += 1;
-        let first = node.index();
-        for k in first..first.wrapping_add(node.value) {
-            let prim = kd.prim(k, probe);
-            let verts = scene.triangle(prim, probe);
-            test_triangle::<I>(&prep, ray, &verts, prim, &mut best);
-        }
-        tests += node.value;
-        // Final once the walk has passed the hit.
-        if best.is_some_and(|h| h.t < t_max) || sp == 0 {
-            break;
-        }
-        sp -= 1;
-        (index, t_min, t_max) = stack[sp];
-        if best.is_some_and(|h| h.t < t_min) {
-            break;
         }
     }
     counters.nodes += nodes;
     counters.leaves += leaves;
     counters.tri_tests += tests;
-    best
+    trav.best
 }

@@ -8,10 +8,12 @@ use anyhow::Result;
 use rayon::prelude::*;
 use raypipe_core::camera::EyeRays;
 use raypipe_core::image::CameraRecord;
-use raypipe_core::{Intersector, NoProbe, RayCounters, SceneView};
+use raypipe_core::packet::PacketCounters;
+use raypipe_core::{Intersector, RayCounters, SceneView};
 
+use crate::packets::{trace_tile, PacketSize};
 use crate::render::{eye_rays, in_pool, tiles};
-use crate::tracer::{trace, IntersectorKind};
+use crate::tracer::IntersectorKind;
 use crate::with_intersector;
 
 /// One scene's figures.
@@ -31,6 +33,8 @@ pub struct BenchResult {
     pub single_runs: Vec<f64>,
     /// Every all-thread run, seconds.
     pub all_runs: Vec<f64>,
+    /// Fraction of packet lanes that needed the nodes the packets visited.
+    pub simd_efficiency: f64,
 }
 
 /// The median of a list of numbers.
@@ -49,54 +53,64 @@ pub fn primary_rays(
     scene: &SceneView<'_>,
     camera: &CameraRecord,
     kind: IntersectorKind,
+    packet: PacketSize,
     runs: usize,
     threads: Option<usize>,
 ) -> Result<BenchResult> {
     let eye = eye_rays(camera, "camera")?;
-    with_intersector!(kind, I => run::<I>(scene, &eye, runs.max(1), threads))
+    with_intersector!(kind, I => run::<I>(scene, &eye, packet, runs.max(1), threads))
 }
 
-fn trace_all<I: Intersector>(scene: &SceneView<'_>, eye: &EyeRays, tiles: &[(u32, u32, u32, u32)]) -> u64 {
-    let (lo, hi) = scene.bounds();
+fn trace_all<I: Intersector>(
+    scene: &SceneView<'_>,
+    eye: &EyeRays,
+    tiles: &[(u32, u32, u32, u32)],
+    packet: PacketSize,
+) -> (u64, PacketCounters) {
+    let bounds = scene.bounds();
     tiles
         .par_iter()
-        .map(|&(x0, y0, x1, y1)| {
+        .map(|&tile| {
             let mut hits = 0u64;
-            let mut c = RayCounters::default();
-            for y in y0..y1 {
-                for x in x0..x1 {
-                    if let Some(ray) = eye.ray_in_scene(x, y, lo, hi) {
-                        hits += trace::<I, _>(scene, &ray, &mut NoProbe, &mut c).is_some() as u64;
-                    }
-                }
-            }
-            hits
+            let (mut c, mut pc) = (RayCounters::default(), PacketCounters::default());
+            trace_tile::<I>(scene, eye, bounds, tile, packet, &mut c, &mut pc, &mut |_, _, _, h| {
+                hits += h.is_some() as u64
+            });
+            (hits, pc)
         })
-        .sum()
+        .reduce(
+            || (0, PacketCounters::default()),
+            |(h1, mut p1), (h2, p2)| {
+                p1.add(&p2);
+                (h1 + h2, p1)
+            },
+        )
 }
 
 fn run<I: Intersector>(
     scene: &SceneView<'_>,
     eye: &EyeRays,
+    packet: PacketSize,
     runs: usize,
     threads: Option<usize>,
 ) -> Result<BenchResult> {
     let tiles = tiles(eye.width, eye.height);
     let rays = eye.width as u64 * eye.height as u64;
-    let time = |n: Option<usize>| -> Result<(Vec<f64>, u64, usize)> {
+    let time = |n: Option<usize>| -> Result<(Vec<f64>, (u64, PacketCounters), usize)> {
         in_pool(n, || {
-            let mut hits = trace_all::<I>(scene, eye, &tiles); // warm-up
+            let mut out = trace_all::<I>(scene, eye, &tiles, packet); // warm-up
             let mut secs = Vec::new();
             for _ in 0..runs {
                 let t = Instant::now();
-                hits = trace_all::<I>(scene, eye, &tiles);
+                out = trace_all::<I>(scene, eye, &tiles, packet);
                 secs.push(t.elapsed().as_secs_f64());
             }
-            (secs, hits, rayon::current_num_threads())
+            (secs, out, rayon::current_num_threads())
         })
     };
-    let (single_runs, hits, _) = time(Some(1))?;
+    let (single_runs, (hits, pc), _) = time(Some(1))?;
     let (all_runs, _, threads) = time(threads)?;
+    let simd_efficiency = pc.active_lanes as f64 / (pc.visits.max(1) as f64 * packet.rays() as f64);
     let mrays = |s: &[f64]| rays as f64 / median(s) / 1e6;
     Ok(BenchResult {
         rays,
@@ -106,5 +120,6 @@ fn run<I: Intersector>(
         threads,
         single_runs,
         all_runs,
+        simd_efficiency,
     })
 }

@@ -14,6 +14,7 @@ use crate::bench::{self, median};
 use crate::camera_file::CameraSpec;
 use crate::grid_builder::{GridResolution, DEFAULT_CELLS_PER_TRIANGLE};
 use crate::output;
+use crate::packets::PacketSize;
 use crate::render::{self, RenderOptions};
 use crate::scene::{self, Accel, BuildOptions, Scene};
 use crate::stats;
@@ -200,6 +201,9 @@ pub struct BuildArgs {
 /// `raypipe render`.
 #[derive(Args, Debug)]
 pub struct RenderArgs {
+    /// Rays per packet: 1 (single rays), 4 (2×2), 16 (4×4) or 64 (8×8); the image is the same.
+    #[arg(long, value_enum, default_value_t = PacketSize::P16)]
+    pub packet: PacketSize,
     /// An OBJ file or a scene image; the built-in Cornell box when omitted.
     pub scene: Option<PathBuf>,
     /// Output PNG.
@@ -220,6 +224,9 @@ pub struct RenderArgs {
 /// `raypipe stats`.
 #[derive(Args, Debug)]
 pub struct StatsArgs {
+    /// Also trace the view as packets of this many rays and report their SIMD efficiency.
+    #[arg(long, value_enum, default_value_t = PacketSize::Single)]
+    pub packet: PacketSize,
     /// An OBJ file or a scene image; the built-in Cornell box when omitted.
     pub scene: Option<PathBuf>,
     #[command(flatten)]
@@ -245,6 +252,12 @@ pub struct BenchArgs {
     /// Image size of the primary-ray frame.
     #[arg(long, value_name = "WxH", value_parser = parse_size, default_value = "1024x1024")]
     pub size: (u32, u32),
+    /// Packet sizes to measure (1 = single rays).
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [PacketSize::Single, PacketSize::P16])]
+    pub packet: Vec<PacketSize>,
+    /// Camera file for every scene's view (default: each scene's own camera).
+    #[arg(long, value_name = "FILE")]
+    pub camera: Option<PathBuf>,
     /// Timed runs per figure (the median is reported).
     #[arg(long, default_value_t = 5)]
     pub runs: usize,
@@ -428,7 +441,7 @@ fn cmd_render(a: RenderArgs) -> Result<()> {
     warn(&scene);
     let view = scene.view()?;
     let cam = camera_for(&scene, &a.camera)?;
-    let opts = RenderOptions { threads: a.threads, intersector: a.intersector, progress: true };
+    let opts = RenderOptions { threads: a.threads, intersector: a.intersector, progress: true, packet: a.packet };
     let start = Instant::now();
     let frame = render::render(&view, &cam, &opts)?;
     let secs = start.elapsed().as_secs_f64();
@@ -461,7 +474,7 @@ fn cmd_stats(a: StatsArgs) -> Result<()> {
     warn(&scene);
     let view = scene.view()?;
     let cam = camera_for(&scene, &a.camera)?;
-    let opts = RenderOptions { threads: a.threads, intersector: a.intersector, progress: false };
+    let opts = RenderOptions { threads: a.threads, intersector: a.intersector, progress: false, packet: a.packet };
     let s = stats::gather(&view, &cam, &opts)?;
     println!("scene                     {} ({} triangles)", scene.name, view.triangle_count());
     println!("structure                 {}", structure_summary(&view));
@@ -507,8 +520,8 @@ fn cmd_bench(a: BenchArgs) -> Result<()> {
         a.size.0, a.size.1, a.runs
     );
     println!(
-        "{:<24} {:>8} {:<22} {:>8} {:>8} {:>10} {:>10} {:>8}",
-        "scene", "tris", "structure", "build s", "B/tri", "Mrays/s 1t", "Mrays/s", "threads"
+        "{:<24} {:>8} {:<22} {:>8} {:>8} {:<7} {:>10} {:>10} {:>8} {:>6}",
+        "scene", "tris", "structure", "build s", "B/tri", "packet", "Mrays/s 1t", "Mrays/s", "threads", "SIMD"
     );
     for t in targets {
         let source = scene::load_source(t.as_deref())?;
@@ -542,22 +555,32 @@ fn cmd_bench(a: BenchArgs) -> Result<()> {
             }
             let scene = built.ok_or_else(|| anyhow!("no scene"))?;
             let view = scene.view()?;
-            let base = camera_for(&scene, &CameraArgs::default())?;
+            let cam_args = CameraArgs { camera: a.camera.clone(), ..Default::default() };
+            let base = camera_for(&scene, &cam_args)?;
             let cam = CameraRecord { width: a.size.0, height: a.size.1, ..base };
-            let r = bench::primary_rays(&view, &cam, a.intersector, a.runs, a.threads)?;
             let bytes_per_tri = scene.report.as_ref().map_or(view.bytes().len(), |r| r.structure_bytes) as f64
                 / view.triangle_count().max(1) as f64;
-            println!(
-                "{:<24} {:>8} {:<22} {:>8.3} {:>8.1} {:>10.2} {:>10.2} {:>8}",
-                name,
-                view.triangle_count(),
-                structure_summary(&view),
-                median(&builds),
-                bytes_per_tri,
-                r.mrays_single,
-                r.mrays_all,
-                r.threads
-            );
+            for &packet in &a.packet {
+                let r = bench::primary_rays(&view, &cam, a.intersector, packet, a.runs, a.threads)?;
+                let simd = if packet == PacketSize::Single {
+                    "-".to_string()
+                } else {
+                    format!("{:.0}%", 100.0 * r.simd_efficiency)
+                };
+                println!(
+                    "{:<24} {:>8} {:<22} {:>8.3} {:>8.1} {:<7} {:>10.2} {:>10.2} {:>8} {:>6}",
+                    name,
+                    view.triangle_count(),
+                    structure_summary(&view),
+                    median(&builds),
+                    bytes_per_tri,
+                    packet.label(),
+                    r.mrays_single,
+                    r.mrays_all,
+                    r.threads,
+                    simd
+                );
+            }
         }
     }
     Ok(())

@@ -19,6 +19,7 @@ pub mod mesh;
 pub mod npy;
 pub mod obj;
 pub mod output;
+pub mod packets;
 pub mod progress;
 pub mod render;
 pub mod scene;

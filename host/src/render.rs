@@ -8,11 +8,14 @@ use rayon::prelude::*;
 use raypipe_core::camera::{Camera, EyeRays};
 use raypipe_core::color::rgb8;
 use raypipe_core::image::CameraRecord;
+use raypipe_core::packet::PacketCounters;
 use raypipe_core::shade::shade;
-use raypipe_core::{Intersector, NoProbe, RayCounters, SceneView};
+use raypipe_core::{Intersector, NoProbe, Ray, RayCounters, SceneView};
+
+use crate::packets::{trace_tile, PacketSize};
 
 use crate::progress;
-use crate::tracer::{trace, IntersectorKind};
+use crate::tracer::IntersectorKind;
 use crate::with_intersector;
 
 /// Side of the square tiles rendered as one unit of work.
@@ -27,11 +30,18 @@ pub struct RenderOptions {
     pub intersector: IntersectorKind,
     /// Show a progress bar on a terminal.
     pub progress: bool,
+    /// Rays traced one by one or as packets.
+    pub packet: PacketSize,
 }
 
 impl Default for RenderOptions {
     fn default() -> Self {
-        RenderOptions { threads: None, intersector: IntersectorKind::Watertight, progress: false }
+        RenderOptions {
+            threads: None,
+            intersector: IntersectorKind::Watertight,
+            progress: false,
+            packet: PacketSize::Single,
+        }
     }
 }
 
@@ -92,20 +102,17 @@ fn render_with<I: Intersector>(
         tiles
             .par_iter()
             .map(|&(x0, y0, x1, y1)| {
-                let mut out = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
-                let mut counters = RayCounters::default();
-                for y in y0..y1 {
-                    for x in x0..x1 {
-                        let color = match eye.ray_in_scene(x, y, lo, hi) {
-                            Some(ray) => {
-                                let hit = trace::<I, _>(scene, &ray, &mut NoProbe, &mut counters);
-                                shade(scene, &ray, hit, background, &mut NoProbe)
-                            }
-                            None => background,
-                        };
-                        out.push(rgb8(color));
-                    }
-                }
+                let tw = (x1 - x0) as usize;
+                let mut out = vec![[0u8; 3]; tw * (y1 - y0) as usize];
+                let (mut counters, mut pc) = (RayCounters::default(), PacketCounters::default());
+                let mut put = |x: u32, y: u32, ray: Option<Ray>, hit| {
+                    let color = match ray {
+                        Some(ray) => shade(scene, &ray, hit, background, &mut NoProbe),
+                        None => background,
+                    };
+                    out[(y - y0) as usize * tw + (x - x0) as usize] = rgb8(color);
+                };
+                trace_tile::<I>(scene, eye, (lo, hi), (x0, y0, x1, y1), opts.packet, &mut counters, &mut pc, &mut put);
                 bar.inc(1);
                 out
             })

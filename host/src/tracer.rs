@@ -3,8 +3,13 @@
 
 use raypipe_core::bvh::trace_bvh;
 use raypipe_core::bvh4::trace_bvh4;
+use raypipe_core::bvh4_packet::trace_bvh4_packet;
+use raypipe_core::bvh_packet::trace_bvh_packet;
 use raypipe_core::grid::trace_grid;
+use raypipe_core::grid_packet::trace_grid_packet;
 use raypipe_core::kdtree::trace_kdtree;
+use raypipe_core::kdtree_packet::trace_kdtree_packet;
+use raypipe_core::packet::{PacketCounters, PacketHits, RayPacket};
 use raypipe_core::{brute_force::trace_brute_force, Hit, Intersector, MemoryProbe, Ray, RayCounters, SceneView};
 
 /// Which ray–triangle test to use.
@@ -53,4 +58,35 @@ macro_rules! with_intersector {
             }
         }
     };
+}
+
+/// Traces a packet with the scene's structure, in lock-step.
+#[inline]
+pub fn trace_packet<I: Intersector, P: MemoryProbe, const N: usize>(
+    scene: &SceneView<'_>,
+    packet: &RayPacket<N>,
+    hits: &mut PacketHits<N>,
+    probe: &mut P,
+    counters: &mut PacketCounters,
+) {
+    if let Some(grid) = scene.grid() {
+        trace_grid_packet::<I, P, N>(scene, grid, packet, hits, probe, counters)
+    } else if let Some(bvh) = scene.bvh4() {
+        trace_bvh4_packet::<I, P, N>(scene, bvh, packet, hits, probe, counters)
+    } else if let Some(bvh) = scene.bvh() {
+        trace_bvh_packet::<I, P, N>(scene, bvh, packet, hits, probe, counters)
+    } else if let Some(kd) = scene.kdtree() {
+        trace_kdtree_packet::<I, P, N>(scene, kd, packet, hits, probe, counters)
+    } else {
+        // No structure: each ray against every triangle.
+        let mut c = RayCounters::default();
+        for (i, hit) in hits.iter_mut().enumerate() {
+            *hit = if packet.active & (1 << i) != 0 {
+                trace_brute_force::<I, P>(scene, &packet.ray(i), probe, &mut c)
+            } else {
+                None
+            };
+        }
+        counters.tri_tests += c.tri_tests as u64;
+    }
 }

@@ -255,3 +255,59 @@ proptest! {
         }
     }
 }
+
+/// Traces every ray both alone and in a packet of `N`, and demands identical hits.
+fn packet_matches_single<const N: usize>(view: &SceneView<'_>, rays: &[Ray]) -> Result<(), TestCaseError> {
+    use raypipe::tracer::trace_packet;
+    use raypipe_core::packet::{PacketCounters, RayPacket};
+    for chunk in rays.chunks(N) {
+        let mut packet = RayPacket::<N>::new();
+        for (i, r) in chunk.iter().enumerate() {
+            packet.set(i, r);
+        }
+        let mut hits = [None; N];
+        let mut pc = PacketCounters::default();
+        trace_packet::<Watertight, _, N>(view, &packet, &mut hits, &mut NoProbe, &mut pc);
+        for (i, r) in chunk.iter().enumerate() {
+            let single = trace::<Watertight, _>(view, r, &mut NoProbe, &mut RayCounters::default());
+            let same = match (hits[i], single) {
+                (None, None) => true,
+                (Some(a), Some(b)) => a.bits_eq(&b),
+                _ => false,
+            };
+            prop_assert!(same, "packet of {N}, lane {i}: {:?} != single {:?} for {r:?}", hits[i], single);
+        }
+        prop_assert!(pc.active_lanes <= pc.visits * N as u64);
+    }
+    Ok(())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 300, ..ProptestConfig::default() })]
+
+    /// Packets of 2×2, 4×4 and 8×8 — coherent (a camera's pixel block) or not (random
+    /// rays) — return exactly the single-ray hits, hence the brute-force hits, for every
+    /// structure.
+    #[test]
+    fn packets_return_the_single_ray_hits(
+        soup in soup(),
+        eye in [-8.0f32..8.0, -8.0f32..8.0, -8.0f32..8.0],
+        look in point(),
+        random in prop::collection::vec(ray_kind(), 64),
+        accel in prop_oneof![Just(Accel::Grid), Just(Accel::Kd), Just(Accel::Bvh), Just(Accel::Bvh4), Just(Accel::None)],
+    ) {
+        use raypipe_core::camera::{Camera, EyeRays};
+        let scene = build_soup(soup.positions.clone(), soup.triangles.clone(), accel, 3);
+        let view = scene.view().unwrap();
+        let grid = build_soup(soup.positions.clone(), soup.triangles.clone(), Accel::Grid, 3);
+        let gview = grid.view().unwrap();
+        let mut rays: Vec<Ray> = random.iter().map(|k| make_ray(k, &soup, &gview, (0.0, f32::INFINITY))).collect();
+        let cam = Camera { eye: Vec3::from(eye), look_at: Vec3::from(look), up: Vec3::Y, vfov_deg: 50.0, width: 8, height: 8 };
+        if let Ok(e) = EyeRays::new(&cam) {
+            rays.extend((0..64).map(|i| e.ray(i % 8, i / 8)));
+        }
+        packet_matches_single::<4>(&view, &rays)?;
+        packet_matches_single::<16>(&view, &rays)?;
+        packet_matches_single::<64>(&view, &rays)?;
+    }
+}

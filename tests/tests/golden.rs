@@ -6,8 +6,9 @@
 use std::path::{Path, PathBuf};
 
 use raypipe::grid_builder::GridResolution;
+use raypipe::packets::PacketSize;
 use raypipe::render::{render, Frame, RenderOptions};
-use raypipe::scene::{self, BuildOptions};
+use raypipe::scene::{self, Accel, BuildOptions};
 use raypipe::tracer::IntersectorKind;
 use raypipe_core::image::CameraRecord;
 
@@ -36,23 +37,34 @@ fn check(name: &str, frame: &Frame) {
     assert_eq!(differing, 0, "{name}: {differing} pixels differ from the golden image");
 }
 
-fn render_default(width: u32, height: u32, kind: IntersectorKind, threads: usize) -> Frame {
-    let scene = scene::load_default(&BuildOptions::default()).unwrap();
+fn render_default(kind: IntersectorKind, threads: usize, accel: Accel, packet: PacketSize) -> Frame {
+    let scene = scene::load_default(&BuildOptions { accel, ..Default::default() }).unwrap();
     let view = scene.view().unwrap();
-    let cam = CameraRecord { width, height, ..*view.camera().unwrap() };
-    render(&view, &cam, &RenderOptions { threads: Some(threads), intersector: kind, progress: false }).unwrap()
+    let cam = CameraRecord { width: 128, height: 128, ..*view.camera().unwrap() };
+    render(&view, &cam, &RenderOptions { threads: Some(threads), intersector: kind, progress: false, packet }).unwrap()
 }
 
 #[test]
 fn cornell_box_watertight() {
-    check("cornell_box_128.png", &render_default(128, 128, IntersectorKind::Watertight, 2));
+    check("cornell_box_128.png", &render_default(IntersectorKind::Watertight, 2, Accel::Grid, PacketSize::Single));
+}
+
+/// One image whatever the structure, packet size and thread count.
+#[test]
+fn cornell_box_is_the_same_from_every_structure_and_packet_size() {
+    for accel in [Accel::Grid, Accel::Kd, Accel::Bvh, Accel::Bvh4, Accel::None] {
+        for (i, packet) in PacketSize::ALL.into_iter().enumerate() {
+            let frame = render_default(IntersectorKind::Watertight, 1 + i % 3, accel, packet);
+            check("cornell_box_128.png", &frame);
+        }
+    }
 }
 
 #[test]
 fn cornell_box_moller_trumbore_matches_the_same_golden_image() {
     // Away from edges both kernels find the same triangles; on this scene the 8-bit
     // image is the same.
-    check("cornell_box_128.png", &render_default(128, 128, IntersectorKind::MollerTrumbore, 1));
+    check("cornell_box_128.png", &render_default(IntersectorKind::MollerTrumbore, 1, Accel::Grid, PacketSize::P16));
 }
 
 #[test]
