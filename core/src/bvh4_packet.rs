@@ -1,11 +1,13 @@
-//! Packet traversal of the 4-wide BVH: the packet visits a node if any of its rays hits
-//! one of the node's boxes; each child is entered with the mask of the rays that hit it
-//! (nearest child first by the smallest entry distance of those rays), and a leaf
-//! intersects its triangles with exactly the rays in its mask.
+//! Packet traversal of the 4-wide BVH: the packet visits a node if any of its rays may
+//! hit one of the node's boxes, nearest child first; a leaf intersects its triangles with
+//! exactly the rays that enter its box.
 
 use crate::bvh4::slab4;
+use glam::{Vec3A, Vec4};
+
+use crate::aabb::SLAB_GROWTH;
 use crate::hit::Hit;
-use crate::image::{Bvh4View, SceneView, MAX_TREE_DEPTH};
+use crate::image::{Bvh4Node, Bvh4View, SceneView, MAX_TREE_DEPTH, NULL_INDEX};
 use crate::packet::{Lanes, PacketCounters, PacketHits, RayPacket};
 use crate::probe::MemoryProbe;
 use crate::ray_box::RayBox;
@@ -13,7 +15,80 @@ use crate::triangle::{test_triangle, Intersector};
 
 const STACK: usize = 3 * MAX_TREE_DEPTH as usize + 4;
 
+/// The packet as one conservative "frustum": the box of its origins and of its
+/// reciprocal directions. Interval arithmetic on these bounds gives, for a box, an entry
+/// distance no larger and an exit no smaller than any single ray's (rounding is monotone,
+/// so the bounds are attained at the corners), hence a box rejected for the packet is
+/// rejected by every ray (Reshetov et al. 2005; Wald et al. 2007).
+#[derive(Clone, Copy, Debug)]
+struct Frustum {
+    olo: [f32; 3],
+    ohi: [f32; 3],
+    ilo: [f32; 3],
+    ihi: [f32; 3],
+    t_min: f32,
+}
+
+impl Frustum {
+    fn new<const N: usize>(boxes: &[RayBox; N], rays: &[crate::ray::Ray; N], mask: u64) -> Option<Frustum> {
+        let mut f = Frustum {
+            olo: [f32::INFINITY; 3],
+            ohi: [f32::NEG_INFINITY; 3],
+            ilo: [f32::INFINITY; 3],
+            ihi: [f32::NEG_INFINITY; 3],
+            t_min: f32::INFINITY,
+        };
+        for i in Lanes(mask) {
+            // A zero direction component needs the exact per-ray rule of `RayBox`.
+            if boxes[i].zero_axes != 0 {
+                return None;
+            }
+            for a in 0..3 {
+                f.olo[a] = f.olo[a].min(boxes[i].origin[a]);
+                f.ohi[a] = f.ohi[a].max(boxes[i].origin[a]);
+                f.ilo[a] = f.ilo[a].min(boxes[i].inv[a]);
+                f.ihi[a] = f.ihi[a].max(boxes[i].inv[a]);
+            }
+            f.t_min = f.t_min.min(rays[i].t_min);
+        }
+        Some(f)
+    }
+
+    /// Lower bound of the entry distance into each child box, and which boxes some ray
+    /// may hit before `t_end` (the largest best-hit distance of the packet).
+    #[inline(always)]
+    fn slab4(&self, n: &Bvh4Node, t_end: f32) -> (Vec4, u32) {
+        let mut near = Vec4::splat(self.t_min);
+        let mut far = Vec4::splat(f32::INFINITY);
+        let planes = [(n.min_x, n.max_x), (n.min_y, n.max_y), (n.min_z, n.max_z)];
+        for (a, (lo, hi)) in planes.into_iter().enumerate() {
+            let (il, ih) = (Vec4::splat(self.ilo[a]), Vec4::splat(self.ihi[a]));
+            let (ol, oh) = (Vec4::splat(self.olo[a]), Vec4::splat(self.ohi[a]));
+            let (lo, hi) = (Vec4::from_array(lo), Vec4::from_array(hi));
+            let p = [(lo - oh) * il, (lo - oh) * ih, (lo - ol) * il, (lo - ol) * ih];
+            let q = [(hi - oh) * il, (hi - oh) * ih, (hi - ol) * il, (hi - ol) * ih];
+            let mut mn = p[0];
+            let mut mx = p[0];
+            for v in p.iter().chain(q.iter()) {
+                mn = mn.min(*v);
+                mx = mx.max(*v);
+            }
+            near = near.max(mn);
+            far = far.min(mx * SLAB_GROWTH);
+        }
+        far = far.min(Vec4::splat(t_end));
+        let valid = (0..4).fold(0u32, |m, k| m | (((n.child[k] != NULL_INDEX) as u32) << k));
+        (near, near.cmple(far).bitmask() & valid)
+    }
+}
+
 /// Traces all active rays of `packet`; `hits[i]` receives ray `i`'s closest hit.
+///
+/// Inner nodes are tested once for the whole packet with the interval-arithmetic
+/// [`Frustum`]; at a leaf each ray tests the leaf's box (up to its own best hit) and only
+/// the rays that enter it test the triangles. Since the frustum test is conservative,
+/// every ray still tests every triangle its single-ray walk would. A packet whose rays
+/// have a zero direction component falls back to one exact 4-box test per ray and node.
 pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
     scene: &SceneView<'_>,
     bvh: &Bvh4View<'_>,
@@ -26,39 +101,57 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
     let boxes: [RayBox; N] = core::array::from_fn(|i| RayBox::new(&rays[i]));
     let preps: [I::Prepared; N] = core::array::from_fn(|i| I::prepare(&rays[i]));
     *hits = [None; N];
-    let best_t = |hits: &PacketHits<N>, i: usize| hits[i].map_or(rays[i].t_max, |h: Hit| h.t);
-    // (child or first entry, leaf count or 0, smallest entry distance, ray mask)
-    let mut stack = [(0u32, 0u32, 0f32, 0u64); STACK];
+    let mask = packet.active;
+    if mask == 0 {
+        return;
+    }
+    let frustum = Frustum::new(&boxes, &rays, mask);
+    let t_end_of = |hits: &PacketHits<N>| {
+        Lanes(mask).fold(f32::NEG_INFINITY, |m, i| m.max(hits[i].map_or(rays[i].t_max, |h: Hit| h.t)))
+    };
+    let mut t_end = t_end_of(hits);
+    // Structure-of-arrays copies for the 4-rays-at-once leaf box test.
+    let org: [[f32; N]; 3] = core::array::from_fn(|a| core::array::from_fn(|i| boxes[i].origin[a]));
+    let inv: [[f32; N]; 3] = core::array::from_fn(|a| core::array::from_fn(|i| boxes[i].inv[a]));
+    let t_min: [f32; N] = core::array::from_fn(|i| rays[i].t_min);
+    let mut ends: [f32; N] = core::array::from_fn(|i| rays[i].t_max);
+    // (child or first entry, leaf count or 0, entry bound, leaf box as min xyz, max xyz)
+    let mut stack = [(0u32, 0u32, 0f32, [0f32; 6]); STACK];
     let mut sp = 0usize;
-    let mut current = (0u32, 0u32, packet.active);
+    let mut current = (0u32, 0u32, [0f32; 6]);
     let mut c = PacketCounters::default();
     loop {
-        let (index, count, mask) = current;
+        let (index, count, leaf_box) = current;
         c.visits += 1;
-        c.active_lanes += mask.count_ones() as u64;
         if count == 0 {
             let node = bvh.node(index, probe);
-            let mut child_mask = [0u64; 4];
-            let mut child_t = [f32::INFINITY; 4];
-            for i in Lanes(mask) {
-                let (tn, hit) = slab4(&boxes[i], node, rays[i].t_min, best_t(hits, i));
-                let m = hit.bitmask();
-                if m == 0 {
-                    continue;
+            let (tn, needed) = match &frustum {
+                Some(f) => {
+                    c.active_lanes += mask.count_ones() as u64;
+                    f.slab4(node, t_end)
                 }
-                let t = tn.to_array();
-                for k in 0..4 {
-                    if m & (1 << k) != 0 {
-                        child_mask[k] |= 1 << i;
-                        child_t[k] = child_t[k].min(t[k]);
+                None => {
+                    let mut needed = 0u32;
+                    let mut t = Vec4::INFINITY;
+                    for i in Lanes(mask) {
+                        let end = hits[i].map_or(rays[i].t_max, |h: Hit| h.t);
+                        let (tn, hit) = slab4(&boxes[i], node, rays[i].t_min, end);
+                        let m = hit.bitmask();
+                        if m != 0 {
+                            c.active_lanes += 1;
+                            needed |= m;
+                            t = t.min(Vec4::select(hit, tn, Vec4::INFINITY));
+                        }
                     }
+                    (t, needed)
                 }
-            }
-            // Order the children that any ray needs, nearest first.
+            };
+            let child_t = tn.to_array();
+            // Needed children, nearest first.
             let mut order = [0usize; 4];
             let mut n = 0;
             for k in 0..4 {
-                if child_mask[k] != 0 {
+                if needed & (1 << k) != 0 {
                     let mut j = n;
                     while j > 0 && child_t[order[j - 1]] > child_t[k] {
                         order[j] = order[j - 1];
@@ -69,44 +162,80 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
                 }
             }
             if n > 0 {
+                let slot_box = |k: usize| {
+                    [node.min_x[k], node.min_y[k], node.min_z[k], node.max_x[k], node.max_y[k], node.max_z[k]]
+                };
                 for &k in order[1..n].iter().rev() {
                     if let Some(slot) = stack.get_mut(sp) {
-                        *slot = (node.child[k], node.count[k], child_t[k], child_mask[k]);
+                        *slot = (node.child[k], node.count[k], child_t[k], slot_box(k));
                         sp += 1;
                     }
                 }
                 let k = order[0];
-                current = (node.child[k], node.count[k], child_mask[k]);
+                current = (node.child[k], node.count[k], slot_box(k));
                 continue;
             }
         } else {
-            for e in index..index.wrapping_add(count) {
-                let prim = bvh.prim(e, probe);
-                let verts = scene.triangle(prim, probe);
+            let mut enter = 0u64;
+            if frustum.is_some() && N.is_multiple_of(4) {
+                // Four rays against the leaf box at once (no zero direction components,
+                // so the plain slab test is exact here).
+                for g in 0..N / 4 {
+                    let m4 = (mask >> (4 * g)) & 0xF;
+                    if m4 == 0 {
+                        continue;
+                    }
+                    let lanes = 4 * g..4 * g + 4;
+                    let mut tn = Vec4::from_slice(&t_min[lanes.clone()]);
+                    let mut tf = Vec4::from_slice(&ends[lanes.clone()]);
+                    for a in 0..3 {
+                        let o = Vec4::from_slice(&org[a][lanes.clone()]);
+                        let iv = Vec4::from_slice(&inv[a][lanes.clone()]);
+                        let p = (Vec4::splat(leaf_box[a]) - o) * iv;
+                        let q = (Vec4::splat(leaf_box[a + 3]) - o) * iv;
+                        tn = tn.max(p.min(q));
+                        tf = tf.min(p.max(q) * SLAB_GROWTH);
+                    }
+                    enter |= ((tn.cmple(tf).bitmask() as u64) & m4) << (4 * g);
+                }
+            } else {
+                let lo = Vec3A::new(leaf_box[0], leaf_box[1], leaf_box[2]);
+                let hi = Vec3A::new(leaf_box[3], leaf_box[4], leaf_box[5]);
                 for i in Lanes(mask) {
-                    test_triangle::<I>(&preps[i], &rays[i], &verts, prim, &mut hits[i]);
+                    if boxes[i].entry_a(lo, hi, rays[i].t_min, ends[i]).is_some() {
+                        enter |= 1 << i;
+                    }
                 }
             }
-            c.tri_tests += count as u64 * mask.count_ones() as u64;
+            c.active_lanes += enter.count_ones() as u64;
+            if enter != 0 {
+                for e in index..index.wrapping_add(count) {
+                    let prim = bvh.prim(e, probe);
+                    let verts = scene.triangle(prim, probe);
+                    for i in Lanes(enter) {
+                        test_triangle::<I>(&preps[i], &rays[i], &verts, prim, &mut hits[i]);
+                    }
+                }
+                c.tri_tests += count as u64 * enter.count_ones() as u64;
+                for i in Lanes(enter) {
+                    ends[i] = hits[i].map_or(rays[i].t_max, |h: Hit| h.t);
+                }
+                t_end = t_end_of(hits);
+            }
         }
-        // Pop the next entry, dropping the rays whose hit is already nearer than it.
+        // Pop the next entry whose entry bound is not beyond every ray's best hit.
         loop {
             if sp == 0 {
                 counters.add(&c);
                 return;
             }
             sp -= 1;
-            let (child, count, t, mask) = stack[sp];
-            let mut still = 0u64;
-            for i in Lanes(mask) {
-                if t <= best_t(hits, i) {
-                    still |= 1 << i;
-                }
+            let (child, count, t, b) = stack[sp];
+            if t > t_end {
+                continue;
             }
-            if still != 0 {
-                current = (child, count, still);
-                break;
-            }
+            current = (child, count, b);
+            break;
         }
     }
 }

@@ -493,6 +493,18 @@ fn cmd_stats(a: StatsArgs) -> Result<()> {
     let classes: Vec<String> =
         DataClass::ALL.iter().map(|c| format!("{} {:.1}", c.name(), s.per_ray(s.bytes.bytes[*c as usize]))).collect();
     println!("bytes read per ray        {}", classes.join(", "));
+    if a.packet != PacketSize::Single {
+        let p = stats::gather_packets(&view, &cam, &opts, a.packet)?;
+        let n = a.packet.rays() as f64;
+        println!(
+            "packets {:<17} {} packets, {:.1} node visits per packet, SIMD efficiency {:.1}%, {:.2} triangle tests per ray",
+            a.packet.label(),
+            p.packets,
+            p.counters.visits as f64 / p.packets.max(1) as f64,
+            100.0 * p.counters.active_lanes as f64 / (p.counters.visits.max(1) as f64 * n),
+            p.counters.tri_tests as f64 / s.rays.max(1) as f64
+        );
+    }
     Ok(())
 }
 

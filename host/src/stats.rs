@@ -8,6 +8,9 @@ use raypipe_core::image::CameraRecord;
 use raypipe_core::probe::ByteCounter;
 use raypipe_core::{Intersector, RayCounters, SceneView};
 
+use raypipe_core::packet::PacketCounters;
+
+use crate::packets::{trace_tile, PacketSize};
 use crate::render::{eye_rays, in_pool, tiles, RenderOptions};
 use crate::tracer::trace;
 use crate::with_intersector;
@@ -117,5 +120,51 @@ fn gather_with<I: Intersector>(
                 s
             })
             .reduce(SceneStats::default, SceneStats::merge)
+    })
+}
+
+/// What tracing the view as packets cost.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PacketStats {
+    /// Packets traced.
+    pub packets: u64,
+    /// Summed packet counters.
+    pub counters: PacketCounters,
+}
+
+/// Traces the view as packets of `size` and sums their counters.
+pub fn gather_packets(
+    scene: &SceneView<'_>,
+    camera: &CameraRecord,
+    opts: &RenderOptions,
+    size: PacketSize,
+) -> Result<PacketStats> {
+    let eye = eye_rays(camera, "camera")?;
+    with_intersector!(opts.intersector, I => gather_packets_with::<I>(scene, &eye, opts, size))
+}
+
+fn gather_packets_with<I: Intersector>(
+    scene: &SceneView<'_>,
+    eye: &raypipe_core::camera::EyeRays,
+    opts: &RenderOptions,
+    size: PacketSize,
+) -> Result<PacketStats> {
+    let tiles = tiles(eye.width, eye.height);
+    let bounds = scene.bounds();
+    let side = size.side();
+    in_pool(opts.threads, || {
+        tiles
+            .par_iter()
+            .map(|&tile| {
+                let (mut c, mut pc) = (RayCounters::default(), PacketCounters::default());
+                trace_tile::<I>(scene, eye, bounds, tile, size, &mut c, &mut pc, &mut |_, _, _, _| {});
+                let (w, h) = (tile.2 - tile.0, tile.3 - tile.1);
+                PacketStats { packets: (w.div_ceil(side) * h.div_ceil(side)) as u64, counters: pc }
+            })
+            .reduce(PacketStats::default, |mut a, b| {
+                a.packets += b.packets;
+                a.counters.add(&b.counters);
+                a
+            })
     })
 }
