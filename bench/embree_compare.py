@@ -54,7 +54,8 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("mesh", help="OBJ (or .obj.gz) file")
     ap.add_argument("--size", default="1024x1024")
-    ap.add_argument("--accel", default="bvh", help="raypipe structure: grid, kd or bvh")
+    ap.add_argument("--accel", default="bvh4", help="raypipe structure: grid, kd, bvh or bvh4")
+    ap.add_argument("--packet", default="64", help="raypipe packet size for the packet figure: 4, 16 or 64")
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--camera", help="raypipe camera file for the view")
     ap.add_argument("--raypipe", default=os.path.join(os.path.dirname(__file__), "..", "target", "release", "raypipe"))
@@ -63,13 +64,22 @@ def main():
     with tempfile.TemporaryDirectory() as tmp:
         rays_p, tris_p, hits_p = (os.path.join(tmp, n) for n in ("rays.npy", "tris.npy", "hits.npy"))
         cam = ["--camera", a.camera] if a.camera else []
-        raypipe(a.raypipe, "rays", a.mesh, "-o", rays_p, "--triangles", tris_p, "--size", a.size, *cam)
-        out = raypipe(a.raypipe, "trace", a.mesh, "--rays", rays_p, "--hits", hits_p, "--accel", a.accel,
-                      "--threads", "1", "--runs", str(a.runs))
-        rp_secs = float(re.search(r"in ([0-9.]+) s", out).group(1))
+        side = {"4": "2", "16": "4", "64": "8"}[a.packet]
+        raypipe(a.raypipe, "rays", a.mesh, "-o", rays_p, "--triangles", tris_p, "--size", a.size,
+                "--block", side, *cam)
+        image = os.path.join(tmp, "scene.rpsi")
+        raypipe(a.raypipe, "build", a.mesh, "-o", image, "--accel", a.accel)
+        secs = {}
+        for packet in ("1", a.packet):
+            out = raypipe(a.raypipe, "trace", image, "--rays", rays_p, "--hits", hits_p + packet,
+                          "--threads", "1", "--runs", str(a.runs), "--packet", packet)
+            secs[packet] = float(re.search(r"in ([0-9.]+) s", out).group(1))
         rays = np.load(rays_p)
         tris = np.load(tris_p).astype(np.float32)
-        hits = np.load(hits_p)
+        hits = np.load(hits_p + "1")
+        packet_hits = np.load(hits_p + a.packet)
+        if packet_hits.tobytes() != hits.tobytes():
+            sys.exit("error: raypipe's packet hits differ from its single-ray hits")
 
     origins = np.ascontiguousarray(rays[:, 0:3], dtype=np.float32)
     dirs = np.ascontiguousarray(rays[:, 3:6], dtype=np.float32)
@@ -90,12 +100,13 @@ def main():
     agree = same_miss | same_prim | close_t
     differ = n - int(agree.sum())
 
-    rp = n / rp_secs / 1e6
+    rp = n / secs["1"] / 1e6
+    rpp = n / secs[a.packet] / 1e6
     em = n / em_secs / 1e6
-    print(f"mesh        {a.mesh} ({len(tris)} triangles), {n} primary rays, single thread")
-    print(f"raypipe     {a.accel:<4} {rp:8.2f} Mrays/s")
-    print(f"embree      rtcIntersect1 {em:8.2f} Mrays/s")
-    print(f"ratio       raypipe / embree = {rp / em:.2f}")
+    print(f"mesh        {a.mesh} ({len(tris)} triangles), {n} primary rays, single thread, median of {a.runs}")
+    print(f"embree      rtcIntersect1           {em:8.2f} Mrays/s")
+    print(f"raypipe     {a.accel} single rays      {rp:8.2f} Mrays/s   ratio {rp / em:.2f}")
+    print(f"raypipe     {a.accel} packets of {a.packet:<3}  {rpp:8.2f} Mrays/s   ratio {rpp / em:.2f}")
     print(f"agreement   {100.0 * agree.mean():.4f}% ({differ} rays differ: "
           f"{int((e_hit != r_hit).sum())} hit/miss, {int((e_hit & r_hit & ~same_prim & ~close_t).sum())} other triangle)")
     return 0 if agree.mean() >= 0.9999 else 1

@@ -10,7 +10,7 @@ use crate::hit::Hit;
 use crate::image::{Bvh4Node, Bvh4View, SceneView, MAX_TREE_DEPTH, NULL_INDEX};
 use crate::packet::{Lanes, PacketCounters, PacketHits, RayPacket};
 use crate::probe::MemoryProbe;
-use crate::ray_box::RayBox;
+use crate::ray_box::{recip, RayBox};
 use crate::triangle::{test_triangle, Intersector};
 
 const STACK: usize = 3 * MAX_TREE_DEPTH as usize + 4;
@@ -30,7 +30,7 @@ struct Frustum {
 }
 
 impl Frustum {
-    fn new<const N: usize>(boxes: &[RayBox; N], rays: &[crate::ray::Ray; N], mask: u64) -> Option<Frustum> {
+    fn new<const N: usize>(p: &RayPacket<N>, mask: u64) -> Option<Frustum> {
         let mut f = Frustum {
             olo: [f32::INFINITY; 3],
             ohi: [f32::NEG_INFINITY; 3],
@@ -39,17 +39,20 @@ impl Frustum {
             t_min: f32::INFINITY,
         };
         for i in Lanes(mask) {
-            // A zero direction component needs the exact per-ray rule of `RayBox`.
-            if boxes[i].zero_axes != 0 {
-                return None;
-            }
+            let o = [p.ox[i], p.oy[i], p.oz[i]];
+            let d = [p.dx[i], p.dy[i], p.dz[i]];
             for a in 0..3 {
-                f.olo[a] = f.olo[a].min(boxes[i].origin[a]);
-                f.ohi[a] = f.ohi[a].max(boxes[i].origin[a]);
-                f.ilo[a] = f.ilo[a].min(boxes[i].inv[a]);
-                f.ihi[a] = f.ihi[a].max(boxes[i].inv[a]);
+                // A zero direction component needs the exact per-ray rule of `RayBox`.
+                if d[a] == 0.0 {
+                    return None;
+                }
+                let inv = recip(d[a]);
+                f.olo[a] = f.olo[a].min(o[a]);
+                f.ohi[a] = f.ohi[a].max(o[a]);
+                f.ilo[a] = f.ilo[a].min(inv);
+                f.ihi[a] = f.ihi[a].max(inv);
             }
-            f.t_min = f.t_min.min(rays[i].t_min);
+            f.t_min = f.t_min.min(p.t_min[i]);
         }
         Some(f)
     }
@@ -98,23 +101,30 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
     counters: &mut PacketCounters,
 ) {
     let rays: [_; N] = core::array::from_fn(|i| packet.ray(i));
-    let boxes: [RayBox; N] = core::array::from_fn(|i| RayBox::new(&rays[i]));
-    let preps: [I::Prepared; N] = core::array::from_fn(|i| I::prepare(&rays[i]));
     *hits = [None; N];
     let mask = packet.active;
     if mask == 0 {
         return;
     }
-    let frustum = Frustum::new(&boxes, &rays, mask);
+    // The watertight constants are computed the first time a ray enters a leaf: most
+    // rays of a frame never do.
+    let mut preps: [I::Prepared; N] = [I::Prepared::default(); N];
+    let mut prepared = 0u64;
+    let frustum = Frustum::new(packet, mask);
     let t_end_of = |hits: &PacketHits<N>| {
         Lanes(mask).fold(f32::NEG_INFINITY, |m, i| m.max(hits[i].map_or(rays[i].t_max, |h: Hit| h.t)))
     };
     let mut t_end = t_end_of(hits);
-    // Structure-of-arrays copies for the 4-rays-at-once leaf box test.
-    let org: [[f32; N]; 3] = core::array::from_fn(|a| core::array::from_fn(|i| boxes[i].origin[a]));
-    let inv: [[f32; N]; 3] = core::array::from_fn(|a| core::array::from_fn(|i| boxes[i].inv[a]));
-    let t_min: [f32; N] = core::array::from_fn(|i| rays[i].t_min);
-    let mut ends: [f32; N] = core::array::from_fn(|i| rays[i].t_max);
+    // Reciprocal directions for the 4-rays-at-once leaf box test (the packet is already
+    // a structure of arrays).
+    let org = [&packet.ox, &packet.oy, &packet.oz];
+    let inv: [[f32; N]; 3] = [
+        core::array::from_fn(|i| recip(packet.dx[i])),
+        core::array::from_fn(|i| recip(packet.dy[i])),
+        core::array::from_fn(|i| recip(packet.dz[i])),
+    ];
+    let t_min = &packet.t_min;
+    let mut ends: [f32; N] = packet.t_max;
     // (child or first entry, leaf count or 0, entry bound, leaf box as min xyz, max xyz)
     let mut stack = [(0u32, 0u32, 0f32, [0f32; 6]); STACK];
     let mut sp = 0usize;
@@ -135,7 +145,7 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
                     let mut t = Vec4::INFINITY;
                     for i in Lanes(mask) {
                         let end = hits[i].map_or(rays[i].t_max, |h: Hit| h.t);
-                        let (tn, hit) = slab4(&boxes[i], node, rays[i].t_min, end);
+                        let (tn, hit) = slab4(&RayBox::new(&rays[i]), node, rays[i].t_min, end);
                         let m = hit.bitmask();
                         if m != 0 {
                             c.active_lanes += 1;
@@ -202,13 +212,17 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
                 let lo = Vec3A::new(leaf_box[0], leaf_box[1], leaf_box[2]);
                 let hi = Vec3A::new(leaf_box[3], leaf_box[4], leaf_box[5]);
                 for i in Lanes(mask) {
-                    if boxes[i].entry_a(lo, hi, rays[i].t_min, ends[i]).is_some() {
+                    if RayBox::new(&rays[i]).entry_a(lo, hi, rays[i].t_min, ends[i]).is_some() {
                         enter |= 1 << i;
                     }
                 }
             }
             c.active_lanes += enter.count_ones() as u64;
             if enter != 0 {
+                for i in Lanes(enter & !prepared) {
+                    preps[i] = I::prepare(&rays[i]);
+                }
+                prepared |= enter;
                 for e in index..index.wrapping_add(count) {
                     let prim = bvh.prim(e, probe);
                     let verts = scene.triangle(prim, probe);

@@ -15,7 +15,7 @@ pub const PARALLEL_EPSILON: f32 = 1e-5;
 pub struct MollerTrumbore;
 
 /// The ray itself is all Möller–Trumbore needs.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Default)]
 pub struct PlainRay {
     org: Vec3,
     dir: Vec3,

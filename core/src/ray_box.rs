@@ -66,8 +66,9 @@ impl RayBox {
     }
 }
 
+/// `1 / d` clamped to `±1e30` (zero gives `±1e30` by its sign): always finite.
 #[inline]
-fn recip(d: f32) -> f32 {
+pub fn recip(d: f32) -> f32 {
     if d == 0.0 {
         if d.is_sign_negative() {
             -INV_LIMIT

@@ -13,7 +13,7 @@ pub use crate::watertight::Watertight;
 /// the three vertices, so every structure that tests the same triangle gets the same bits.
 pub trait Intersector {
     /// Per-ray constants.
-    type Prepared: Copy;
+    type Prepared: Copy + Default;
     /// A short name for reports.
     const NAME: &'static str;
     /// Computes the per-ray constants.

@@ -14,7 +14,7 @@ use crate::triangle::Intersector;
 pub struct Watertight;
 
 /// Per-ray shear constants (paper, Fig. 1 lines 1–14).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Default)]
 pub struct ShearedRay {
     org: Vec3,
     kx: usize,

@@ -7,7 +7,10 @@ use raypipe_core::{Intersector, NoProbe, Ray, RayCounters, SceneView, Vec3};
 
 use crate::npy::{Array2, HitRecord};
 use crate::render::in_pool;
-use crate::tracer::{trace, IntersectorKind};
+use raypipe_core::packet::{PacketCounters, RayPacket};
+
+use crate::packets::PacketSize;
+use crate::tracer::{trace, trace_packet, IntersectorKind};
 use crate::with_intersector;
 
 /// Rays traced as one unit of work.
@@ -42,23 +45,51 @@ pub fn trace_batch(
     scene: &SceneView<'_>,
     rays: &[Ray],
     kind: IntersectorKind,
+    packet: PacketSize,
     threads: Option<usize>,
 ) -> Result<Vec<HitRecord>> {
-    with_intersector!(kind, I => trace_with::<I>(scene, rays, threads))
+    with_intersector!(kind, I => match packet {
+        PacketSize::Single => trace_with::<I, 1>(scene, rays, threads),
+        PacketSize::P4 => trace_with::<I, 4>(scene, rays, threads),
+        PacketSize::P16 => trace_with::<I, 16>(scene, rays, threads),
+        PacketSize::P64 => trace_with::<I, 64>(scene, rays, threads),
+    })
 }
 
-fn trace_with<I: Intersector>(scene: &SceneView<'_>, rays: &[Ray], threads: Option<usize>) -> Result<Vec<HitRecord>> {
+fn record(hit: Option<raypipe_core::Hit>) -> HitRecord {
+    match hit {
+        Some(h) => HitRecord { t: h.t, u: h.u, v: h.v, prim: h.prim as i32 },
+        None => HitRecord { t: f32::INFINITY, u: 0.0, v: 0.0, prim: -1 },
+    }
+}
+
+/// Chunks of `CHUNK` rays per task; with `N > 1`, runs of `N` consecutive rays are traced
+/// as one packet.
+fn trace_with<I: Intersector, const N: usize>(
+    scene: &SceneView<'_>,
+    rays: &[Ray],
+    threads: Option<usize>,
+) -> Result<Vec<HitRecord>> {
     in_pool(threads, || {
         rays.par_chunks(CHUNK)
             .flat_map_iter(|chunk| {
                 let mut c = RayCounters::default();
-                chunk
-                    .iter()
-                    .map(|r| match trace::<I, _>(scene, r, &mut NoProbe, &mut c) {
-                        Some(h) => HitRecord { t: h.t, u: h.u, v: h.v, prim: h.prim as i32 },
-                        None => HitRecord { t: f32::INFINITY, u: 0.0, v: 0.0, prim: -1 },
-                    })
-                    .collect::<Vec<_>>()
+                let mut out = Vec::with_capacity(chunk.len());
+                if N == 1 {
+                    out.extend(chunk.iter().map(|r| record(trace::<I, _>(scene, r, &mut NoProbe, &mut c))));
+                } else {
+                    let mut pc = PacketCounters::default();
+                    let mut hits = [None; N];
+                    for group in chunk.chunks(N) {
+                        let mut packet = RayPacket::<N>::new();
+                        for (i, r) in group.iter().enumerate() {
+                            packet.set(i, r);
+                        }
+                        trace_packet::<I, _, N>(scene, &packet, &mut hits, &mut NoProbe, &mut pc);
+                        out.extend(hits[..group.len()].iter().map(|h| record(*h)));
+                    }
+                }
+                out
             })
             .collect()
     })

@@ -69,6 +69,9 @@ pub struct TraceArgs {
     /// Trace the batch this many times and report the median time.
     #[arg(long, default_value_t = 1)]
     pub runs: usize,
+    /// Trace consecutive rays in packets of this many (1 = single rays); hits are the same.
+    #[arg(long, value_enum, default_value_t = PacketSize::Single)]
+    pub packet: PacketSize,
 }
 
 /// `raypipe rays`.
@@ -82,6 +85,10 @@ pub struct RaysArgs {
     /// Also write the scene's triangles, in id order, as a (T, 9) float32 array.
     #[arg(long, value_name = "NPY")]
     pub triangles: Option<PathBuf>,
+    /// Write the rays in square blocks of this side (e.g. 8: each run of 64 rays is an 8×8
+    /// pixel block, ready for `trace --packet 64`); 1 = row by row.
+    #[arg(long, value_name = "SIDE", default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub block: u32,
     #[command(flatten)]
     pub camera: CameraArgs,
 }
@@ -603,10 +610,17 @@ fn cmd_rays(a: RaysArgs) -> Result<()> {
     let cam = camera_for(&scene, &a.camera)?;
     let eye = render::eye_rays(&cam, "camera")?;
     let mut data = Vec::with_capacity(cam.width as usize * cam.height as usize * 8);
-    for y in 0..cam.height {
-        for x in 0..cam.width {
-            let r = eye.ray(x, y);
-            data.extend_from_slice(&[r.origin.x, r.origin.y, r.origin.z, r.dir.x, r.dir.y, r.dir.z, r.t_min, r.t_max]);
+    let b = a.block;
+    for by in (0..cam.height).step_by(b as usize) {
+        for bx in (0..cam.width).step_by(b as usize) {
+            for y in by..(by + b).min(cam.height) {
+                for x in bx..(bx + b).min(cam.width) {
+                    let r = eye.ray(x, y);
+                    data.extend_from_slice(&[
+                        r.origin.x, r.origin.y, r.origin.z, r.dir.x, r.dir.y, r.dir.z, r.t_min, r.t_max,
+                    ]);
+                }
+            }
         }
     }
     let rows = data.len() / 8;
@@ -644,7 +658,7 @@ fn cmd_trace(a: TraceArgs) -> Result<()> {
     let mut hits = Vec::new();
     for _ in 0..a.runs {
         let start = Instant::now();
-        hits = crate::batch::trace_batch(&view, &rays, a.intersector, a.threads)?;
+        hits = crate::batch::trace_batch(&view, &rays, a.intersector, a.packet, a.threads)?;
         times.push(start.elapsed().as_secs_f64());
     }
     let secs = median(&times);
