@@ -21,7 +21,7 @@ pub fn trace_brute_force<I: Intersector, P: MemoryProbe>(
     let prep = I::prepare(ray);
     let mut best = None;
     for prim in 0..scene.triangle_count() {
-        let verts = scene.triangle(prim, probe);
+        let verts = I::fetch(scene, prim, probe);
         test_triangle::<I>(&prep, ray, &verts, prim, &mut best);
     }
     counters.tri_tests += scene.triangle_count();

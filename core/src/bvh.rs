@@ -42,7 +42,7 @@ pub fn trace_bvh<I: Intersector, P: MemoryProbe>(
             leaves += 1;
             for k in node.first..node.first.wrapping_add(node.count) {
                 let prim = bvh.prim(k, probe);
-                let verts = scene.triangle(prim, probe);
+                let verts = I::fetch(scene, prim, probe);
                 test_triangle::<I>(&prep, ray, &verts, prim, &mut best);
             }
             tests += node.count;

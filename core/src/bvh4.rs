@@ -119,7 +119,7 @@ pub fn trace_bvh4<I: Intersector, P: MemoryProbe>(
             leaves += 1;
             for e in index..index.wrapping_add(count) {
                 let prim = bvh.prim(e, probe);
-                let verts = scene.triangle(prim, probe);
+                let verts = I::fetch(scene, prim, probe);
                 test_triangle::<I>(&prep, ray, &verts, prim, &mut best);
             }
             tests += count;

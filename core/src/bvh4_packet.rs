@@ -225,7 +225,7 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
                 prepared |= enter;
                 for e in index..index.wrapping_add(count) {
                     let prim = bvh.prim(e, probe);
-                    let verts = scene.triangle(prim, probe);
+                    let verts = I::fetch(scene, prim, probe);
                     for i in Lanes(enter) {
                         test_triangle::<I>(&preps[i], &rays[i], &verts, prim, &mut hits[i]);
                     }

@@ -47,7 +47,7 @@ pub fn trace_bvh_packet<I: Intersector, P: MemoryProbe, const N: usize>(
             if node.count > 0 {
                 for e in node.first..node.first.wrapping_add(node.count) {
                     let prim = bvh.prim(e, probe);
-                    let verts = scene.triangle(prim, probe);
+                    let verts = I::fetch(scene, prim, probe);
                     for i in Lanes(mask) {
                         test_triangle::<I>(&preps[i], &rays[i], &verts, prim, &mut hits[i]);
                     }

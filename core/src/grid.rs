@@ -114,7 +114,7 @@ pub fn trace_grid<I: Intersector, P: MemoryProbe>(
                         break;
                     }
                     tests += 1;
-                    let verts = scene.triangle(prim, probe);
+                    let verts = I::fetch(scene, prim, probe);
                     test_triangle::<I>(&prep, ray, &verts, prim, &mut trav.best);
                     pos = pos.wrapping_add(1);
                 }

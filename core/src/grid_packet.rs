@@ -45,7 +45,7 @@ pub fn trace_grid_packet<I: Intersector, P: MemoryProbe, const N: usize>(
                             break;
                         }
                         c.tri_tests += 1;
-                        let verts = scene.triangle(prim, probe);
+                        let verts = I::fetch(scene, prim, probe);
                         test_triangle::<I>(&preps[i], &rays[i], &verts, prim, &mut trav[i].best);
                         pos = pos.wrapping_add(1);
                     }

@@ -133,7 +133,7 @@ pub fn trace_kdtree<I: Intersector, P: MemoryProbe>(
                 leaves += 1;
                 for k in first..first.wrapping_add(count) {
                     let prim = kd.prim(k, probe);
-                    let verts = scene.triangle(prim, probe);
+                    let verts = I::fetch(scene, prim, probe);
                     test_triangle::<I>(&prep, ray, &verts, prim, &mut trav.best);
                 }
                 tests += count;

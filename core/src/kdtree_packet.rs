@@ -34,7 +34,7 @@ pub fn trace_kdtree_packet<I: Intersector, P: MemoryProbe, const N: usize>(
                 KdEvent::Leaf { first, count } => {
                     for k in first..first.wrapping_add(count) {
                         let prim = kd.prim(k, probe);
-                        let verts = scene.triangle(prim, probe);
+                        let verts = I::fetch(scene, prim, probe);
                         test_triangle::<I>(&preps[i], &rays[i], &verts, prim, &mut trav[i].best);
                     }
                     c.tri_tests += count as u64;

@@ -51,6 +51,7 @@ pub mod ray;
 pub mod ray_box;
 pub mod shade;
 pub mod triangle;
+pub mod wald;
 pub mod watertight;
 
 pub use camera::{Camera, CameraError};
@@ -59,6 +60,6 @@ pub use hit::Hit;
 pub use image::{SceneError, SceneView};
 pub use probe::{DataClass, MemoryProbe, NoProbe};
 pub use ray::Ray;
-pub use triangle::{Intersector, MollerTrumbore, Watertight};
+pub use triangle::{Intersector, MollerTrumbore, WaldProjection, Watertight};
 
 pub use glam::Vec3;

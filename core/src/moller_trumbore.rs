@@ -4,6 +4,8 @@
 
 use glam::Vec3;
 
+use crate::image::SceneView;
+use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::triangle::Intersector;
 
@@ -23,7 +25,13 @@ pub struct PlainRay {
 
 impl Intersector for MollerTrumbore {
     type Prepared = PlainRay;
+    type Triangle = [Vec3; 3];
     const NAME: &'static str = "moller-trumbore";
+
+    #[inline(always)]
+    fn fetch<P: MemoryProbe>(scene: &SceneView<'_>, prim: u32, probe: &mut P) -> [Vec3; 3] {
+        scene.triangle(prim, probe)
+    }
 
     #[inline]
     fn prepare(ray: &Ray) -> PlainRay {

@@ -1,11 +1,12 @@
 //! The ray–triangle intersection interface and the one place a candidate hit is accepted.
 
-use glam::Vec3;
-
 use crate::hit::{keep_closest, Hit};
+use crate::image::SceneView;
+use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 
 pub use crate::moller_trumbore::MollerTrumbore;
+pub use crate::wald::WaldProjection;
 pub use crate::watertight::Watertight;
 
 /// A ray–triangle test. `prepare` computes the per-ray constants once (the watertight
@@ -14,13 +15,18 @@ pub use crate::watertight::Watertight;
 pub trait Intersector {
     /// Per-ray constants.
     type Prepared: Copy + Default;
+    /// What the test reads of a triangle (its layout): the vertices, or a precomputed
+    /// record.
+    type Triangle: Copy;
     /// A short name for reports.
     const NAME: &'static str;
     /// Computes the per-ray constants.
     fn prepare(ray: &Ray) -> Self::Prepared;
+    /// Reads triangle `prim` in this test's layout (an observed read).
+    fn fetch<P: MemoryProbe>(scene: &SceneView<'_>, prim: u32, probe: &mut P) -> Self::Triangle;
     /// `(t, u, v)` where `u` and `v` weight the second and third vertex, or `None`.
     /// `t` is not range-checked here; [`test_triangle`] does that.
-    fn intersect(prep: &Self::Prepared, v: &[Vec3; 3]) -> Option<(f32, f32, f32)>;
+    fn intersect(prep: &Self::Prepared, tri: &Self::Triangle) -> Option<(f32, f32, f32)>;
 }
 
 /// Tests triangle `prim` and keeps the hit if it lies in `[t_min, t_max]` and is closer
@@ -29,11 +35,11 @@ pub trait Intersector {
 pub fn test_triangle<I: Intersector>(
     prep: &I::Prepared,
     ray: &Ray,
-    verts: &[Vec3; 3],
+    tri: &I::Triangle,
     prim: u32,
     best: &mut Option<Hit>,
 ) -> bool {
-    if let Some((t, u, v)) = I::intersect(prep, verts) {
+    if let Some((t, u, v)) = I::intersect(prep, tri) {
         // Written so NaN is rejected.
         if t >= ray.t_min && t <= ray.t_max {
             let before = *best;

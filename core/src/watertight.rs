@@ -6,6 +6,8 @@
 
 use glam::Vec3;
 
+use crate::image::SceneView;
+use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::triangle::Intersector;
 
@@ -27,7 +29,13 @@ pub struct ShearedRay {
 
 impl Intersector for Watertight {
     type Prepared = ShearedRay;
+    type Triangle = [Vec3; 3];
     const NAME: &'static str = "watertight";
+
+    #[inline(always)]
+    fn fetch<P: MemoryProbe>(scene: &SceneView<'_>, prim: u32, probe: &mut P) -> [Vec3; 3] {
+        scene.triangle(prim, probe)
+    }
 
     #[inline]
     fn prepare(ray: &Ray) -> ShearedRay {

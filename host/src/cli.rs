@@ -16,7 +16,7 @@ use crate::grid_builder::{GridResolution, DEFAULT_CELLS_PER_TRIANGLE};
 use crate::output;
 use crate::packets::PacketSize;
 use crate::render::{self, RenderOptions};
-use crate::scene::{self, Accel, BuildOptions, Scene};
+use crate::scene::{self, Accel, BuildOptions, Scene, TriangleLayout};
 use crate::stats;
 use crate::tracer::IntersectorKind;
 
@@ -63,9 +63,10 @@ pub struct TraceArgs {
     /// Worker threads (default: all cores).
     #[arg(long, value_name = "N")]
     pub threads: Option<usize>,
-    /// Ray–triangle intersection test.
-    #[arg(long, value_enum, default_value_t = IntersectorKind::Watertight)]
-    pub intersector: IntersectorKind,
+    /// Ray–triangle intersection test (default: wald for an image with Wald triangles,
+    /// watertight otherwise).
+    #[arg(long, value_enum)]
+    pub intersector: Option<IntersectorKind>,
     /// Trace the batch this many times and report the median time.
     #[arg(long, default_value_t = 1)]
     pub runs: usize,
@@ -106,6 +107,9 @@ pub struct StructureArgs {
     /// Target grid cells per triangle when --grid-min-dim is not given.
     #[arg(long, value_name = "F", default_value_t = DEFAULT_CELLS_PER_TRIANGLE)]
     pub grid_density: f64,
+    /// Triangle layout: indexed vertices, or also Wald's 48-byte precomputed triangles.
+    #[arg(long, value_enum, default_value_t = TriangleLayout::Indexed)]
+    pub triangles: TriangleLayout,
 }
 
 impl StructureArgs {
@@ -116,6 +120,7 @@ impl StructureArgs {
                 Some(n) => GridResolution::MinDim(n),
                 None => GridResolution::Auto { cells_per_triangle: self.grid_density },
             },
+            triangles: self.triangles,
             ..Default::default()
         }
     }
@@ -223,9 +228,10 @@ pub struct RenderArgs {
     /// Worker threads (default: all cores).
     #[arg(long, value_name = "N")]
     pub threads: Option<usize>,
-    /// Ray–triangle intersection test.
-    #[arg(long, value_enum, default_value_t = IntersectorKind::Watertight)]
-    pub intersector: IntersectorKind,
+    /// Ray–triangle intersection test (default: wald for an image with Wald triangles,
+    /// watertight otherwise).
+    #[arg(long, value_enum)]
+    pub intersector: Option<IntersectorKind>,
 }
 
 /// `raypipe stats`.
@@ -243,9 +249,10 @@ pub struct StatsArgs {
     /// Worker threads (default: all cores).
     #[arg(long, value_name = "N")]
     pub threads: Option<usize>,
-    /// Ray–triangle intersection test.
-    #[arg(long, value_enum, default_value_t = IntersectorKind::Watertight)]
-    pub intersector: IntersectorKind,
+    /// Ray–triangle intersection test (default: wald for an image with Wald triangles,
+    /// watertight otherwise).
+    #[arg(long, value_enum)]
+    pub intersector: Option<IntersectorKind>,
 }
 
 /// `raypipe bench`.
@@ -277,9 +284,13 @@ pub struct BenchArgs {
     /// Grid cells along the shortest axis (default: derived from the triangle count).
     #[arg(long, value_name = "N")]
     pub grid_min_dim: Option<u32>,
-    /// Ray–triangle intersection test.
-    #[arg(long, value_enum, default_value_t = IntersectorKind::Watertight)]
-    pub intersector: IntersectorKind,
+    /// Triangle layout: indexed vertices, or also Wald's 48-byte precomputed triangles.
+    #[arg(long, value_enum, default_value_t = TriangleLayout::Indexed)]
+    pub triangles: TriangleLayout,
+    /// Ray–triangle intersection test (default: wald for an image with Wald triangles,
+    /// watertight otherwise).
+    #[arg(long, value_enum)]
+    pub intersector: Option<IntersectorKind>,
 }
 
 /// Parses the process arguments, runs, and turns any error into one line on stderr.
@@ -448,7 +459,8 @@ fn cmd_render(a: RenderArgs) -> Result<()> {
     warn(&scene);
     let view = scene.view()?;
     let cam = camera_for(&scene, &a.camera)?;
-    let opts = RenderOptions { threads: a.threads, intersector: a.intersector, progress: true, packet: a.packet };
+    let kind = IntersectorKind::resolve(a.intersector, &view);
+    let opts = RenderOptions { threads: a.threads, intersector: kind, progress: true, packet: a.packet };
     let start = Instant::now();
     let frame = render::render(&view, &cam, &opts)?;
     let secs = start.elapsed().as_secs_f64();
@@ -481,7 +493,8 @@ fn cmd_stats(a: StatsArgs) -> Result<()> {
     warn(&scene);
     let view = scene.view()?;
     let cam = camera_for(&scene, &a.camera)?;
-    let opts = RenderOptions { threads: a.threads, intersector: a.intersector, progress: false, packet: a.packet };
+    let kind = IntersectorKind::resolve(a.intersector, &view);
+    let opts = RenderOptions { threads: a.threads, intersector: kind, progress: false, packet: a.packet };
     let s = stats::gather(&view, &cam, &opts)?;
     println!("scene                     {} ({} triangles)", scene.name, view.triangle_count());
     println!("structure                 {}", structure_summary(&view));
@@ -530,10 +543,7 @@ fn cmd_bench(a: BenchArgs) -> Result<()> {
     if targets.is_empty() {
         bail!("nothing to measure: --no-default without scenes");
     }
-    let kernel = match a.intersector {
-        IntersectorKind::Watertight => "watertight",
-        IntersectorKind::MollerTrumbore => "moller-trumbore",
-    };
+    let kernel = a.intersector.map_or("default", IntersectorKind::name);
     println!(
         "primary rays {}x{}, trace only (eye ray, traversal, {kernel} intersection), median of {} runs",
         a.size.0, a.size.1, a.runs
@@ -558,6 +568,7 @@ fn cmd_bench(a: BenchArgs) -> Result<()> {
                     Some(n) => GridResolution::MinDim(n),
                     None => GridResolution::default(),
                 },
+                triangles: a.triangles,
                 ..Default::default()
             };
             // Structure build time: median of up to three builds (one for large scenes).
@@ -580,7 +591,8 @@ fn cmd_bench(a: BenchArgs) -> Result<()> {
             let bytes_per_tri = scene.report.as_ref().map_or(view.bytes().len(), |r| r.structure_bytes) as f64
                 / view.triangle_count().max(1) as f64;
             for &packet in &a.packet {
-                let r = bench::primary_rays(&view, &cam, a.intersector, packet, a.runs, a.threads)?;
+                let kind = IntersectorKind::resolve(a.intersector, &view);
+                let r = bench::primary_rays(&view, &cam, kind, packet, a.runs, a.threads)?;
                 let simd = if packet == PacketSize::Single {
                     "-".to_string()
                 } else {
@@ -658,7 +670,13 @@ fn cmd_trace(a: TraceArgs) -> Result<()> {
     let mut hits = Vec::new();
     for _ in 0..a.runs {
         let start = Instant::now();
-        hits = crate::batch::trace_batch(&view, &rays, a.intersector, a.packet, a.threads)?;
+        hits = crate::batch::trace_batch(
+            &view,
+            &rays,
+            IntersectorKind::resolve(a.intersector, &view),
+            a.packet,
+            a.threads,
+        )?;
         times.push(start.elapsed().as_secs_f64());
     }
     let secs = median(&times);

@@ -8,6 +8,9 @@ use raypipe_core::image::{
     SECTION_ALIGN,
 };
 
+use raypipe_core::image::WaldTriangle;
+use raypipe_core::Vec3;
+
 use crate::aligned::AlignedBytes;
 use crate::bvh_builder::{BuiltBvh, BuiltBvh4};
 use crate::grid_builder::BuiltGrid;
@@ -52,6 +55,17 @@ impl ImageWriter {
     fn add<T: Pod>(&mut self, kind: SectionKind, records: &[T]) {
         debug_assert_eq!(std::mem::size_of::<T>() as u32, kind.record_size());
         self.sections.push((kind, bytemuck::cast_slice(records).to_vec(), records.len() as u32));
+    }
+
+    /// Adds Wald's precomputed projection triangles, one per triangle.
+    pub fn wald_triangles(&mut self, mesh: &Mesh) -> &mut Self {
+        let recs: Vec<WaldTriangle> = mesh
+            .triangles
+            .iter()
+            .map(|t| WaldTriangle::from_vertices(&t.map(|i| Vec3::from(mesh.positions[i as usize]))))
+            .collect();
+        self.add(SectionKind::WaldTriangles, &recs);
+        self
     }
 
     /// Adds the uniform grid.

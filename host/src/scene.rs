@@ -35,6 +35,17 @@ pub enum Accel {
     None,
 }
 
+/// Which triangle layout the intersection unit reads.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum TriangleLayout {
+    /// Vertex indices into positions (12 + 3·12 bytes, shared vertices): watertight or
+    /// Möller–Trumbore.
+    #[default]
+    Indexed,
+    /// Also Wald's 48-byte precomputed projection triangles, for `--intersector wald`.
+    Wald,
+}
+
 /// How to build a scene image from a mesh.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct BuildOptions {
@@ -46,6 +57,8 @@ pub struct BuildOptions {
     pub kd: KdParams,
     /// BVH cost constants.
     pub bvh: BvhParams,
+    /// Triangle layout.
+    pub triangles: TriangleLayout,
 }
 
 /// What a build produced, for `raypipe build` and `bench`.
@@ -256,6 +269,9 @@ pub fn build(
         ..Default::default()
     };
     let mut writer = ImageWriter::new(&mesh);
+    if opts.triangles == TriangleLayout::Wald {
+        writer.wald_triangles(&mesh);
+    }
     writer.camera(&camera);
     let start = Instant::now();
     match opts.accel {

@@ -20,6 +20,25 @@ pub enum IntersectorKind {
     Watertight,
     /// Möller & Trumbore 1997, for comparison.
     MollerTrumbore,
+    /// Wald's projection test on 48-byte precomputed triangles (Wald 2004).
+    Wald,
+}
+
+impl IntersectorKind {
+    /// The test the user asked for, or by default the one the image's triangle layout
+    /// is for (Wald's if it stores Wald triangles, watertight otherwise).
+    pub fn resolve(choice: Option<IntersectorKind>, scene: &SceneView<'_>) -> IntersectorKind {
+        choice.unwrap_or(if scene.has_wald_triangles() { IntersectorKind::Wald } else { IntersectorKind::Watertight })
+    }
+
+    /// Name for reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            IntersectorKind::Watertight => "watertight",
+            IntersectorKind::MollerTrumbore => "moller-trumbore",
+            IntersectorKind::Wald => "wald",
+        }
+    }
 }
 
 /// Traces one ray with the scene's structure.
@@ -54,6 +73,10 @@ macro_rules! with_intersector {
             }
             $crate::tracer::IntersectorKind::MollerTrumbore => {
                 type $I = raypipe_core::MollerTrumbore;
+                $body
+            }
+            $crate::tracer::IntersectorKind::Wald => {
+                type $I = raypipe_core::WaldProjection;
                 $body
             }
         }

@@ -7,7 +7,14 @@ use raypipe::grid_builder::GridResolution;
 use raypipe::mesh::Mesh;
 use raypipe::scene::{self, Accel, BuildOptions, Scene};
 
-/// Builds a scene image (grid or none) from raw triangles.
+/// Builds a scene image with Wald's precomputed triangles as well.
+pub fn build_soup_wald(positions: Vec<[f32; 3]>, triangles: Vec<[u32; 3]>, accel: Accel) -> Scene {
+    let mesh = Mesh { positions, triangles, ..Default::default() };
+    let opts = BuildOptions { accel, triangles: raypipe::scene::TriangleLayout::Wald, ..Default::default() };
+    scene::build("soup".into(), mesh, Vec::new(), Default::default(), &opts).expect("soup builds")
+}
+
+/// Builds a scene image (any structure) from raw triangles.
 pub fn build_soup(positions: Vec<[f32; 3]>, triangles: Vec<[u32; 3]>, accel: Accel, min_dim: u32) -> Scene {
     let mesh = Mesh { positions, triangles, ..Default::default() };
     let opts = BuildOptions { accel, grid: GridResolution::MinDim(min_dim), ..Default::default() };

@@ -130,11 +130,14 @@ pub enum SectionKind {
     KdNodes = 12,
     /// 4-wide BVH nodes, [`crate::image::Bvh4Node`], 128 bytes each; node 0 is the root.
     Bvh4Nodes = 13,
+    /// Wald's precomputed projection triangles, [`crate::image::WaldTriangle`], 48 bytes
+    /// each, one per triangle (an optional intersection layout).
+    WaldTriangles = 14,
 }
 
 impl SectionKind {
     /// Every kind, in table order.
-    pub const ALL: [SectionKind; 13] = [
+    pub const ALL: [SectionKind; 14] = [
         SectionKind::Positions,
         SectionKind::Triangles,
         SectionKind::Grid,
@@ -148,6 +151,7 @@ impl SectionKind {
         SectionKind::BvhNodes,
         SectionKind::KdNodes,
         SectionKind::Bvh4Nodes,
+        SectionKind::WaldTriangles,
     ];
 
     /// Decodes a section-table kind.
@@ -164,6 +168,7 @@ impl SectionKind {
             SectionKind::ShadingVertices | SectionKind::Lights | SectionKind::BvhNodes => 32,
             SectionKind::KdNodes => 8,
             SectionKind::Bvh4Nodes => 128,
+            SectionKind::WaldTriangles => 48,
         }
     }
 
@@ -183,6 +188,7 @@ impl SectionKind {
             SectionKind::BvhNodes => "BVH_NODES",
             SectionKind::KdNodes => "KD_NODES",
             SectionKind::Bvh4Nodes => "BVH4_NODES",
+            SectionKind::WaldTriangles => "WALD_TRIANGLES",
         }
     }
 }

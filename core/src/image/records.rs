@@ -270,3 +270,42 @@ impl Bvh4Node {
         count: [0; 4],
     };
 }
+
+/// Wald's precomputed triangle for the projection test (Wald 2004, §7.1; Wald &
+/// Slusallek 2001): 37 bytes of data padded to 48 so that triangles never straddle a
+/// cache line in pairs, in three 16-byte rows.
+///
+/// The plane is `P[k] + n_u·P[u] + n_v·P[v] = n_d` with `(u, v) = (k+1, k+2) mod 3` and
+/// `k` the dominant axis of the normal; the barycentric weights of the second and third
+/// vertex are affine functions `b_nu·h_u + b_nv·h_v + b_d` and `c_nu·h_u + c_nv·h_v + c_d`
+/// of the hit point projected to `(u, v)`. `k == 3` marks a degenerate triangle.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct WaldTriangle {
+    /// Plane coefficient of `P[u]`.
+    pub n_u: f32,
+    /// Plane coefficient of `P[v]`.
+    pub n_v: f32,
+    /// Plane constant.
+    pub n_d: f32,
+    /// Projection axis 0–2, or 3 (degenerate).
+    pub k: u32,
+    /// Second-vertex weight: coefficient of `h_u`.
+    pub b_nu: f32,
+    /// Second-vertex weight: coefficient of `h_v`.
+    pub b_nv: f32,
+    /// Second-vertex weight: constant.
+    pub b_d: f32,
+    /// `sqrt(1 + n_u² + n_v²)`, for the scale-free parallelism test (in Wald's padding).
+    pub n_scale: f32,
+    /// Third-vertex weight: coefficient of `h_u`.
+    pub c_nu: f32,
+    /// Third-vertex weight: coefficient of `h_v`.
+    pub c_nv: f32,
+    /// Third-vertex weight: constant.
+    pub c_d: f32,
+    /// Unused, zero.
+    pub _pad: u32,
+}
+const _: () = assert!(core::mem::size_of::<WaldTriangle>() == 48);
+const _: () = assert!(core::mem::align_of::<WaldTriangle>() == 4);

@@ -9,7 +9,7 @@ use super::crc32::Crc32;
 use super::header::{AccelKind, Header, SectionEntry, SectionKind, CHECKSUM_OFFSET, FORMAT_VERSION, MAGIC};
 use super::records::{
     Bvh4Node, BvhNode, CameraRecord, GridRecord, KdNode, LightRecord, MaterialRecord, Position, ShadingVertex,
-    TriangleRecord, NULL_INDEX,
+    TriangleRecord, WaldTriangle, NULL_INDEX,
 };
 use crate::probe::{DataClass, MemoryProbe};
 
@@ -429,6 +429,7 @@ pub struct SceneView<'a> {
     bvh4: Option<Bvh4View<'a>>,
     kd: Option<KdTreeView<'a>>,
     shading: &'a [ShadingVertex],
+    wald: &'a [WaldTriangle],
     tri_materials: &'a [u32],
     materials: &'a [MaterialRecord],
     lights: &'a [LightRecord],
@@ -439,6 +440,7 @@ pub struct SceneView<'a> {
     tri_materials_addr: u32,
     materials_addr: u32,
     lights_addr: u32,
+    wald_addr: u32,
 }
 
 struct Sections<'a> {
@@ -663,6 +665,20 @@ impl<'a> SceneView<'a> {
                 });
             }
         }
+        let wald: &[WaldTriangle] = s.slice(K::WaldTriangles)?;
+        if !wald.is_empty() && wald.len() as u32 != nt {
+            return Err(SceneError::CountMismatch {
+                section: K::WaldTriangles,
+                expected: nt,
+                found: wald.len() as u32,
+            });
+        }
+        for (i, w) in wald.iter().enumerate() {
+            let vals = [w.n_u, w.n_v, w.n_d, w.b_nu, w.b_nv, w.b_d, w.n_scale, w.c_nu, w.c_nv, w.c_d];
+            if w.k > 3 || vals.iter().any(|v| !v.is_finite()) {
+                return Err(SceneError::NonFinite { section: K::WaldTriangles, record: i as u32 });
+            }
+        }
         let lights: &[LightRecord] = s.slice(K::Lights)?;
         let cameras: &[CameraRecord] = s.slice(K::Camera)?;
         if cameras.len() > 1 {
@@ -679,6 +695,7 @@ impl<'a> SceneView<'a> {
             bvh4,
             kd,
             shading,
+            wald,
             tri_materials,
             materials,
             lights,
@@ -689,6 +706,7 @@ impl<'a> SceneView<'a> {
             tri_materials_addr: s.addr(K::TriangleMaterials),
             materials_addr: s.addr(K::Materials),
             lights_addr: s.addr(K::Lights),
+            wald_addr: s.addr(K::WaldTriangles),
         })
     }
 
@@ -971,6 +989,21 @@ impl<'a> SceneView<'a> {
     fn position<P: MemoryProbe>(&self, index: u32, probe: &mut P) -> Vec3 {
         probe.read(DataClass::Triangles, self.positions_addr.wrapping_add(index.wrapping_mul(12)), 12);
         self.positions.get(index as usize).map_or(Vec3::ZERO, |p| Vec3::from(p.0))
+    }
+
+    /// Reads triangle `prim`'s precomputed Wald record, if the image has that layout.
+    #[inline]
+    pub fn wald_triangle<P: MemoryProbe>(&self, prim: u32, probe: &mut P) -> Option<WaldTriangle> {
+        if self.wald.is_empty() {
+            return None;
+        }
+        probe.read(DataClass::Triangles, self.wald_addr.wrapping_add(prim.wrapping_mul(48)), 48);
+        self.wald.get(prim as usize).copied()
+    }
+
+    /// True if the image stores Wald's precomputed triangles.
+    pub fn has_wald_triangles(&self) -> bool {
+        !self.wald.is_empty()
     }
 
     /// The vertex indices of triangle `prim` (not probed: shading re-reads them from its
