@@ -213,9 +213,10 @@ pub struct BuildArgs {
 /// `raypipe render`.
 #[derive(Args, Debug)]
 pub struct RenderArgs {
-    /// Rays per packet: 1 (single rays), 4 (2×2), 16 (4×4) or 64 (8×8); the image is the same.
-    #[arg(long, value_enum, default_value_t = PacketSize::P16)]
-    pub packet: PacketSize,
+    /// Rays per packet: 1 (single rays), 4 (2×2), 16 (4×4) or 64 (8×8); the image is the
+    /// same. Default: the faster one for the structure.
+    #[arg(long, value_enum)]
+    pub packet: Option<PacketSize>,
     /// An OBJ file or a scene image; the built-in Cornell box when omitted.
     pub scene: Option<PathBuf>,
     /// Output PNG.
@@ -460,7 +461,8 @@ fn cmd_render(a: RenderArgs) -> Result<()> {
     let view = scene.view()?;
     let cam = camera_for(&scene, &a.camera)?;
     let kind = IntersectorKind::resolve(a.intersector, &view);
-    let opts = RenderOptions { threads: a.threads, intersector: kind, progress: true, packet: a.packet };
+    let packet = a.packet.unwrap_or_else(|| PacketSize::auto_for(&view));
+    let opts = RenderOptions { threads: a.threads, intersector: kind, progress: true, packet };
     let start = Instant::now();
     let frame = render::render(&view, &cam, &opts)?;
     let secs = start.elapsed().as_secs_f64();

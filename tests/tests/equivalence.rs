@@ -344,3 +344,65 @@ proptest! {
         }
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 200, ..ProptestConfig::default() })]
+
+    /// Huge and tiny coordinates: the same soups scaled by 1e-4 … 1e4 and moved far from
+    /// the origin; every structure still returns the brute-force hit (watertight kernel).
+    #[test]
+    fn huge_and_tiny_coordinates(
+        soup in soup(),
+        rays in prop::collection::vec(ray_kind(), 24),
+        scale in prop_oneof![Just(1e-4f32), Just(1e-2), Just(1e3), Just(1e4)],
+        offset in prop_oneof![Just(0.0f32), Just(1e3), Just(-5e4)],
+    ) {
+        let map = |p: [f32; 3]| p.map(|c| c * scale + offset);
+        let positions: Vec<[f32; 3]> = soup.positions.iter().map(|&p| map(p)).collect();
+        let scaled = Soup { positions: positions.clone(), triangles: soup.triangles.clone(), flat_axis: soup.flat_axis };
+        let grid = build_soup(positions.clone(), soup.triangles.clone(), Accel::Grid, 3);
+        let gview = grid.view().unwrap();
+        for accel in [Accel::Grid, Accel::Kd, Accel::Bvh, Accel::Bvh4] {
+            let scene = build_soup(positions.clone(), soup.triangles.clone(), accel, 3);
+            let view = scene.view().unwrap();
+            for k in &rays {
+                let ray = match k {
+                    // Cell-boundary origins come from the scaled grid itself.
+                    RayKind::OnCellBoundary(..) => make_ray(k, &scaled, &gview, (0.0, f32::INFINITY)),
+                    // Other rays are made in soup space and mapped like the geometry.
+                    _ => {
+                        let r = make_ray(k, &soup, &gview, (0.0, f32::INFINITY));
+                        Ray::new(Vec3::from(map(r.origin.to_array())), r.dir * scale)
+                    }
+                };
+                check::<Watertight>(&view, &ray)?;
+            }
+        }
+    }
+
+    /// Rays lying in a triangle's plane (through two of its vertices, or along an edge):
+    /// the tangent case where only a consistent kernel keeps structures in agreement.
+    #[test]
+    fn rays_in_a_triangles_plane(soup in soup(), picks in prop::collection::vec((any::<prop::sample::Index>(), 0u8..3, -0.5f32..1.5), 24)) {
+        let scenes: Vec<_> = [Accel::Grid, Accel::Kd, Accel::Bvh, Accel::Bvh4]
+            .into_iter()
+            .map(|a| build_soup(soup.positions.clone(), soup.triangles.clone(), a, 3))
+            .collect();
+        for (i, edge, s) in &picks {
+            let t = soup.triangles[i.index(soup.triangles.len())];
+            let v = t.map(|k| Vec3::from(soup.positions[k as usize]));
+            let (a, b) = (v[*edge as usize], v[(*edge as usize + 1) % 3]);
+            let c = v[(*edge as usize + 2) % 3];
+            // From a point on the line through c and a point of edge ab, towards it.
+            let target = a + (b - a) * *s;
+            let origin = c + (c - target) * 2.0;
+            if (target - origin).length_squared() == 0.0 {
+                continue;
+            }
+            let ray = Ray::new(origin, target - origin);
+            for scene in &scenes {
+                check::<Watertight>(&scene.view().unwrap(), &ray)?;
+            }
+        }
+    }
+}
