@@ -28,8 +28,7 @@ pub fn trace_bvh<I: Intersector, P: MemoryProbe>(
     let rb = RayBox::new(ray);
     let prep = I::prepare(ray);
     let mut best: Option<Hit> = None;
-    let mut stack = [(0u32, 0f32); MAX_TREE_DEPTH as usize];
-    let mut sp = 0usize;
+    let mut stack: heapless::Vec<(u32, f32), { MAX_TREE_DEPTH as usize }> = heapless::Vec::new();
     let (mut nodes, mut leaves, mut tests) = (1u32, 0u32, 0u32);
     let root = bvh.node(0, probe);
     if rb.entry_a(Vec3A::from_array(root.min), Vec3A::from_array(root.max), ray.t_min, ray.t_max).is_none() {
@@ -58,10 +57,8 @@ pub fn trace_bvh<I: Intersector, P: MemoryProbe>(
             match (ta, tb) {
                 (Some(ta), Some(tb)) => {
                     let (near, far_index, t_far) = if ta <= tb { (a, ib, tb) } else { (b, ia, ta) };
-                    if let Some(slot) = stack.get_mut(sp) {
-                        *slot = (far_index, t_far);
-                        sp += 1;
-                    }
+                    // Cannot be full: `parse` bounds the depth.
+                    let _ = stack.push((far_index, t_far));
                     node = near;
                     continue;
                 }
@@ -78,14 +75,12 @@ pub fn trace_bvh<I: Intersector, P: MemoryProbe>(
         }
         // Pop the next node that may still hold a closer hit.
         loop {
-            if sp == 0 {
+            let Some((index, t_entry)) = stack.pop() else {
                 counters.nodes += nodes;
                 counters.leaves += leaves;
                 counters.tri_tests += tests;
                 return best;
-            }
-            sp -= 1;
-            let (index, t_entry) = stack[sp];
+            };
             if best.is_some_and(|h| t_entry > h.t) {
                 continue;
             }

@@ -76,8 +76,8 @@ pub fn trace_bvh4<I: Intersector, P: MemoryProbe>(
     let prep = I::prepare(ray);
     let mut best: Option<Hit> = None;
     // (child or first entry, leaf count or 0, entry distance)
-    let mut stack = [(0u32, 0u32, 0f32); STACK];
-    let mut sp = 0usize;
+    // heapless: fixed capacity, and nothing is written until pushed (no per-ray memset).
+    let mut stack: heapless::Vec<(u32, u32, f32), STACK> = heapless::Vec::new();
     let (mut nodes, mut leaves, mut tests) = (0u32, 0u32, 0u32);
     let mut current = (0u32, 0u32);
     loop {
@@ -106,10 +106,8 @@ pub fn trace_bvh4<I: Intersector, P: MemoryProbe>(
                 }
                 // Push the far ones (farthest first), continue with the nearest.
                 for &k in order[1..m].iter().rev() {
-                    if let Some(slot) = stack.get_mut(sp) {
-                        *slot = (node.child[k], node.count[k], t[k]);
-                        sp += 1;
-                    }
+                    // Cannot be full: `parse` bounds the depth (see `STACK`).
+                    let _ = stack.push((node.child[k], node.count[k], t[k]));
                 }
                 let k = order[0];
                 current = (node.child[k], node.count[k]);
@@ -126,14 +124,12 @@ pub fn trace_bvh4<I: Intersector, P: MemoryProbe>(
         }
         // Pop the next entry that may still hold a closer hit.
         loop {
-            if sp == 0 {
+            let Some((c, n, t)) = stack.pop() else {
                 counters.nodes += nodes;
                 counters.leaves += leaves;
                 counters.tri_tests += tests;
                 return best;
-            }
-            sp -= 1;
-            let (c, n, t) = stack[sp];
+            };
             if best.is_some_and(|h| t > h.t) {
                 continue;
             }

@@ -126,8 +126,7 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
     let t_min = &packet.t_min;
     let mut ends: [f32; N] = packet.t_max;
     // (child or first entry, leaf count or 0, entry bound, leaf box as min xyz, max xyz)
-    let mut stack = [(0u32, 0u32, 0f32, [0f32; 6]); STACK];
-    let mut sp = 0usize;
+    let mut stack: heapless::Vec<(u32, u32, f32, [f32; 6]), STACK> = heapless::Vec::new();
     let mut current = (0u32, 0u32, [0f32; 6]);
     let mut c = PacketCounters::default();
     loop {
@@ -176,10 +175,7 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
                     [node.min_x[k], node.min_y[k], node.min_z[k], node.max_x[k], node.max_y[k], node.max_z[k]]
                 };
                 for &k in order[1..n].iter().rev() {
-                    if let Some(slot) = stack.get_mut(sp) {
-                        *slot = (node.child[k], node.count[k], child_t[k], slot_box(k));
-                        sp += 1;
-                    }
+                    let _ = stack.push((node.child[k], node.count[k], child_t[k], slot_box(k)));
                 }
                 let k = order[0];
                 current = (node.child[k], node.count[k], slot_box(k));
@@ -239,12 +235,10 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
         }
         // Pop the next entry whose entry bound is not beyond every ray's best hit.
         loop {
-            if sp == 0 {
+            let Some((child, count, t, b)) = stack.pop() else {
                 counters.add(&c);
                 return;
-            }
-            sp -= 1;
-            let (child, count, t, b) = stack[sp];
+            };
             if t > t_end {
                 continue;
             }

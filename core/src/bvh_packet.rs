@@ -25,8 +25,7 @@ pub fn trace_bvh_packet<I: Intersector, P: MemoryProbe, const N: usize>(
     let preps: [I::Prepared; N] = core::array::from_fn(|i| I::prepare(&rays[i]));
     *hits = [None; N];
     let best_t = |hits: &PacketHits<N>, i: usize| hits[i].map_or(rays[i].t_max, |h: Hit| h.t);
-    let mut stack = [(0u32, 0f32, 0u64); MAX_TREE_DEPTH as usize];
-    let mut sp = 0usize;
+    let mut stack: heapless::Vec<(u32, f32, u64), { MAX_TREE_DEPTH as usize }> = heapless::Vec::new();
     let mut c = PacketCounters::default();
     // The root box first.
     let root = bvh.node(0, probe);
@@ -75,10 +74,7 @@ pub fn trace_bvh_packet<I: Intersector, P: MemoryProbe, const N: usize>(
                 match (ma != 0, mb != 0) {
                     (true, true) => {
                         let (near, nm, far, ft, fm) = if ta <= tb { (a, ma, ib, tb, mb) } else { (b, mb, ia, ta, ma) };
-                        if let Some(slot) = stack.get_mut(sp) {
-                            *slot = (far, ft, fm);
-                            sp += 1;
-                        }
+                        let _ = stack.push((far, ft, fm));
                         node = near;
                         mask = nm;
                         descended = true;
@@ -100,9 +96,7 @@ pub fn trace_bvh_packet<I: Intersector, P: MemoryProbe, const N: usize>(
                 continue;
             }
             let mut next = None;
-            while sp > 0 {
-                sp -= 1;
-                let (index, t, m) = stack[sp];
+            while let Some((index, t, m)) = stack.pop() {
                 let mut still = 0u64;
                 for i in Lanes(m) {
                     if t <= best_t(hits, i) {

@@ -32,13 +32,12 @@ pub enum KdEvent {
 }
 
 /// The traversal registers of one ray.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct KdTraversal {
     index: u32,
     t_min: f32,
     t_max: f32,
-    stack: [(u32, f32, f32); MAX_TREE_DEPTH as usize],
-    sp: usize,
+    stack: heapless::Vec<(u32, f32, f32), { MAX_TREE_DEPTH as usize }>,
     done: bool,
     /// Closest hit so far.
     pub best: Option<Hit>,
@@ -53,8 +52,7 @@ impl KdTraversal {
             index: 0,
             t_min,
             t_max,
-            stack: [(0, 0.0, 0.0); MAX_TREE_DEPTH as usize],
-            sp: 0,
+            stack: heapless::Vec::new(),
             done: clip.is_none(),
             best: None,
         }
@@ -86,10 +84,8 @@ impl KdTraversal {
         } else if t_split < self.t_min {
             self.index = second;
         } else {
-            if let Some(slot) = self.stack.get_mut(self.sp) {
-                *slot = (second, t_split, self.t_max);
-                self.sp += 1;
-            }
+            // Cannot be full: `parse` bounds the depth.
+            let _ = self.stack.push((second, t_split, self.t_max));
             self.index = first;
             self.t_max = t_split;
         }
@@ -100,12 +96,15 @@ impl KdTraversal {
     /// otherwise the walk resumes at the next pushed node.
     #[inline]
     pub fn finish_leaf(&mut self) {
-        if self.best.is_some_and(|h| h.t < self.t_max) || self.sp == 0 {
+        if self.best.is_some_and(|h| h.t < self.t_max) {
             self.done = true;
             return;
         }
-        self.sp -= 1;
-        (self.index, self.t_min, self.t_max) = self.stack[self.sp];
+        let Some(next) = self.stack.pop() else {
+            self.done = true;
+            return;
+        };
+        (self.index, self.t_min, self.t_max) = next;
         if self.best.is_some_and(|h| h.t < self.t_min) {
             self.done = true;
         }
