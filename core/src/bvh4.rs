@@ -9,7 +9,7 @@ use glam::{BVec4A, Vec4};
 use crate::aabb::SLAB_GROWTH;
 use crate::counters::RayCounters;
 use crate::hit::Hit;
-use crate::image::{Bvh4Node, Bvh4View, SceneView, MAX_TREE_DEPTH, NULL_INDEX};
+use crate::image::{Bvh4Node, Bvh4View, SceneView, MAX_TREE_DEPTH};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::ray_box::RayBox;
@@ -19,9 +19,9 @@ use crate::triangle::{test_triangle, Intersector};
 const STACK: usize = 3 * MAX_TREE_DEPTH as usize + 4;
 
 /// Entry distances of the ray into the four child boxes of `n`, within `[t0, t1]`, and
-/// which of them it hits (empty slots never hit).
+/// the bit mask of those it hits (empty slots, whose boxes are inverted, never).
 #[inline(always)]
-pub fn slab4(rb: &RayBox, n: &Bvh4Node, t0: f32, t1: f32) -> (Vec4, BVec4A) {
+pub fn slab4(rb: &RayBox, n: &Bvh4Node, t0: f32, t1: f32) -> (Vec4, u32) {
     let (o, inv) = (rb.origin, rb.inv);
     let ax = (Vec4::from_array(n.min_x) - o.x) * inv.x;
     let bx = (Vec4::from_array(n.max_x) - o.x) * inv.x;
@@ -29,6 +29,8 @@ pub fn slab4(rb: &RayBox, n: &Bvh4Node, t0: f32, t1: f32) -> (Vec4, BVec4A) {
     let by = (Vec4::from_array(n.max_y) - o.y) * inv.y;
     let az = (Vec4::from_array(n.min_z) - o.z) * inv.z;
     let bz = (Vec4::from_array(n.max_z) - o.z) * inv.z;
+    // For a valid box the near plane's distance is the smaller; an empty slot's inverted
+    // box becomes an interval too, so empty slots are masked by the sign test below.
     let (mut nx, mut fx) = (ax.min(bx), ax.max(bx));
     let (mut ny, mut fy) = (ay.min(by), ay.max(by));
     let (mut nz, mut fz) = (az.min(bz), az.max(bz));
@@ -51,13 +53,9 @@ pub fn slab4(rb: &RayBox, n: &Bvh4Node, t0: f32, t1: f32) -> (Vec4, BVec4A) {
     }
     let tn = nx.max(ny).max(nz.max(Vec4::splat(t0)));
     let tf = (fx.min(fy).min(fz) * SLAB_GROWTH).min(Vec4::splat(t1));
-    let valid = BVec4A::new(
-        n.child[0] != NULL_INDEX,
-        n.child[1] != NULL_INDEX,
-        n.child[2] != NULL_INDEX,
-        n.child[3] != NULL_INDEX,
-    );
-    (tn, tn.cmple(tf) & valid & inside)
+    // Inverted (empty) slots: min > max on x.
+    let real = Vec4::from_array(n.min_x).cmple(Vec4::from_array(n.max_x));
+    (tn, (tn.cmple(tf) & inside & real).bitmask())
 }
 
 /// The closest hit of `ray` through the 4-wide BVH.
@@ -86,9 +84,14 @@ pub fn trace_bvh4<I: Intersector, P: MemoryProbe>(
             nodes += 1;
             let node = bvh.node(index, probe);
             let t_end = best.map_or(ray.t_max, |h| h.t);
-            let (tn, hit) = slab4(&rb, node, ray.t_min, t_end);
-            let mask = hit.bitmask();
+            let (tn, mask) = slab4(&rb, node, ray.t_min, t_end);
             if mask != 0 {
+                // One child hit (the common case for coherent rays): no sorting.
+                if mask.is_power_of_two() {
+                    let k = mask.trailing_zeros() as usize;
+                    current = (node.child[k], node.count[k]);
+                    continue;
+                }
                 // Sort the hit slots by entry distance (at most four: insertion sort).
                 let t = tn.to_array();
                 let mut order = [0usize; 4];

@@ -144,11 +144,11 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
                     let mut t = Vec4::INFINITY;
                     for i in Lanes(mask) {
                         let end = hits[i].map_or(rays[i].t_max, |h: Hit| h.t);
-                        let (tn, hit) = slab4(&RayBox::new(&rays[i]), node, rays[i].t_min, end);
-                        let m = hit.bitmask();
+                        let (tn, m) = slab4(&RayBox::new(&rays[i]), node, rays[i].t_min, end);
                         if m != 0 {
                             c.active_lanes += 1;
                             needed |= m;
+                            let hit = glam::BVec4A::new(m & 1 != 0, m & 2 != 0, m & 4 != 0, m & 8 != 0);
                             t = t.min(Vec4::select(hit, tn, Vec4::INFINITY));
                         }
                     }

@@ -48,14 +48,7 @@ impl KdTraversal {
     pub fn new(kd: &KdTreeView<'_>, ray: &Ray) -> KdTraversal {
         let clip = if ray.is_valid() { clip_ray(ray, kd.min, kd.max) } else { None };
         let (t_min, t_max) = clip.unwrap_or((0.0, 0.0));
-        KdTraversal {
-            index: 0,
-            t_min,
-            t_max,
-            stack: heapless::Vec::new(),
-            done: clip.is_none(),
-            best: None,
-        }
+        KdTraversal { index: 0, t_min, t_max, stack: heapless::Vec::new(), done: clip.is_none(), best: None }
     }
 
     /// Reads one node and moves down (inner node) or reports a leaf.

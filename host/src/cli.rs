@@ -11,8 +11,10 @@ use raypipe_core::image::CameraRecord;
 use raypipe_core::DataClass;
 
 use crate::bench::{self, median};
+use crate::bvh_builder::BvhParams;
 use crate::camera_file::CameraSpec;
 use crate::grid_builder::{GridResolution, DEFAULT_CELLS_PER_TRIANGLE};
+use crate::kd_builder::KdParams;
 use crate::output;
 use crate::packets::PacketSize;
 use crate::render::{self, RenderOptions};
@@ -110,6 +112,27 @@ pub struct StructureArgs {
     /// Triangle layout: indexed vertices, or also Wald's 48-byte precomputed triangles.
     #[arg(long, value_enum, default_value_t = TriangleLayout::Indexed)]
     pub triangles: TriangleLayout,
+    /// kd-tree SAH: cost of a traversal step (pbrt: 1).
+    #[arg(long, value_name = "C", default_value_t = KdParams::default().traversal_cost)]
+    pub kd_traversal_cost: f64,
+    /// kd-tree SAH: cost of a triangle test (pbrt: 80).
+    #[arg(long, value_name = "C", default_value_t = KdParams::default().intersection_cost)]
+    pub kd_intersection_cost: f64,
+    /// kd-tree SAH: bonus for cutting off empty space, 0–1 (pbrt: 0.5).
+    #[arg(long, value_name = "B", default_value_t = KdParams::default().empty_bonus)]
+    pub kd_empty_bonus: f64,
+    /// kd-tree: largest depth (default 8 + 1.3·log2(triangles), at most 60).
+    #[arg(long, value_name = "N")]
+    pub kd_max_depth: Option<u32>,
+    /// BVH SAH: cost of visiting a node, relative to a triangle test.
+    #[arg(long, value_name = "C", default_value_t = BvhParams::default().traversal_cost)]
+    pub bvh_traversal_cost: f64,
+    /// BVH: largest leaf.
+    #[arg(long, value_name = "N", default_value_t = BvhParams::default().max_leaf)]
+    pub bvh_max_leaf: usize,
+    /// BVH: cut triangles longer than this fraction of the scene into pieces (0: never).
+    #[arg(long, value_name = "F", default_value_t = BvhParams::default().presplit_extent)]
+    pub bvh_presplit: f64,
 }
 
 impl StructureArgs {
@@ -121,7 +144,19 @@ impl StructureArgs {
                 None => GridResolution::Auto { cells_per_triangle: self.grid_density },
             },
             triangles: self.triangles,
-            ..Default::default()
+            kd: KdParams {
+                traversal_cost: self.kd_traversal_cost,
+                intersection_cost: self.kd_intersection_cost,
+                empty_bonus: self.kd_empty_bonus,
+                max_depth: self.kd_max_depth,
+                ..KdParams::default()
+            },
+            bvh: BvhParams {
+                traversal_cost: self.bvh_traversal_cost,
+                max_leaf: self.bvh_max_leaf.max(1),
+                presplit_extent: self.bvh_presplit.max(0.0),
+                ..BvhParams::default()
+            },
         }
     }
 }

@@ -231,7 +231,9 @@ impl KdNode {
 /// structure-of-arrays form, so one SIMD slab test checks all four (Wald, Benthin &
 /// Boulos 2008, "Getting rid of packets"; Embree's BVH4).
 ///
-/// Slot `k` is empty when `child[k] == NULL_INDEX`; an inner child when `count[k] == 0`
+/// Slot `k` is empty when `child[k] == NULL_INDEX`, and then its box is inverted
+/// (`min = f32::MAX`, `max = −f32::MAX` on every axis) so that no slab test accepts it;
+/// an inner child when `count[k] == 0`
 /// (`child[k]` is its node index); a leaf when `count[k] > 0` (PRIM_LISTS entries
 /// `child[k] .. child[k] + count[k]`).
 #[repr(C)]
@@ -260,12 +262,12 @@ const _: () = assert!(core::mem::align_of::<Bvh4Node>() == 4);
 impl Bvh4Node {
     /// A node with four empty slots.
     pub const EMPTY: Bvh4Node = Bvh4Node {
-        min_x: [0.0; 4],
-        min_y: [0.0; 4],
-        min_z: [0.0; 4],
-        max_x: [0.0; 4],
-        max_y: [0.0; 4],
-        max_z: [0.0; 4],
+        min_x: [f32::MAX; 4],
+        min_y: [f32::MAX; 4],
+        min_z: [f32::MAX; 4],
+        max_x: [-f32::MAX; 4],
+        max_y: [-f32::MAX; 4],
+        max_z: [-f32::MAX; 4],
         child: [NULL_INDEX; 4],
         count: [0; 4],
     };

@@ -873,11 +873,15 @@ impl<'a> SceneView<'a> {
             let node = &nodes[i];
             for k in 0..4 {
                 let (c, count) = (node.child[k], node.count[k]);
-                if c == NULL_INDEX {
-                    continue;
-                }
                 let lo = [node.min_x[k], node.min_y[k], node.min_z[k]];
                 let hi = [node.max_x[k], node.max_y[k], node.max_z[k]];
+                if c == NULL_INDEX {
+                    // Empty slots carry an inverted box, which no slab test accepts.
+                    if !(finite3(lo) && finite3(hi) && (0..3).all(|a| lo[a] > hi[a])) {
+                        return Err(bad(i));
+                    }
+                    continue;
+                }
                 if !(finite3(lo) && finite3(hi) && Vec3::from(lo).cmple(Vec3::from(hi)).all()) {
                     return Err(bad(i));
                 }
