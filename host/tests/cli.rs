@@ -240,3 +240,97 @@ fn gzipped_obj_renders_like_the_plain_file() {
     std::fs::write(d.join("broken.obj.gz"), b"\x1f\x8b\x08\x00garbage").unwrap();
     assert_one_line_error(&raypipe(d, &["build", "broken.obj.gz", "-o", "x.rpsi"]), "broken.obj.gz");
 }
+
+/// Writes a little-endian float32 .npy array of the given shape.
+fn write_npy(path: &Path, shape: &[usize], data: &[f32], descr: &str) {
+    let dims: Vec<String> = shape.iter().map(|d| d.to_string()).collect();
+    let shape = if dims.len() == 1 { format!("({},)", dims[0]) } else { format!("({})", dims.join(", ")) };
+    let mut header = format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape}, }}");
+    while (10 + header.len() + 1) % 64 != 0 {
+        header.push(' ');
+    }
+    header.push('\n');
+    let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
+    bytes.extend_from_slice(&(header.len() as u16).to_le_bytes());
+    bytes.extend_from_slice(header.as_bytes());
+    for v in data {
+        bytes.extend_from_slice(&v.to_le_bytes());
+    }
+    std::fs::write(path, bytes).unwrap();
+}
+
+/// Reads the structured hits array back: (t, u, v, prim) per ray.
+fn read_hits(path: &Path) -> Vec<(f32, f32, f32, i32)> {
+    let bytes = std::fs::read(path).unwrap();
+    let hl = u16::from_le_bytes([bytes[8], bytes[9]]) as usize;
+    let header = String::from_utf8_lossy(&bytes[10..10 + hl]).into_owned();
+    assert!(header.contains("('prim', '<i4')"), "{header}");
+    bytes[10 + hl..]
+        .chunks_exact(16)
+        .map(|c| {
+            let f = |i: usize| f32::from_le_bytes([c[i], c[i + 1], c[i + 2], c[i + 3]]);
+            (f(0), f(4), f(8), i32::from_le_bytes([c[12], c[13], c[14], c[15]]))
+        })
+        .collect()
+}
+
+#[test]
+fn trace_a_ray_batch_with_every_structure_and_packet_size() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let obj = fixtures().join("cornell_box.obj");
+    let obj = obj.to_str().unwrap();
+    // Rays of a view in 8×8 blocks, plus the scene's triangles.
+    let o = raypipe(d, &["rays", "-o", "rays.npy", "--size", "32x24", "--block", "8", "--triangles", "tris.npy"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let mut reference = None;
+    for accel in ["grid", "kd", "bvh", "bvh4"] {
+        for packet in ["1", "4", "16", "64"] {
+            let o = raypipe(
+                d,
+                &["trace", obj, "--rays", "rays.npy", "--hits", "hits.npy", "--accel", accel, "--packet", packet],
+            );
+            assert!(o.status.success(), "{accel} {packet}: {}", stderr(&o));
+            let hits = read_hits(&d.join("hits.npy"));
+            assert_eq!(hits.len(), 32 * 24);
+            let hit_count = hits.iter().filter(|h| h.3 >= 0).count();
+            assert!(hit_count > 500, "most rays of the box view hit: {hit_count}");
+            assert!(hits.iter().all(|h| h.3 < 32), "ids are input triangle ids");
+            match &reference {
+                None => reference = Some(hits),
+                Some(r) => assert!(
+                    r.iter().zip(&hits).all(|(a, b)| a.0.to_bits() == b.0.to_bits() && a.3 == b.3),
+                    "{accel} with packets of {packet} differs"
+                ),
+            }
+        }
+    }
+    // A ray straight down the box's axis (N × 6 form) hits the back wall at z = 559.2.
+    write_npy(&d.join("one.npy"), &[1, 6], &[278.0, 273.0, -800.0, 0.0, 0.0, 1.0], "<f4");
+    assert!(raypipe(d, &["trace", obj, "--rays", "one.npy", "--hits", "one_hits.npy"]).status.success());
+    let h = read_hits(&d.join("one_hits.npy"));
+    assert!((h[0].0 - 1359.2).abs() < 1e-3, "{h:?}");
+}
+
+#[test]
+fn malformed_ray_arrays() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let obj = fixtures().join("tetra.obj");
+    let obj = obj.to_str().unwrap();
+    let run = |name: &str| raypipe(d, &["trace", obj, "--rays", name, "--hits", "h.npy"]);
+    write_npy(&d.join("cols.npy"), &[2, 5], &[0.0; 10], "<f4");
+    assert_one_line_error(&run("cols.npy"), "5 columns");
+    write_npy(&d.join("f8.npy"), &[1, 6], &[0.0; 12], "<f8");
+    assert_one_line_error(&run("f8.npy"), "float32");
+    write_npy(&d.join("nan.npy"), &[2, 6], &[0.0, 0.0, 0.0, 0.0, 0.0, 1.0, f32::NAN, 0.0, 0.0, 1.0, 0.0, 0.0], "<f4");
+    assert_one_line_error(&run("nan.npy"), "row 1");
+    write_npy(&d.join("zero.npy"), &[1, 6], &[0.0; 6], "<f4");
+    assert_one_line_error(&run("zero.npy"), "direction is zero");
+    write_npy(&d.join("range.npy"), &[1, 8], &[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 5.0, 1.0], "<f4");
+    assert_one_line_error(&run("range.npy"), "t range");
+    std::fs::write(d.join("junk.npy"), b"not numpy").unwrap();
+    assert_one_line_error(&run("junk.npy"), "junk.npy");
+    assert_one_line_error(&run("missing.npy"), "missing.npy");
+    assert!(!d.join("h.npy").exists());
+}
