@@ -305,8 +305,8 @@ fn trace_a_ray_batch_with_every_structure_and_packet_size() {
             }
         }
     }
-    // A ray straight down the box's axis (N × 6 form) hits the back wall at z = 559.2.
-    write_npy(&d.join("one.npy"), &[1, 6], &[278.0, 273.0, -800.0, 0.0, 0.0, 1.0], "<f4");
+    // A ray above the blocks, straight down +z (N × 6 form), hits the back wall at z = 559.2.
+    write_npy(&d.join("one.npy"), &[1, 6], &[100.0, 450.0, -800.0, 0.0, 0.0, 1.0], "<f4");
     assert!(raypipe(d, &["trace", obj, "--rays", "one.npy", "--hits", "one_hits.npy"]).status.success());
     let h = read_hits(&d.join("one_hits.npy"));
     assert!((h[0].0 - 1359.2).abs() < 1e-3, "{h:?}");
