@@ -62,13 +62,8 @@ pub struct TraceArgs {
     pub hits: PathBuf,
     #[command(flatten)]
     pub structure: StructureArgs,
-    /// Worker threads (default: all cores).
-    #[arg(long, value_name = "N")]
-    pub threads: Option<usize>,
-    /// Ray–triangle intersection test (default: wald for an image with Wald triangles,
-    /// watertight otherwise).
-    #[arg(long, value_enum)]
-    pub intersector: Option<IntersectorKind>,
+    #[command(flatten)]
+    pub run: RunArgs,
     /// Trace the batch this many times and report the median time.
     #[arg(long, default_value_t = 1)]
     pub runs: usize,
@@ -231,6 +226,27 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
     Ok((w, h))
 }
 
+/// How rays are traced: threads and the intersection test.
+#[derive(Args, Debug, Clone, Default)]
+pub struct RunArgs {
+    /// Worker threads (default: all cores).
+    #[arg(long, value_name = "N")]
+    pub threads: Option<usize>,
+    /// Ray–triangle intersection test (default: wald for an image with Wald triangles,
+    /// watertight otherwise).
+    #[arg(long, value_enum)]
+    pub intersector: Option<IntersectorKind>,
+}
+
+impl RunArgs {
+    fn check(&self) -> Result<()> {
+        if self.threads == Some(0) {
+            bail!("--threads must be at least 1");
+        }
+        Ok(())
+    }
+}
+
 /// `raypipe build`.
 #[derive(Args, Debug)]
 pub struct BuildArgs {
@@ -261,13 +277,8 @@ pub struct RenderArgs {
     pub camera: CameraArgs,
     #[command(flatten)]
     pub structure: StructureArgs,
-    /// Worker threads (default: all cores).
-    #[arg(long, value_name = "N")]
-    pub threads: Option<usize>,
-    /// Ray–triangle intersection test (default: wald for an image with Wald triangles,
-    /// watertight otherwise).
-    #[arg(long, value_enum)]
-    pub intersector: Option<IntersectorKind>,
+    #[command(flatten)]
+    pub run: RunArgs,
 }
 
 /// `raypipe stats`.
@@ -282,13 +293,8 @@ pub struct StatsArgs {
     pub camera: CameraArgs,
     #[command(flatten)]
     pub structure: StructureArgs,
-    /// Worker threads (default: all cores).
-    #[arg(long, value_name = "N")]
-    pub threads: Option<usize>,
-    /// Ray–triangle intersection test (default: wald for an image with Wald triangles,
-    /// watertight otherwise).
-    #[arg(long, value_enum)]
-    pub intersector: Option<IntersectorKind>,
+    #[command(flatten)]
+    pub run: RunArgs,
 }
 
 /// `raypipe bench`.
@@ -487,17 +493,15 @@ fn camera_for(scene: &Scene, args: &CameraArgs) -> Result<CameraRecord> {
 }
 
 fn cmd_render(a: RenderArgs) -> Result<()> {
-    if a.threads == Some(0) {
-        bail!("--threads must be at least 1");
-    }
+    a.run.check()?;
     check_png_path(&a.output)?;
     let scene = scene::load(a.scene.as_deref(), &a.structure.options())?;
     warn(&scene);
     let view = scene.view()?;
     let cam = camera_for(&scene, &a.camera)?;
-    let kind = IntersectorKind::resolve(a.intersector, &view);
+    let kind = IntersectorKind::resolve(a.run.intersector, &view);
     let packet = a.packet.unwrap_or_else(|| PacketSize::auto_for(&view));
-    let opts = RenderOptions { threads: a.threads, intersector: kind, progress: true, packet };
+    let opts = RenderOptions { threads: a.run.threads, intersector: kind, progress: true, packet };
     let start = Instant::now();
     let frame = render::render(&view, &cam, &opts)?;
     let secs = start.elapsed().as_secs_f64();
@@ -523,15 +527,13 @@ fn check_png_path(p: &Path) -> Result<()> {
 }
 
 fn cmd_stats(a: StatsArgs) -> Result<()> {
-    if a.threads == Some(0) {
-        bail!("--threads must be at least 1");
-    }
+    a.run.check()?;
     let scene = scene::load(a.scene.as_deref(), &a.structure.options())?;
     warn(&scene);
     let view = scene.view()?;
     let cam = camera_for(&scene, &a.camera)?;
-    let kind = IntersectorKind::resolve(a.intersector, &view);
-    let opts = RenderOptions { threads: a.threads, intersector: kind, progress: false, packet: a.packet };
+    let kind = IntersectorKind::resolve(a.run.intersector, &view);
+    let opts = RenderOptions { threads: a.run.threads, intersector: kind, progress: false, packet: a.packet };
     let s = stats::gather(&view, &cam, &opts)?;
     println!("scene                     {} ({} triangles)", scene.name, view.triangle_count());
     println!("structure                 {}", structure_summary(&view));
@@ -691,9 +693,7 @@ fn cmd_rays(a: RaysArgs) -> Result<()> {
 }
 
 fn cmd_trace(a: TraceArgs) -> Result<()> {
-    if a.threads == Some(0) {
-        bail!("--threads must be at least 1");
-    }
+    a.run.check()?;
     let rays = crate::npy::read_f32_2d(&a.rays)?;
     let name = a.rays.display();
     let rays = crate::batch::rays_from_array(&rays).map_err(|e| anyhow!("{name}: {e}"))?;
@@ -710,9 +710,9 @@ fn cmd_trace(a: TraceArgs) -> Result<()> {
         hits = crate::batch::trace_batch(
             &view,
             &rays,
-            IntersectorKind::resolve(a.intersector, &view),
+            IntersectorKind::resolve(a.run.intersector, &view),
             a.packet,
-            a.threads,
+            a.run.threads,
         )?;
         times.push(start.elapsed().as_secs_f64());
     }

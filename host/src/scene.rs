@@ -94,6 +94,17 @@ pub struct BuildReport {
     pub warnings: Vec<String>,
 }
 
+impl BuildReport {
+    /// Records a tree's size: `nodes` of `node_bytes` each, and its primitive list.
+    fn tree(&mut self, nodes: usize, node_bytes: usize, depth: u32, prims: usize) {
+        self.tree_nodes = nodes;
+        self.tree_depth = depth;
+        self.references = prims as u64;
+        self.list_entries = prims as u64;
+        self.structure_bytes = node_bytes * nodes + 4 * prims;
+    }
+}
+
 /// A scene image in memory, with its name for messages.
 pub struct Scene {
     /// What the user called it.
@@ -287,29 +298,17 @@ pub fn build(
         }
         Accel::Kd => {
             let kd = build_kdtree(&mesh, &opts.kd);
-            report.tree_nodes = kd.nodes.len();
-            report.tree_depth = kd.depth;
-            report.references = kd.prims.len() as u64;
-            report.list_entries = kd.prims.len() as u64;
-            report.structure_bytes = 8 * kd.nodes.len() + 4 * kd.prims.len();
+            report.tree(kd.nodes.len(), 8, kd.depth, kd.prims.len());
             writer.kdtree(&kd);
         }
         Accel::Bvh => {
             let bvh = build_bvh(&mesh, &opts.bvh);
-            report.tree_nodes = bvh.nodes.len();
-            report.tree_depth = bvh.depth;
-            report.references = bvh.prims.len() as u64;
-            report.list_entries = bvh.prims.len() as u64;
-            report.structure_bytes = 32 * bvh.nodes.len() + 4 * bvh.prims.len();
+            report.tree(bvh.nodes.len(), 32, bvh.depth, bvh.prims.len());
             writer.bvh(&bvh);
         }
         Accel::Bvh4 => {
             let bvh = collapse_to_bvh4(&build_bvh(&mesh, &opts.bvh));
-            report.tree_nodes = bvh.nodes.len();
-            report.tree_depth = bvh.depth;
-            report.references = bvh.prims.len() as u64;
-            report.list_entries = bvh.prims.len() as u64;
-            report.structure_bytes = 128 * bvh.nodes.len() + 4 * bvh.prims.len();
+            report.tree(bvh.nodes.len(), 128, bvh.depth, bvh.prims.len());
             writer.bvh4(&bvh);
         }
         Accel::None => {}
