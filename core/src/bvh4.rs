@@ -73,6 +73,8 @@ pub fn trace_bvh4<I: Intersector, P: MemoryProbe>(
     let rb = RayBox::new(ray);
     let prep = I::prepare(ray);
     let mut best: Option<Hit> = None;
+    // The best hit's distance (or the ray's end): boxes entered beyond it are skipped.
+    let mut t_end = ray.t_max;
     // (child or first entry, leaf count or 0, entry distance)
     // heapless: fixed capacity, and nothing is written until pushed (no per-ray memset).
     let mut stack: heapless::Vec<(u32, u32, f32), STACK> = heapless::Vec::new();
@@ -83,17 +85,26 @@ pub fn trace_bvh4<I: Intersector, P: MemoryProbe>(
         if count == 0 {
             nodes += 1;
             let node = bvh.node(index, probe);
-            let t_end = best.map_or(ray.t_max, |h| h.t);
             let (tn, mask) = slab4(&rb, node, ray.t_min, t_end);
             if mask != 0 {
-                // One child hit (the common case for coherent rays): no sorting.
-                if mask.is_power_of_two() {
-                    let k = mask.trailing_zeros() as usize;
-                    current = (node.child[k], node.count[k]);
+                let t = tn.to_array();
+                let first = mask.trailing_zeros() as usize;
+                let rest = mask & (mask - 1);
+                if rest == 0 {
+                    // One child hit (the common case for coherent rays): no sorting.
+                    current = (node.child[first], node.count[first]);
                     continue;
                 }
-                // Sort the hit slots by entry distance (at most four: insertion sort).
-                let t = tn.to_array();
+                if rest & (rest - 1) == 0 {
+                    // Two children: one comparison.
+                    let second = rest.trailing_zeros() as usize;
+                    let (near, far) = if t[second] < t[first] { (second, first) } else { (first, second) };
+                    // Cannot be full: `parse` bounds the depth (see `STACK`).
+                    let _ = stack.push((node.child[far], node.count[far], t[far]));
+                    current = (node.child[near], node.count[near]);
+                    continue;
+                }
+                // Three or four: insertion sort by entry distance.
                 let mut order = [0usize; 4];
                 let mut m = 0;
                 for k in 0..4 {
@@ -109,7 +120,6 @@ pub fn trace_bvh4<I: Intersector, P: MemoryProbe>(
                 }
                 // Push the far ones (farthest first), continue with the nearest.
                 for &k in order[1..m].iter().rev() {
-                    // Cannot be full: `parse` bounds the depth (see `STACK`).
                     let _ = stack.push((node.child[k], node.count[k], t[k]));
                 }
                 let k = order[0];
@@ -121,7 +131,9 @@ pub fn trace_bvh4<I: Intersector, P: MemoryProbe>(
             for e in index..index.wrapping_add(count) {
                 let prim = bvh.prim(e, probe);
                 let verts = I::fetch(scene, prim, probe);
-                test_triangle::<I>(&prep, ray, &verts, prim, &mut best);
+                if test_triangle::<I>(&prep, ray, &verts, prim, &mut best) {
+                    t_end = best.map_or(t_end, |h| h.t);
+                }
             }
             tests += count;
         }
@@ -133,7 +145,7 @@ pub fn trace_bvh4<I: Intersector, P: MemoryProbe>(
                 counters.tri_tests += tests;
                 return best;
             };
-            if best.is_some_and(|h| t > h.t) {
+            if t > t_end {
                 continue;
             }
             current = (c, n);
