@@ -85,6 +85,15 @@ impl Frustum {
     }
 }
 
+/// Lanes `4g .. 4g + 4` of a per-ray array as one SIMD register (a single load).
+#[inline(always)]
+fn load4<const N: usize>(a: &[f32; N], g: usize) -> Vec4 {
+    match a.get(4 * g..4 * g + 4).and_then(|s| <[f32; 4]>::try_from(s).ok()) {
+        Some(v) => Vec4::from_array(v),
+        None => Vec4::ZERO,
+    }
+}
+
 /// Traces all active rays of `packet`; `hits[i]` receives ray `i`'s closest hit.
 ///
 /// Inner nodes are tested once for the whole packet with the interval-arithmetic
@@ -191,12 +200,11 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
                     if m4 == 0 {
                         continue;
                     }
-                    let lanes = 4 * g..4 * g + 4;
-                    let mut tn = Vec4::from_slice(&t_min[lanes.clone()]);
-                    let mut tf = Vec4::from_slice(&ends[lanes.clone()]);
+                    let mut tn = load4(t_min, g);
+                    let mut tf = load4(&ends, g);
                     for a in 0..3 {
-                        let o = Vec4::from_slice(&org[a][lanes.clone()]);
-                        let iv = Vec4::from_slice(&inv[a][lanes.clone()]);
+                        let o = load4(org[a], g);
+                        let iv = load4(&inv[a], g);
                         let p = (Vec4::splat(leaf_box[a]) - o) * iv;
                         let q = (Vec4::splat(leaf_box[a + 3]) - o) * iv;
                         tn = tn.max(p.min(q));
