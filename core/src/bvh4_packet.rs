@@ -8,7 +8,7 @@ use glam::{Vec3A, Vec4};
 use crate::aabb::SLAB_GROWTH;
 use crate::hit::Hit;
 use crate::image::{Bvh4Node, Bvh4View, SceneView, MAX_TREE_DEPTH, NULL_INDEX};
-use crate::packet::{Lanes, PacketCounters, PacketHits, RayPacket};
+use crate::packet::{Lanes, PacketCounters, PacketHits, RayPacket, MAX_PACKET};
 use crate::probe::MemoryProbe;
 use crate::ray_box::{recip, RayBox};
 use crate::triangle::{test_triangle, Intersector};
@@ -134,12 +134,19 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
     ];
     let t_min = &packet.t_min;
     let mut ends: [f32; N] = packet.t_max;
+    // Per group of four lanes, the largest of their ends (for whole-group culling).
+    let mut group_end = [f32::NEG_INFINITY; MAX_PACKET / 4];
+    for i in Lanes(mask) {
+        if let Some(e) = group_end.get_mut(i / 4) {
+            *e = e.max(ends[i]);
+        }
+    }
     // (child or first entry, leaf count or 0, entry bound, leaf box as min xyz, max xyz)
     let mut stack: heapless::Vec<(u32, u32, f32, [f32; 6]), STACK> = heapless::Vec::new();
-    let mut current = (0u32, 0u32, [0f32; 6]);
+    let mut current = (0u32, 0u32, [0f32; 6], 0f32);
     let mut c = PacketCounters::default();
     loop {
-        let (index, count, leaf_box) = current;
+        let (index, count, leaf_box, leaf_t) = current;
         c.visits += 1;
         if count == 0 {
             let node = bvh.node(index, probe);
@@ -187,7 +194,7 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
                     let _ = stack.push((node.child[k], node.count[k], child_t[k], slot_box(k)));
                 }
                 let k = order[0];
-                current = (node.child[k], node.count[k], slot_box(k));
+                current = (node.child[k], node.count[k], slot_box(k), child_t[k]);
                 continue;
             }
         } else {
@@ -195,9 +202,11 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
             if frustum.is_some() && N.is_multiple_of(4) {
                 // Four rays against the leaf box at once (no zero direction components,
                 // so the plain slab test is exact here).
-                for g in 0..N / 4 {
+                for (g, &group_end) in group_end.iter().enumerate().take(N / 4) {
                     let m4 = (mask >> (4 * g)) & 0xF;
-                    if m4 == 0 {
+                    // `leaf_t` bounds every ray's entry from below: a group whose rays all
+                    // have nearer hits skips the exact test.
+                    if m4 == 0 || leaf_t > group_end {
                         continue;
                     }
                     let mut tn = load4(t_min, g);
@@ -237,6 +246,12 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
                 c.tri_tests += count as u64 * enter.count_ones() as u64;
                 for i in Lanes(enter) {
                     ends[i] = hits[i].map_or(rays[i].t_max, |h: Hit| h.t);
+                    let g = i / 4;
+                    if let Some(e) = group_end.get_mut(g) {
+                        *e = (4 * g..4 * g + 4)
+                            .filter(|&j| mask & (1 << j) != 0)
+                            .fold(f32::NEG_INFINITY, |m, j| m.max(ends[j]));
+                    }
                 }
                 t_end = t_end_of(hits);
             }
@@ -250,7 +265,7 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
             if t > t_end {
                 continue;
             }
-            current = (child, count, b);
+            current = (child, count, b, t);
             break;
         }
     }
