@@ -22,10 +22,10 @@ use crate::tri_box;
 pub const DEFAULT_CELLS_PER_TRIANGLE: f64 = 2.0;
 /// Margin added around each cell in the overlap test, as a fraction of the smallest cell side.
 pub const CELL_MARGIN: f64 = 1e-3;
-/// Largest number of cells along one axis.
+/// Largest number of cells along one axis (larger requests get bigger voxels).
 pub const MAX_DIM: u32 = 4096;
 /// Largest number of cells in all.
-pub const MAX_CELLS: u64 = 1 << 27;
+pub const MAX_CELLS: u64 = 1 << 26;
 
 /// How to size the grid.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -103,17 +103,22 @@ pub fn choose_dims(gmin: DVec3, gmax: DVec3, triangles: usize, res: GridResoluti
             (measure / target).powf(1.0 / thick.len() as f64)
         }
     };
+    // Grow the voxels (still cubical) until the grid fits the per-axis and total limits:
+    // a nearly flat scene with a large --grid-min-dim would otherwise ask for millions.
+    // At most MAX_CELLS, and at most 256 cells per triangle (Purcell's bunny has 15).
+    let max_cells = MAX_CELLS.min((256 * triangles as u64).max(1 << 20));
+    let measure: f64 = thick.iter().map(|&a| ext[a]).product();
+    let fit_axis = longest / MAX_DIM as f64;
+    let fit_total = (measure / max_cells as f64).powf(1.0 / thick.len().max(1) as f64);
+    let side = side.max(fit_axis).max(fit_total);
     let mut dims = [1u32; 3];
     for &a in &thick {
-        let n = (ext[a] / side).round().max(1.0);
-        if n > MAX_DIM as f64 {
-            bail!("grid would need {n} cells along an axis (at most {MAX_DIM}); lower --grid-min-dim");
-        }
-        dims[a] = n as u32;
+        dims[a] = ((ext[a] / side).round().max(1.0) as u32).min(MAX_DIM);
     }
-    let total: u64 = dims.iter().map(|&d| d as u64).product();
-    if total > MAX_CELLS {
-        bail!("grid would have {total} cells (at most {MAX_CELLS}); lower --grid-min-dim");
+    while dims.iter().map(|&d| d as u64).product::<u64>() > max_cells {
+        // Rounding can still overshoot by a little: shave the largest axis.
+        let a = (0..3).max_by_key(|&a| dims[a]).unwrap_or(0);
+        dims[a] -= 1;
     }
     Ok(dims)
 }
@@ -193,4 +198,27 @@ pub fn build_grid(mesh: &Mesh, res: GridResolution) -> Result<BuiltGrid> {
         cell_count: cell_count as u32,
     };
     Ok(BuiltGrid { record, cells, lists, references: refs.len() as u64, full_cells })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nearly_flat_scenes_get_bigger_voxels_instead_of_an_error() {
+        let (lo, hi) = (DVec3::new(-2.0, 0.0, -2.0), DVec3::new(2.0, 0.005, 2.0));
+        let dims = choose_dims(lo, hi, 10, GridResolution::MinDim(64)).unwrap();
+        assert!(dims.iter().all(|&d| d <= MAX_DIM), "{dims:?}");
+        assert!(dims.iter().map(|&d| d as u64).product::<u64>() <= MAX_CELLS);
+        // Near-cubical voxels still: x and z get the same count.
+        assert_eq!(dims[0], dims[2]);
+        assert!(choose_dims(lo, hi, 10, GridResolution::MinDim(0)).is_err());
+    }
+
+    #[test]
+    fn purcell_resolution_for_a_bunny_shaped_box() {
+        // Purcell used 64 cells on the shortest axis of the bunny: 98 × 64 × 163.
+        let (lo, hi) = (DVec3::new(0.0, 0.0, 0.0), DVec3::new(98.0, 64.0, 163.0));
+        assert_eq!(choose_dims(lo, hi, 69451, GridResolution::MinDim(64)).unwrap(), [98, 64, 163]);
+    }
 }

@@ -36,7 +36,15 @@ impl ImageWriter {
             sections: Vec::new(),
         };
         let positions: Vec<Position> = mesh.positions.iter().map(|&p| Position(p)).collect();
-        let triangles: Vec<TriangleRecord> = mesh.triangles.iter().map(|&t| TriangleRecord(t)).collect();
+        // A zero-area triangle is written with three equal indices: every intersection
+        // kernel then computes exactly zero area and never reports a hit, whereas three
+        // distinct collinear vertices can give a "hit" made of rounding noise, at a
+        // distance no structure can be conservative about.
+        let triangles: Vec<TriangleRecord> = mesh
+            .triangles
+            .iter()
+            .map(|&t| if mesh.is_degenerate(t) { TriangleRecord([t[0]; 3]) } else { TriangleRecord(t) })
+            .collect();
         w.add(SectionKind::Positions, &positions);
         w.add(SectionKind::Triangles, &triangles);
         if !mesh.shading.is_empty() {

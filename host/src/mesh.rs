@@ -51,16 +51,17 @@ impl Mesh {
         Ok(())
     }
 
+    /// True if triangle `t` has zero area (collinear or repeated vertices), computed in
+    /// double precision from the single-precision vertices.
+    pub fn is_degenerate(&self, t: [u32; 3]) -> bool {
+        let [a, b, c] = t.map(|i| glam::DVec3::from(self.positions[i as usize].map(f64::from)));
+        (b - a).cross(c - a) == glam::DVec3::ZERO
+    }
+
     /// Number of triangles with zero area (they can never be hit; they are kept so that
     /// triangle ids follow the input's face order).
     pub fn degenerate_count(&self) -> usize {
-        self.triangles
-            .iter()
-            .filter(|t| {
-                let [a, b, c] = t.map(|i| glam::DVec3::from(self.positions[i as usize].map(f64::from)));
-                (b - a).cross(c - a).length_squared() == 0.0
-            })
-            .count()
+        self.triangles.iter().filter(|&&t| self.is_degenerate(t)).count()
     }
 
     /// The box around all vertices.
