@@ -821,6 +821,9 @@ impl<'a> SceneView<'a> {
     }
 
     fn validate_kd(s: &Sections<'a>, nt: u32, bmin: Vec3, bmax: Vec3) -> Result<KdTreeView<'a>, SceneError> {
+        // The root box is the scene bounds grown like the builders grow their boxes, so a
+        // hit that rounding puts a hair outside the bounds is not clipped away.
+        let pad = 1e-5 * (bmax - bmin).max_element() + 8.0 * f32::EPSILON * bmin.abs().max(bmax.abs()).max_element();
         let nodes: &[KdNode] = s.required(SectionKind::KdNodes)?;
         let prims = Self::prim_list(s, nt)?;
         let np = prims.len() as u64;
@@ -843,8 +846,8 @@ impl<'a> SceneView<'a> {
             prims,
             nodes_addr: s.addr(SectionKind::KdNodes),
             prims_addr: s.addr(SectionKind::PrimLists),
-            min: bmin,
-            max: bmax,
+            min: bmin - Vec3::splat(pad),
+            max: bmax + Vec3::splat(pad),
         })
     }
 
