@@ -67,7 +67,7 @@ fn trace_all<I: Intersector>(
     tiles: &[(u32, u32, u32, u32)],
     packet: PacketSize,
 ) -> (u64, PacketCounters) {
-    let bounds = scene.bounds();
+    let bounds = scene.test_bounds();
     tiles
         .par_iter()
         .map(|&tile| {

@@ -95,7 +95,7 @@ fn render_with<I: Intersector>(
     opts: &RenderOptions,
 ) -> Result<Frame> {
     let (w, h) = (eye.width, eye.height);
-    let (lo, hi) = scene.bounds();
+    let (lo, hi) = scene.test_bounds();
     let tiles = tiles(w, h);
     let bar = progress::bar(tiles.len() as u64, "render", opts.progress);
     let done: Vec<Vec<[u8; 3]>> = in_pool(opts.threads, || {

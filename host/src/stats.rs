@@ -99,7 +99,7 @@ fn gather_with<I: Intersector>(
     opts: &RenderOptions,
 ) -> Result<SceneStats> {
     let tiles = tiles(eye.width, eye.height);
-    let (lo, hi) = scene.bounds();
+    let (lo, hi) = scene.test_bounds();
     in_pool(opts.threads, || {
         tiles
             .par_iter()
@@ -150,7 +150,7 @@ fn gather_packets_with<I: Intersector>(
     size: PacketSize,
 ) -> Result<PacketStats> {
     let tiles = tiles(eye.width, eye.height);
-    let bounds = scene.bounds();
+    let bounds = scene.test_bounds();
     let side = size.side();
     in_pool(opts.threads, || {
         tiles

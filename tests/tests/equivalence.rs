@@ -253,7 +253,7 @@ proptest! {
         let view = scene.view().unwrap();
         let cam = Camera { eye: Vec3::from(eye), look_at: Vec3::from(look), up: Vec3::Y, vfov_deg: fov, width: 12, height: 9 };
         let Ok(rays) = EyeRays::new(&cam) else { return Ok(()) };
-        let (lo, hi) = view.bounds();
+        let (lo, hi) = view.test_bounds();
         for y in 0..9 {
             for x in 0..12 {
                 match rays.ray_in_scene(x, y, lo, hi) {

@@ -417,6 +417,14 @@ fn validate_tree(
     Ok(())
 }
 
+/// The scene bounds grown by a margin (1e-5 of the extent plus a few ulps of the
+/// coordinates), as the builders grow their boxes: a box that a kernel's rounding cannot
+/// make a hit fall outside of.
+fn grow_bounds(lo: Vec3, hi: Vec3) -> (Vec3, Vec3) {
+    let pad = 1e-5 * (hi - lo).max_element() + 8.0 * f32::EPSILON * lo.abs().max(hi.abs()).max_element();
+    (lo - Vec3::splat(pad), hi + Vec3::splat(pad))
+}
+
 /// A validated scene image, borrowed in place. Cheap to copy.
 #[derive(Clone, Copy, Debug)]
 pub struct SceneView<'a> {
@@ -823,7 +831,7 @@ impl<'a> SceneView<'a> {
     fn validate_kd(s: &Sections<'a>, nt: u32, bmin: Vec3, bmax: Vec3) -> Result<KdTreeView<'a>, SceneError> {
         // The root box is the scene bounds grown like the builders grow their boxes, so a
         // hit that rounding puts a hair outside the bounds is not clipped away.
-        let pad = 1e-5 * (bmax - bmin).max_element() + 8.0 * f32::EPSILON * bmin.abs().max(bmax.abs()).max_element();
+        let (rmin, rmax) = grow_bounds(bmin, bmax);
         let nodes: &[KdNode] = s.required(SectionKind::KdNodes)?;
         let prims = Self::prim_list(s, nt)?;
         let np = prims.len() as u64;
@@ -846,8 +854,8 @@ impl<'a> SceneView<'a> {
             prims,
             nodes_addr: s.addr(SectionKind::KdNodes),
             prims_addr: s.addr(SectionKind::PrimLists),
-            min: bmin - Vec3::splat(pad),
-            max: bmax + Vec3::splat(pad),
+            min: rmin,
+            max: rmax,
         })
     }
 
@@ -950,6 +958,13 @@ impl<'a> SceneView<'a> {
     /// Scene bounds from the header.
     pub fn bounds(&self) -> (Vec3, Vec3) {
         (Vec3::from(self.header.bounds_min), Vec3::from(self.header.bounds_max))
+    }
+
+    /// The scene bounds grown by the builders' margin: the box for Purcell's early
+    /// bounding-box test, which must never end a ray that a kernel would report a hit for.
+    pub fn test_bounds(&self) -> (Vec3, Vec3) {
+        let (lo, hi) = self.bounds();
+        grow_bounds(lo, hi)
     }
 
     /// The uniform grid, if the image holds one.
