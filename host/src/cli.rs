@@ -180,12 +180,12 @@ pub struct CameraArgs {
 }
 
 impl CameraArgs {
-    /// The scene's default camera with the file and then the flags applied.
-    pub fn resolve(&self, base: &CameraRecord) -> Result<CameraRecord> {
-        let mut spec = CameraSpec::default();
-        if let Some(path) = &self.camera {
-            spec = CameraSpec::load(path)?;
-        }
+    /// The camera file's settings with the flags' on top.
+    pub fn spec(&self) -> Result<CameraSpec> {
+        let file = match &self.camera {
+            Some(path) => CameraSpec::load(path)?,
+            None => CameraSpec::default(),
+        };
         let flags = CameraSpec {
             eye: self.eye,
             look_at: self.look_at,
@@ -194,7 +194,12 @@ impl CameraArgs {
             size: self.size,
             background: None,
         };
-        let cam = spec.merged(flags).apply(base);
+        Ok(file.merged(flags))
+    }
+
+    /// The scene's default camera with the file and then the flags applied.
+    pub fn resolve(&self, base: &CameraRecord) -> Result<CameraRecord> {
+        let cam = self.spec()?.apply(base);
         let what = self.camera.as_ref().map_or("camera".to_string(), |p| p.display().to_string());
         render::eye_rays(&cam, &what)?;
         Ok(cam)
@@ -402,34 +407,17 @@ fn fmt_bytes(b: usize) -> String {
 }
 
 fn cmd_build(a: BuildArgs) -> Result<()> {
-    let ext = a.scene.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
-    if ext == "rpsi" {
-        bail!("{}: is already a scene image; build takes an OBJ file", a.scene.display());
-    }
     let start = Instant::now();
-    let mut scene = scene::load(Some(&a.scene), &a.structure.options())?;
+    let scene::Source::Mesh { name, mesh, warnings, camera } = scene::load_source(Some(&a.scene))? else {
+        bail!("{}: is already a scene image; build takes an OBJ file", a.scene.display());
+    };
+    // The camera file and flags, over the OBJ's sidecar camera, become the image's default.
+    let scene = scene::build(name, mesh, warnings, camera.merged(a.camera.spec()?), &a.structure.options())?;
     warn(&scene);
-    let has_camera_flags = a.camera.camera.is_some()
-        || a.camera.eye.is_some()
-        || a.camera.look_at.is_some()
-        || a.camera.up.is_some()
-        || a.camera.fov.is_some()
-        || a.camera.size.is_some();
-    if has_camera_flags {
-        // Rebuild with the chosen camera as the image's default.
-        let base = *scene.view()?.camera().ok_or_else(|| anyhow!("internal error: built image lacks a camera"))?;
-        let cam = a.camera.resolve(&base)?;
-        let (mesh, notes) = crate::obj::load_obj_file(&a.scene)?;
-        let spec = CameraSpec {
-            eye: Some(cam.eye),
-            look_at: Some(cam.look_at),
-            up: Some(cam.up),
-            fov: Some(cam.vfov_deg),
-            size: Some((cam.width, cam.height)),
-            background: Some(cam.background),
-        };
-        scene = scene::build(a.scene.display().to_string(), mesh, notes.warnings, spec, &a.structure.options())?;
-    }
+    let what = a.camera.camera.as_ref().map_or("camera".to_string(), |p| p.display().to_string());
+    let view = scene.view()?;
+    let camera = view.camera().ok_or_else(|| anyhow!("internal error: built image lacks a camera"))?;
+    render::eye_rays(camera, &what)?;
     let elapsed = start.elapsed().as_secs_f64();
     output::write_bytes(&a.output, &scene.image)?;
     let r = scene.report.as_ref().ok_or_else(|| anyhow!("internal error: no build report"))?;

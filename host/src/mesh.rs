@@ -40,10 +40,11 @@ impl Mesh {
             bail!("{name}: shading data does not match the vertices");
         }
         for (i, m) in self.materials.iter().enumerate() {
-            let vals = m.diffuse.iter().chain(&m.specular).chain(&m.emission);
-            if vals.clone().any(|c| !c.is_finite() || *c < 0.0) {
+            let mut vals =
+                m.diffuse.iter().chain(&m.specular).chain(&m.emission).chain([&m.shininess, &m.ior, &m.dissolve]);
+            if vals.any(|c| !c.is_finite() || *c < 0.0) {
                 bail!(
-                    "{name}: material '{}' has a negative, NaN or infinite colour",
+                    "{name}: material '{}' has a negative, NaN or infinite value",
                     self.material_names.get(i).map_or("?", |s| s.as_str())
                 );
             }

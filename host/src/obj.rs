@@ -88,7 +88,7 @@ fn convert(name: &str, result: tobj::LoadResult) -> Result<(Mesh, LoadNotes)> {
     }
     let mut mesh = Mesh::default();
     for m in &materials {
-        mesh.materials.push(material_record(name, m)?);
+        mesh.materials.push(material_record(m));
         mesh.material_names.push(m.name.clone());
     }
     let mut default_material = None;
@@ -150,7 +150,8 @@ fn convert(name: &str, result: tobj::LoadResult) -> Result<(Mesh, LoadNotes)> {
     Ok((mesh, notes))
 }
 
-fn material_record(file: &str, m: &tobj::Material) -> Result<MaterialRecord> {
+/// The MTL material as a record; `Mesh::validate` checks its values.
+fn material_record(m: &tobj::Material) -> MaterialRecord {
     let mut r = MaterialRecord::DEFAULT;
     if let Some(kd) = m.diffuse {
         r.diffuse = kd;
@@ -166,11 +167,7 @@ fn material_record(file: &str, m: &tobj::Material) -> Result<MaterialRecord> {
     if let Some(ke) = m.emissive {
         r.emission = ke;
     }
-    let all = r.diffuse.iter().chain(&r.specular).chain(&r.emission).chain([&r.shininess, &r.ior, &r.dissolve]);
-    if all.clone().any(|c| !c.is_finite() || *c < 0.0) {
-        bail!("{file}: material '{}' has a negative, NaN or infinite value", m.name);
-    }
-    Ok(r)
+    r
 }
 
 fn describe(e: &tobj::LoadError) -> String {
