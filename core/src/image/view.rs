@@ -365,49 +365,36 @@ impl<'a> KdTreeView<'a> {
     }
 }
 
+/// The inner children of one tree node (at most four: the 4-wide BVH).
+type Children = heapless::Vec<u32, 4>;
+
 /// Checks, with a fixed-capacity stack and no allocation, that `children(i)` describes a
-/// tree rooted at node 0: every child comes after its parent and inside the section, the
-/// walk never needs more than [`MAX_TREE_DEPTH`] stack entries (the traversal kernels'
-/// capacity, since they push at most one node per level), and it visits exactly `n`
-/// nodes. `children(i)` is `Err` for a malformed node, `Ok(None)` for a valid leaf and
-/// `Ok(Some(c))` for an inner node whose children are `c` and `c + 1`.
+/// tree rooted at node 0: every child comes after its parent and inside the section, no
+/// path is [`MAX_TREE_DEPTH`] nodes deep (the traversal kernels' stacks hold one entry per
+/// level, three for the 4-wide BVH), and the walk visits exactly `n` nodes. `children(i)`
+/// is `Err` for a malformed node, else the node's inner children (none for a leaf).
 fn validate_tree(
     n: usize,
     section: SectionKind,
-    mut children: impl FnMut(usize) -> Result<Option<u32>, ()>,
+    mut children: impl FnMut(usize) -> Result<Children, ()>,
 ) -> Result<(), SceneError> {
     let bad = |node: usize| SceneError::BadTree { section, node: node as u32 };
     if n == 0 {
         return Err(bad(0));
     }
-    let mut stack = [0u32; MAX_TREE_DEPTH as usize];
-    let mut sp = 0usize;
-    let mut node = 0usize;
+    // (node, depth); a depth-first walk pushes at most three more entries per level.
+    let mut stack: heapless::Vec<(u32, u32), { 3 * MAX_TREE_DEPTH as usize + 1 }> = heapless::Vec::new();
+    let _ = stack.push((0, 0));
     let mut visited = 0usize;
-    loop {
+    while let Some((i, depth)) = stack.pop() {
+        let i = i as usize;
         visited += 1;
-        if visited > n {
-            return Err(bad(node));
+        if visited > n || depth >= MAX_TREE_DEPTH {
+            return Err(bad(i));
         }
-        match children(node).map_err(|_| bad(node))? {
-            Some(c) => {
-                let c = c as usize;
-                if c <= node || c + 1 >= n {
-                    return Err(bad(node));
-                }
-                if sp == stack.len() {
-                    return Err(bad(node));
-                }
-                stack[sp] = (c + 1) as u32;
-                sp += 1;
-                node = c;
-            }
-            None => {
-                if sp == 0 {
-                    break;
-                }
-                sp -= 1;
-                node = stack[sp] as usize;
+        for c in children(i).map_err(|_| bad(i))? {
+            if c as usize <= i || c as usize >= n || stack.push((c, depth + 1)).is_err() {
+                return Err(bad(i));
             }
         }
     }
@@ -415,6 +402,11 @@ fn validate_tree(
         return Err(bad(n - 1));
     }
     Ok(())
+}
+
+/// The two adjacent children `c` and `c + 1` of a binary inner node.
+fn pair(c: u32) -> Children {
+    Children::from_iter([c, c.wrapping_add(1)])
 }
 
 /// The scene bounds grown by a margin (1e-5 of the extent plus a few ulps of the
@@ -813,9 +805,9 @@ impl<'a> SceneView<'a> {
                 return Err(());
             }
             if n.count == 0 {
-                Ok(Some(n.first))
+                Ok(pair(n.first))
             } else if n.first as u64 + n.count as u64 <= np {
-                Ok(None)
+                Ok(Children::new())
             } else {
                 Err(())
             }
@@ -839,12 +831,12 @@ impl<'a> SceneView<'a> {
             let n = &nodes[i];
             if n.axis() == KdNode::LEAF {
                 if n.index() as u64 + n.value as u64 <= np {
-                    Ok(None)
+                    Ok(Children::new())
                 } else {
                     Err(())
                 }
             } else if n.split().is_finite() {
-                Ok(Some(n.index()))
+                Ok(pair(n.index()))
             } else {
                 Err(())
             }
@@ -864,54 +856,33 @@ impl<'a> SceneView<'a> {
         let nodes: &[Bvh4Node] = s.required(section)?;
         let prims = Self::prim_list(s, nt)?;
         let np = prims.len() as u64;
-        let n = nodes.len();
-        let bad = |node: usize| SceneError::BadTree { section, node: node as u32 };
-        if n == 0 {
-            return Err(bad(0));
-        }
-        // Depth-first walk with a fixed stack of (node, depth), as in `validate_tree`.
-        let mut stack = [(0u32, 0u32); 3 * MAX_TREE_DEPTH as usize + 1];
-        let mut sp = 1usize;
-        let mut visited = 0usize;
-        while sp > 0 {
-            sp -= 1;
-            let (i, depth) = stack[sp];
-            let i = i as usize;
-            visited += 1;
-            if visited > n || depth >= MAX_TREE_DEPTH {
-                return Err(bad(i));
-            }
+        validate_tree(nodes.len(), section, |i| {
             let node = &nodes[i];
+            let mut inner = Children::new();
             for k in 0..4 {
                 let (c, count) = (node.child[k], node.count[k]);
                 let lo = [node.min_x[k], node.min_y[k], node.min_z[k]];
                 let hi = [node.max_x[k], node.max_y[k], node.max_z[k]];
+                if !(finite3(lo) && finite3(hi)) {
+                    return Err(());
+                }
                 if c == NULL_INDEX {
                     // Empty slots carry an inverted box, which no slab test accepts.
-                    if !(finite3(lo) && finite3(hi) && (0..3).all(|a| lo[a] > hi[a])) {
-                        return Err(bad(i));
+                    if !(0..3).all(|a| lo[a] > hi[a]) {
+                        return Err(());
                     }
-                    continue;
-                }
-                if !(finite3(lo) && finite3(hi) && Vec3::from(lo).cmple(Vec3::from(hi)).all()) {
-                    return Err(bad(i));
-                }
-                if count > 0 {
+                } else if !Vec3::from(lo).cmple(Vec3::from(hi)).all() {
+                    return Err(());
+                } else if count > 0 {
                     if c as u64 + count as u64 > np {
-                        return Err(bad(i));
+                        return Err(());
                     }
                 } else {
-                    if c as usize <= i || c as usize >= n || sp == stack.len() {
-                        return Err(bad(i));
-                    }
-                    stack[sp] = (c, depth + 1);
-                    sp += 1;
+                    let _ = inner.push(c);
                 }
             }
-        }
-        if visited != n {
-            return Err(bad(n - 1));
-        }
+            Ok(inner)
+        })?;
         Ok(Bvh4View { nodes, prims, nodes_addr: s.addr(section), prims_addr: s.addr(SectionKind::PrimLists) })
     }
 
