@@ -1,17 +1,58 @@
-//! Packets through the uniform grid in lock-step: every active ray keeps its own DDA
-//! registers (rays of a packet leave a voxel at different distances, so they cannot share
-//! one walk), and each round every active ray takes one traversal step, then the rays
-//! whose voxel holds triangles run the intersection kernel — the streaming organisation
-//! of Purcell 2002 §3.2 applied to a packet. The active fraction per round is the SIMD
-//! efficiency.
+//! Packets through the uniform grid in lock-step ([`crate::lockstep`]): every ray keeps
+//! its own DDA registers, and a packet round is one voxel step of each active ray.
 
 use crate::grid::{GridEvent, GridTraversal};
+use crate::hit::Hit;
 use crate::image::{GridView, SceneView, NULL_INDEX};
-use crate::packet::{Lanes, PacketCounters, PacketHits, RayPacket};
+use crate::lockstep::{trace_lock_step, RayWalk};
+use crate::packet::{PacketCounters, PacketHits, RayPacket};
 use crate::probe::MemoryProbe;
-use crate::triangle::{test_triangle, Intersector};
+use crate::ray::Ray;
+use crate::triangle::Intersector;
 
-/// Traces all active rays of `packet`; `hits[i]` receives ray `i`'s closest hit.
+/// A ray's walk through the grid.
+struct GridWalk<'g> {
+    grid: &'g GridView<'g>,
+    trav: GridTraversal,
+}
+
+impl RayWalk for GridWalk<'_> {
+    #[inline]
+    fn advance<P: MemoryProbe>(
+        &mut self,
+        _ray: &Ray,
+        probe: &mut P,
+        test: &mut impl FnMut(&mut Self, u32, &mut P),
+    ) -> bool {
+        match self.trav.step(self.grid, probe) {
+            GridEvent::Done => false,
+            GridEvent::Empty(voxel) => {
+                self.trav.finish_voxel(&voxel);
+                true
+            }
+            GridEvent::Cell { voxel, list } => {
+                let mut pos = list;
+                loop {
+                    let prim = self.grid.list_entry(pos, probe);
+                    if prim == NULL_INDEX {
+                        break;
+                    }
+                    test(self, prim, probe);
+                    pos = pos.wrapping_add(1);
+                }
+                self.trav.finish_voxel(&voxel);
+                true
+            }
+        }
+    }
+
+    fn best_mut(&mut self) -> &mut Option<Hit> {
+        &mut self.trav.best
+    }
+}
+
+/// Traces all active rays of `packet`; `hits[i]` receives ray `i`'s closest hit. Rays
+/// that miss the grid's box take no part.
 pub fn trace_grid_packet<I: Intersector, P: MemoryProbe, const N: usize>(
     scene: &SceneView<'_>,
     grid: &GridView<'_>,
@@ -20,42 +61,8 @@ pub fn trace_grid_packet<I: Intersector, P: MemoryProbe, const N: usize>(
     probe: &mut P,
     counters: &mut PacketCounters,
 ) {
-    let rays: [_; N] = core::array::from_fn(|i| packet.ray(i));
-    let preps: [I::Prepared; N] = core::array::from_fn(|i| I::prepare(&rays[i]));
-    let mut trav: [GridTraversal; N] = core::array::from_fn(|i| GridTraversal::new(grid, &rays[i]));
-    let mut active = 0u64;
-    for i in Lanes(packet.active) {
-        if !trav[i].missed_bounds() {
-            active |= 1 << i;
-        }
-    }
-    let mut c = PacketCounters::default();
-    while active != 0 {
-        c.visits += 1;
-        c.active_lanes += active.count_ones() as u64;
-        for i in Lanes(active) {
-            match trav[i].step(grid, probe) {
-                GridEvent::Done => active &= !(1 << i),
-                GridEvent::Empty(voxel) => trav[i].finish_voxel(&voxel),
-                GridEvent::Cell { voxel, list } => {
-                    let mut pos = list;
-                    loop {
-                        let prim = grid.list_entry(pos, probe);
-                        if prim == NULL_INDEX {
-                            break;
-                        }
-                        c.tri_tests += 1;
-                        let verts = I::fetch(scene, prim, probe);
-                        test_triangle::<I>(&preps[i], &rays[i], &verts, prim, &mut trav[i].best);
-                        pos = pos.wrapping_add(1);
-                    }
-                    trav[i].finish_voxel(&voxel);
-                }
-            }
-        }
-    }
-    for i in 0..N {
-        hits[i] = if packet.active & (1 << i) != 0 { trav[i].best } else { None };
-    }
-    counters.add(&c);
+    trace_lock_step::<GridWalk<'_>, I, P, N>(scene, packet, hits, probe, counters, |ray| {
+        let trav = GridTraversal::new(grid, ray);
+        (!trav.missed_bounds()).then_some(GridWalk { grid, trav })
+    });
 }

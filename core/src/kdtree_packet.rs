@@ -1,14 +1,48 @@
-//! Packets through the kd-tree in lock-step: each ray keeps its own traversal registers
-//! ([`KdTraversal`]), and each round every active ray takes one step; rays that reach a
-//! leaf intersect it in the same round. Rays of a coherent packet walk the same nodes in
-//! the same rounds, so node reads are shared in a cache, as in Wald & Slusallek 2001 §4;
-//! the active fraction per round is the SIMD efficiency.
+//! Packets through the kd-tree in lock-step ([`crate::lockstep`]): every ray keeps its
+//! own traversal registers ([`KdTraversal`]), and a packet round is one node step of
+//! each active ray.
 
+use crate::hit::Hit;
 use crate::image::{KdTreeView, SceneView};
 use crate::kdtree::{KdEvent, KdTraversal};
-use crate::packet::{Lanes, PacketCounters, PacketHits, RayPacket};
+use crate::lockstep::{trace_lock_step, RayWalk};
+use crate::packet::{PacketCounters, PacketHits, RayPacket};
 use crate::probe::MemoryProbe;
-use crate::triangle::{test_triangle, Intersector};
+use crate::ray::Ray;
+use crate::triangle::Intersector;
+
+/// A ray's walk through the kd-tree.
+struct KdWalk<'k> {
+    kd: &'k KdTreeView<'k>,
+    trav: KdTraversal,
+}
+
+impl RayWalk for KdWalk<'_> {
+    #[inline]
+    fn advance<P: MemoryProbe>(
+        &mut self,
+        ray: &Ray,
+        probe: &mut P,
+        test: &mut impl FnMut(&mut Self, u32, &mut P),
+    ) -> bool {
+        match self.trav.step(self.kd, ray, probe) {
+            KdEvent::Done => false,
+            KdEvent::Inner => true,
+            KdEvent::Leaf { first, count } => {
+                for k in first..first.wrapping_add(count) {
+                    let prim = self.kd.prim(k, probe);
+                    test(self, prim, probe);
+                }
+                self.trav.finish_leaf();
+                true
+            }
+        }
+    }
+
+    fn best_mut(&mut self) -> &mut Option<Hit> {
+        &mut self.trav.best
+    }
+}
 
 /// Traces all active rays of `packet`; `hits[i]` receives ray `i`'s closest hit.
 pub fn trace_kdtree_packet<I: Intersector, P: MemoryProbe, const N: usize>(
@@ -19,32 +53,7 @@ pub fn trace_kdtree_packet<I: Intersector, P: MemoryProbe, const N: usize>(
     probe: &mut P,
     counters: &mut PacketCounters,
 ) {
-    let rays: [_; N] = core::array::from_fn(|i| packet.ray(i));
-    let preps: [I::Prepared; N] = core::array::from_fn(|i| I::prepare(&rays[i]));
-    let mut trav: [KdTraversal; N] = core::array::from_fn(|i| KdTraversal::new(kd, &rays[i]));
-    let mut active = packet.active;
-    let mut c = PacketCounters::default();
-    while active != 0 {
-        c.visits += 1;
-        c.active_lanes += active.count_ones() as u64;
-        for i in Lanes(active) {
-            match trav[i].step(kd, &rays[i], probe) {
-                KdEvent::Done => active &= !(1 << i),
-                KdEvent::Inner => {}
-                KdEvent::Leaf { first, count } => {
-                    for k in first..first.wrapping_add(count) {
-                        let prim = kd.prim(k, probe);
-                        let verts = I::fetch(scene, prim, probe);
-                        test_triangle::<I>(&preps[i], &rays[i], &verts, prim, &mut trav[i].best);
-                    }
-                    c.tri_tests += count as u64;
-                    trav[i].finish_leaf();
-                }
-            }
-        }
-    }
-    for i in 0..N {
-        hits[i] = if packet.active & (1 << i) != 0 { trav[i].best } else { None };
-    }
-    counters.add(&c);
+    trace_lock_step::<KdWalk<'_>, I, P, N>(scene, packet, hits, probe, counters, |ray| {
+        Some(KdWalk { kd, trav: KdTraversal::new(kd, ray) })
+    });
 }

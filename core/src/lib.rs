@@ -44,6 +44,7 @@ pub mod hit;
 pub mod image;
 pub mod kdtree;
 pub mod kdtree_packet;
+pub mod lockstep;
 pub mod moller_trumbore;
 pub mod packet;
 pub mod probe;
