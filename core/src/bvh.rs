@@ -31,7 +31,7 @@ pub fn trace_bvh<I: Intersector, P: MemoryProbe>(
     let mut stack: heapless::Vec<(u32, f32), { MAX_TREE_DEPTH as usize }> = heapless::Vec::new();
     let (mut nodes, mut leaves, mut tests) = (1u32, 0u32, 0u32);
     let root = bvh.node(0, probe);
-    if rb.entry_a(Vec3A::from_array(root.min), Vec3A::from_array(root.max), ray.t_min, ray.t_max).is_none() {
+    if rb.entry(Vec3A::from_array(root.min), Vec3A::from_array(root.max), ray.t_min, ray.t_max).is_none() {
         counters.nodes += 1;
         return None;
     }
@@ -52,8 +52,8 @@ pub fn trace_bvh<I: Intersector, P: MemoryProbe>(
             let a = bvh.node(ia, probe);
             let b = bvh.node(ib, probe);
             nodes += 2;
-            let ta = rb.entry_a(Vec3A::from_array(a.min), Vec3A::from_array(a.max), ray.t_min, t_end);
-            let tb = rb.entry_a(Vec3A::from_array(b.min), Vec3A::from_array(b.max), ray.t_min, t_end);
+            let ta = rb.entry(Vec3A::from_array(a.min), Vec3A::from_array(a.max), ray.t_min, t_end);
+            let tb = rb.entry(Vec3A::from_array(b.min), Vec3A::from_array(b.max), ray.t_min, t_end);
             match (ta, tb) {
                 (Some(ta), Some(tb)) => {
                     let (near, far_index, t_far) = if ta <= tb { (a, ib, tb) } else { (b, ia, ta) };

@@ -120,10 +120,6 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
     let mut preps: [I::Prepared; N] = [I::Prepared::default(); N];
     let mut prepared = 0u64;
     let frustum = Frustum::new(packet, mask);
-    let t_end_of = |hits: &PacketHits<N>| {
-        Lanes(mask).fold(f32::NEG_INFINITY, |m, i| m.max(hits[i].map_or(rays[i].t_max, |h: Hit| h.t)))
-    };
-    let mut t_end = t_end_of(hits);
     // Reciprocal directions for the 4-rays-at-once leaf box test (the packet is already
     // a structure of arrays).
     let org = [&packet.ox, &packet.oy, &packet.oz];
@@ -134,13 +130,17 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
     ];
     let t_min = &packet.t_min;
     let mut ends: [f32; N] = packet.t_max;
-    // Per group of four lanes, the largest of their ends (for whole-group culling).
+    // Per group of four lanes, the largest of their ends (for whole-group culling), and
+    // the largest of all: how far any ray of the packet still looks.
+    let groups = N.div_ceil(4);
+    let group_end_of = |ends: &[f32; N], g: usize| {
+        (4 * g..(4 * g + 4).min(N)).filter(|&j| mask & (1 << j) != 0).fold(f32::NEG_INFINITY, |m, j| m.max(ends[j]))
+    };
     let mut group_end = [f32::NEG_INFINITY; MAX_PACKET / 4];
-    for i in Lanes(mask) {
-        if let Some(e) = group_end.get_mut(i / 4) {
-            *e = e.max(ends[i]);
-        }
+    for (g, e) in group_end.iter_mut().enumerate().take(groups) {
+        *e = group_end_of(&ends, g);
     }
+    let mut t_end = group_end.iter().take(groups).fold(f32::NEG_INFINITY, |m, &e| m.max(e));
     // (child or first entry, leaf count or 0, entry bound, leaf box as min xyz, max xyz)
     let mut stack: heapless::Vec<(u32, u32, f32, [f32; 6]), STACK> = heapless::Vec::new();
     let mut current = (0u32, 0u32, [0f32; 6], 0f32);
@@ -225,7 +225,7 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
                 let lo = Vec3A::new(leaf_box[0], leaf_box[1], leaf_box[2]);
                 let hi = Vec3A::new(leaf_box[3], leaf_box[4], leaf_box[5]);
                 for i in Lanes(mask) {
-                    if RayBox::new(&rays[i]).entry_a(lo, hi, rays[i].t_min, ends[i]).is_some() {
+                    if RayBox::new(&rays[i]).entry(lo, hi, rays[i].t_min, ends[i]).is_some() {
                         enter |= 1 << i;
                     }
                 }
@@ -244,16 +244,17 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
                     }
                 }
                 c.tri_tests += count as u64 * enter.count_ones() as u64;
+                let mut touched = 0u64;
                 for i in Lanes(enter) {
                     ends[i] = hits[i].map_or(rays[i].t_max, |h: Hit| h.t);
-                    let g = i / 4;
+                    touched |= 1 << (i / 4);
+                }
+                for g in Lanes(touched) {
                     if let Some(e) = group_end.get_mut(g) {
-                        *e = (4 * g..4 * g + 4)
-                            .filter(|&j| mask & (1 << j) != 0)
-                            .fold(f32::NEG_INFINITY, |m, j| m.max(ends[j]));
+                        *e = group_end_of(&ends, g);
                     }
                 }
-                t_end = t_end_of(hits);
+                t_end = group_end.iter().take(groups).fold(f32::NEG_INFINITY, |m, &e| m.max(e));
             }
         }
         // Pop the next entry whose entry bound is not beyond every ray's best hit.

@@ -32,7 +32,7 @@ pub fn trace_bvh_packet<I: Intersector, P: MemoryProbe, const N: usize>(
     let mut mask = 0u64;
     for i in Lanes(packet.active) {
         let hit =
-            boxes[i].entry_a(Vec3A::from_array(root.min), Vec3A::from_array(root.max), rays[i].t_min, rays[i].t_max);
+            boxes[i].entry(Vec3A::from_array(root.min), Vec3A::from_array(root.max), rays[i].t_min, rays[i].t_max);
         if hit.is_some() {
             mask |= 1 << i;
         }
@@ -62,11 +62,11 @@ pub fn trace_bvh_packet<I: Intersector, P: MemoryProbe, const N: usize>(
                 let (mut ta, mut tb) = (f32::INFINITY, f32::INFINITY);
                 for i in Lanes(mask) {
                     let end = best_t(hits, i);
-                    if let Some(t) = boxes[i].entry_a(alo, ahi, rays[i].t_min, end) {
+                    if let Some(t) = boxes[i].entry(alo, ahi, rays[i].t_min, end) {
                         ma |= 1 << i;
                         ta = ta.min(t);
                     }
-                    if let Some(t) = boxes[i].entry_a(blo, bhi, rays[i].t_min, end) {
+                    if let Some(t) = boxes[i].entry(blo, bhi, rays[i].t_min, end) {
                         mb |= 1 << i;
                         tb = tb.min(t);
                     }

@@ -3,7 +3,7 @@
 //! far distance is grown by `1 + 2·gamma(3)` so that rounding never rejects a box the
 //! ray touches.
 
-use glam::{Vec3, Vec3A};
+use glam::Vec3A;
 
 use crate::aabb::SLAB_GROWTH;
 use crate::ray::Ray;
@@ -34,13 +34,7 @@ impl RayBox {
 
     /// Entry distance of the ray into the box `[lo, hi]` within `[t0, t1]`, or `None`.
     #[inline(always)]
-    pub fn entry(&self, lo: Vec3, hi: Vec3, t0: f32, t1: f32) -> Option<f32> {
-        self.entry_a(lo.into(), hi.into(), t0, t1)
-    }
-
-    /// [`RayBox::entry`] on SIMD-layout corners.
-    #[inline(always)]
-    pub fn entry_a(&self, lo: Vec3A, hi: Vec3A, t0: f32, t1: f32) -> Option<f32> {
+    pub fn entry(&self, lo: Vec3A, hi: Vec3A, t0: f32, t1: f32) -> Option<f32> {
         let a = (lo - self.origin) * self.inv;
         let b = (hi - self.origin) * self.inv;
         let mut near = a.min(b);
@@ -83,16 +77,17 @@ pub fn recip(d: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::Vec3;
 
     #[test]
     fn touching_a_face_counts_and_zero_directions_never_give_nan() {
         let r = Ray::new(Vec3::new(0.0, 1.0, -5.0), Vec3::Z);
         let b = RayBox::new(&r);
-        assert_eq!(b.entry(Vec3::ZERO, Vec3::ONE, 0.0, f32::INFINITY), Some(5.0));
+        assert_eq!(b.entry(Vec3A::ZERO, Vec3A::ONE, 0.0, f32::INFINITY), Some(5.0));
         let r = Ray::new(Vec3::new(0.0, 1.5, -5.0), Vec3::Z);
-        assert_eq!(RayBox::new(&r).entry(Vec3::ZERO, Vec3::ONE, 0.0, f32::INFINITY), None);
+        assert_eq!(RayBox::new(&r).entry(Vec3A::ZERO, Vec3A::ONE, 0.0, f32::INFINITY), None);
         // Beyond the ray's end: rejected; ending exactly at the entry: accepted.
-        assert_eq!(b.entry(Vec3::ZERO, Vec3::ONE, 0.0, 4.0), None);
-        assert_eq!(b.entry(Vec3::ZERO, Vec3::ONE, 0.0, 5.0), Some(5.0));
+        assert_eq!(b.entry(Vec3A::ZERO, Vec3A::ONE, 0.0, 4.0), None);
+        assert_eq!(b.entry(Vec3A::ZERO, Vec3A::ONE, 0.0, 5.0), Some(5.0));
     }
 }

@@ -21,18 +21,12 @@ use crate::with_intersector;
 pub struct BenchResult {
     /// Rays per run.
     pub rays: u64,
-    /// Rays that hit.
-    pub hits: u64,
     /// Median Mrays/s on one thread.
     pub mrays_single: f64,
     /// Median Mrays/s on all threads.
     pub mrays_all: f64,
     /// Threads used for the all-threads figure.
     pub threads: usize,
-    /// Every single-thread run, seconds.
-    pub single_runs: Vec<f64>,
-    /// Every all-thread run, seconds.
-    pub all_runs: Vec<f64>,
     /// Fraction of packet lanes that needed the nodes the packets visited.
     pub simd_efficiency: f64,
 }
@@ -66,25 +60,22 @@ fn trace_all<I: Intersector>(
     eye: &EyeRays,
     tiles: &[(u32, u32, u32, u32)],
     packet: PacketSize,
-) -> (u64, PacketCounters) {
+) -> PacketCounters {
     let bounds = scene.test_bounds();
     tiles
         .par_iter()
         .map(|&tile| {
-            let mut hits = 0u64;
             let (mut c, mut pc) = (RayCounters::default(), PacketCounters::default());
+            // Each hit goes through black_box so that no tracing can be optimised away.
             trace_tile::<I>(scene, eye, bounds, tile, packet, &mut c, &mut pc, &mut |_, _, _, h| {
-                hits += h.is_some() as u64
+                std::hint::black_box(h);
             });
-            (hits, pc)
+            pc
         })
-        .reduce(
-            || (0, PacketCounters::default()),
-            |(h1, mut p1), (h2, p2)| {
-                p1.add(&p2);
-                (h1 + h2, p1)
-            },
-        )
+        .reduce(PacketCounters::default, |mut a, b| {
+            a.add(&b);
+            a
+        })
 }
 
 fn run<I: Intersector>(
@@ -96,7 +87,7 @@ fn run<I: Intersector>(
 ) -> Result<BenchResult> {
     let tiles = tiles(eye.width, eye.height);
     let rays = eye.width as u64 * eye.height as u64;
-    let time = |n: Option<usize>| -> Result<(Vec<f64>, (u64, PacketCounters), usize)> {
+    let time = |n: Option<usize>| -> Result<(Vec<f64>, PacketCounters, usize)> {
         in_pool(n, || {
             let mut out = trace_all::<I>(scene, eye, &tiles, packet); // warm-up
             let mut secs = Vec::new();
@@ -108,18 +99,9 @@ fn run<I: Intersector>(
             (secs, out, rayon::current_num_threads())
         })
     };
-    let (single_runs, (hits, pc), _) = time(Some(1))?;
+    let (single_runs, pc, _) = time(Some(1))?;
     let (all_runs, _, threads) = time(threads)?;
     let simd_efficiency = pc.active_lanes as f64 / (pc.visits.max(1) as f64 * packet.rays() as f64);
     let mrays = |s: &[f64]| rays as f64 / median(s) / 1e6;
-    Ok(BenchResult {
-        rays,
-        hits,
-        mrays_single: mrays(&single_runs),
-        mrays_all: mrays(&all_runs),
-        threads,
-        single_runs,
-        all_runs,
-        simd_efficiency,
-    })
+    Ok(BenchResult { rays, mrays_single: mrays(&single_runs), mrays_all: mrays(&all_runs), threads, simd_efficiency })
 }
