@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use anyhow::{anyhow, bail, Context, Result};
+use anyhow::{anyhow, bail, Result};
 use raypipe_core::image::{MaterialRecord, ShadingVertex, NULL_INDEX};
 
 use crate::mesh::Mesh;
@@ -189,14 +189,4 @@ fn describe(e: &tobj::LoadError) -> String {
         FaceColorOutOfBounds => "a face references a colour that does not exist".into(),
         other => format!("{other}"),
     }
-}
-
-/// Reads a file with the OBJ's name in errors (for `.rpsi` sniffing).
-pub fn read_head(path: &Path, n: usize) -> Result<Vec<u8>> {
-    use std::io::Read;
-    let mut f = std::fs::File::open(path).with_context(|| format!("{}: cannot open", path.display()))?;
-    let mut buf = vec![0; n];
-    let got = f.read(&mut buf).with_context(|| format!("{}: cannot read", path.display()))?;
-    buf.truncate(got);
-    Ok(buf)
 }

@@ -165,7 +165,7 @@ pub fn load_source(path: Option<&Path>) -> Result<Source> {
     let is_image = match ext.as_str() {
         "obj" | "gz" => false,
         "rpsi" => true,
-        _ => obj::read_head(path, 8)? == MAGIC,
+        _ => starts_with_magic(path)?,
     };
     if is_image {
         let image = AlignedBytes::read_file(path).map_err(|e| anyhow!("{name}: cannot read: {e}"))?;
@@ -178,6 +178,16 @@ pub fn load_source(path: Option<&Path>) -> Result<Source> {
         None => CameraSpec::default(),
     };
     Ok(Source::Mesh { name, mesh, warnings: notes.warnings, camera })
+}
+
+/// True if the file begins like a scene image (for names without a known extension).
+fn starts_with_magic(path: &Path) -> Result<bool> {
+    use std::io::Read;
+    let name = path.display();
+    let mut f = std::fs::File::open(path).map_err(|e| anyhow!("{name}: cannot open: {e}"))?;
+    let mut head = [0u8; 8];
+    let got = f.read(&mut head).map_err(|e| anyhow!("{name}: cannot read: {e}"))?;
+    Ok(got == head.len() && head == MAGIC)
 }
 
 /// Loads the scene the user named, or the built-in default when `path` is `None`.
