@@ -1,19 +1,125 @@
-//! BVH traversal: one loop over a fixed-capacity stack, nearer child first, boxes beyond
+//! BVH traversal as a step kernel over a fixed-capacity stack, nearer child first, boxes beyond
 //! the best hit so far skipped (pbrt-v4 `BVHAggregate::Intersect`, tinybvh
 //! `BVH::Intersect`). The stack never overflows: `SceneView::parse` rejects trees deeper
 //! than [`MAX_TREE_DEPTH`], and at most one node per level waits on it.
 
+use bytemuck::Zeroable;
 use glam::Vec3A;
 
 use crate::counters::RayCounters;
 use crate::hit::Hit;
-use crate::image::{BvhView, SceneView, MAX_TREE_DEPTH};
+use crate::image::{BvhNode, BvhView, SceneView, MAX_TREE_DEPTH};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::ray_box::RayBox;
+use crate::tree_step::TreeEvent;
 use crate::triangle::{test_triangle, Intersector};
 
-/// The closest hit of `ray` through the BVH.
+/// The traversal registers of one ray in the BVH: the node it stands on (its record is
+/// held, not re-read), a fixed-capacity stack of `(node, entry distance)`, and the best
+/// hit so far. One [`BvhTraversal::step`] visits one inner node: it reads the node's two
+/// children (adjacent records) and tests both boxes.
+#[derive(Clone, Debug)]
+pub struct BvhTraversal {
+    rb: RayBox,
+    t_min: f32,
+    t_max: f32,
+    node: BvhNode,
+    // A node to read at the next step: the root at the start, then popped nodes.
+    pending: Option<u32>,
+    stack: heapless::Vec<(u32, f32), { MAX_TREE_DEPTH as usize }>,
+    started: bool,
+    done: bool,
+    /// Closest hit so far.
+    pub best: Option<Hit>,
+}
+
+impl BvhTraversal {
+    /// Starts a ray at the root; an invalid ray is done at once.
+    #[inline]
+    pub fn new(ray: &Ray) -> BvhTraversal {
+        BvhTraversal {
+            rb: RayBox::new(ray),
+            t_min: ray.t_min,
+            t_max: ray.t_max,
+            node: BvhNode::zeroed(),
+            pending: Some(0),
+            stack: heapless::Vec::new(),
+            started: false,
+            done: !ray.is_valid(),
+            best: None,
+        }
+    }
+
+    /// Visits one inner node (moving to its nearer hit child and pushing the other), or
+    /// reports the leaf the walk stands on.
+    #[inline(always)]
+    pub fn step<P: MemoryProbe>(&mut self, bvh: &BvhView<'_>, probe: &mut P) -> TreeEvent {
+        if self.done {
+            return TreeEvent::Done;
+        }
+        if let Some(index) = self.pending.take() {
+            self.node = bvh.node(index, probe);
+            if !self.started {
+                // The root's own box is tested once; children are tested by their parent.
+                self.started = true;
+                let n = &self.node;
+                let (lo, hi) = (Vec3A::from_array(n.min), Vec3A::from_array(n.max));
+                if self.rb.entry(lo, hi, self.t_min, self.t_max).is_none() {
+                    self.done = true;
+                    return TreeEvent::Done;
+                }
+            }
+        }
+        let node = self.node;
+        if node.count > 0 {
+            return TreeEvent::Leaf { first: node.first, count: node.count };
+        }
+        // Boxes entered beyond the best hit cannot hold a closer one; equal is kept.
+        let t_end = self.best.map_or(self.t_max, |h| h.t);
+        let (ia, ib) = (node.first, node.first.wrapping_add(1));
+        let a = bvh.node(ia, probe);
+        let b = bvh.node(ib, probe);
+        let ta = self.rb.entry(Vec3A::from_array(a.min), Vec3A::from_array(a.max), self.t_min, t_end);
+        let tb = self.rb.entry(Vec3A::from_array(b.min), Vec3A::from_array(b.max), self.t_min, t_end);
+        match (ta, tb) {
+            (Some(ta), Some(tb)) => {
+                let (near, far_index, t_far) = if ta <= tb { (a, ib, tb) } else { (b, ia, ta) };
+                // Cannot be full: `parse` bounds the depth.
+                let _ = self.stack.push((far_index, t_far));
+                self.node = near;
+            }
+            (Some(_), None) => self.node = a,
+            (None, Some(_)) => self.node = b,
+            (None, None) => self.pop(),
+        }
+        TreeEvent::Inner
+    }
+
+    /// After a leaf's triangles: on to the next entry that may hold a closer hit.
+    #[inline(always)]
+    pub fn finish_leaf(&mut self) {
+        self.pop();
+    }
+
+    /// Pops the next node that may still hold a closer hit (read at the next step), or
+    /// ends the walk.
+    #[inline(always)]
+    fn pop(&mut self) {
+        loop {
+            let Some((index, t_entry)) = self.stack.pop() else {
+                self.done = true;
+                return;
+            };
+            if !self.best.is_some_and(|h| t_entry > h.t) {
+                self.pending = Some(index);
+                return;
+            }
+        }
+    }
+}
+
+/// The closest hit of `ray` through the BVH: the host's loop over the step kernel.
 #[inline]
 pub fn trace_bvh<I: Intersector, P: MemoryProbe>(
     scene: &SceneView<'_>,
@@ -22,70 +128,27 @@ pub fn trace_bvh<I: Intersector, P: MemoryProbe>(
     probe: &mut P,
     counters: &mut RayCounters,
 ) -> Option<Hit> {
-    if !ray.is_valid() {
-        return None;
-    }
-    let rb = RayBox::new(ray);
+    let mut trav = BvhTraversal::new(ray);
     let prep = I::prepare(ray);
-    let mut best: Option<Hit> = None;
-    let mut stack: heapless::Vec<(u32, f32), { MAX_TREE_DEPTH as usize }> = heapless::Vec::new();
-    let (mut nodes, mut leaves, mut tests) = (1u32, 0u32, 0u32);
-    let root = bvh.node(0, probe);
-    if rb.entry(Vec3A::from_array(root.min), Vec3A::from_array(root.max), ray.t_min, ray.t_max).is_none() {
-        counters.nodes += 1;
-        return None;
-    }
-    let mut node = root;
+    let (mut nodes, mut leaves, mut tests) = (0u32, 0u32, 0u32);
     loop {
-        if node.count > 0 {
-            leaves += 1;
-            for k in node.first..node.first.wrapping_add(node.count) {
-                let prim = bvh.prim(k, probe);
-                let verts = I::fetch(scene, prim, probe);
-                test_triangle::<I>(&prep, ray, &verts, prim, &mut best);
-            }
-            tests += node.count;
-        } else {
-            // Boxes entered beyond the best hit cannot hold a closer one; equal is kept.
-            let t_end = best.map_or(ray.t_max, |h| h.t);
-            let (ia, ib) = (node.first, node.first.wrapping_add(1));
-            let a = bvh.node(ia, probe);
-            let b = bvh.node(ib, probe);
-            nodes += 2;
-            let ta = rb.entry(Vec3A::from_array(a.min), Vec3A::from_array(a.max), ray.t_min, t_end);
-            let tb = rb.entry(Vec3A::from_array(b.min), Vec3A::from_array(b.max), ray.t_min, t_end);
-            match (ta, tb) {
-                (Some(ta), Some(tb)) => {
-                    let (near, far_index, t_far) = if ta <= tb { (a, ib, tb) } else { (b, ia, ta) };
-                    // Cannot be full: `parse` bounds the depth.
-                    let _ = stack.push((far_index, t_far));
-                    node = near;
-                    continue;
+        match trav.step(bvh, probe) {
+            TreeEvent::Inner => nodes += 1,
+            TreeEvent::Leaf { first, count } => {
+                leaves += 1;
+                for k in first..first.wrapping_add(count) {
+                    let prim = bvh.prim(k, probe);
+                    let verts = I::fetch(scene, prim, probe);
+                    test_triangle::<I>(&prep, ray, &verts, prim, &mut trav.best);
                 }
-                (Some(_), None) => {
-                    node = a;
-                    continue;
-                }
-                (None, Some(_)) => {
-                    node = b;
-                    continue;
-                }
-                (None, None) => {}
+                tests += count;
+                trav.finish_leaf();
             }
-        }
-        // Pop the next node that may still hold a closer hit.
-        loop {
-            let Some((index, t_entry)) = stack.pop() else {
-                counters.nodes += nodes;
-                counters.leaves += leaves;
-                counters.tri_tests += tests;
-                return best;
-            };
-            if best.is_some_and(|h| t_entry > h.t) {
-                continue;
-            }
-            node = bvh.node(index, probe);
-            break;
+            TreeEvent::Done => break,
         }
     }
+    counters.nodes += nodes;
+    counters.leaves += leaves;
+    counters.tri_tests += tests;
+    trav.best
 }

@@ -13,6 +13,7 @@ use crate::image::{Bvh4Node, Bvh4View, SceneView, MAX_TREE_DEPTH};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::ray_box::RayBox;
+use crate::tree_step::TreeEvent;
 use crate::triangle::{test_triangle, Intersector};
 
 /// Stack capacity: at most three entries wait per level of a tree of [`MAX_TREE_DEPTH`].
@@ -58,7 +59,119 @@ pub fn slab4(rb: &RayBox, n: &Bvh4Node, t0: f32, t1: f32) -> (Vec4, u32) {
     (tn, (tn.cmple(tf) & inside & real).bitmask())
 }
 
-/// The closest hit of `ray` through the 4-wide BVH.
+/// The traversal registers of one ray in the 4-wide BVH: the entry to visit next, a
+/// fixed-capacity stack of `(child or first entry, leaf count or 0, entry distance)`, and
+/// the best hit so far. One [`Bvh4Traversal::step`] reads one node.
+#[derive(Clone, Debug)]
+pub struct Bvh4Traversal {
+    rb: RayBox,
+    t_min: f32,
+    // The best hit's distance (or the ray's end): boxes entered beyond it are skipped.
+    t_end: f32,
+    current: (u32, u32),
+    // heapless: fixed capacity, and nothing is written until pushed (no per-ray memset).
+    stack: heapless::Vec<(u32, u32, f32), STACK>,
+    done: bool,
+    /// Closest hit so far.
+    pub best: Option<Hit>,
+}
+
+impl Bvh4Traversal {
+    /// Starts a ray at the root; an invalid ray is done at once.
+    #[inline]
+    pub fn new(ray: &Ray) -> Bvh4Traversal {
+        Bvh4Traversal {
+            rb: RayBox::new(ray),
+            t_min: ray.t_min,
+            t_end: ray.t_max,
+            current: (0, 0),
+            stack: heapless::Vec::new(),
+            done: !ray.is_valid(),
+            best: None,
+        }
+    }
+
+    /// Reads one inner node and moves to its nearest hit child (pushing the others), or
+    /// reports the leaf the walk stands on.
+    #[inline(always)]
+    pub fn step<P: MemoryProbe>(&mut self, bvh: &Bvh4View<'_>, probe: &mut P) -> TreeEvent {
+        if self.done {
+            return TreeEvent::Done;
+        }
+        let (index, count) = self.current;
+        if count > 0 {
+            return TreeEvent::Leaf { first: index, count };
+        }
+        let node = bvh.node(index, probe);
+        let (tn, mask) = slab4(&self.rb, node, self.t_min, self.t_end);
+        if mask == 0 {
+            self.pop();
+            return TreeEvent::Inner;
+        }
+        let t = tn.to_array();
+        let first = mask.trailing_zeros() as usize & 3;
+        let rest = mask & (mask - 1);
+        if rest == 0 {
+            // One child hit (the common case for coherent rays): no sorting.
+            self.current = (node.child[first], node.count[first]);
+            return TreeEvent::Inner;
+        }
+        if rest & (rest - 1) == 0 {
+            // Two children: one comparison.
+            let second = rest.trailing_zeros() as usize & 3;
+            let (near, far) = if t[second] < t[first] { (second, first) } else { (first, second) };
+            // Cannot be full: `parse` bounds the depth (see `STACK`).
+            let _ = self.stack.push((node.child[far], node.count[far], t[far]));
+            self.current = (node.child[near], node.count[near]);
+            return TreeEvent::Inner;
+        }
+        // Three or four: insertion sort by entry distance.
+        let mut order = [0usize; 4];
+        let mut m = 0;
+        for k in 0..4 {
+            if mask & (1 << k) != 0 {
+                let mut j = m;
+                while j > 0 && t[order[j - 1]] > t[k] {
+                    order[j] = order[j - 1];
+                    j -= 1;
+                }
+                order[j] = k;
+                m += 1;
+            }
+        }
+        // Push the far ones (farthest first), continue with the nearest.
+        for &k in order[1..m].iter().rev() {
+            let _ = self.stack.push((node.child[k], node.count[k], t[k]));
+        }
+        let k = order[0];
+        self.current = (node.child[k], node.count[k]);
+        TreeEvent::Inner
+    }
+
+    /// After a leaf's triangles: nearer boxes only from now on, and on to the next entry.
+    #[inline(always)]
+    pub fn finish_leaf(&mut self) {
+        self.t_end = self.best.map_or(self.t_end, |h| h.t);
+        self.pop();
+    }
+
+    /// Pops the next entry that may still hold a closer hit, or ends the walk.
+    #[inline(always)]
+    fn pop(&mut self) {
+        loop {
+            let Some((c, n, t)) = self.stack.pop() else {
+                self.done = true;
+                return;
+            };
+            if t <= self.t_end {
+                self.current = (c, n);
+                return;
+            }
+        }
+    }
+}
+
+/// The closest hit of `ray` through the 4-wide BVH: the host's loop over the step kernel.
 #[inline]
 pub fn trace_bvh4<I: Intersector, P: MemoryProbe>(
     scene: &SceneView<'_>,
@@ -67,89 +180,27 @@ pub fn trace_bvh4<I: Intersector, P: MemoryProbe>(
     probe: &mut P,
     counters: &mut RayCounters,
 ) -> Option<Hit> {
-    if !ray.is_valid() {
-        return None;
-    }
-    let rb = RayBox::new(ray);
+    let mut trav = Bvh4Traversal::new(ray);
     let prep = I::prepare(ray);
-    let mut best: Option<Hit> = None;
-    // The best hit's distance (or the ray's end): boxes entered beyond it are skipped.
-    let mut t_end = ray.t_max;
-    // (child or first entry, leaf count or 0, entry distance)
-    // heapless: fixed capacity, and nothing is written until pushed (no per-ray memset).
-    let mut stack: heapless::Vec<(u32, u32, f32), STACK> = heapless::Vec::new();
     let (mut nodes, mut leaves, mut tests) = (0u32, 0u32, 0u32);
-    let mut current = (0u32, 0u32);
     loop {
-        let (index, count) = current;
-        if count == 0 {
-            nodes += 1;
-            let node = bvh.node(index, probe);
-            let (tn, mask) = slab4(&rb, node, ray.t_min, t_end);
-            if mask != 0 {
-                let t = tn.to_array();
-                let first = mask.trailing_zeros() as usize;
-                let rest = mask & (mask - 1);
-                if rest == 0 {
-                    // One child hit (the common case for coherent rays): no sorting.
-                    current = (node.child[first], node.count[first]);
-                    continue;
+        match trav.step(bvh, probe) {
+            TreeEvent::Inner => nodes += 1,
+            TreeEvent::Leaf { first, count } => {
+                leaves += 1;
+                for e in first..first.wrapping_add(count) {
+                    let prim = bvh.prim(e, probe);
+                    let verts = I::fetch(scene, prim, probe);
+                    test_triangle::<I>(&prep, ray, &verts, prim, &mut trav.best);
                 }
-                if rest & (rest - 1) == 0 {
-                    // Two children: one comparison.
-                    let second = rest.trailing_zeros() as usize;
-                    let (near, far) = if t[second] < t[first] { (second, first) } else { (first, second) };
-                    // Cannot be full: `parse` bounds the depth (see `STACK`).
-                    let _ = stack.push((node.child[far], node.count[far], t[far]));
-                    current = (node.child[near], node.count[near]);
-                    continue;
-                }
-                // Three or four: insertion sort by entry distance.
-                let mut order = [0usize; 4];
-                let mut m = 0;
-                for k in 0..4 {
-                    if mask & (1 << k) != 0 {
-                        let mut j = m;
-                        while j > 0 && t[order[j - 1]] > t[k] {
-                            order[j] = order[j - 1];
-                            j -= 1;
-                        }
-                        order[j] = k;
-                        m += 1;
-                    }
-                }
-                // Push the far ones (farthest first), continue with the nearest.
-                for &k in order[1..m].iter().rev() {
-                    let _ = stack.push((node.child[k], node.count[k], t[k]));
-                }
-                let k = order[0];
-                current = (node.child[k], node.count[k]);
-                continue;
+                tests += count;
+                trav.finish_leaf();
             }
-        } else {
-            leaves += 1;
-            for e in index..index.wrapping_add(count) {
-                let prim = bvh.prim(e, probe);
-                let verts = I::fetch(scene, prim, probe);
-                if test_triangle::<I>(&prep, ray, &verts, prim, &mut best) {
-                    t_end = best.map_or(t_end, |h| h.t);
-                }
-            }
-            tests += count;
-        }
-        // Pop the next entry that may still hold a closer hit.
-        loop {
-            let Some((c, n, t)) = stack.pop() else {
-                counters.nodes += nodes;
-                counters.leaves += leaves;
-                counters.tri_tests += tests;
-                return best;
-            };
-            if t > t_end {
-                continue;
-            }
-            current = (c, n);
-            break;
+            TreeEvent::Done => break,
         }
     }
+    counters.nodes += nodes;
+    counters.leaves += leaves;
+    counters.tri_tests += tests;
+    trav.best
 }

@@ -12,24 +12,8 @@ use crate::hit::Hit;
 use crate::image::{KdNode, KdTreeView, SceneView, MAX_TREE_DEPTH};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
+use crate::tree_step::TreeEvent;
 use crate::triangle::{test_triangle, Intersector};
-
-/// What one traversal step produced.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum KdEvent {
-    /// An inner node was crossed; step again.
-    Inner,
-    /// A leaf: test PRIM_LISTS entries `first .. first + count`, then call
-    /// [`KdTraversal::finish_leaf`].
-    Leaf {
-        /// First list entry.
-        first: u32,
-        /// Number of triangles.
-        count: u32,
-    },
-    /// The walk is over.
-    Done,
-}
 
 /// The traversal registers of one ray.
 #[derive(Clone, Debug)]
@@ -53,14 +37,14 @@ impl KdTraversal {
 
     /// Reads one node and moves down (inner node) or reports a leaf.
     #[inline]
-    pub fn step<P: MemoryProbe>(&mut self, kd: &KdTreeView<'_>, ray: &Ray, probe: &mut P) -> KdEvent {
+    pub fn step<P: MemoryProbe>(&mut self, kd: &KdTreeView<'_>, ray: &Ray, probe: &mut P) -> TreeEvent {
         if self.done {
-            return KdEvent::Done;
+            return TreeEvent::Done;
         }
         let node = kd.node(self.index, probe);
         let axis = node.axis();
         if axis == KdNode::LEAF {
-            return KdEvent::Leaf { first: node.index(), count: node.value };
+            return TreeEvent::Leaf { first: node.index(), count: node.value };
         }
         let a = axis as usize;
         let (o, d, split) = (ray.origin[a], ray.dir[a], node.split());
@@ -69,7 +53,7 @@ impl KdTraversal {
         let (first, second) = if below_first { (c, c.wrapping_add(1)) } else { (c.wrapping_add(1), c) };
         if d == 0.0 {
             self.index = first;
-            return KdEvent::Inner;
+            return TreeEvent::Inner;
         }
         let t_split = (split - o) / d;
         if t_split > self.t_max || t_split <= 0.0 {
@@ -82,7 +66,7 @@ impl KdTraversal {
             self.index = first;
             self.t_max = t_split;
         }
-        KdEvent::Inner
+        TreeEvent::Inner
     }
 
     /// After a leaf's triangles: the hit is final once it is nearer than the leaf's end;
@@ -118,9 +102,9 @@ pub fn trace_kdtree<I: Intersector, P: MemoryProbe>(
     let (mut nodes, mut leaves, mut tests) = (0u32, 0u32, 0u32);
     loop {
         match trav.step(kd, ray, probe) {
-            KdEvent::Done => break,
-            KdEvent::Inner => nodes += 1,
-            KdEvent::Leaf { first, count } => {
+            TreeEvent::Done => break,
+            TreeEvent::Inner => nodes += 1,
+            TreeEvent::Leaf { first, count } => {
                 nodes += 1;
                 leaves += 1;
                 for k in first..first.wrapping_add(count) {

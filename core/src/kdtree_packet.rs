@@ -4,11 +4,12 @@
 
 use crate::hit::Hit;
 use crate::image::{KdTreeView, SceneView};
-use crate::kdtree::{KdEvent, KdTraversal};
+use crate::kdtree::KdTraversal;
 use crate::lockstep::{trace_lock_step, RayWalk};
 use crate::packet::{PacketCounters, PacketHits, RayPacket};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
+use crate::tree_step::TreeEvent;
 use crate::triangle::Intersector;
 
 /// A ray's walk through the kd-tree.
@@ -26,9 +27,9 @@ impl RayWalk for KdWalk<'_> {
         test: &mut impl FnMut(&mut Self, u32, &mut P),
     ) -> bool {
         match self.trav.step(self.kd, ray, probe) {
-            KdEvent::Done => false,
-            KdEvent::Inner => true,
-            KdEvent::Leaf { first, count } => {
+            TreeEvent::Done => false,
+            TreeEvent::Inner => true,
+            TreeEvent::Leaf { first, count } => {
                 for k in first..first.wrapping_add(count) {
                     let prim = self.kd.prim(k, probe);
                     test(self, prim, probe);

@@ -51,8 +51,10 @@ pub mod probe;
 pub mod ray;
 pub mod ray_box;
 pub mod shade;
+pub mod tree_step;
 pub mod triangle;
 pub mod wald;
+pub mod walk;
 pub mod watertight;
 
 pub use camera::{Camera, CameraError};

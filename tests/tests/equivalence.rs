@@ -6,6 +6,7 @@ use proptest::prelude::*;
 use raypipe::scene::Accel;
 use raypipe::tracer::trace;
 use raypipe_core::brute_force::trace_brute_force;
+use raypipe_core::walk::trace_walk;
 use raypipe_core::Vec3;
 use raypipe_core::{
     Hit, Intersector, MollerTrumbore, NoProbe, Ray, RayCounters, SceneView, WaldProjection, Watertight,
@@ -123,6 +124,16 @@ fn check<I: Intersector>(view: &SceneView<'_>, ray: &Ray) -> Result<(Option<Hit>
     let mut cg = RayCounters::default();
     let g = trace::<I, _>(view, ray, &mut NoProbe, &mut cg);
     let b = trace_brute_force::<I, _>(view, ray, &mut NoProbe, &mut RayCounters::default());
+    // The step-by-step walk the hardware model drives finds the same hit.
+    let w = trace_walk::<I, _>(view, ray, &mut NoProbe);
+    let same = |a: Option<Hit>, b: Option<Hit>| match (a, b) {
+        (None, None) => true,
+        (Some(a), Some(b)) => a.bits_eq(&b),
+        _ => false,
+    };
+    if !same(w, g) {
+        return Err(TestCaseError::fail(format!("{}: walk {w:?} != tracer {g:?} for {ray:?}", I::NAME)));
+    }
     match (g, b) {
         (None, None) => {}
         (Some(g), Some(b)) if g.bits_eq(&b) => {}
