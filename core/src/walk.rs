@@ -82,6 +82,9 @@ pub enum WalkEvent {
 }
 
 /// The traversal registers of one ray, for the structure the scene holds.
+// The 4-wide BVH's stack makes its variant the largest; core has no heap to box it in,
+// and a walk is a fixed-size register file anyway.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug)]
 pub enum Walk {
     /// Uniform grid: the DDA registers and the voxel whose list is being tested.
