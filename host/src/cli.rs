@@ -19,6 +19,7 @@ use crate::output;
 use crate::packets::PacketSize;
 use crate::render::{self, RenderOptions};
 use crate::scene::{self, Accel, BuildOptions, Scene, TriangleLayout};
+use crate::simulate;
 use crate::stats;
 use crate::tracer::IntersectorKind;
 
@@ -47,6 +48,38 @@ pub enum Command {
     Trace(TraceArgs),
     /// Write the primary rays of a view as a NumPy .npy array (N × 8 float32).
     Rays(RaysArgs),
+    /// Run the cycle-level hardware model on a scene (the built-in Cornell box when none
+    /// is given): image, summary and JSON report.
+    Simulate(SimulateArgs),
+}
+
+/// `raypipe simulate`.
+#[derive(Args, Debug)]
+pub struct SimulateArgs {
+    /// An OBJ file or a scene image; the built-in Cornell box when omitted.
+    pub scene: Option<PathBuf>,
+    /// Hardware configuration file (TOML; see fixtures/hw/ and docs/hw-report.md).
+    #[arg(long, value_name = "FILE.toml", conflicts_with = "preset")]
+    pub config: Option<PathBuf>,
+    /// A shipped configuration: saarcor or minimal (default: the built-in defaults).
+    #[arg(long, value_name = "NAME")]
+    pub preset: Option<String>,
+    /// Override one parameter, e.g. `--set traversal.threads=16` (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+    /// Output PNG.
+    #[arg(short, long, value_name = "PNG", default_value = "raypipe-sim.png")]
+    pub output: PathBuf,
+    /// Also write the report as JSON (schema in docs/hw-report.md).
+    #[arg(long, value_name = "JSON")]
+    pub report: Option<PathBuf>,
+    #[command(flatten)]
+    pub camera: CameraArgs,
+    #[command(flatten)]
+    pub structure: StructureArgs,
+    /// Ray–triangle test (default: the one the image's triangle layout is for).
+    #[arg(long, value_enum)]
+    pub intersector: Option<IntersectorKind>,
 }
 
 /// `raypipe trace`.
@@ -362,6 +395,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Bench(a) => cmd_bench(a),
         Command::Trace(a) => cmd_trace(a),
         Command::Rays(a) => cmd_rays(a),
+        Command::Simulate(a) => cmd_simulate(a),
     }
 }
 
@@ -503,6 +537,39 @@ fn cmd_render(a: RenderArgs) -> Result<()> {
         secs,
         (frame.width as f64 * frame.height as f64) / secs / 1e6,
         a.output.display()
+    );
+    Ok(())
+}
+
+fn cmd_simulate(a: SimulateArgs) -> Result<()> {
+    check_png_path(&a.output)?;
+    // The configuration is checked before the scene is even loaded.
+    let cfg = simulate::load_config(a.preset.as_deref(), a.config.as_deref(), &a.set)?;
+    let scene = scene::load(a.scene.as_deref(), &a.structure.options())?;
+    warn(&scene);
+    let view = scene.view()?;
+    let cam = camera_for(&scene, &a.camera)?;
+    let kind = IntersectorKind::resolve(a.intersector, &view);
+    let start = Instant::now();
+    let (frame, report) = simulate::simulate(&view, &cam, &cfg, kind, true)?;
+    let secs = start.elapsed().as_secs_f64();
+    output::write_png(&a.output, frame.width, frame.height, &frame.pixels)?;
+    if let Some(path) = &a.report {
+        output::write_bytes(path, report.to_json().as_bytes())?;
+    }
+    println!(
+        "simulated {} ({}, {} triangles) -> {}",
+        scene.name,
+        structure_summary(&view),
+        view.triangle_count(),
+        a.output.display()
+    );
+    print!("{}", report.summary());
+    println!(
+        "simulator      {:.2} s wall, {:.3} Mrays/s simulated{}",
+        secs,
+        report.rays as f64 / secs / 1e6,
+        a.report.as_ref().map_or(String::new(), |p| format!("; report -> {}", p.display()))
     );
     Ok(())
 }

@@ -23,6 +23,7 @@ pub mod packets;
 pub mod progress;
 pub mod render;
 pub mod scene;
+pub mod simulate;
 pub mod stats;
 pub mod tracer;
 pub mod tri_box;

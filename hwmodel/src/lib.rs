@@ -1,11 +1,40 @@
 //! # raypipe-hw
 //!
-//! The cycle-level, RTL-style model of a ray tracing chip (issue 4): ray generation and
-//! shading units feeding traversal units coupled to intersection units through bounded
-//! FIFOs, with caches and a memory channel that account every byte. It will be built
-//! from `raypipe-core`'s kernels — the grid traversal is already a step kernel
-//! (`raypipe_core::grid::GridTraversal::step`) and every scene read already goes through
-//! `raypipe_core::MemoryProbe` — so that its images equal the host's bit for bit.
+//! A cycle-level, RTL-style model of a ray tracing chip in the spirit of SaarCOR (Wald &
+//! Slusallek 2001 §7.3): a ray generation & shading unit ([`rgs`]) feeds several traversal
+//! units ([`traversal_unit`]), each coupled to a list & intersection unit
+//! ([`intersection_unit`]) through bounded FIFOs ([`fifo`]); packets step in lock-step;
+//! per-unit caches ([`cache`]) sit in front of one memory channel ([`memory_channel`])
+//! that accounts every byte by data class. Every unit has registered state and one
+//! `tick`; FIFOs and the channel commit at the clock edge ([`simulator`]), so the tick
+//! order cannot change any result.
 //!
-//! Nothing is modelled yet; this crate only fixes the workspace layout.
+//! The model computes with raypipe-core's kernels — the structures' step kernels through
+//! `raypipe_core::walk::Walk`, the intersection and shading kernels — and observes their
+//! reads through `MemoryProbe`, so its image is the host's image bit for bit; it adds
+//! cycles, stalls, occupancy and traffic ([`report`]). Parameters live in one
+//! [`config::HwConfig`].
 #![forbid(unsafe_code)]
+
+pub mod cache;
+pub mod config;
+pub mod fifo;
+pub mod intersection_unit;
+pub mod jobs;
+pub mod mem_port;
+pub mod memory_channel;
+pub mod report;
+pub mod rgs;
+pub mod simulator;
+pub mod traffic;
+pub mod traversal_unit;
+pub mod unit_stats;
+
+pub use config::HwConfig;
+pub use report::Report;
+pub use simulator::Simulator;
+
+/// The set lanes of a mask, lowest first.
+pub(crate) fn lane_iter(mask: u64) -> raypipe_core::packet::Lanes {
+    raypipe_core::packet::Lanes(mask)
+}

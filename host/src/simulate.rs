@@ -1,0 +1,58 @@
+//! `raypipe simulate`: the hardware model on a scene and a view. Configuration comes from
+//! a preset or a TOML file, then `--set key=value` overrides; the model's image is the
+//! host renderer's image (same kernels), and its report adds cycles and traffic.
+
+use std::path::Path;
+
+use anyhow::{anyhow, Result};
+use raypipe_core::image::CameraRecord;
+use raypipe_core::SceneView;
+use raypipe_hw::{HwConfig, Report, Simulator};
+
+use crate::progress;
+use crate::render::{eye_rays, Frame};
+use crate::tracer::IntersectorKind;
+use crate::with_intersector;
+
+/// Builds the configuration: a preset or a file (else the defaults), then overrides;
+/// validated before anything runs.
+pub fn load_config(preset: Option<&str>, file: Option<&Path>, sets: &[String]) -> Result<HwConfig> {
+    let mut cfg = match (preset, file) {
+        (Some(name), _) => HwConfig::preset(name).map_err(|e| anyhow!(e))?,
+        (None, Some(path)) => {
+            let text = std::fs::read_to_string(path).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+            HwConfig::from_toml(&text).map_err(|e| anyhow!("{}: {e}", path.display()))?
+        }
+        (None, None) => HwConfig::default(),
+    };
+    for s in sets {
+        cfg.set(s).map_err(|e| anyhow!(e))?;
+    }
+    cfg.validate().map_err(|e| anyhow!("hardware configuration: {e}"))?;
+    Ok(cfg)
+}
+
+/// Simulates one frame; the image and the report.
+pub fn simulate(
+    scene: &SceneView<'_>,
+    camera: &CameraRecord,
+    cfg: &HwConfig,
+    intersector: IntersectorKind,
+    show_progress: bool,
+) -> Result<(Frame, Report)> {
+    let eye = eye_rays(camera, "camera")?;
+    let (width, height) = (eye.width, eye.height);
+    let background = raypipe_core::Vec3::from(camera.background);
+    with_intersector!(intersector, I => {
+        let mut sim = Simulator::<I>::new(*scene, eye, background, cfg).map_err(|e| anyhow!("hardware configuration: {e}"))?;
+        let bar = progress::bar(0, "simulate", show_progress);
+        sim.run(|done, total| {
+            bar.set_length(total as u64);
+            bar.set_position(done as u64);
+        })
+        .map_err(|e| anyhow!(e))?;
+        bar.finish_and_clear();
+        let frame = Frame { width, height, pixels: sim.framebuffer().to_vec() };
+        Ok((frame, sim.report()))
+    })
+}

@@ -1,0 +1,55 @@
+//! What travels through the FIFOs: whole packets (structure of lanes with an active
+//! mask), boxed so that a FIFO slot is a pointer, as a hardware FIFO of packet tags into
+//! a packet register file would be.
+
+use raypipe_core::walk::Leaf;
+use raypipe_core::{Hit, Ray};
+
+use crate::config::MAX_PACKET;
+
+const LANES: usize = MAX_PACKET as usize;
+
+/// A ray that is never traced (inactive lanes).
+pub const NO_RAY: Ray = Ray { origin: raypipe_core::Vec3::ZERO, dir: raypipe_core::Vec3::ZERO, t_min: 0.0, t_max: 0.0 };
+
+/// Ray generator → traversal unit: a packet of primary rays.
+#[derive(Clone, Debug)]
+pub struct RayPacketJob {
+    /// Packet number (its pixel block, in tile order).
+    pub index: u32,
+    /// Lanes with a ray (inside the image and passing the scene-bounds test).
+    pub lanes: u64,
+    /// The rays.
+    pub rays: [Ray; LANES],
+}
+
+/// Traversal unit → intersection unit: a packet standing at leaves.
+#[derive(Clone, Debug)]
+pub struct LeafJob {
+    /// The traversal thread the packet belongs to.
+    pub thread: u8,
+    /// Lanes at a leaf.
+    pub lanes: u64,
+    /// Each lane's leaf.
+    pub leaves: [Leaf; LANES],
+    /// The rays.
+    pub rays: [Ray; LANES],
+    /// Each lane's best hit so far (updated by the intersection unit).
+    pub best: [Option<Hit>; LANES],
+}
+
+/// Traversal unit → shading: a finished packet.
+#[derive(Clone, Debug)]
+pub struct HitPacket {
+    /// Packet number.
+    pub index: u32,
+    /// Lanes that were traced.
+    pub lanes: u64,
+    /// Their closest hits.
+    pub hits: [Option<Hit>; LANES],
+}
+
+/// Lane count of a mask.
+pub fn lanes(mask: u64) -> u64 {
+    mask.count_ones() as u64
+}

@@ -1,0 +1,327 @@
+//! The report of a run, gathered in one place from the units' counters: a JSON document
+//! (schema `raypipe-hw-report/1`, documented in docs/hw-report.md) and a human summary.
+
+use std::collections::BTreeMap;
+
+use serde::Serialize;
+
+use crate::cache::CacheStats;
+use crate::config::HwConfig;
+use crate::fifo::FifoStats;
+use crate::memory_channel::ChannelStats;
+use crate::traffic::{CLASSES, CLASS_NAMES, FRAMEBUFFER};
+use crate::unit_stats::UnitStats;
+
+/// Schema name and version of the JSON report.
+pub const SCHEMA: &str = "raypipe-hw-report/1";
+
+/// One unit's line of the report.
+#[derive(Clone, Debug, Serialize)]
+pub struct UnitReport {
+    /// Unit name (`rgs.generate`, `rgs.shade`, `traversal0`, `intersection0`, …).
+    pub name: String,
+    /// Cycles doing work.
+    pub busy_cycles: u64,
+    /// Cycles with work waiting (memory, latency, a full FIFO).
+    pub stall_cycles: u64,
+    /// Cycles without work.
+    pub idle_cycles: u64,
+    /// Packet operations issued.
+    pub issues: u64,
+    /// Active lanes over lane slots of those issues.
+    pub simd_efficiency: f64,
+}
+
+/// One FIFO's line.
+#[derive(Clone, Debug, Serialize)]
+pub struct FifoReport {
+    /// FIFO name (`rays0`, `leaves0`, `results0`, `hits0`, …).
+    pub name: String,
+    /// Configured depth.
+    pub depth: usize,
+    /// Mean committed occupancy.
+    pub mean_occupancy: f64,
+    /// Counters and the occupancy histogram (`occupancy[k]`: cycles with `k` entries).
+    #[serde(flatten)]
+    pub stats: FifoStats,
+}
+
+/// One class's counts in one cache.
+#[derive(Clone, Debug, Serialize)]
+pub struct CacheClassReport {
+    /// Line accesses that hit.
+    pub hits: u64,
+    /// Line accesses that joined a fill in flight.
+    pub merged: u64,
+    /// Line accesses that missed.
+    pub misses: u64,
+    /// `hits / (hits + merged + misses)`.
+    pub hit_rate: f64,
+}
+
+/// One cache's line.
+#[derive(Clone, Debug, Serialize)]
+pub struct CacheReport {
+    /// Cache name (that of its port).
+    pub name: String,
+    /// Per data class with any access.
+    pub classes: BTreeMap<String, CacheClassReport>,
+}
+
+/// The memory channel.
+#[derive(Clone, Debug, Serialize)]
+pub struct MemoryReport {
+    /// Bytes transferred per class.
+    pub bytes: BTreeMap<String, u64>,
+    /// Total bytes transferred.
+    pub total_bytes: u64,
+    /// Total bytes per traced ray.
+    pub bytes_per_ray: f64,
+    /// Requests served.
+    pub requests: u64,
+    /// Fraction of cycles the channel was transferring.
+    pub utilization: f64,
+    /// Distinct scene bytes the kernels read (the compulsory traffic).
+    pub distinct_scene_bytes: u64,
+    /// Scene bytes transferred over distinct scene bytes read (1.0 is the floor).
+    pub traffic_over_compulsory: f64,
+}
+
+/// Checks that must hold for every run.
+#[derive(Clone, Debug, Serialize)]
+pub struct Conservation {
+    /// Rays sent to traversal.
+    pub rays_issued: u64,
+    /// Rays shaded after traversal.
+    pub rays_retired: u64,
+    /// Bytes the ports requested.
+    pub bytes_requested: u64,
+    /// Bytes the channel delivered.
+    pub bytes_delivered: u64,
+}
+
+/// The whole report.
+#[derive(Clone, Debug, Serialize)]
+pub struct Report {
+    /// Schema name and version.
+    pub schema: &'static str,
+    /// The configuration simulated.
+    pub config: HwConfig,
+    /// Image size.
+    pub width: u32,
+    /// Image size.
+    pub height: u32,
+    /// Rays traced (primary rays that passed the scene-bounds test).
+    pub rays: u64,
+    /// Cycles for the frame.
+    pub cycles: u64,
+    /// Frames per second at `config.clock_mhz`.
+    pub frames_per_second: f64,
+    /// Traced rays per second at `config.clock_mhz`.
+    pub rays_per_second: f64,
+    /// Traversal steps issued (packet steps).
+    pub traversal_steps: u64,
+    /// Ray–triangle tests run.
+    pub triangle_tests: u64,
+    /// Per unit.
+    pub units: Vec<UnitReport>,
+    /// Per FIFO.
+    pub fifos: Vec<FifoReport>,
+    /// Per cache.
+    pub caches: Vec<CacheReport>,
+    /// The memory channel.
+    pub memory: MemoryReport,
+    /// Conservation checks.
+    pub conservation: Conservation,
+}
+
+/// Everything [`Report::gather`] reads.
+pub struct Sources<'a> {
+    /// The configuration.
+    pub cfg: &'a HwConfig,
+    /// Image size.
+    pub size: (u32, u32),
+    /// Frame cycles.
+    pub cycles: u64,
+    /// Units by name.
+    pub units: Vec<(String, &'a UnitStats)>,
+    /// FIFOs: name, depth, counters.
+    pub fifos: Vec<(String, usize, &'a FifoStats)>,
+    /// Caches by port name.
+    pub caches: Vec<(String, &'a CacheStats)>,
+    /// The channel.
+    pub channel: &'a ChannelStats,
+    /// Bytes requested by all ports.
+    pub requested: u64,
+    /// Distinct scene bytes read.
+    pub distinct: u64,
+    /// Rays issued, rays retired.
+    pub rays: (u64, u64),
+    /// Ray–triangle tests.
+    pub tests: u64,
+}
+
+fn ratio(a: f64, b: f64) -> f64 {
+    if b > 0.0 {
+        a / b
+    } else {
+        0.0
+    }
+}
+
+impl Report {
+    /// Gathers the report.
+    pub fn gather(s: Sources<'_>) -> Report {
+        let cycles = s.cycles.max(1);
+        let seconds = cycles as f64 / (s.cfg.clock_mhz * 1e6);
+        let rays = s.rays.0;
+        let units = s
+            .units
+            .iter()
+            .map(|(name, u)| UnitReport {
+                name: name.clone(),
+                busy_cycles: u.busy_cycles,
+                stall_cycles: u.stall_cycles,
+                idle_cycles: u.idle_cycles,
+                issues: u.issues,
+                simd_efficiency: u.simd_efficiency(),
+            })
+            .collect::<Vec<_>>();
+        let traversal_steps =
+            s.units.iter().filter(|(n, _)| n.starts_with("traversal")).map(|(_, u)| u.issues).sum::<u64>();
+        let fifos = s
+            .fifos
+            .iter()
+            .map(|(name, depth, st)| {
+                let total: u64 = st.occupancy.iter().sum();
+                let weighted: u64 = st.occupancy.iter().enumerate().map(|(k, c)| k as u64 * c).sum();
+                FifoReport {
+                    name: name.clone(),
+                    depth: *depth,
+                    mean_occupancy: ratio(weighted as f64, total as f64),
+                    stats: (*st).clone(),
+                }
+            })
+            .collect();
+        let caches = s
+            .caches
+            .iter()
+            .map(|(name, c)| CacheReport {
+                name: name.clone(),
+                classes: (0..CLASSES)
+                    .filter(|&k| c.hits[k] + c.merged[k] + c.misses[k] > 0)
+                    .map(|k| {
+                        let all = (c.hits[k] + c.merged[k] + c.misses[k]) as f64;
+                        let r = CacheClassReport {
+                            hits: c.hits[k],
+                            merged: c.merged[k],
+                            misses: c.misses[k],
+                            hit_rate: ratio(c.hits[k] as f64, all),
+                        };
+                        (CLASS_NAMES[k].to_string(), r)
+                    })
+                    .collect(),
+            })
+            .collect();
+        let total_bytes: u64 = s.channel.bytes.iter().sum();
+        let scene_bytes = total_bytes - s.channel.bytes[FRAMEBUFFER];
+        let memory = MemoryReport {
+            bytes: (0..CLASSES).map(|k| (CLASS_NAMES[k].to_string(), s.channel.bytes[k])).collect(),
+            total_bytes,
+            bytes_per_ray: ratio(total_bytes as f64, rays as f64),
+            requests: s.channel.requests.iter().sum(),
+            utilization: ratio(s.channel.busy_cycles as f64, cycles as f64),
+            distinct_scene_bytes: s.distinct,
+            traffic_over_compulsory: ratio(scene_bytes as f64, s.distinct as f64),
+        };
+        Report {
+            schema: SCHEMA,
+            config: s.cfg.clone(),
+            width: s.size.0,
+            height: s.size.1,
+            rays,
+            cycles: s.cycles,
+            frames_per_second: 1.0 / seconds,
+            rays_per_second: rays as f64 / seconds,
+            traversal_steps,
+            triangle_tests: s.tests,
+            units,
+            fifos,
+            caches,
+            memory,
+            conservation: Conservation {
+                rays_issued: s.rays.0,
+                rays_retired: s.rays.1,
+                bytes_requested: s.requested,
+                bytes_delivered: total_bytes,
+            },
+        }
+    }
+
+    /// The report as pretty-printed JSON.
+    pub fn to_json(&self) -> String {
+        serde_json::to_string_pretty(self).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
+    }
+
+    /// A human summary for the terminal.
+    pub fn summary(&self) -> String {
+        let mut out = String::new();
+        let mut line = |s: String| {
+            out.push_str(&s);
+            out.push('\n');
+        };
+        line(format!(
+            "frame          {}x{}, {} rays in packets of {}, {} cycles",
+            self.width, self.height, self.rays, self.config.packet_size, self.cycles
+        ));
+        line(format!(
+            "at {} MHz      {:.2} frames/s, {:.2} Mrays/s",
+            self.config.clock_mhz,
+            self.frames_per_second,
+            self.rays_per_second / 1e6
+        ));
+        line(format!(
+            "work           {} traversal steps, {} ray-triangle tests",
+            self.traversal_steps, self.triangle_tests
+        ));
+        line("unit                busy  stall   idle   SIMD".to_string());
+        for u in &self.units {
+            let all = (u.busy_cycles + u.stall_cycles + u.idle_cycles).max(1) as f64;
+            line(format!(
+                "  {:<16} {:>5.1}% {:>5.1}% {:>5.1}% {:>5.1}%",
+                u.name,
+                100.0 * u.busy_cycles as f64 / all,
+                100.0 * u.stall_cycles as f64 / all,
+                100.0 * u.idle_cycles as f64 / all,
+                100.0 * u.simd_efficiency
+            ));
+        }
+        let (full, empty): (u64, u64) =
+            self.fifos.iter().fold((0, 0), |(a, b), f| (a + f.stats.full_stall_cycles, b + f.stats.empty_stall_cycles));
+        line(format!("fifos          {} full-stall cycles, {} empty-stall cycles in all", full, empty));
+        for c in &self.caches {
+            let parts: Vec<String> = c
+                .classes
+                .iter()
+                .map(|(k, r)| format!("{k} {:.1}% hit ({} misses)", 100.0 * r.hit_rate, r.misses))
+                .collect();
+            if !parts.is_empty() {
+                line(format!("cache {:<14} {}", c.name, parts.join(", ")));
+            }
+        }
+        let m = &self.memory;
+        let by_class: Vec<String> = m.bytes.iter().filter(|(_, &b)| b > 0).map(|(k, b)| format!("{k} {b}")).collect();
+        line(format!(
+            "memory         {} bytes ({:.1} per ray; {}), {:.1}% busy",
+            m.total_bytes,
+            m.bytes_per_ray,
+            by_class.join(", "),
+            100.0 * m.utilization
+        ));
+        line(format!(
+            "scene traffic  {:.2}x the {} distinct bytes read",
+            m.traffic_over_compulsory, m.distinct_scene_bytes
+        ));
+        out
+    }
+}

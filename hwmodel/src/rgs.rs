@@ -1,0 +1,250 @@
+//! Ray generation & shading (RGS): the generator emits packets of primary rays, one
+//! square pixel block per packet in tile order, with Purcell's scene-bounds test deciding
+//! which lanes carry a ray; packets go round-robin to the traversal units' ray FIFOs.
+//! The shader takes finished packets back, runs core's shading kernel (its reads go
+//! through the shading cache) and writes the framebuffer (a posted write per packet).
+//!
+//! Ports: `rays` out (one FIFO per traversal unit), `hits` in (one per traversal unit),
+//! and a memory port with the shading cache.
+
+use raypipe_core::camera::EyeRays;
+use raypipe_core::color::rgb8;
+use raypipe_core::shade::shade;
+use raypipe_core::{SceneView, Vec3};
+
+use crate::config::HwConfig;
+use crate::fifo::Fifo;
+use crate::jobs::{lanes, HitPacket, RayPacketJob, NO_RAY};
+use crate::mem_port::{MemPort, PortProbe, Wait};
+use crate::traffic::FRAMEBUFFER;
+use crate::unit_stats::{Activity, UnitStats};
+
+/// Pixels per tile side (packets are issued tile by tile, as the host renders).
+pub const TILE: u32 = 16;
+
+/// Framebuffer base address: above any scene image (a 32-bit address space).
+const FRAMEBUFFER_BASE: u64 = 1 << 32;
+
+/// A packet being shaded.
+struct Shading {
+    wait: Wait,
+    busy_until: u64,
+}
+
+/// The ray generation & shading unit.
+pub struct Rgs {
+    eye: EyeRays,
+    bounds: (Vec3, Vec3),
+    background: Vec3,
+    side: u32,
+    packet_size: u64,
+    rays_per_cycle: u64,
+    shade_per_cycle: u64,
+    /// Pixel block origins, in issue order.
+    blocks: Vec<(u32, u32)>,
+    next_block: usize,
+    generated: Option<(Box<RayPacketJob>, u64)>,
+    next_unit: usize,
+    next_hits: usize,
+    shading: Option<Shading>,
+    /// The image, row-major.
+    pub framebuffer: Vec<[u8; 3]>,
+    /// The shading port.
+    pub port: MemPort,
+    /// Generator activity.
+    pub gen_stats: UnitStats,
+    /// Shader activity.
+    pub shade_stats: UnitStats,
+    /// Packets shaded and written.
+    pub packets_done: usize,
+    /// Rays issued to traversal.
+    pub rays_issued: u64,
+    /// Rays shaded after traversal.
+    pub rays_retired: u64,
+}
+
+impl Rgs {
+    /// A generator for the view `eye` of the scene with bounds `bounds` (Purcell's test).
+    pub fn new(eye: EyeRays, bounds: (Vec3, Vec3), background: Vec3, cfg: &HwConfig) -> Rgs {
+        let side = cfg.packet_side();
+        let mut blocks = Vec::new();
+        for ty in (0..eye.height).step_by(TILE as usize) {
+            for tx in (0..eye.width).step_by(TILE as usize) {
+                for by in (ty..(ty + TILE).min(eye.height)).step_by(side as usize) {
+                    for bx in (tx..(tx + TILE).min(eye.width)).step_by(side as usize) {
+                        blocks.push((bx, by));
+                    }
+                }
+            }
+        }
+        let pixels = (eye.width * eye.height) as usize;
+        Rgs {
+            eye,
+            bounds,
+            background,
+            side,
+            packet_size: cfg.packet_size as u64,
+            rays_per_cycle: cfg.rgs.rays_per_cycle as u64,
+            shade_per_cycle: cfg.rgs.shade_per_cycle as u64,
+            blocks,
+            next_block: 0,
+            generated: None,
+            next_unit: 0,
+            next_hits: 0,
+            shading: None,
+            framebuffer: vec![[0; 3]; pixels],
+            port: MemPort::new("shading".into(), &cfg.cache.shading),
+            gen_stats: UnitStats::default(),
+            shade_stats: UnitStats::default(),
+            packets_done: 0,
+            rays_issued: 0,
+            rays_retired: 0,
+        }
+    }
+
+    /// Number of packets in the frame.
+    pub fn packet_count(&self) -> usize {
+        self.blocks.len()
+    }
+
+    /// Image size.
+    pub fn size(&self) -> (u32, u32) {
+        (self.eye.width, self.eye.height)
+    }
+
+    /// Every packet shaded.
+    pub fn is_done(&self) -> bool {
+        self.packets_done == self.blocks.len()
+    }
+
+    /// One line describing the unit (for the watchdog).
+    pub fn describe(&self) -> String {
+        format!(
+            "rgs: {}/{} packets generated, {} waiting to be sent, {} shaded, shader {}",
+            self.next_block,
+            self.blocks.len(),
+            self.generated.is_some() as u32,
+            self.packets_done,
+            if self.shading.is_some() { "busy" } else { "free" }
+        )
+    }
+
+    /// Pixel of lane `j` of block `b`, if inside the image.
+    fn pixel(&self, b: usize, j: usize) -> Option<(u32, u32)> {
+        let (bx, by) = *self.blocks.get(b)?;
+        let (x, y) = (bx + j as u32 % self.side, by + j as u32 / self.side);
+        (x < self.eye.width && y < self.eye.height).then_some((x, y))
+    }
+
+    /// One cycle. Returns true if anything moved.
+    pub fn tick(
+        &mut self,
+        now: u64,
+        scene: &SceneView<'_>,
+        rays: &mut [Fifo<Box<RayPacketJob>>],
+        hits: &mut [Fifo<Box<HitPacket>>],
+    ) -> bool {
+        let mut moved = false;
+        // Generator: send the packet made earlier, or make the next one.
+        let gen_activity = match self.generated.take() {
+            Some((job, ready)) if ready <= now => {
+                let n = rays.len();
+                match (0..n).map(|k| (self.next_unit + k) % n).find(|&u| rays[u].can_push()) {
+                    Some(u) => {
+                        self.rays_issued += lanes(job.lanes);
+                        let _ = rays[u].push(job);
+                        self.next_unit = (u + 1) % n;
+                        moved = true;
+                        Activity::Busy
+                    }
+                    None => {
+                        rays.iter_mut().for_each(|f| f.note_full());
+                        self.generated = Some((job, ready));
+                        Activity::Stalled
+                    }
+                }
+            }
+            Some(pending) => {
+                self.generated = Some(pending);
+                Activity::Busy
+            }
+            None if self.next_block < self.blocks.len() => {
+                let b = self.next_block;
+                let mut job = Box::new(RayPacketJob { index: b as u32, lanes: 0, rays: [NO_RAY; 64] });
+                for j in 0..self.packet_size as usize {
+                    if let Some((x, y)) = self.pixel(b, j) {
+                        if let Some(ray) = self.eye.ray_in_scene(x, y, self.bounds.0, self.bounds.1) {
+                            job.rays[j] = ray;
+                            job.lanes |= 1 << j;
+                        }
+                    }
+                }
+                self.gen_stats.issue(lanes(job.lanes), self.packet_size);
+                let cycles = self.packet_size.div_ceil(self.rays_per_cycle);
+                self.generated = Some((job, now + cycles));
+                self.next_block += 1;
+                moved = true;
+                Activity::Busy
+            }
+            None => Activity::Idle,
+        };
+        self.gen_stats.cycle(gen_activity);
+
+        // Shader: finish the packet being shaded, or take the next finished one.
+        if let Some(s) = &self.shading {
+            if self.port.resolve(&s.wait).is_some_and(|r| r.max(s.busy_until) <= now) {
+                self.shading = None;
+                self.packets_done += 1;
+                moved = true;
+            }
+        }
+        let shade_activity = if self.shading.is_some() {
+            Activity::Stalled
+        } else {
+            let n = hits.len();
+            match (0..n).map(|k| (self.next_hits + k) % n).find(|&u| hits[u].peek().is_some()) {
+                Some(u) => {
+                    self.next_hits = (u + 1) % n;
+                    let packet = hits[u].pop().expect("peeked");
+                    self.shade(now, scene, &packet);
+                    moved = true;
+                    Activity::Busy
+                }
+                None => Activity::Idle,
+            }
+        };
+        self.shade_stats.cycle(shade_activity);
+        moved
+    }
+
+    /// Shades one finished packet into the framebuffer.
+    fn shade(&mut self, now: u64, scene: &SceneView<'_>, packet: &HitPacket) {
+        let b = packet.index as usize;
+        let mut where_: [Option<(u32, u32)>; 64] = [None; 64];
+        for (j, p) in where_.iter_mut().enumerate().take(self.packet_size as usize) {
+            *p = self.pixel(b, j);
+        }
+        let mut probe = PortProbe { port: &mut self.port, now, wait: Wait::default() };
+        let mut pixels = 0u64;
+        for (j, p) in where_.iter().enumerate() {
+            let Some((x, y)) = *p else { continue };
+            pixels += 1;
+            let color = if packet.lanes & (1 << j) != 0 {
+                match self.eye.ray_in_scene(x, y, self.bounds.0, self.bounds.1) {
+                    Some(ray) => shade(scene, &ray, packet.hits[j], self.background, &mut probe),
+                    None => self.background,
+                }
+            } else {
+                self.background
+            };
+            self.framebuffer[(y * self.eye.width + x) as usize] = rgb8(color);
+        }
+        let wait = probe.wait;
+        let first = self.blocks[b];
+        let addr = FRAMEBUFFER_BASE + 4 * (first.1 as u64 * self.eye.width as u64 + first.0 as u64);
+        self.port.write(FRAMEBUFFER, addr, 4 * pixels as u32);
+        self.rays_retired += lanes(packet.lanes);
+        self.shade_stats.issue(lanes(packet.lanes), self.packet_size);
+        self.shading = Some(Shading { wait, busy_until: now + pixels.div_ceil(self.shade_per_cycle) });
+    }
+}

@@ -1,0 +1,239 @@
+//! The clock: every cycle each unit ticks (reading only state committed at the previous
+//! edge), then the edge commits every FIFO and hands the cycle's memory requests to the
+//! channel in a fixed port order. A watchdog stops a run in which nothing moves for
+//! `watchdog_cycles` and names every unit's state and every FIFO's occupancy.
+
+use raypipe_core::camera::EyeRays;
+use raypipe_core::triangle::Intersector;
+use raypipe_core::{SceneView, Vec3};
+
+use crate::config::HwConfig;
+use crate::fifo::Fifo;
+use crate::intersection_unit::IntersectionUnit;
+use crate::jobs::{HitPacket, LeafJob, RayPacketJob};
+use crate::mem_port::MemPort;
+use crate::memory_channel::MemoryChannel;
+use crate::report::{Report, Sources};
+use crate::rgs::Rgs;
+use crate::traversal_unit::TraversalUnit;
+
+/// A unit, for the tick order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum UnitRef {
+    Rgs,
+    Traversal(usize),
+    Intersection(usize),
+}
+
+/// The modelled chip with its scene and frame.
+pub struct Simulator<'s, I: Intersector> {
+    cfg: HwConfig,
+    scene: SceneView<'s>,
+    rgs: Rgs,
+    tus: Vec<TraversalUnit>,
+    ius: Vec<IntersectionUnit<I>>,
+    ray_fifos: Vec<Fifo<Box<RayPacketJob>>>,
+    leaf_fifos: Vec<Fifo<Box<LeafJob>>>,
+    result_fifos: Vec<Fifo<Box<LeafJob>>>,
+    hit_fifos: Vec<Fifo<Box<HitPacket>>>,
+    channel: MemoryChannel,
+    /// Scene bytes read at least once, one bit per 4-byte word.
+    touched: Vec<u64>,
+    order: Vec<UnitRef>,
+    shuffle: Option<u64>,
+    now: u64,
+}
+
+impl<'s, I: Intersector> Simulator<'s, I> {
+    /// Builds the chip of `cfg` (validated first) for the frame `eye` of `scene`.
+    pub fn new(scene: SceneView<'s>, eye: EyeRays, background: Vec3, cfg: &HwConfig) -> Result<Self, String> {
+        cfg.validate()?;
+        let units = cfg.traversal.units as usize;
+        let f = &cfg.fifo;
+        let mut order = vec![UnitRef::Rgs];
+        order.extend((0..units).map(UnitRef::Traversal));
+        order.extend((0..units).map(UnitRef::Intersection));
+        let words = scene.bytes().len().div_ceil(4);
+        Ok(Simulator {
+            cfg: cfg.clone(),
+            scene,
+            rgs: Rgs::new(eye, scene.test_bounds(), background, cfg),
+            tus: (0..units).map(|u| TraversalUnit::new(u, cfg)).collect(),
+            ius: (0..units).map(|u| IntersectionUnit::new(u, cfg)).collect(),
+            ray_fifos: (0..units).map(|u| Fifo::new(format!("rays{u}"), f.rays)).collect(),
+            leaf_fifos: (0..units).map(|u| Fifo::new(format!("leaves{u}"), f.leaves)).collect(),
+            result_fifos: (0..units).map(|u| Fifo::new(format!("results{u}"), f.results)).collect(),
+            hit_fifos: (0..units).map(|u| Fifo::new(format!("hits{u}"), f.hits)).collect(),
+            channel: MemoryChannel::new(&cfg.memory),
+            touched: vec![0; words.div_ceil(64)],
+            order,
+            shuffle: None,
+            now: 0,
+        })
+    }
+
+    /// Ticks the units in a pseudo-random order, reshuffled every cycle (for the test
+    /// that proves the order cannot matter).
+    pub fn shuffle_tick_order(&mut self, seed: u64) {
+        self.shuffle = Some(seed | 1);
+    }
+
+    /// Runs the frame to the end; `progress(done, total)` is called now and then with
+    /// packets shaded.
+    pub fn run(&mut self, mut progress: impl FnMut(usize, usize)) -> Result<(), String> {
+        let mut quiet = 0u64;
+        let total = self.rgs.packet_count();
+        let mut last_done = usize::MAX;
+        while !self.rgs.is_done() {
+            let moved = self.cycle();
+            if moved || self.channel.busy_after(self.now) {
+                quiet = 0;
+            } else {
+                quiet += 1;
+                if quiet > self.cfg.watchdog_cycles {
+                    return Err(self.deadlock());
+                }
+            }
+            self.now += 1;
+            if self.rgs.packets_done != last_done && self.now.is_multiple_of(1024) {
+                last_done = self.rgs.packets_done;
+                progress(last_done, total);
+            }
+        }
+        progress(total, total);
+        Ok(())
+    }
+
+    /// One clock cycle: every unit ticks, then the edge. Returns whether anything moved.
+    fn cycle(&mut self) -> bool {
+        let now = self.now;
+        if let Some(state) = self.shuffle.as_mut() {
+            // Fisher–Yates with xorshift64.
+            for i in (1..self.order.len()).rev() {
+                *state ^= *state << 13;
+                *state ^= *state >> 7;
+                *state ^= *state << 17;
+                self.order.swap(i, (*state % (i as u64 + 1)) as usize);
+            }
+        }
+        let mut moved = false;
+        for k in 0..self.order.len() {
+            moved |= match self.order[k] {
+                UnitRef::Rgs => self.rgs.tick(now, &self.scene, &mut self.ray_fifos, &mut self.hit_fifos),
+                UnitRef::Traversal(u) => self.tus[u].tick(
+                    now,
+                    &self.scene,
+                    &mut self.ray_fifos[u],
+                    &mut self.leaf_fifos[u],
+                    &mut self.result_fifos[u],
+                    &mut self.hit_fifos[u],
+                ),
+                UnitRef::Intersection(u) => {
+                    self.ius[u].tick(now, &self.scene, &mut self.leaf_fifos[u], &mut self.result_fifos[u])
+                }
+            };
+        }
+        // The edge: FIFOs commit, then the channel takes this cycle's requests in port
+        // order (shading, traversal units, intersection units).
+        for f in &mut self.ray_fifos {
+            moved |= f.commit();
+        }
+        for f in self.leaf_fifos.iter_mut().chain(self.result_fifos.iter_mut()) {
+            moved |= f.commit();
+        }
+        for f in &mut self.hit_fifos {
+            moved |= f.commit();
+        }
+        let touched = &mut self.touched;
+        let channel = &mut self.channel;
+        let ports = std::iter::once(&mut self.rgs.port)
+            .chain(self.tus.iter_mut().map(|t| &mut t.port))
+            .chain(self.ius.iter_mut().map(|i| &mut i.port));
+        for port in ports {
+            mark_touched(touched, port);
+            channel.accept(now, port);
+        }
+        moved
+    }
+
+    /// The watchdog's message: every unit's state and every FIFO's occupancy.
+    fn deadlock(&self) -> String {
+        let mut parts = vec![self.rgs.describe()];
+        parts.extend(self.tus.iter().map(|t| t.describe()));
+        parts.extend(self.ius.iter().map(|i| i.describe()));
+        let fifos = self
+            .ray_fifos
+            .iter()
+            .map(|f| (f.name.as_str(), f.len(), f.depth()))
+            .chain(self.leaf_fifos.iter().map(|f| (f.name.as_str(), f.len(), f.depth())))
+            .chain(self.result_fifos.iter().map(|f| (f.name.as_str(), f.len(), f.depth())))
+            .chain(self.hit_fifos.iter().map(|f| (f.name.as_str(), f.len(), f.depth())))
+            .map(|(n, l, d)| format!("{n} {l}/{d}"))
+            .collect::<Vec<_>>()
+            .join(", ");
+        format!(
+            "watchdog: no unit made progress for {} cycles at cycle {}; {}; FIFOs: {fifos}",
+            self.cfg.watchdog_cycles,
+            self.now,
+            parts.join("; ")
+        )
+    }
+
+    /// The rendered image, row-major.
+    pub fn framebuffer(&self) -> &[[u8; 3]] {
+        &self.rgs.framebuffer
+    }
+
+    /// Total cycles of the frame: until the last pixel was shaded and the channel drained.
+    pub fn cycles(&self) -> u64 {
+        self.now.max(self.channel.drained_at())
+    }
+
+    /// The report of the run so far.
+    pub fn report(&self) -> Report {
+        let mut units =
+            vec![("rgs.generate".to_string(), &self.rgs.gen_stats), ("rgs.shade".to_string(), &self.rgs.shade_stats)];
+        units.extend(self.tus.iter().map(|t| (format!("traversal{}", t.id), &t.stats)));
+        units.extend(self.ius.iter().map(|i| (format!("intersection{}", i.id), &i.stats)));
+        let fifos = self
+            .ray_fifos
+            .iter()
+            .map(|f| (f.name.clone(), f.depth(), &f.stats))
+            .chain(
+                self.leaf_fifos.iter().chain(self.result_fifos.iter()).map(|f| (f.name.clone(), f.depth(), &f.stats)),
+            )
+            .chain(self.hit_fifos.iter().map(|f| (f.name.clone(), f.depth(), &f.stats)))
+            .collect();
+        let ports: Vec<&MemPort> = std::iter::once(&self.rgs.port)
+            .chain(self.tus.iter().map(|t| &t.port))
+            .chain(self.ius.iter().map(|i| &i.port))
+            .collect();
+        let caches = ports.iter().filter_map(|p| p.cache.as_ref().map(|c| (p.name.clone(), &c.stats))).collect();
+        let requested = ports.iter().map(|p| p.requested.iter().sum::<u64>()).sum();
+        Report::gather(Sources {
+            cfg: &self.cfg,
+            size: self.rgs.size(),
+            cycles: self.cycles(),
+            units,
+            fifos,
+            caches,
+            channel: &self.channel.stats,
+            requested,
+            distinct: self.touched.iter().map(|w| w.count_ones() as u64).sum::<u64>() * 4,
+            rays: (self.rgs.rays_issued, self.rgs.rays_retired),
+            tests: self.ius.iter().map(|i| i.tests).sum(),
+        })
+    }
+}
+
+/// Marks the 4-byte words a port read this cycle (scene data only).
+fn mark_touched(touched: &mut [u64], port: &mut MemPort) {
+    for (addr, bytes) in port.read_log.drain(..) {
+        let (first, last) = (addr / 4, (addr + bytes.max(1) - 1) / 4);
+        for w in first..=last {
+            if let Some(slot) = touched.get_mut(w as usize / 64) {
+                *slot |= 1 << (w % 64);
+            }
+        }
+    }
+}
