@@ -72,7 +72,7 @@ fn render_without_arguments_draws_the_cornell_box() {
 #[test]
 fn every_subcommand_has_help() {
     let dir = tempfile::tempdir().unwrap();
-    for sub in ["build", "render", "stats", "bench"] {
+    for sub in ["build", "render", "stats", "bench", "trace", "rays", "simulate"] {
         let o = raypipe(dir.path(), &[sub, "--help"]);
         assert!(o.status.success());
         let out = String::from_utf8_lossy(&o.stdout);
@@ -80,7 +80,7 @@ fn every_subcommand_has_help() {
     }
     let o = raypipe(dir.path(), &["--help"]);
     let out = String::from_utf8_lossy(&o.stdout);
-    for sub in ["build", "render", "stats", "bench"] {
+    for sub in ["build", "render", "stats", "bench", "trace", "rays", "simulate"] {
         assert!(out.contains(sub));
     }
 }
@@ -333,4 +333,77 @@ fn malformed_ray_arrays() {
     assert_one_line_error(&run("junk.npy"), "junk.npy");
     assert_one_line_error(&run("missing.npy"), "missing.npy");
     assert!(!d.join("h.npy").exists());
+}
+
+#[test]
+fn simulate_without_arguments_matches_render_and_reports() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = raypipe(dir.path(), &["simulate", "--report", "report.json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    for needle in ["cycles", "frames/s", "traversal0", "intersection0", "memory", "distinct bytes"] {
+        assert!(out.contains(needle), "{needle} missing: {out}");
+    }
+    let o = raypipe(dir.path(), &["render"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(decode(&dir.path().join("raypipe-sim.png")), decode(&dir.path().join("raypipe.png")));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("report.json")).unwrap()).unwrap();
+    assert_eq!(json["schema"], "raypipe-hw-report/1");
+    assert!(json["cycles"].as_u64().unwrap() > 0);
+    assert_eq!(json["conservation"]["rays_issued"], json["conservation"]["rays_retired"]);
+    assert_eq!(json["conservation"]["bytes_requested"], json["conservation"]["bytes_delivered"]);
+    for key in ["units", "fifos", "caches"] {
+        assert!(!json[key].as_array().unwrap().is_empty(), "{key}");
+    }
+    assert!(json["memory"]["bytes"]["nodes"].as_u64().unwrap() > 0);
+}
+
+#[test]
+fn simulate_presets_configs_and_overrides() {
+    let dir = tempfile::tempdir().unwrap();
+    let tetra = fixtures().join("tetra.obj");
+    let tetra = tetra.to_str().unwrap();
+    let o = raypipe(dir.path(), &["render", tetra, "--accel", "bvh", "--size", "40x30", "-o", "r.png"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let cfg = write(dir.path(), "chip.toml", "packet_size = 4\n[traversal]\nunits = 2\nthreads = 3\n");
+    let cfg = cfg.to_str().unwrap();
+    for extra in [
+        &["--preset", "saarcor"][..],
+        &["--preset", "minimal", "--set", "memory.latency=3"][..],
+        &["--config", cfg, "--set", "cache.nodes.size_bytes=0"][..],
+    ] {
+        let mut args = vec!["simulate", tetra, "--accel", "bvh", "--size", "40x30", "-o", "s.png"];
+        args.extend_from_slice(extra);
+        let o = raypipe(dir.path(), &args);
+        assert!(o.status.success(), "{extra:?}: {}", stderr(&o));
+        assert_eq!(decode(&dir.path().join("s.png")), decode(&dir.path().join("r.png")), "{extra:?}");
+    }
+}
+
+#[test]
+fn impossible_hardware_configurations() {
+    let dir = tempfile::tempdir().unwrap();
+    let typo = write(dir.path(), "typo.toml", "[traversal]\nthreds = 4\n");
+    let zero = write(dir.path(), "zero.toml", "[fifo]\nleaves = 0\n");
+    let broken = write(dir.path(), "broken.toml", "[traversal\n");
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["--config", typo.to_str().unwrap()], "threds"),
+        (vec!["--config", zero.to_str().unwrap()], "fifo.leaves"),
+        (vec!["--config", broken.to_str().unwrap()], "broken.toml"),
+        (vec!["--config", "missing.toml"], "missing.toml"),
+        (vec!["--preset", "nosuch"], "unknown preset"),
+        (vec!["--set", "traversal.thread=2"], "no such parameter"),
+        (vec!["--set", "traversal.threads"], "key=value"),
+        (vec!["--set", "cache.triangles.size_bytes=8"], "smaller than one"),
+        (vec!["--set", "packet_size=8"], "packet_size"),
+        (vec!["--set", "traversal.threads=-1"], "traversal.threads"),
+    ];
+    for (args, needle) in cases {
+        let mut all = vec!["simulate", "-o", "x.png", "--report", "x.json"];
+        all.extend_from_slice(&args);
+        let o = raypipe(dir.path(), &all);
+        assert_one_line_error(&o, needle);
+        assert!(!dir.path().join("x.png").exists() && !dir.path().join("x.json").exists(), "{args:?}");
+    }
 }

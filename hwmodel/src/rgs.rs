@@ -49,6 +49,8 @@ pub struct Rgs {
     shading: Option<Shading>,
     /// The image, row-major.
     pub framebuffer: Vec<[u8; 3]>,
+    /// Each pixel's closest hit (what the equivalence tests compare with the host).
+    pub hits: Vec<Option<raypipe_core::Hit>>,
     /// The shading port.
     pub port: MemPort,
     /// Generator activity.
@@ -93,6 +95,7 @@ impl Rgs {
             next_hits: 0,
             shading: None,
             framebuffer: vec![[0; 3]; pixels],
+            hits: vec![None; pixels],
             port: MemPort::new("shading".into(), &cfg.cache.shading),
             gen_stats: UnitStats::default(),
             shade_stats: UnitStats::default(),
@@ -237,7 +240,9 @@ impl Rgs {
             } else {
                 self.background
             };
-            self.framebuffer[(y * self.eye.width + x) as usize] = rgb8(color);
+            let pixel = (y * self.eye.width + x) as usize;
+            self.framebuffer[pixel] = rgb8(color);
+            self.hits[pixel] = if packet.lanes & (1 << j) != 0 { packet.hits[j] } else { None };
         }
         let wait = probe.wait;
         let first = self.blocks[b];

@@ -184,6 +184,17 @@ impl<'s, I: Intersector> Simulator<'s, I> {
         &self.rgs.framebuffer
     }
 
+    /// Each pixel's closest hit, row-major.
+    pub fn hits(&self) -> &[Option<raypipe_core::Hit>] {
+        &self.rgs.hits
+    }
+
+    /// Test hook: a traversal unit that never ticks again, to prove the watchdog fires.
+    #[doc(hidden)]
+    pub fn freeze_traversal_unit(&mut self, unit: usize) {
+        self.order.retain(|u| *u != UnitRef::Traversal(unit));
+    }
+
     /// Total cycles of the frame: until the last pixel was shaded and the channel drained.
     pub fn cycles(&self) -> u64 {
         self.now.max(self.channel.drained_at())

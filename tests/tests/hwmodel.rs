@@ -1,0 +1,232 @@
+//! The hardware model (issue 4) against the host: for random small scenes, views,
+//! structures and hardware configurations, every pixel's hit equals the host runner's
+//! exactly, every run terminates, rays issued = rays retired, and every byte the channel
+//! delivered was requested. The tick order of the units cannot change anything, and the
+//! watchdog turns a stuck unit into an error naming the units and FIFOs.
+
+use proptest::prelude::*;
+use raypipe::scene::{framing_camera, Accel};
+use raypipe::tracer::trace;
+use raypipe_core::camera::{Camera, EyeRays};
+use raypipe_core::image::CameraRecord;
+use raypipe_core::{Hit, NoProbe, RayCounters, SceneView, Vec3, Watertight};
+use raypipe_hw::{HwConfig, Simulator};
+use raypipe_tests::build_soup;
+
+fn coord() -> impl Strategy<Value = f32> {
+    prop_oneof![3 => (-4i32..=4).prop_map(|i| i as f32 * 0.5), 1 => -2.0f32..2.0]
+}
+
+/// A random triangle soup (shared vertices and edges, coplanar and degenerate triangles).
+fn soup() -> impl Strategy<Value = (Vec<[f32; 3]>, Vec<[u32; 3]>)> {
+    (
+        prop::collection::vec([coord(), coord(), coord()], 3..20),
+        prop::collection::vec(any::<[prop::sample::Index; 3]>(), 1..30),
+    )
+        .prop_map(|(positions, picks)| {
+            let n = positions.len();
+            let tris =
+                picks.iter().map(|[a, b, c]| [a.index(n) as u32, b.index(n) as u32, c.index(n) as u32]).collect();
+            (positions, tris)
+        })
+}
+
+fn accel() -> impl Strategy<Value = Accel> {
+    prop_oneof![Just(Accel::Grid), Just(Accel::Kd), Just(Accel::Bvh), Just(Accel::Bvh4), Just(Accel::None)]
+}
+
+/// A random but valid chip.
+fn config() -> impl Strategy<Value = HwConfig> {
+    let cache = || {
+        (prop_oneof![Just(0u32), Just(256), Just(1024)], prop_oneof![Just(16u32), Just(32), Just(64)], 1u32..3, 0u32..4)
+    };
+    (
+        (prop_oneof![Just(1u32), Just(4), Just(16), Just(64)], 1u32..4, 1u32..5, 1u32..6),
+        ([1u32..4, 1u32..4, 1u32..4, 1u32..4], 1u32..40, 1u32..4, 1u32..3, 1u32..8),
+        (cache(), cache(), cache()),
+        (0u32..120, 1u32..33),
+    )
+        .prop_map(|((packet, units, threads, step), (fifos, ilat, ii, rpc, spc), (cn, ct, cs), (mlat, bpc))| {
+            let mut c = HwConfig { packet_size: packet, ..HwConfig::default() };
+            c.traversal.units = units;
+            c.traversal.threads = threads;
+            c.traversal.step_latency = step;
+            [c.fifo.rays, c.fifo.leaves, c.fifo.results, c.fifo.hits] = fifos;
+            c.intersection.latency = ilat;
+            c.intersection.initiation_interval = ii;
+            c.rgs.rays_per_cycle = rpc;
+            c.rgs.shade_per_cycle = spc;
+            for (slot, (size, line, ways, hit)) in
+                [(&mut c.cache.nodes, cn), (&mut c.cache.triangles, ct), (&mut c.cache.shading, cs)]
+            {
+                slot.size_bytes = size.max(if size > 0 { line * ways } else { 0 });
+                slot.line_bytes = line;
+                slot.ways = ways;
+                slot.hit_latency = hit;
+                // Keep the geometry legal: a power-of-two number of sets.
+                if size > 0 {
+                    let sets = (slot.size_bytes / line / ways).next_power_of_two();
+                    slot.size_bytes = sets * line * ways;
+                }
+            }
+            c.memory.latency = mlat;
+            c.memory.bytes_per_cycle = bpc;
+            c
+        })
+}
+
+fn camera(view: &SceneView<'_>, size: (u32, u32), eye_jitter: [f32; 3]) -> CameraRecord {
+    let (lo, hi) = view.bounds();
+    let mut cam = framing_camera(lo.to_array(), hi.to_array());
+    for (e, j) in cam.eye.iter_mut().zip(eye_jitter) {
+        *e += j;
+    }
+    (cam.width, cam.height) = size;
+    cam
+}
+
+/// The host's per-pixel hits for the view.
+fn host_hits(view: &SceneView<'_>, eye: &EyeRays) -> Vec<Option<Hit>> {
+    let (lo, hi) = view.test_bounds();
+    let mut out = Vec::new();
+    for y in 0..eye.height {
+        for x in 0..eye.width {
+            out.push(
+                eye.ray_in_scene(x, y, lo, hi)
+                    .and_then(|r| trace::<Watertight, _>(view, &r, &mut NoProbe, &mut RayCounters::default())),
+            );
+        }
+    }
+    out
+}
+
+fn same(a: &Option<Hit>, b: &Option<Hit>) -> bool {
+    match (a, b) {
+        (None, None) => true,
+        (Some(a), Some(b)) => a.bits_eq(b),
+        _ => false,
+    }
+}
+
+fn run<'a>(
+    view: &SceneView<'a>,
+    cam: &CameraRecord,
+    cfg: &HwConfig,
+    shuffle: Option<u64>,
+) -> Simulator<'a, Watertight> {
+    let eye = EyeRays::new(&Camera::from(cam)).expect("valid camera");
+    let mut sim = Simulator::<Watertight>::new(*view, eye, Vec3::from(cam.background), cfg).expect("valid config");
+    if let Some(seed) = shuffle {
+        sim.shuffle_tick_order(seed);
+    }
+    sim.run(|_, _| {}).expect("the run terminates");
+    sim
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 160, ..ProptestConfig::default() })]
+
+    #[test]
+    fn model_hits_equal_the_host_for_any_chip(
+        (positions, tris) in soup(),
+        accel in accel(),
+        cfg in config(),
+        w in 1u32..20,
+        h in 1u32..20,
+        jitter in [-1.0f32..1.0, -1.0f32..1.0, -1.0f32..1.0],
+    ) {
+        let scene = build_soup(positions, tris, accel, 2);
+        let view = scene.view().expect("valid image");
+        let cam = camera(&view, (w, h), jitter);
+        let sim = run(&view, &cam, &cfg, None);
+        let eye = EyeRays::new(&Camera::from(&cam)).unwrap();
+        let want = host_hits(&view, &eye);
+        for (i, (m, h)) in sim.hits().iter().zip(&want).enumerate() {
+            prop_assert!(same(m, h), "pixel {i}: model {m:?} != host {h:?} ({accel:?}, {cfg:?})");
+        }
+        let r = sim.report();
+        prop_assert_eq!(r.conservation.rays_issued, r.conservation.rays_retired);
+        prop_assert_eq!(r.conservation.rays_issued, want.len() as u64 - count_outside(&view, &eye));
+        prop_assert_eq!(r.conservation.bytes_requested, r.conservation.bytes_delivered);
+        prop_assert!(r.memory.traffic_over_compulsory == 0.0 || r.memory.traffic_over_compulsory >= 1.0);
+        // Every unit is busy, stalled or idle in each cycle it ticked (all of them).
+        let ticked = |u: &raypipe_hw::report::UnitReport| u.busy_cycles + u.stall_cycles + u.idle_cycles;
+        for u in &r.units {
+            prop_assert_eq!(ticked(u), ticked(&r.units[0]), "{}", u.name);
+        }
+        prop_assert!(ticked(&r.units[0]) <= r.cycles);
+    }
+}
+
+/// Pixels whose eye ray misses the scene's bounds (no ray is traced for them).
+fn count_outside(view: &SceneView<'_>, eye: &EyeRays) -> u64 {
+    let (lo, hi) = view.test_bounds();
+    (0..eye.height)
+        .flat_map(|y| (0..eye.width).map(move |x| (x, y)))
+        .filter(|&(x, y)| eye.ray_in_scene(x, y, lo, hi).is_none())
+        .count() as u64
+}
+
+#[test]
+fn the_tick_order_changes_nothing() {
+    let positions = vec![[0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0, 2.0], [2.0, 2.0, 1.0]];
+    let tris = vec![[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3], [1, 4, 2], [3, 4, 0]];
+    for accel in [Accel::Grid, Accel::Kd, Accel::Bvh, Accel::Bvh4] {
+        let scene = build_soup(positions.clone(), tris.clone(), accel, 3);
+        let view = scene.view().unwrap();
+        let cam = camera(&view, (24, 20), [0.3, -0.2, 0.1]);
+        for preset in ["saarcor", "minimal"] {
+            let mut cfg = HwConfig::preset(preset).unwrap();
+            cfg.traversal.units = 3;
+            cfg.traversal.threads = 3;
+            cfg.packet_size = 4;
+            let base = run(&view, &cam, &cfg, None);
+            let want = base.report().to_json();
+            for seed in [1u64, 7, 12345] {
+                let other = run(&view, &cam, &cfg, Some(seed));
+                assert_eq!(other.framebuffer(), base.framebuffer(), "{accel:?} {preset} seed {seed}");
+                assert_eq!(other.cycles(), base.cycles(), "{accel:?} {preset} seed {seed}");
+                assert_eq!(other.report().to_json(), want, "{accel:?} {preset} seed {seed}");
+            }
+        }
+    }
+}
+
+#[test]
+fn the_watchdog_names_the_stuck_units_and_fifos() {
+    let scene = build_soup(vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], vec![[0, 1, 2]], Accel::Bvh, 1);
+    let view = scene.view().unwrap();
+    let cam = camera(&view, (16, 16), [0.0; 3]);
+    let mut cfg = HwConfig::default();
+    cfg.traversal.units = 2;
+    cfg.watchdog_cycles = 500;
+    let eye = EyeRays::new(&Camera::from(&cam)).unwrap();
+    let mut sim = Simulator::<Watertight>::new(view, eye, Vec3::ZERO, &cfg).unwrap();
+    sim.freeze_traversal_unit(1);
+    let err = sim.run(|_, _| {}).unwrap_err();
+    assert!(err.starts_with("watchdog: no unit made progress for 500 cycles"), "{err}");
+    for part in ["rgs:", "traversal0:", "traversal1:", "intersection1:", "rays1 ", "hits0 "] {
+        assert!(err.contains(part), "{part} missing from: {err}");
+    }
+    assert!(!err.contains('\n'));
+}
+
+#[test]
+fn impossible_configurations_are_rejected_before_the_run() {
+    let scene = build_soup(vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], vec![[0, 1, 2]], Accel::Grid, 1);
+    let view = scene.view().unwrap();
+    let cam = camera(&view, (4, 4), [0.0; 3]);
+    for (key, what) in [
+        ("fifo.hits=0", "fifo.hits"),
+        ("cache.nodes.size_bytes=16", "smaller than one"),
+        ("traversal.threads=0", "traversal.threads"),
+        ("packet_size=32", "packet_size"),
+        ("memory.bytes_per_cycle=0", "memory.bytes_per_cycle"),
+    ] {
+        let mut cfg = HwConfig::default();
+        cfg.set(key).unwrap();
+        let eye = EyeRays::new(&Camera::from(&cam)).unwrap();
+        let err = Simulator::<Watertight>::new(view, eye, Vec3::ZERO, &cfg).err().expect(key);
+        assert!(err.contains(what), "{key}: {err}");
+    }
+}
