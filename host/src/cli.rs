@@ -58,7 +58,7 @@ pub enum Command {
 pub struct SimulateArgs {
     /// An OBJ file or a scene image; the built-in Cornell box when omitted.
     pub scene: Option<PathBuf>,
-    /// Hardware configuration file (TOML; see fixtures/hw/ and docs/hw-report.md).
+    /// Hardware configuration file (TOML; see fixtures/hw/ and docs/hw-model.md).
     #[arg(long, value_name = "FILE.toml", conflicts_with = "preset")]
     pub config: Option<PathBuf>,
     /// A shipped configuration: saarcor or minimal (default: the built-in defaults).
@@ -70,9 +70,9 @@ pub struct SimulateArgs {
     /// Output PNG.
     #[arg(short, long, value_name = "PNG", default_value = "raypipe-sim.png")]
     pub output: PathBuf,
-    /// Also write the report as JSON (schema in docs/hw-report.md).
-    #[arg(long, value_name = "JSON")]
-    pub report: Option<PathBuf>,
+    /// The report as JSON (schema in docs/hw-model.md).
+    #[arg(long, value_name = "JSON", default_value = "raypipe-sim.json")]
+    pub report: PathBuf,
     #[command(flatten)]
     pub camera: CameraArgs,
     #[command(flatten)]
@@ -371,6 +371,10 @@ pub struct BenchArgs {
     /// watertight otherwise).
     #[arg(long, value_enum)]
     pub intersector: Option<IntersectorKind>,
+    /// Also run the hardware model with this preset (saarcor, minimal) on each frame and
+    /// report its wall time against the host's fastest single-thread frame.
+    #[arg(long, value_name = "PRESET")]
+    pub simulate: Option<String>,
 }
 
 /// Parses the process arguments, runs, and turns any error into one line on stderr.
@@ -554,9 +558,7 @@ fn cmd_simulate(a: SimulateArgs) -> Result<()> {
     let (frame, report) = simulate::simulate(&view, &cam, &cfg, kind, true)?;
     let secs = start.elapsed().as_secs_f64();
     output::write_png(&a.output, frame.width, frame.height, &frame.pixels)?;
-    if let Some(path) = &a.report {
-        output::write_bytes(path, report.to_json().as_bytes())?;
-    }
+    output::write_bytes(&a.report, report.to_json().as_bytes())?;
     println!(
         "simulated {} ({}, {} triangles) -> {}",
         scene.name,
@@ -566,10 +568,10 @@ fn cmd_simulate(a: SimulateArgs) -> Result<()> {
     );
     print!("{}", report.summary());
     println!(
-        "simulator      {:.2} s wall, {:.3} Mrays/s simulated{}",
+        "simulator      {:.2} s wall, {:.3} Mrays/s simulated; report -> {}",
         secs,
         report.rays as f64 / secs / 1e6,
-        a.report.as_ref().map_or(String::new(), |p| format!("; report -> {}", p.display()))
+        a.report.display()
     );
     Ok(())
 }
@@ -638,6 +640,10 @@ fn cmd_bench(a: BenchArgs) -> Result<()> {
         bail!("nothing to measure: --no-default without scenes");
     }
     let kernel = a.intersector.map_or("default", IntersectorKind::name);
+    let chip = match &a.simulate {
+        Some(preset) => Some(simulate::load_config(Some(preset), None, &[])?),
+        None => None,
+    };
     println!(
         "primary rays {}x{}, trace only (eye ray, traversal, {kernel} intersection), median of {} runs",
         a.size.0, a.size.1, a.runs
@@ -684,9 +690,11 @@ fn cmd_bench(a: BenchArgs) -> Result<()> {
             let cam = CameraRecord { width: a.size.0, height: a.size.1, ..base };
             let bytes_per_tri = scene.report.as_ref().map_or(view.bytes().len(), |r| r.structure_bytes) as f64
                 / view.triangle_count().max(1) as f64;
+            let kind = IntersectorKind::resolve(a.intersector, &view);
+            let mut best_single = 0.0f64;
             for &packet in &a.packet {
-                let kind = IntersectorKind::resolve(a.intersector, &view);
                 let r = bench::primary_rays(&view, &cam, kind, packet, a.runs, a.threads)?;
+                best_single = best_single.max(r.mrays_single);
                 let simd = if packet == PacketSize::Single {
                     "-".to_string()
                 } else {
@@ -704,6 +712,31 @@ fn cmd_bench(a: BenchArgs) -> Result<()> {
                     r.mrays_all,
                     r.threads,
                     simd
+                );
+            }
+            if let (Some(cfg), Some(preset)) = (&chip, &a.simulate) {
+                // The simulator is deterministic; its wall time is the median of up to 3 runs.
+                let mut walls = Vec::new();
+                let mut last = None;
+                for _ in 0..a.runs.min(3) {
+                    let start = Instant::now();
+                    let out = simulate::simulate(&view, &cam, cfg, kind, false)?;
+                    walls.push(start.elapsed().as_secs_f64());
+                    last = Some(out.1);
+                }
+                let report = last.ok_or_else(|| anyhow!("no simulation"))?;
+                let wall = median(&walls);
+                let host = (a.size.0 as f64 * a.size.1 as f64) / (best_single * 1e6);
+                println!(
+                    "{:<24} simulate --preset {preset}: {} cycles ({:.1} frames/s at {} MHz); simulator {:.2} s wall, {:.3} Mrays/s; host 1 thread {:.3} s: {:.1}x slower",
+                    name,
+                    report.cycles,
+                    report.frames_per_second,
+                    cfg.clock_mhz,
+                    wall,
+                    report.rays as f64 / wall / 1e6,
+                    host,
+                    wall / host
                 );
             }
         }

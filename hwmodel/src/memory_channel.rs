@@ -44,7 +44,8 @@ impl MemoryChannel {
 
     /// At the edge ending cycle `now`: schedules the port's staged requests.
     pub fn accept(&mut self, now: u64, port: &mut MemPort) {
-        for r in std::mem::take(&mut port.staged) {
+        for k in 0..port.staged.len() {
+            let r = port.staged[k];
             let start = self.busy_until.max(now + 1);
             let transfer = (r.bytes as u64).div_ceil(self.bytes_per_cycle).max(1);
             self.busy_until = start + transfer;
@@ -53,6 +54,7 @@ impl MemoryChannel {
             self.stats.requests[r.class] += 1;
             port.set_ready(r.id, start + transfer + self.latency);
         }
+        port.staged.clear();
     }
 
     /// True while a transfer is under way after cycle `now`.

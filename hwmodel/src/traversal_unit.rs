@@ -26,25 +26,28 @@ enum Next {
     Finish,
 }
 
-/// A thread's control state.
+/// A thread's control state; the unit keeps one bit mask of threads per state, so that
+/// picking a thread is a find-first-set, as in hardware.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum State {
-    Free,
+    Free = 0,
     /// Waiting for a step's data (memory) and its pipeline latency.
-    Waiting {
-        wait: Wait,
-        not_before: u64,
-        then: Next,
-    },
-    Ready,
-    SendLeaf,
-    AtIntersection,
-    Finished,
+    Waiting = 1,
+    Ready = 2,
+    SendLeaf = 3,
+    AtIntersection = 4,
+    Finished = 5,
 }
+
+const STATES: usize = 6;
 
 /// One packet's registers.
 struct Thread {
     state: State,
+    /// While waiting: for what, until when, and what comes next.
+    wait: Wait,
+    not_before: u64,
+    then: Next,
     index: u32,
     traced: u64,
     /// Lanes whose walk is not over.
@@ -63,7 +66,9 @@ pub struct TraversalUnit {
     packet_size: u64,
     step_latency: u64,
     threads: Vec<Thread>,
-    next_issue: usize,
+    /// `masks[s]`: the threads in state `s`.
+    masks: [u64; STATES],
+    next_issue: u32,
     /// The node port.
     pub port: MemPort,
     /// Activity and SIMD lanes.
@@ -74,12 +79,25 @@ pub struct TraversalUnit {
     pub rays_out: u64,
 }
 
+/// The lowest set bit of `mask` at or after `start` (wrapping), if any.
+fn first_from(mask: u64, start: u32) -> Option<usize> {
+    if mask == 0 {
+        return None;
+    }
+    let rotated = mask.rotate_right(start);
+    Some(((rotated.trailing_zeros() + start) % 64) as usize)
+}
+
 impl TraversalUnit {
     /// A unit with `cfg.traversal.threads` free threads.
     pub fn new(id: usize, cfg: &HwConfig) -> TraversalUnit {
-        let threads = (0..cfg.traversal.threads)
+        let n = cfg.traversal.threads.clamp(1, 64) as usize;
+        let threads = (0..n)
             .map(|_| Thread {
                 state: State::Free,
+                wait: Wait::default(),
+                not_before: 0,
+                then: Next::Step,
                 index: 0,
                 traced: 0,
                 live: 0,
@@ -89,11 +107,14 @@ impl TraversalUnit {
                 leaves: [Leaf::All { count: 0 }; 64],
             })
             .collect();
+        let mut masks = [0u64; STATES];
+        masks[State::Free as usize] = if n == 64 { u64::MAX } else { (1u64 << n) - 1 };
         TraversalUnit {
             id,
             packet_size: cfg.packet_size as u64,
             step_latency: cfg.traversal.step_latency as u64,
             threads,
+            masks,
             next_issue: 0,
             port: MemPort::new(format!("traversal{id}"), &cfg.cache.nodes),
             stats: UnitStats::default(),
@@ -102,23 +123,30 @@ impl TraversalUnit {
         }
     }
 
+    fn set(&mut self, k: usize, state: State) {
+        let bit = 1u64 << k;
+        self.masks[self.threads[k].state as usize] &= !bit;
+        self.masks[state as usize] |= bit;
+        self.threads[k].state = state;
+    }
+
     /// True if no packet is in flight.
     pub fn is_empty(&self) -> bool {
-        self.threads.iter().all(|t| t.state == State::Free)
+        self.masks[State::Free as usize].count_ones() as usize == self.threads.len()
     }
 
     /// One line describing the threads (for the watchdog).
     pub fn describe(&self) -> String {
-        let count = |f: &dyn Fn(&State) -> bool| self.threads.iter().filter(|t| f(&t.state)).count();
+        let count = |s: State| self.masks[s as usize].count_ones();
         format!(
             "traversal{}: {} free, {} waiting, {} ready, {} to send to intersection, {} at intersection, {} finished",
             self.id,
-            count(&|s| *s == State::Free),
-            count(&|s| matches!(s, State::Waiting { .. })),
-            count(&|s| *s == State::Ready),
-            count(&|s| *s == State::SendLeaf),
-            count(&|s| *s == State::AtIntersection),
-            count(&|s| *s == State::Finished),
+            count(State::Free),
+            count(State::Waiting),
+            count(State::Ready),
+            count(State::SendLeaf),
+            count(State::AtIntersection),
+            count(State::Finished),
         )
     }
 
@@ -134,52 +162,60 @@ impl TraversalUnit {
     ) -> bool {
         let mut moved = false;
         // A packet back from the intersection unit: its lanes finish their leaves.
-        if self.threads.iter().any(|t| t.state == State::AtIntersection) {
+        if self.masks[State::AtIntersection as usize] != 0 {
             if let Some(job) = results.pop() {
-                if let Some(t) = self.threads.get_mut(job.thread as usize) {
+                let k = job.thread as usize;
+                if k < self.threads.len() {
+                    let t = &mut self.threads[k];
                     for i in crate::lane_iter(job.lanes) {
                         *t.walks[i].best_mut() = job.best[i];
                         t.walks[i].finish_leaf();
                     }
                     t.at_leaf &= !job.lanes;
-                    t.state = State::Ready;
+                    self.set(k, State::Ready);
                 }
                 moved = true;
             }
         }
         // A finished packet to shading.
-        if let Some(k) = self.threads.iter().position(|t| t.state == State::Finished) {
-            let t = &mut self.threads[k];
-            let mut out = Box::new(HitPacket { index: t.index, lanes: t.traced, hits: [None; 64] });
-            for i in crate::lane_iter(t.traced) {
-                out.hits[i] = t.walks[i].best();
-            }
-            if hits.push(out).is_ok() {
+        if let Some(k) = first_from(self.masks[State::Finished as usize], 0) {
+            if hits.can_push() {
+                let t = &self.threads[k];
+                let mut out = Box::new(HitPacket { index: t.index, lanes: t.traced, hits: [None; 64] });
+                for i in crate::lane_iter(t.traced) {
+                    out.hits[i] = t.walks[i].best();
+                }
                 self.rays_out += lanes(t.traced);
-                t.state = State::Free;
+                let _ = hits.push(out);
+                self.set(k, State::Free);
                 moved = true;
+            } else {
+                hits.note_full();
             }
         }
         // A packet at its leaves to the intersection unit.
-        if let Some(k) = self.threads.iter().position(|t| t.state == State::SendLeaf) {
-            let t = &mut self.threads[k];
-            let mut job = Box::new(LeafJob {
-                thread: k as u8,
-                lanes: t.at_leaf,
-                leaves: t.leaves,
-                rays: *t.rays,
-                best: [None; 64],
-            });
-            for i in crate::lane_iter(t.at_leaf) {
-                job.best[i] = t.walks[i].best();
-            }
-            if leaves.push(job).is_ok() {
-                t.state = State::AtIntersection;
+        if let Some(k) = first_from(self.masks[State::SendLeaf as usize], 0) {
+            if leaves.can_push() {
+                let t = &self.threads[k];
+                let mut job = Box::new(LeafJob {
+                    thread: k as u8,
+                    lanes: t.at_leaf,
+                    leaves: t.leaves,
+                    rays: *t.rays,
+                    best: [None; 64],
+                });
+                for i in crate::lane_iter(t.at_leaf) {
+                    job.best[i] = t.walks[i].best();
+                }
+                let _ = leaves.push(job);
+                self.set(k, State::AtIntersection);
                 moved = true;
+            } else {
+                leaves.note_full();
             }
         }
         // A new packet into a free thread.
-        if let Some(k) = self.threads.iter().position(|t| t.state == State::Free) {
+        if let Some(k) = first_from(self.masks[State::Free as usize], 0) {
             if let Some(job) = rays.pop() {
                 let t = &mut self.threads[k];
                 t.index = job.index;
@@ -190,28 +226,26 @@ impl TraversalUnit {
                 for i in crate::lane_iter(job.lanes) {
                     t.walks[i] = Walk::start(scene, &job.rays[i]);
                 }
-                t.state = if job.lanes == 0 { State::Finished } else { State::Ready };
                 self.rays_in += lanes(job.lanes);
+                self.set(k, if job.lanes == 0 { State::Finished } else { State::Ready });
                 moved = true;
             }
         }
         // Steps whose data has arrived.
-        for t in &mut self.threads {
-            if let State::Waiting { wait, not_before, then } = t.state {
-                if self.port.resolve(&wait).is_some_and(|r| r.max(not_before) <= now) {
-                    t.state = match then {
-                        Next::Step => State::Ready,
-                        Next::SendLeaf => State::SendLeaf,
-                        Next::Finish => State::Finished,
-                    };
-                }
+        for k in crate::lane_iter(self.masks[State::Waiting as usize]) {
+            let t = &self.threads[k];
+            if self.port.resolve(&t.wait).is_some_and(|r| r.max(t.not_before) <= now) {
+                let next = match t.then {
+                    Next::Step => State::Ready,
+                    Next::SendLeaf => State::SendLeaf,
+                    Next::Finish => State::Finished,
+                };
+                self.set(k, next);
             }
         }
         // Issue one step of one ready packet (round robin).
-        let n = self.threads.len();
-        let pick = (0..n).map(|k| (self.next_issue + k) % n).find(|&k| self.threads[k].state == State::Ready);
-        let activity = if let Some(k) = pick {
-            self.next_issue = (k + 1) % n;
+        let activity = if let Some(k) = first_from(self.masks[State::Ready as usize], self.next_issue) {
+            self.next_issue = (k as u32 + 1) % 64;
             let t = &mut self.threads[k];
             let stepping = t.live & !t.at_leaf;
             let mut probe = PortProbe { port: &mut self.port, now, wait: Wait::default() };
@@ -225,14 +259,16 @@ impl TraversalUnit {
                     WalkEvent::Done => t.live &= !(1 << i),
                 }
             }
-            let then = if t.live & !t.at_leaf != 0 {
+            t.then = if t.live & !t.at_leaf != 0 {
                 Next::Step
             } else if t.at_leaf != 0 {
                 Next::SendLeaf
             } else {
                 Next::Finish
             };
-            t.state = State::Waiting { wait: probe.wait, not_before: now + self.step_latency, then };
+            t.wait = probe.wait;
+            t.not_before = now + self.step_latency;
+            self.set(k, State::Waiting);
             self.stats.issue(lanes(stepping), self.packet_size);
             moved = true;
             Activity::Busy
