@@ -39,6 +39,8 @@ pub struct Fifo<T> {
     popped: bool,
     full_noted: bool,
     empty_noted: bool,
+    // The stalls of the last committed cycle (repeated when the clock skips ahead).
+    last_stalls: (bool, bool),
     /// Statistics.
     pub stats: FifoStats,
 }
@@ -56,6 +58,7 @@ impl<T> Fifo<T> {
             popped: false,
             full_noted: false,
             empty_noted: false,
+            last_stalls: (false, false),
             stats: FifoStats { occupancy: vec![0; depth + 1], ..FifoStats::default() },
         }
     }
@@ -127,6 +130,7 @@ impl<T> Fifo<T> {
             self.stats.pushes += 1;
         }
         self.popped = false;
+        self.last_stalls = (self.full_noted, self.empty_noted);
         self.full_noted = false;
         self.empty_noted = false;
         self.committed_len = self.items.len();
@@ -136,11 +140,14 @@ impl<T> Fifo<T> {
         moved
     }
 
-    /// Adds `cycles` idle cycles at the current occupancy (when the clock skips ahead).
-    pub fn skip(&mut self, cycles: u64) {
+    /// Accounts `cycles` more cycles exactly like the last one (when the clock skips
+    /// cycles in which nothing can change): same occupancy, same stalls.
+    pub fn repeat_last(&mut self, cycles: u64) {
         if let Some(c) = self.stats.occupancy.get_mut(self.committed_len) {
             *c += cycles;
         }
+        self.stats.full_stall_cycles += cycles * self.last_stalls.0 as u64;
+        self.stats.empty_stall_cycles += cycles * self.last_stalls.1 as u64;
     }
 
     /// Committed entries.

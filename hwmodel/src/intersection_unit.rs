@@ -65,6 +65,14 @@ impl<I: Intersector> IntersectionUnit<I> {
         self.current.is_none()
     }
 
+    /// The first cycle after `now` at which time alone changes something (the last test
+    /// entered, the results are out); `None` if only FIFO traffic can.
+    pub fn next_wake(&self, now: u64) -> Option<u64> {
+        let c = self.current.as_ref()?;
+        let done = c.done_at.or_else(|| self.port.resolve(&c.wait).map(|r| c.last_issue.max(r) + self.latency));
+        [Some(c.last_issue + 1), done.or(Some(now + 1))].into_iter().flatten().filter(|&w| w > now).min()
+    }
+
     /// One line describing the datapath (for the watchdog).
     pub fn describe(&self) -> String {
         match &self.current {
@@ -95,6 +103,7 @@ impl<I: Intersector> IntersectionUnit<I> {
                     // A test can enter once its data is there; the last result leaves
                     // `latency` cycles after the last test entered.
                     cur.done_at = Some(cur.last_issue.max(arrived) + self.latency);
+                    moved = true;
                 }
             }
             if cur.done_at.is_some_and(|d| d <= now) {

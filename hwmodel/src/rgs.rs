@@ -120,6 +120,14 @@ impl Rgs {
         self.packets_done == self.blocks.len()
     }
 
+    /// The first cycle after `now` at which time alone changes something (a packet is
+    /// generated, a shaded packet is written); `None` if only FIFO traffic can.
+    pub fn next_wake(&self, now: u64) -> Option<u64> {
+        let generated = self.generated.as_ref().map(|(_, ready)| *ready);
+        let shaded = self.shading.as_ref().map(|s| self.port.resolve(&s.wait).map_or(now + 1, |r| r.max(s.busy_until)));
+        [generated, shaded].into_iter().flatten().filter(|&w| w > now).min()
+    }
+
     /// One line describing the unit (for the watchdog).
     pub fn describe(&self) -> String {
         format!(

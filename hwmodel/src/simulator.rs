@@ -41,6 +41,7 @@ pub struct Simulator<'s, I: Intersector> {
     touched: Vec<u64>,
     order: Vec<UnitRef>,
     shuffle: Option<u64>,
+    skip: bool,
     now: u64,
 }
 
@@ -68,6 +69,7 @@ impl<'s, I: Intersector> Simulator<'s, I> {
             touched: vec![0; words.div_ceil(64)],
             order,
             shuffle: None,
+            skip: true,
             now: 0,
         })
     }
@@ -78,6 +80,12 @@ impl<'s, I: Intersector> Simulator<'s, I> {
         self.shuffle = Some(seed | 1);
     }
 
+    /// Ticks every cycle instead of skipping cycles in which nothing can change (for the
+    /// test that proves skipping changes no result).
+    pub fn tick_every_cycle(&mut self) {
+        self.skip = false;
+    }
+
     /// Runs the frame to the end; `progress(done, total)` is called now and then with
     /// packets shaded.
     pub fn run(&mut self, mut progress: impl FnMut(usize, usize)) -> Result<(), String> {
@@ -86,16 +94,25 @@ impl<'s, I: Intersector> Simulator<'s, I> {
         let mut last_done = usize::MAX;
         while !self.rgs.is_done() {
             let moved = self.cycle();
+            // A cycle in which nothing moved repeats itself until a unit's wait is over:
+            // the clock jumps there, accounting the skipped cycles like this one.
+            let mut skipped = 0;
+            if !moved && self.skip {
+                let wake = self.next_wake();
+                let until = wake.unwrap_or(self.now + self.cfg.watchdog_cycles.saturating_sub(quiet) + 1);
+                skipped = until.saturating_sub(self.now + 1);
+                self.repeat_last(skipped);
+            }
             if moved || self.channel.busy_after(self.now) {
                 quiet = 0;
             } else {
-                quiet += 1;
+                quiet += 1 + skipped;
                 if quiet > self.cfg.watchdog_cycles {
                     return Err(self.deadlock());
                 }
             }
-            self.now += 1;
-            if self.rgs.packets_done != last_done && self.now.is_multiple_of(1024) {
+            self.now += 1 + skipped;
+            if self.rgs.packets_done != last_done && self.rgs.packets_done.is_multiple_of(64) {
                 last_done = self.rgs.packets_done;
                 progress(last_done, total);
             }
@@ -154,6 +171,27 @@ impl<'s, I: Intersector> Simulator<'s, I> {
             channel.accept(now, port);
         }
         moved
+    }
+
+    /// The earliest cycle after now at which some unit's wait is over.
+    fn next_wake(&self) -> Option<u64> {
+        let now = self.now;
+        let units = self.tus.iter().map(|t| t.next_wake(now)).chain(self.ius.iter().map(|i| i.next_wake(now)));
+        std::iter::once(self.rgs.next_wake(now)).chain(units).flatten().min()
+    }
+
+    /// Accounts `n` cycles exactly like the last one, for every unit and FIFO.
+    fn repeat_last(&mut self, n: u64) {
+        if n == 0 {
+            return;
+        }
+        self.rgs.gen_stats.repeat_last(n);
+        self.rgs.shade_stats.repeat_last(n);
+        self.tus.iter_mut().for_each(|t| t.stats.repeat_last(n));
+        self.ius.iter_mut().for_each(|i| i.stats.repeat_last(n));
+        self.ray_fifos.iter_mut().for_each(|f| f.repeat_last(n));
+        self.leaf_fifos.iter_mut().chain(self.result_fifos.iter_mut()).for_each(|f| f.repeat_last(n));
+        self.hit_fifos.iter_mut().for_each(|f| f.repeat_last(n));
     }
 
     /// The watchdog's message: every unit's state and every FIFO's occupancy.

@@ -135,6 +135,18 @@ impl TraversalUnit {
         self.masks[State::Free as usize].count_ones() as usize == self.threads.len()
     }
 
+    /// The first cycle after `now` at which time alone changes something (a step's data
+    /// and latency are over); `None` if only FIFO traffic can.
+    pub fn next_wake(&self, now: u64) -> Option<u64> {
+        crate::lane_iter(self.masks[State::Waiting as usize])
+            .map(|k| {
+                let t = &self.threads[k];
+                self.port.resolve(&t.wait).map_or(now + 1, |r| r.max(t.not_before))
+            })
+            .filter(|&w| w > now)
+            .min()
+    }
+
     /// One line describing the threads (for the watchdog).
     pub fn describe(&self) -> String {
         let count = |s: State| self.masks[s as usize].count_ones();
@@ -241,6 +253,7 @@ impl TraversalUnit {
                     Next::Finish => State::Finished,
                 };
                 self.set(k, next);
+                moved = true;
             }
         }
         // Issue one step of one ready packet (round robin).

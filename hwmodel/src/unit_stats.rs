@@ -29,12 +29,24 @@ pub struct UnitStats {
     pub active_lanes: u64,
     /// Lanes available, summed over issues (issues × packet size).
     pub lane_slots: u64,
+    /// The activity of the last cycle counted.
+    #[serde(skip)]
+    pub last: Option<Activity>,
 }
 
 impl UnitStats {
     /// Counts one cycle.
     pub fn cycle(&mut self, a: Activity) {
         self.cycles(a, 1);
+        self.last = Some(a);
+    }
+
+    /// Counts `n` more cycles like the last one (the clock skipped cycles in which nothing
+    /// could change).
+    pub fn repeat_last(&mut self, n: u64) {
+        if let Some(a) = self.last {
+            self.cycles(a, n);
+        }
     }
 
     /// Counts `n` cycles of the same activity.
