@@ -96,14 +96,19 @@ pub struct CacheConfig {
 }
 
 /// The caches: each traversal unit has a node cache, each intersection unit a cache for
-/// primitive lists and triangles, the shading unit one for shading data.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+/// triangles that primitive lists share (or their own), the shading unit one for shading
+/// data.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct CachesConfig {
     /// Per traversal unit: nodes (grid cells, tree nodes).
     pub nodes: CacheConfig,
-    /// Per intersection unit: primitive lists and triangles.
+    /// Per intersection unit: triangles (and primitive lists, when they share it).
     pub triangles: CacheConfig,
+    /// Primitive lists go through the triangle cache (true) or through `lists` (false).
+    pub lists_share_triangle_cache: bool,
+    /// Per intersection unit: primitive lists, when they do not share the triangle cache.
+    pub lists: CacheConfig,
     /// The shading unit: materials, lights, shading vertices.
     pub shading: CacheConfig,
 }
@@ -161,6 +166,18 @@ impl Default for FifoConfig {
 impl Default for CacheConfig {
     fn default() -> Self {
         CacheConfig { size_bytes: 16 * 1024, line_bytes: 64, ways: 4, hit_latency: 1 }
+    }
+}
+
+impl Default for CachesConfig {
+    fn default() -> Self {
+        CachesConfig {
+            nodes: CacheConfig::default(),
+            triangles: CacheConfig::default(),
+            lists_share_triangle_cache: true,
+            lists: CacheConfig { size_bytes: 4096, ..CacheConfig::default() },
+            shading: CacheConfig::default(),
+        }
     }
 }
 
@@ -276,6 +293,7 @@ impl HwConfig {
         for (name, c) in [
             ("cache.nodes", &self.cache.nodes),
             ("cache.triangles", &self.cache.triangles),
+            ("cache.lists", &self.cache.lists),
             ("cache.shading", &self.cache.shading),
         ] {
             if !c.line_bytes.is_power_of_two() || c.line_bytes < 4 {
@@ -302,8 +320,11 @@ impl HwConfig {
         let longest = self.memory.latency as u64
             + self.intersection.latency as u64
             + self.traversal.step_latency as u64
-            + self.cache.nodes.hit_latency.max(self.cache.triangles.hit_latency).max(self.cache.shading.hit_latency)
-                as u64;
+            + [&self.cache.nodes, &self.cache.triangles, &self.cache.lists, &self.cache.shading]
+                .iter()
+                .map(|c| c.hit_latency)
+                .max()
+                .unwrap_or(0) as u64;
         if self.watchdog_cycles <= longest {
             return err(format!(
                 "watchdog_cycles {} must exceed the longest wait without progress ({longest} cycles)",

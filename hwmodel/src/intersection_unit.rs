@@ -9,7 +9,7 @@
 use std::marker::PhantomData;
 
 use raypipe_core::triangle::{test_triangle, Intersector};
-use raypipe_core::SceneView;
+use raypipe_core::{DataClass, SceneView};
 
 use crate::config::HwConfig;
 use crate::fifo::Fifo;
@@ -53,7 +53,21 @@ impl<I: Intersector> IntersectionUnit<I> {
             latency: cfg.intersection.latency as u64,
             interval: cfg.intersection.initiation_interval as u64,
             current: None,
-            port: MemPort::new(format!("intersection{id}"), &cfg.cache.triangles),
+            port: {
+                let name = format!("intersection{id}");
+                let (lists, triangles) = (DataClass::PrimLists as usize, DataClass::Triangles as usize);
+                if cfg.cache.lists_share_triangle_cache {
+                    MemPort::with_caches(name.clone(), &[(name, &cfg.cache.triangles, &[lists, triangles])])
+                } else {
+                    MemPort::with_caches(
+                        name.clone(),
+                        &[
+                            (format!("{name}.lists"), &cfg.cache.lists, &[lists]),
+                            (format!("{name}.triangles"), &cfg.cache.triangles, &[triangles]),
+                        ],
+                    )
+                }
+            },
             stats: UnitStats::default(),
             tests: 0,
             _kernel: PhantomData,

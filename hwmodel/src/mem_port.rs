@@ -1,4 +1,5 @@
-//! A unit's memory port: its cache (if any) and the channel requests it has issued. The
+//! A unit's memory port: its caches (one shared by all classes, or one per class, or
+//! none) and the channel requests it has issued. The
 //! kernels' scene reads arrive here through [`PortProbe`] (core's `MemoryProbe`), so the
 //! model sees every byte the kernels read; misses become line requests that the memory
 //! channel schedules at the clock edge, in a fixed order.
@@ -42,8 +43,10 @@ pub struct Wait {
 pub struct MemPort {
     /// Name for reports.
     pub name: String,
-    /// The cache, if configured.
-    pub cache: Option<Cache>,
+    /// The caches: name and cache.
+    pub caches: Vec<(String, Cache)>,
+    /// For each traffic class, the cache its reads go through (`None`: uncached).
+    route: [Option<usize>; CLASSES],
     ready: Vec<u64>,
     /// Requests issued this cycle, taken by the channel at the edge.
     pub staged: Vec<Request>,
@@ -54,11 +57,30 @@ pub struct MemPort {
 }
 
 impl MemPort {
-    /// A port with the configured cache.
+    /// A port whose reads all go through one cache (`size_bytes = 0`: none).
     pub fn new(name: String, cache: &CacheConfig) -> MemPort {
+        MemPort::with_caches(name.clone(), &[(name, cache, &[0, 1, 2, 3, 4])])
+    }
+
+    /// A port with several caches, each named and serving the listed traffic classes
+    /// (a class in no list, or whose cache has `size_bytes = 0`, is uncached).
+    pub fn with_caches(name: String, caches: &[(String, &CacheConfig, &[usize])]) -> MemPort {
+        let mut route = [None; CLASSES];
+        let mut built = Vec::new();
+        for (cache_name, cfg, classes) in caches {
+            if let Some(c) = Cache::new(cfg) {
+                for &k in classes.iter() {
+                    if let Some(r) = route.get_mut(k) {
+                        *r = Some(built.len());
+                    }
+                }
+                built.push((cache_name.clone(), c));
+            }
+        }
         MemPort {
             name,
-            cache: Cache::new(cache),
+            caches: built,
+            route,
             ready: Vec::new(),
             staged: Vec::new(),
             read_log: Vec::new(),
@@ -77,16 +99,17 @@ impl MemPort {
     /// A read of `bytes` at `addr` at cycle `now`; `wait` collects what it waits for.
     pub fn read(&mut self, class: usize, addr: u32, bytes: u32, now: u64, wait: &mut Wait) {
         self.read_log.push((addr, bytes));
-        let Some(cache) = self.cache.as_mut() else {
+        let Some(c) = self.route.get(class).copied().flatten() else {
             let id = self.request(addr as u64, bytes, class, false);
             wait.last = wait.last.max(Some(id));
             return;
         };
+        let cache = &self.caches[c].1;
         let first = cache.line_of(addr as u64);
         let last = cache.line_of(addr as u64 + bytes.max(1) as u64 - 1);
         let line_bytes = cache.line_bytes();
         for line in first..=last {
-            let cache = self.cache.as_mut().expect("checked above");
+            let cache = &mut self.caches[c].1;
             match cache.lookup(line) {
                 Lookup::Present { fill } => {
                     if self.ready.get(fill as usize).is_some_and(|&r| r <= now) {
@@ -100,7 +123,7 @@ impl MemPort {
                 Lookup::Absent => {
                     cache.stats.misses[class] += 1;
                     let id = self.request(line * line_bytes as u64, line_bytes, class, false);
-                    self.cache.as_mut().expect("checked above").install(line, id);
+                    self.caches[c].1.install(line, id);
                     wait.last = wait.last.max(Some(id));
                 }
             }

@@ -306,7 +306,7 @@ impl Report {
                 .map(|(k, r)| format!("{k} {:.1}% hit ({} misses)", 100.0 * r.hit_rate, r.misses))
                 .collect();
             if !parts.is_empty() {
-                line(format!("cache {:<14} {}", c.name, parts.join(", ")));
+                line(format!("cache {:<26} {}", c.name, parts.join(", ")));
             }
         }
         let m = &self.memory;

@@ -257,7 +257,7 @@ impl<'s, I: Intersector> Simulator<'s, I> {
             .chain(self.tus.iter().map(|t| &t.port))
             .chain(self.ius.iter().map(|i| &i.port))
             .collect();
-        let caches = ports.iter().filter_map(|p| p.cache.as_ref().map(|c| (p.name.clone(), &c.stats))).collect();
+        let caches = ports.iter().flat_map(|p| p.caches.iter().map(|(name, c)| (name.clone(), &c.stats))).collect();
         let requested = ports.iter().map(|p| p.requested.iter().sum::<u64>()).sum();
         Report::gather(Sources {
             cfg: &self.cfg,

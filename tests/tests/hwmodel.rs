@@ -43,36 +43,42 @@ fn config() -> impl Strategy<Value = HwConfig> {
     (
         (prop_oneof![Just(1u32), Just(4), Just(16), Just(64)], 1u32..4, 1u32..5, 1u32..6),
         ([1u32..4, 1u32..4, 1u32..4, 1u32..4], 1u32..40, 1u32..4, 1u32..3, 1u32..8),
-        (cache(), cache(), cache()),
+        (cache(), cache(), cache(), cache(), any::<bool>()),
         (0u32..120, 1u32..33),
     )
-        .prop_map(|((packet, units, threads, step), (fifos, ilat, ii, rpc, spc), (cn, ct, cs), (mlat, bpc))| {
-            let mut c = HwConfig { packet_size: packet, ..HwConfig::default() };
-            c.traversal.units = units;
-            c.traversal.threads = threads;
-            c.traversal.step_latency = step;
-            [c.fifo.rays, c.fifo.leaves, c.fifo.results, c.fifo.hits] = fifos;
-            c.intersection.latency = ilat;
-            c.intersection.initiation_interval = ii;
-            c.rgs.rays_per_cycle = rpc;
-            c.rgs.shade_per_cycle = spc;
-            for (slot, (size, line, ways, hit)) in
-                [(&mut c.cache.nodes, cn), (&mut c.cache.triangles, ct), (&mut c.cache.shading, cs)]
-            {
-                slot.size_bytes = size.max(if size > 0 { line * ways } else { 0 });
-                slot.line_bytes = line;
-                slot.ways = ways;
-                slot.hit_latency = hit;
-                // Keep the geometry legal: a power-of-two number of sets.
-                if size > 0 {
-                    let sets = (slot.size_bytes / line / ways).next_power_of_two();
-                    slot.size_bytes = sets * line * ways;
+        .prop_map(
+            |((packet, units, threads, step), (fifos, ilat, ii, rpc, spc), (cn, ct, cs, cl, share), (mlat, bpc))| {
+                let mut c = HwConfig { packet_size: packet, ..HwConfig::default() };
+                c.traversal.units = units;
+                c.traversal.threads = threads;
+                c.traversal.step_latency = step;
+                [c.fifo.rays, c.fifo.leaves, c.fifo.results, c.fifo.hits] = fifos;
+                c.intersection.latency = ilat;
+                c.intersection.initiation_interval = ii;
+                c.rgs.rays_per_cycle = rpc;
+                c.rgs.shade_per_cycle = spc;
+                c.cache.lists_share_triangle_cache = share;
+                for (slot, (size, line, ways, hit)) in [
+                    (&mut c.cache.nodes, cn),
+                    (&mut c.cache.triangles, ct),
+                    (&mut c.cache.shading, cs),
+                    (&mut c.cache.lists, cl),
+                ] {
+                    slot.size_bytes = size.max(if size > 0 { line * ways } else { 0 });
+                    slot.line_bytes = line;
+                    slot.ways = ways;
+                    slot.hit_latency = hit;
+                    // Keep the geometry legal: a power-of-two number of sets.
+                    if size > 0 {
+                        let sets = (slot.size_bytes / line / ways).next_power_of_two();
+                        slot.size_bytes = sets * line * ways;
+                    }
                 }
-            }
-            c.memory.latency = mlat;
-            c.memory.bytes_per_cycle = bpc;
-            c
-        })
+                c.memory.latency = mlat;
+                c.memory.bytes_per_cycle = bpc;
+                c
+            },
+        )
 }
 
 fn camera(view: &SceneView<'_>, size: (u32, u32), eye_jitter: [f32; 3]) -> CameraRecord {
@@ -130,15 +136,15 @@ fn run<'a>(view: &SceneView<'a>, cam: &CameraRecord, cfg: &HwConfig, clocking: C
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 160, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 400, ..ProptestConfig::default() })]
 
     #[test]
     fn model_hits_equal_the_host_for_any_chip(
         (positions, tris) in soup(),
         accel in accel(),
         cfg in config(),
-        w in 1u32..20,
-        h in 1u32..20,
+        w in 1u32..32,
+        h in 1u32..32,
         jitter in [-1.0f32..1.0, -1.0f32..1.0, -1.0f32..1.0],
     ) {
         let scene = build_soup(positions, tris, accel, 2);
