@@ -506,8 +506,7 @@ fn cmd_build(a: BuildArgs) -> Result<()> {
     Ok(())
 }
 
-fn camera_for(scene: &Scene, args: &CameraArgs) -> Result<CameraRecord> {
-    let view = scene.view()?;
+fn camera_for(view: &raypipe_core::SceneView<'_>, args: &CameraArgs) -> Result<CameraRecord> {
     let base = match view.camera() {
         Some(c) => *c,
         None => {
@@ -524,7 +523,7 @@ fn cmd_render(a: RenderArgs) -> Result<()> {
     let scene = scene::load(a.scene.as_deref(), &a.structure.options())?;
     warn(&scene);
     let view = scene.view()?;
-    let cam = camera_for(&scene, &a.camera)?;
+    let cam = camera_for(&view, &a.camera)?;
     let kind = IntersectorKind::resolve(a.run.intersector, &view);
     let packet = a.packet.unwrap_or_else(|| PacketSize::auto_for(&view));
     let opts = RenderOptions { threads: a.run.threads, intersector: kind, progress: true, packet };
@@ -552,7 +551,7 @@ fn cmd_simulate(a: SimulateArgs) -> Result<()> {
     let scene = scene::load(a.scene.as_deref(), &a.structure.options())?;
     warn(&scene);
     let view = scene.view()?;
-    let cam = camera_for(&scene, &a.camera)?;
+    let cam = camera_for(&view, &a.camera)?;
     let kind = IntersectorKind::resolve(a.intersector, &view);
     let start = Instant::now();
     let (frame, report) = simulate::simulate(&view, &cam, &cfg, kind, true)?;
@@ -588,7 +587,7 @@ fn cmd_stats(a: StatsArgs) -> Result<()> {
     let scene = scene::load(a.scene.as_deref(), &a.structure.options())?;
     warn(&scene);
     let view = scene.view()?;
-    let cam = camera_for(&scene, &a.camera)?;
+    let cam = camera_for(&view, &a.camera)?;
     let kind = IntersectorKind::resolve(a.run.intersector, &view);
     let opts = RenderOptions { threads: a.run.threads, intersector: kind, progress: false, packet: a.packet };
     let s = stats::gather(&view, &cam, &opts)?;
@@ -686,7 +685,7 @@ fn cmd_bench(a: BenchArgs) -> Result<()> {
             let scene = built.ok_or_else(|| anyhow!("no scene"))?;
             let view = scene.view()?;
             let cam_args = CameraArgs { camera: a.camera.clone(), ..Default::default() };
-            let base = camera_for(&scene, &cam_args)?;
+            let base = camera_for(&view, &cam_args)?;
             let cam = CameraRecord { width: a.size.0, height: a.size.1, ..base };
             let bytes_per_tri = scene.report.as_ref().map_or(view.bytes().len(), |r| r.structure_bytes) as f64
                 / view.triangle_count().max(1) as f64;
@@ -746,7 +745,8 @@ fn cmd_bench(a: BenchArgs) -> Result<()> {
 
 fn cmd_rays(a: RaysArgs) -> Result<()> {
     let scene = scene::load(a.scene.as_deref(), &BuildOptions { accel: Accel::None, ..Default::default() })?;
-    let cam = camera_for(&scene, &a.camera)?;
+    let view = scene.view()?;
+    let cam = camera_for(&view, &a.camera)?;
     let eye = render::eye_rays(&cam, "camera")?;
     let mut data = Vec::with_capacity(cam.width as usize * cam.height as usize * 8);
     let b = a.block;
@@ -765,7 +765,6 @@ fn cmd_rays(a: RaysArgs) -> Result<()> {
     let rows = data.len() / 8;
     crate::npy::write_f32_2d(&a.output, &crate::npy::Array2 { rows, cols: 8, data })?;
     if let Some(path) = &a.triangles {
-        let view = scene.view()?;
         let mut data = Vec::with_capacity(view.triangle_count() as usize * 9);
         for prim in 0..view.triangle_count() {
             for v in view.triangle(prim, &mut raypipe_core::NoProbe) {

@@ -278,10 +278,13 @@ impl<'s, I: Intersector> Simulator<'s, I> {
 /// Marks the 4-byte words a port read this cycle (scene data only).
 fn mark_touched(touched: &mut [u64], port: &mut MemPort) {
     for (addr, bytes) in port.read_log.drain(..) {
-        let (first, last) = (addr / 4, (addr + bytes.max(1) - 1) / 4);
-        for w in first..=last {
-            if let Some(slot) = touched.get_mut(w as usize / 64) {
-                *slot |= 1 << (w % 64);
+        let (first, last) = (addr as usize / 4, (addr as usize + bytes.max(1) as usize - 1) / 4);
+        for word in first / 64..=last / 64 {
+            let lo = if word == first / 64 { first % 64 } else { 0 };
+            let hi = if word == last / 64 { last % 64 } else { 63 };
+            let mask = (u64::MAX >> (63 - hi)) & (u64::MAX << lo);
+            if let Some(slot) = touched.get_mut(word) {
+                *slot |= mask;
             }
         }
     }
