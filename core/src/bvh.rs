@@ -12,8 +12,8 @@ use crate::image::{BvhNode, BvhView, SceneView, MAX_TREE_DEPTH};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::ray_box::RayBox;
-use crate::tree_step::TreeEvent;
-use crate::triangle::{test_triangle, Intersector};
+use crate::tree_step::{trace_tree, TreeEvent, TreeWalk};
+use crate::triangle::Intersector;
 
 /// The traversal registers of one ray in the BVH: the node it stands on (its record is
 /// held, not re-read), a fixed-capacity stack of `(node, entry distance)`, and the best
@@ -119,7 +119,24 @@ impl BvhTraversal {
     }
 }
 
-/// The closest hit of `ray` through the BVH: the host's loop over the step kernel.
+impl TreeWalk<BvhView<'_>> for BvhTraversal {
+    #[inline(always)]
+    fn step<P: MemoryProbe>(&mut self, view: &BvhView<'_>, _ray: &Ray, probe: &mut P) -> TreeEvent {
+        BvhTraversal::step(self, view, probe)
+    }
+
+    #[inline(always)]
+    fn finish_leaf(&mut self) {
+        BvhTraversal::finish_leaf(self)
+    }
+
+    #[inline(always)]
+    fn best_mut(&mut self) -> &mut Option<Hit> {
+        &mut self.best
+    }
+}
+
+/// The closest hit of `ray` through the BVH.
 #[inline]
 pub fn trace_bvh<I: Intersector, P: MemoryProbe>(
     scene: &SceneView<'_>,
@@ -128,27 +145,5 @@ pub fn trace_bvh<I: Intersector, P: MemoryProbe>(
     probe: &mut P,
     counters: &mut RayCounters,
 ) -> Option<Hit> {
-    let mut trav = BvhTraversal::new(ray);
-    let prep = I::prepare(ray);
-    let (mut nodes, mut leaves, mut tests) = (0u32, 0u32, 0u32);
-    loop {
-        match trav.step(bvh, probe) {
-            TreeEvent::Inner => nodes += 1,
-            TreeEvent::Leaf { first, count } => {
-                leaves += 1;
-                for k in first..first.wrapping_add(count) {
-                    let prim = bvh.prim(k, probe);
-                    let verts = I::fetch(scene, prim, probe);
-                    test_triangle::<I>(&prep, ray, &verts, prim, &mut trav.best);
-                }
-                tests += count;
-                trav.finish_leaf();
-            }
-            TreeEvent::Done => break,
-        }
-    }
-    counters.nodes += nodes;
-    counters.leaves += leaves;
-    counters.tri_tests += tests;
-    trav.best
+    trace_tree::<I, P, _, _>(scene, bvh, BvhTraversal::new(ray), ray, probe, counters)
 }

@@ -13,8 +13,8 @@ use crate::image::{Bvh4Node, Bvh4View, SceneView, MAX_TREE_DEPTH};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::ray_box::RayBox;
-use crate::tree_step::TreeEvent;
-use crate::triangle::{test_triangle, Intersector};
+use crate::tree_step::{trace_tree, TreeEvent, TreeWalk};
+use crate::triangle::Intersector;
 
 /// Stack capacity: at most three entries wait per level of a tree of [`MAX_TREE_DEPTH`].
 const STACK: usize = 3 * MAX_TREE_DEPTH as usize + 4;
@@ -125,20 +125,8 @@ impl Bvh4Traversal {
             self.current = (node.child[near], node.count[near]);
             return TreeEvent::Inner;
         }
-        // Three or four: insertion sort by entry distance.
-        let mut order = [0usize; 4];
-        let mut m = 0;
-        for k in 0..4 {
-            if mask & (1 << k) != 0 {
-                let mut j = m;
-                while j > 0 && t[order[j - 1]] > t[k] {
-                    order[j] = order[j - 1];
-                    j -= 1;
-                }
-                order[j] = k;
-                m += 1;
-            }
-        }
+        // Three or four.
+        let (order, m) = nearest_first(mask, &t);
         // Push the far ones (farthest first), continue with the nearest.
         for &k in order[1..m].iter().rev() {
             let _ = self.stack.push((node.child[k], node.count[k], t[k]));
@@ -171,7 +159,44 @@ impl Bvh4Traversal {
     }
 }
 
-/// The closest hit of `ray` through the 4-wide BVH: the host's loop over the step kernel.
+/// The slots set in `mask`, ordered by entry distance `t` (insertion sort: at most four),
+/// and how many there are.
+#[inline(always)]
+pub fn nearest_first(mask: u32, t: &[f32; 4]) -> ([usize; 4], usize) {
+    let mut order = [0usize; 4];
+    let mut m = 0;
+    for k in 0..4 {
+        if mask & (1 << k) != 0 {
+            let mut j = m;
+            while j > 0 && t[order[j - 1]] > t[k] {
+                order[j] = order[j - 1];
+                j -= 1;
+            }
+            order[j] = k;
+            m += 1;
+        }
+    }
+    (order, m)
+}
+
+impl TreeWalk<Bvh4View<'_>> for Bvh4Traversal {
+    #[inline(always)]
+    fn step<P: MemoryProbe>(&mut self, view: &Bvh4View<'_>, _ray: &Ray, probe: &mut P) -> TreeEvent {
+        Bvh4Traversal::step(self, view, probe)
+    }
+
+    #[inline(always)]
+    fn finish_leaf(&mut self) {
+        Bvh4Traversal::finish_leaf(self)
+    }
+
+    #[inline(always)]
+    fn best_mut(&mut self) -> &mut Option<Hit> {
+        &mut self.best
+    }
+}
+
+/// The closest hit of `ray` through the 4-wide BVH.
 #[inline]
 pub fn trace_bvh4<I: Intersector, P: MemoryProbe>(
     scene: &SceneView<'_>,
@@ -180,27 +205,5 @@ pub fn trace_bvh4<I: Intersector, P: MemoryProbe>(
     probe: &mut P,
     counters: &mut RayCounters,
 ) -> Option<Hit> {
-    let mut trav = Bvh4Traversal::new(ray);
-    let prep = I::prepare(ray);
-    let (mut nodes, mut leaves, mut tests) = (0u32, 0u32, 0u32);
-    loop {
-        match trav.step(bvh, probe) {
-            TreeEvent::Inner => nodes += 1,
-            TreeEvent::Leaf { first, count } => {
-                leaves += 1;
-                for e in first..first.wrapping_add(count) {
-                    let prim = bvh.prim(e, probe);
-                    let verts = I::fetch(scene, prim, probe);
-                    test_triangle::<I>(&prep, ray, &verts, prim, &mut trav.best);
-                }
-                tests += count;
-                trav.finish_leaf();
-            }
-            TreeEvent::Done => break,
-        }
-    }
-    counters.nodes += nodes;
-    counters.leaves += leaves;
-    counters.tri_tests += tests;
-    trav.best
+    trace_tree::<I, P, _, _>(scene, bvh, Bvh4Traversal::new(ray), ray, probe, counters)
 }

@@ -2,7 +2,7 @@
 //! hit one of the node's boxes, nearest child first; a leaf intersects its triangles with
 //! exactly the rays that enter its box.
 
-use crate::bvh4::slab4;
+use crate::bvh4::{nearest_first, slab4};
 use glam::{Vec3A, Vec4};
 
 use crate::aabb::SLAB_GROWTH;
@@ -173,19 +173,7 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
             };
             let child_t = tn.to_array();
             // Needed children, nearest first.
-            let mut order = [0usize; 4];
-            let mut n = 0;
-            for k in 0..4 {
-                if needed & (1 << k) != 0 {
-                    let mut j = n;
-                    while j > 0 && child_t[order[j - 1]] > child_t[k] {
-                        order[j] = order[j - 1];
-                        j -= 1;
-                    }
-                    order[j] = k;
-                    n += 1;
-                }
-            }
+            let (order, n) = nearest_first(needed, &child_t);
             if n > 0 {
                 let slot_box = |k: usize| {
                     [node.min_x[k], node.min_y[k], node.min_z[k], node.max_x[k], node.max_y[k], node.max_z[k]]

@@ -12,8 +12,8 @@ use crate::hit::Hit;
 use crate::image::{KdNode, KdTreeView, SceneView, MAX_TREE_DEPTH};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
-use crate::tree_step::TreeEvent;
-use crate::triangle::{test_triangle, Intersector};
+use crate::tree_step::{trace_tree, TreeEvent, TreeWalk};
+use crate::triangle::Intersector;
 
 /// The traversal registers of one ray.
 #[derive(Clone, Debug)]
@@ -88,6 +88,23 @@ impl KdTraversal {
     }
 }
 
+impl TreeWalk<KdTreeView<'_>> for KdTraversal {
+    #[inline(always)]
+    fn step<P: MemoryProbe>(&mut self, view: &KdTreeView<'_>, ray: &Ray, probe: &mut P) -> TreeEvent {
+        KdTraversal::step(self, view, ray, probe)
+    }
+
+    #[inline(always)]
+    fn finish_leaf(&mut self) {
+        KdTraversal::finish_leaf(self)
+    }
+
+    #[inline(always)]
+    fn best_mut(&mut self) -> &mut Option<Hit> {
+        &mut self.best
+    }
+}
+
 /// The closest hit of `ray` through the kd-tree.
 #[inline]
 pub fn trace_kdtree<I: Intersector, P: MemoryProbe>(
@@ -97,28 +114,5 @@ pub fn trace_kdtree<I: Intersector, P: MemoryProbe>(
     probe: &mut P,
     counters: &mut RayCounters,
 ) -> Option<Hit> {
-    let mut trav = KdTraversal::new(kd, ray);
-    let prep = I::prepare(ray);
-    let (mut nodes, mut leaves, mut tests) = (0u32, 0u32, 0u32);
-    loop {
-        match trav.step(kd, ray, probe) {
-            TreeEvent::Done => break,
-            TreeEvent::Inner => nodes += 1,
-            TreeEvent::Leaf { first, count } => {
-                nodes += 1;
-                leaves += 1;
-                for k in first..first.wrapping_add(count) {
-                    let prim = kd.prim(k, probe);
-                    let verts = I::fetch(scene, prim, probe);
-                    test_triangle::<I>(&prep, ray, &verts, prim, &mut trav.best);
-                }
-                tests += count;
-                trav.finish_leaf();
-            }
-        }
-    }
-    counters.nodes += nodes;
-    counters.leaves += leaves;
-    counters.tri_tests += tests;
-    trav.best
+    trace_tree::<I, P, _, _>(scene, kd, KdTraversal::new(kd, ray), ray, probe, counters)
 }

@@ -365,6 +365,27 @@ impl<'a> KdTreeView<'a> {
     }
 }
 
+impl crate::tree_step::PrimLists for BvhView<'_> {
+    #[inline(always)]
+    fn prim<P: MemoryProbe>(&self, pos: u32, probe: &mut P) -> u32 {
+        BvhView::prim(self, pos, probe)
+    }
+}
+
+impl crate::tree_step::PrimLists for Bvh4View<'_> {
+    #[inline(always)]
+    fn prim<P: MemoryProbe>(&self, pos: u32, probe: &mut P) -> u32 {
+        Bvh4View::prim(self, pos, probe)
+    }
+}
+
+impl crate::tree_step::PrimLists for KdTreeView<'_> {
+    #[inline(always)]
+    fn prim<P: MemoryProbe>(&self, pos: u32, probe: &mut P) -> u32 {
+        KdTreeView::prim(self, pos, probe)
+    }
+}
+
 /// The inner children of one tree node (at most four: the 4-wide BVH).
 type Children = heapless::Vec<u32, 4>;
 
