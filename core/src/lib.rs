@@ -13,7 +13,9 @@
 //! * [`bvh`] and [`kdtree`]: tree traversal with a fixed-capacity stack;
 //! * [`watertight`] and [`moller_trumbore`]: ray–triangle intersection;
 //! * [`brute_force`]: the reference tracer every structure must agree with;
-//! * [`shade`]: Lambert shading with one point light plus ambient.
+//! * [`shade`]: Lambert shading with one point light plus ambient;
+//! * [`ray_record`], [`occlusion`] and [`whitted`]: weighted ray records, the any-hit
+//!   query of shadow rays and Whitted's shader as a stream kernel that emits rays.
 //!
 //! ```
 //! use raypipe_core::{SceneView, SceneError};
@@ -46,16 +48,20 @@ pub mod kdtree;
 pub mod kdtree_packet;
 pub mod lockstep;
 pub mod moller_trumbore;
+pub mod occlusion;
 pub mod packet;
 pub mod probe;
 pub mod ray;
 pub mod ray_box;
+pub mod ray_record;
 pub mod shade;
+pub mod surface;
 pub mod tree_step;
 pub mod triangle;
 pub mod wald;
 pub mod walk;
 pub mod watertight;
+pub mod whitted;
 
 pub use camera::{Camera, CameraError};
 pub use counters::RayCounters;

@@ -9,6 +9,7 @@ use crate::hit::Hit;
 use crate::image::{LightRecord, SceneView};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
+use crate::surface::Surface;
 
 /// The linear RGB radiance seen along `ray`.
 pub fn shade<P: MemoryProbe>(
@@ -19,28 +20,8 @@ pub fn shade<P: MemoryProbe>(
     probe: &mut P,
 ) -> Vec3 {
     let Some(hit) = hit else { return background };
-    let material = scene.material_of(hit.prim, probe);
-    let [p0, p1, p2] = scene.triangle(hit.prim, probe);
-    let geometric = (p1 - p0).cross(p2 - p0);
-    let (w0, w1, w2) = (1.0 - hit.u - hit.v, hit.u, hit.v);
-
-    let idx = scene.triangle_indices(hit.prim);
-    let (mut normal, mut tint) = (geometric, Vec3::ONE);
-    if let (Some(a), Some(b), Some(c)) =
-        (scene.shading_vertex(idx[0], probe), scene.shading_vertex(idx[1], probe), scene.shading_vertex(idx[2], probe))
-    {
-        let n = Vec3::from(a.normal) * w0 + Vec3::from(b.normal) * w1 + Vec3::from(c.normal) * w2;
-        if n.length_squared() > 0.0 && n.is_finite() {
-            normal = n;
-        }
-        tint = Vec3::from(a.color) * w0 + Vec3::from(b.color) * w1 + Vec3::from(c.color) * w2;
-    }
-    let mut n = normal.normalize_or_zero();
-    // Face the viewer: both sides of a triangle are lit alike.
-    if n.dot(ray.dir) > 0.0 {
-        n = -n;
-    }
-    let point = ray.at(hit.t);
+    let surface = Surface::at(scene, ray, &hit, probe);
+    let (n, point) = (surface.normal, surface.point);
     let mut light = Vec3::ZERO;
     for i in 0..scene.light_count() {
         let l = scene.light(i, probe);
@@ -52,5 +33,5 @@ pub fn shade<P: MemoryProbe>(
             light += color * n.dot(to_light).max(0.0);
         }
     }
-    Vec3::from(material.diffuse) * tint * light + Vec3::from(material.emission)
+    Vec3::from(surface.material.diffuse) * surface.tint * light + Vec3::from(surface.material.emission)
 }

@@ -17,7 +17,7 @@ use crate::grid_builder::{GridResolution, DEFAULT_CELLS_PER_TRIANGLE};
 use crate::kd_builder::KdParams;
 use crate::output;
 use crate::packets::PacketSize;
-use crate::render::{self, RenderOptions};
+use crate::render::{self, Algorithm, RenderOptions};
 use crate::scene::{self, Accel, BuildOptions, Scene, TriangleLayout};
 use crate::simulate;
 use crate::stats;
@@ -306,6 +306,12 @@ pub struct RenderArgs {
     /// same. Default: the faster one for the structure.
     #[arg(long, value_enum)]
     pub packet: Option<PacketSize>,
+    /// Rendering algorithm.
+    #[arg(long, value_enum, default_value_t = Algorithm::Cast)]
+    pub algo: Algorithm,
+    /// Whitted: largest number of reflection/refraction bounces.
+    #[arg(long, value_name = "N", default_value_t = 5)]
+    pub max_depth: u32,
     /// An OBJ file or a scene image; the built-in Cornell box when omitted.
     pub scene: Option<PathBuf>,
     /// Output PNG.
@@ -526,7 +532,17 @@ fn cmd_render(a: RenderArgs) -> Result<()> {
     let cam = camera_for(&view, &a.camera)?;
     let kind = IntersectorKind::resolve(a.run.intersector, &view);
     let packet = a.packet.unwrap_or_else(|| PacketSize::auto_for(&view));
-    let opts = RenderOptions { threads: a.run.threads, intersector: kind, progress: true, packet };
+    if a.max_depth > 64 {
+        bail!("--max-depth {} is more than 64", a.max_depth);
+    }
+    let opts = RenderOptions {
+        threads: a.run.threads,
+        intersector: kind,
+        progress: true,
+        packet,
+        algo: a.algo,
+        max_depth: a.max_depth as u8,
+    };
     let start = Instant::now();
     let frame = render::render(&view, &cam, &opts)?;
     let secs = start.elapsed().as_secs_f64();
@@ -589,7 +605,13 @@ fn cmd_stats(a: StatsArgs) -> Result<()> {
     let view = scene.view()?;
     let cam = camera_for(&view, &a.camera)?;
     let kind = IntersectorKind::resolve(a.run.intersector, &view);
-    let opts = RenderOptions { threads: a.run.threads, intersector: kind, progress: false, packet: a.packet };
+    let opts = RenderOptions {
+        threads: a.run.threads,
+        intersector: kind,
+        progress: false,
+        packet: a.packet,
+        ..Default::default()
+    };
     let s = stats::gather(&view, &cam, &opts)?;
     println!("scene                     {} ({} triangles)", scene.name, view.triangle_count());
     println!("structure                 {}", structure_summary(&view));

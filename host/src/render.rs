@@ -13,6 +13,8 @@ use raypipe_core::shade::shade;
 use raypipe_core::{Intersector, NoProbe, Ray, RayCounters, SceneView};
 
 use crate::packets::{trace_tile, PacketSize};
+use crate::ray_stream::whitted_tile;
+use raypipe_core::whitted::WhittedOptions;
 
 use crate::progress;
 use crate::tracer::IntersectorKind;
@@ -32,6 +34,20 @@ pub struct RenderOptions {
     pub progress: bool,
     /// Rays traced one by one or as packets.
     pub packet: PacketSize,
+    /// What the shader does with a hit.
+    pub algo: Algorithm,
+    /// Largest reflection/refraction depth (Whitted).
+    pub max_depth: u8,
+}
+
+/// The rendering algorithm (Purcell 2002 Fig. 3).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Algorithm {
+    /// Ray casting: the first hit, Lambert-shaded from the lights without shadows.
+    #[default]
+    Cast,
+    /// Whitted ray tracing: shadow rays to point lights, mirror reflection, refraction.
+    Whitted,
 }
 
 impl Default for RenderOptions {
@@ -41,6 +57,8 @@ impl Default for RenderOptions {
             intersector: IntersectorKind::Watertight,
             progress: false,
             packet: PacketSize::Single,
+            algo: Algorithm::Cast,
+            max_depth: 5,
         }
     }
 }
@@ -105,14 +123,33 @@ fn render_with<I: Intersector>(
                 let tw = (x1 - x0) as usize;
                 let mut out = vec![[0u8; 3]; tw * (y1 - y0) as usize];
                 let (mut counters, mut pc) = (RayCounters::default(), PacketCounters::default());
-                let mut put = |x: u32, y: u32, ray: Option<Ray>, hit| {
-                    let color = match ray {
-                        Some(ray) => shade(scene, &ray, hit, background, &mut NoProbe),
-                        None => background,
-                    };
-                    out[(y - y0) as usize * tw + (x - x0) as usize] = rgb8(color);
-                };
-                trace_tile::<I>(scene, eye, (lo, hi), (x0, y0, x1, y1), opts.packet, &mut counters, &mut pc, &mut put);
+                let tile = (x0, y0, x1, y1);
+                match opts.algo {
+                    Algorithm::Cast => {
+                        let mut put = |x: u32, y: u32, ray: Option<Ray>, hit| {
+                            let color = match ray {
+                                Some(ray) => shade(scene, &ray, hit, background, &mut NoProbe),
+                                None => background,
+                            };
+                            out[(y - y0) as usize * tw + (x - x0) as usize] = rgb8(color);
+                        };
+                        trace_tile::<I>(scene, eye, (lo, hi), tile, opts.packet, &mut counters, &mut pc, &mut put);
+                    }
+                    Algorithm::Whitted => {
+                        // Primary hits first (in packets), then the tile's ray stream in
+                        // pixel order.
+                        let mut primaries = vec![(None, None); out.len()];
+                        let mut put = |x: u32, y: u32, ray: Option<Ray>, hit| {
+                            primaries[(y - y0) as usize * tw + (x - x0) as usize] = (ray, hit);
+                        };
+                        trace_tile::<I>(scene, eye, (lo, hi), tile, opts.packet, &mut counters, &mut pc, &mut put);
+                        let whitted = WhittedOptions { max_depth: opts.max_depth, background };
+                        let radiance = whitted_tile::<I>(scene, &whitted, &primaries, &mut [0; 5]);
+                        for (o, r) in out.iter_mut().zip(radiance) {
+                            *o = rgb8(r);
+                        }
+                    }
+                }
                 bar.inc(1);
                 out
             })

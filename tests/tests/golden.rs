@@ -41,7 +41,12 @@ fn render_default(kind: IntersectorKind, threads: usize, accel: Accel, packet: P
     let scene = scene::load_default(&BuildOptions { accel, ..Default::default() }).unwrap();
     let view = scene.view().unwrap();
     let cam = CameraRecord { width: 128, height: 128, ..*view.camera().unwrap() };
-    render(&view, &cam, &RenderOptions { threads: Some(threads), intersector: kind, progress: false, packet }).unwrap()
+    render(
+        &view,
+        &cam,
+        &RenderOptions { threads: Some(threads), intersector: kind, progress: false, packet, ..Default::default() },
+    )
+    .unwrap()
 }
 
 #[test]

@@ -1,0 +1,39 @@
+//! The any-hit query of shadow rays: is anything in the way within `[t_min, t_max]`?
+//! The walk is the structure's own step kernel ([`crate::walk::Walk`]), and it stops at
+//! the first triangle hit in range — no closest-hit ordering is needed, so a shadow ray
+//! usually ends long before a closest-hit query would (Purcell 2002 §3.1.4).
+
+use crate::image::SceneView;
+use crate::probe::MemoryProbe;
+use crate::ray::Ray;
+use crate::triangle::Intersector;
+use crate::walk::{Walk, WalkEvent};
+
+/// True if some triangle is hit by `ray` within its interval. Exactly the closest-hit
+/// query's "is there a hit", found sooner.
+pub fn occluded<I: Intersector, P: MemoryProbe>(scene: &SceneView<'_>, ray: &Ray, probe: &mut P) -> bool {
+    if !ray.is_valid() {
+        return false;
+    }
+    let prep = I::prepare(ray);
+    let mut walk = Walk::start(scene, ray);
+    loop {
+        match walk.step(scene, ray, probe) {
+            WalkEvent::Inner => {}
+            WalkEvent::Leaf(leaf) => {
+                let mut k = 0;
+                while let Some(prim) = leaf.entry(scene, k, probe) {
+                    let tri = I::fetch(scene, prim, probe);
+                    if let Some((t, _, _)) = I::intersect(&prep, &tri) {
+                        if t >= ray.t_min && t <= ray.t_max {
+                            return true;
+                        }
+                    }
+                    k += 1;
+                }
+                walk.finish_leaf();
+            }
+            WalkEvent::Done => return false,
+        }
+    }
+}

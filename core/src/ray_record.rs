@@ -1,0 +1,68 @@
+//! Weighted ray records and bounded ray queues (Purcell 2002 §3.1.4, after Kajiya 1986):
+//! a shading kernel consumes a hit and emits new ray records instead of recursing; each
+//! record carries the pixel it contributes to and the weight its radiance is multiplied
+//! by, so a driver can trace them in any order and add each contribution when the ray
+//! ends.
+
+use glam::Vec3;
+use heapless::Deque;
+
+use crate::ray::Ray;
+
+/// What a ray is for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[repr(u8)]
+pub enum RayKind {
+    /// From the eye.
+    Primary = 0,
+    /// Toward a light: its weight is added if nothing is in the way (an any-hit query).
+    Shadow = 1,
+    /// Mirror reflection.
+    Reflection = 2,
+    /// Refraction into or out of a transparent material.
+    Refraction = 3,
+    /// A sampled bounce of a path.
+    Path = 4,
+}
+
+impl RayKind {
+    /// Every kind, in a fixed order (for reports).
+    pub const ALL: [RayKind; 5] =
+        [RayKind::Primary, RayKind::Shadow, RayKind::Reflection, RayKind::Refraction, RayKind::Path];
+
+    /// Lower-case name for reports.
+    pub const fn name(self) -> &'static str {
+        match self {
+            RayKind::Primary => "primary",
+            RayKind::Shadow => "shadow",
+            RayKind::Reflection => "reflection",
+            RayKind::Refraction => "refraction",
+            RayKind::Path => "path",
+        }
+    }
+}
+
+/// A ray with the pixel it contributes to and its weight.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RayRecord {
+    /// The ray.
+    pub ray: Ray,
+    /// Pixel index (row-major) the contribution goes to.
+    pub pixel: u32,
+    /// Linear RGB factor applied to whatever the ray brings back.
+    pub weight: Vec3,
+    /// What the ray is for.
+    pub kind: RayKind,
+    /// Bounces from the eye (primary rays: 0).
+    pub depth: u8,
+}
+
+impl RayRecord {
+    /// A primary ray of weight one.
+    pub fn primary(ray: Ray, pixel: u32) -> RayRecord {
+        RayRecord { ray, pixel, weight: Vec3::ONE, kind: RayKind::Primary, depth: 0 }
+    }
+}
+
+/// A bounded first-in first-out queue of ray records (fixed capacity, no heap).
+pub type RayQueue<const N: usize> = Deque<RayRecord, N>;

@@ -1,0 +1,53 @@
+//! The host's driver of the ray-emitting shaders (Purcell 2002 §3.1.4): a tile's rays
+//! are records in one first-in first-out stream. Primary hits are shaded in pixel order;
+//! every record a shader emits joins the stream; shadow rays take core's any-hit query,
+//! the others its closest-hit query and the shader again. A record's contribution is
+//! added to its pixel when it ends, in stream order, so the image does not depend on
+//! threads, tiles or packet sizes.
+
+use std::collections::VecDeque;
+
+use raypipe_core::occlusion::occluded;
+use raypipe_core::ray_record::{RayKind, RayRecord};
+use raypipe_core::whitted::{shade_whitted, WhittedOptions};
+use raypipe_core::{Hit, Intersector, NoProbe, Ray, RayCounters, SceneView, Vec3};
+
+use crate::tracer::trace;
+
+/// Rays traced, by kind (indexed by `RayKind as usize`).
+pub type KindCounts = [u64; 5];
+
+/// Whitted radiance of a tile's pixels from their primary rays and hits (`None` ray: the
+/// eye ray missed the scene's bounds, the pixel is background).
+pub fn whitted_tile<I: Intersector>(
+    scene: &SceneView<'_>,
+    opts: &WhittedOptions,
+    primaries: &[(Option<Ray>, Option<Hit>)],
+    counts: &mut KindCounts,
+) -> Vec<Vec3> {
+    let mut radiance = vec![Vec3::ZERO; primaries.len()];
+    let mut stream: VecDeque<RayRecord> = VecDeque::new();
+    for (p, (ray, hit)) in primaries.iter().enumerate() {
+        match ray {
+            None => radiance[p] = opts.background,
+            Some(ray) => {
+                counts[RayKind::Primary as usize] += 1;
+                let rec = RayRecord::primary(*ray, p as u32);
+                radiance[p] += shade_whitted(scene, &rec, *hit, opts, &mut NoProbe, &mut |r| stream.push_back(r));
+            }
+        }
+    }
+    while let Some(rec) = stream.pop_front() {
+        counts[rec.kind as usize] += 1;
+        let Some(slot) = radiance.get_mut(rec.pixel as usize) else { continue };
+        if rec.kind == RayKind::Shadow {
+            if !occluded::<I, _>(scene, &rec.ray, &mut NoProbe) {
+                *slot += rec.weight;
+            }
+        } else {
+            let hit = trace::<I, _>(scene, &rec.ray, &mut NoProbe, &mut RayCounters::default());
+            *slot += shade_whitted(scene, &rec, hit, opts, &mut NoProbe, &mut |r| stream.push_back(r));
+        }
+    }
+    radiance
+}
