@@ -14,8 +14,9 @@
 //! * [`watertight`] and [`moller_trumbore`]: ray–triangle intersection;
 //! * [`brute_force`]: the reference tracer every structure must agree with;
 //! * [`shade`]: Lambert shading with one point light plus ambient;
-//! * [`ray_record`], [`occlusion`] and [`whitted`]: weighted ray records, the any-hit
-//!   query of shadow rays and Whitted's shader as a stream kernel that emits rays.
+//! * [`ray_record`], [`occlusion`], [`whitted`], [`path`] and [`shader`]: weighted ray
+//!   records, the any-hit query of shadow rays, and Whitted's and the path tracer's
+//!   shaders as stream kernels that emit rays ([`rng`]: counter-based random numbers).
 //!
 //! ```
 //! use raypipe_core::{SceneView, SceneError};
@@ -50,11 +51,14 @@ pub mod lockstep;
 pub mod moller_trumbore;
 pub mod occlusion;
 pub mod packet;
+pub mod path;
 pub mod probe;
 pub mod ray;
 pub mod ray_box;
 pub mod ray_record;
+pub mod rng;
 pub mod shade;
+pub mod shader;
 pub mod surface;
 pub mod tree_step;
 pub mod triangle;

@@ -55,12 +55,20 @@ pub struct RayRecord {
     pub kind: RayKind,
     /// Bounces from the eye (primary rays: 0).
     pub depth: u8,
+    /// Sample number within the pixel (path tracing's random numbers are drawn from
+    /// pixel, sample and bounce).
+    pub sample: u32,
 }
 
 impl RayRecord {
     /// A primary ray of weight one.
     pub fn primary(ray: Ray, pixel: u32) -> RayRecord {
-        RayRecord { ray, pixel, weight: Vec3::ONE, kind: RayKind::Primary, depth: 0 }
+        RayRecord { ray, pixel, weight: Vec3::ONE, kind: RayKind::Primary, depth: 0, sample: 0 }
+    }
+
+    /// A record continuing from `self` (same pixel and sample).
+    pub fn child(&self, ray: Ray, weight: Vec3, kind: RayKind, depth: u8) -> RayRecord {
+        RayRecord { ray, pixel: self.pixel, weight, kind, depth, sample: self.sample }
     }
 }
 

@@ -105,7 +105,7 @@ pub fn shade_whitted<P: MemoryProbe>(
             let origin = s.offset_point(to_light, extent);
             // The light sits at t = 1: only what lies before it can block it.
             let ray = Ray { origin, dir: Vec3::from(l.position) - origin, t_min: 0.0, t_max: 1.0 };
-            emit(RayRecord { ray, pixel: rec.pixel, weight, kind: RayKind::Shadow, depth: rec.depth });
+            emit(rec.child(ray, weight, RayKind::Shadow, rec.depth));
         }
     }
     if rec.depth < opts.max_depth && n != Vec3::ZERO {
@@ -117,7 +117,7 @@ pub fn shade_whitted<P: MemoryProbe>(
             if weight.max_element() > 0.0 && dir != Vec3::ZERO {
                 let origin = s.offset_point(dir, extent);
                 let ray = Ray::new(origin, dir);
-                emit(RayRecord { ray, pixel: rec.pixel, weight: rec.weight * weight, kind, depth: rec.depth + 1 });
+                emit(rec.child(ray, rec.weight * weight, kind, rec.depth + 1));
             }
         };
         let ks = clamp01(Vec3::from(m.specular));

@@ -312,6 +312,15 @@ pub struct RenderArgs {
     /// Whitted: largest number of reflection/refraction bounces.
     #[arg(long, value_name = "N", default_value_t = 5)]
     pub max_depth: u32,
+    /// Path tracing: bounces after the first hit.
+    #[arg(long, value_name = "N", default_value_t = 2)]
+    pub bounces: u32,
+    /// Path tracing: samples per pixel.
+    #[arg(long, value_name = "N", default_value_t = 16)]
+    pub samples: u32,
+    /// Path tracing: end paths at random after the first bounce (Russian roulette).
+    #[arg(long)]
+    pub roulette: bool,
     /// An OBJ file or a scene image; the built-in Cornell box when omitted.
     pub scene: Option<PathBuf>,
     /// Output PNG.
@@ -535,6 +544,12 @@ fn cmd_render(a: RenderArgs) -> Result<()> {
     if a.max_depth > 64 {
         bail!("--max-depth {} is more than 64", a.max_depth);
     }
+    if a.bounces > 64 {
+        bail!("--bounces {} is more than 64", a.bounces);
+    }
+    if a.samples == 0 || a.samples > 65536 {
+        bail!("--samples must be between 1 and 65536 (got {})", a.samples);
+    }
     let opts = RenderOptions {
         threads: a.run.threads,
         intersector: kind,
@@ -542,6 +557,9 @@ fn cmd_render(a: RenderArgs) -> Result<()> {
         packet,
         algo: a.algo,
         max_depth: a.max_depth as u8,
+        bounces: a.bounces as u8,
+        samples: a.samples,
+        roulette: a.roulette,
     };
     let start = Instant::now();
     let frame = render::render(&view, &cam, &opts)?;

@@ -1,15 +1,15 @@
 //! The host's driver of the ray-emitting shaders (Purcell 2002 §3.1.4): a tile's rays
-//! are records in one first-in first-out stream. Primary hits are shaded in pixel order;
-//! every record a shader emits joins the stream; shadow rays take core's any-hit query,
-//! the others its closest-hit query and the shader again. A record's contribution is
-//! added to its pixel when it ends, in stream order, so the image does not depend on
-//! threads, tiles or packet sizes.
+//! are records in one first-in first-out stream. Primary hits are shaded in pixel order
+//! (one record per sample); every record a shader emits joins the stream; shadow rays
+//! take core's any-hit query, the others its closest-hit query and the shader again. A
+//! record's contribution is added to its pixel when it ends, in stream order, so the
+//! image does not depend on threads, tiles or packet sizes.
 
 use std::collections::VecDeque;
 
 use raypipe_core::occlusion::occluded;
 use raypipe_core::ray_record::{RayKind, RayRecord};
-use raypipe_core::whitted::{shade_whitted, WhittedOptions};
+use raypipe_core::shader::Shader;
 use raypipe_core::{Hit, Intersector, NoProbe, Ray, RayCounters, SceneView, Vec3};
 
 use crate::tracer::trace;
@@ -17,23 +17,31 @@ use crate::tracer::trace;
 /// Rays traced, by kind (indexed by `RayKind as usize`).
 pub type KindCounts = [u64; 5];
 
-/// Whitted radiance of a tile's pixels from their primary rays and hits (`None` ray: the
-/// eye ray missed the scene's bounds, the pixel is background).
-pub fn whitted_tile<I: Intersector>(
+/// Radiance of a tile's pixels from their primary rays and hits (`None` ray: the eye ray
+/// missed the scene's bounds, the pixel is `background`).
+pub fn shade_tile<I: Intersector>(
     scene: &SceneView<'_>,
-    opts: &WhittedOptions,
+    shader: &Shader,
+    background: Vec3,
     primaries: &[(Option<Ray>, Option<Hit>)],
     counts: &mut KindCounts,
 ) -> Vec<Vec3> {
+    let samples = shader.samples();
     let mut radiance = vec![Vec3::ZERO; primaries.len()];
     let mut stream: VecDeque<RayRecord> = VecDeque::new();
     for (p, (ray, hit)) in primaries.iter().enumerate() {
         match ray {
-            None => radiance[p] = opts.background,
+            None => radiance[p] = background,
             Some(ray) => {
                 counts[RayKind::Primary as usize] += 1;
-                let rec = RayRecord::primary(*ray, p as u32);
-                radiance[p] += shade_whitted(scene, &rec, *hit, opts, &mut NoProbe, &mut |r| stream.push_back(r));
+                for s in 0..samples {
+                    let rec = RayRecord {
+                        weight: Vec3::splat(1.0 / samples as f32),
+                        sample: s,
+                        ..RayRecord::primary(*ray, p as u32)
+                    };
+                    radiance[p] += shader.shade(scene, &rec, *hit, &mut NoProbe, &mut |r| stream.push_back(r));
+                }
             }
         }
     }
@@ -46,7 +54,7 @@ pub fn whitted_tile<I: Intersector>(
             }
         } else {
             let hit = trace::<I, _>(scene, &rec.ray, &mut NoProbe, &mut RayCounters::default());
-            *slot += shade_whitted(scene, &rec, hit, opts, &mut NoProbe, &mut |r| stream.push_back(r));
+            *slot += shader.shade(scene, &rec, hit, &mut NoProbe, &mut |r| stream.push_back(r));
         }
     }
     radiance

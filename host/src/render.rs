@@ -13,7 +13,9 @@ use raypipe_core::shade::shade;
 use raypipe_core::{Intersector, NoProbe, Ray, RayCounters, SceneView};
 
 use crate::packets::{trace_tile, PacketSize};
-use crate::ray_stream::whitted_tile;
+use crate::ray_stream::shade_tile;
+use raypipe_core::path::PathOptions;
+use raypipe_core::shader::Shader;
 use raypipe_core::whitted::WhittedOptions;
 
 use crate::progress;
@@ -38,6 +40,12 @@ pub struct RenderOptions {
     pub algo: Algorithm,
     /// Largest reflection/refraction depth (Whitted).
     pub max_depth: u8,
+    /// Path tracing: bounces after the first hit.
+    pub bounces: u8,
+    /// Path tracing: samples per pixel.
+    pub samples: u32,
+    /// Path tracing: Russian roulette after the first bounce.
+    pub roulette: bool,
 }
 
 /// The rendering algorithm (Purcell 2002 Fig. 3).
@@ -48,6 +56,24 @@ pub enum Algorithm {
     Cast,
     /// Whitted ray tracing: shadow rays to point lights, mirror reflection, refraction.
     Whitted,
+    /// Path tracing: diffuse bounces, next-event estimation, samples per pixel.
+    Path,
+}
+
+impl RenderOptions {
+    /// The ray-emitting shader of the algorithm (`None` for ray casting).
+    pub fn shader(&self, background: Vec3) -> Option<Shader> {
+        match self.algo {
+            Algorithm::Cast => None,
+            Algorithm::Whitted => Some(Shader::Whitted(WhittedOptions { max_depth: self.max_depth, background })),
+            Algorithm::Path => Some(Shader::Path(PathOptions {
+                bounces: self.bounces,
+                samples: self.samples,
+                roulette: self.roulette,
+                background,
+            })),
+        }
+    }
 }
 
 impl Default for RenderOptions {
@@ -59,6 +85,9 @@ impl Default for RenderOptions {
             packet: PacketSize::Single,
             algo: Algorithm::Cast,
             max_depth: 5,
+            bounces: 2,
+            samples: 16,
+            roulette: false,
         }
     }
 }
@@ -124,8 +153,8 @@ fn render_with<I: Intersector>(
                 let mut out = vec![[0u8; 3]; tw * (y1 - y0) as usize];
                 let (mut counters, mut pc) = (RayCounters::default(), PacketCounters::default());
                 let tile = (x0, y0, x1, y1);
-                match opts.algo {
-                    Algorithm::Cast => {
+                match opts.shader(background) {
+                    None => {
                         let mut put = |x: u32, y: u32, ray: Option<Ray>, hit| {
                             let color = match ray {
                                 Some(ray) => shade(scene, &ray, hit, background, &mut NoProbe),
@@ -135,7 +164,7 @@ fn render_with<I: Intersector>(
                         };
                         trace_tile::<I>(scene, eye, (lo, hi), tile, opts.packet, &mut counters, &mut pc, &mut put);
                     }
-                    Algorithm::Whitted => {
+                    Some(shader) => {
                         // Primary hits first (in packets), then the tile's ray stream in
                         // pixel order.
                         let mut primaries = vec![(None, None); out.len()];
@@ -143,8 +172,7 @@ fn render_with<I: Intersector>(
                             primaries[(y - y0) as usize * tw + (x - x0) as usize] = (ray, hit);
                         };
                         trace_tile::<I>(scene, eye, (lo, hi), tile, opts.packet, &mut counters, &mut pc, &mut put);
-                        let whitted = WhittedOptions { max_depth: opts.max_depth, background };
-                        let radiance = whitted_tile::<I>(scene, &whitted, &primaries, &mut [0; 5]);
+                        let radiance = shade_tile::<I>(scene, &shader, background, &primaries, &mut [0; 5]);
                         for (o, r) in out.iter_mut().zip(radiance) {
                             *o = rgb8(r);
                         }

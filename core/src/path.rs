@@ -1,0 +1,161 @@
+//! Path tracing as a stream kernel (Kajiya 1986; Purcell 2002 §3.1.4 and Fig. 3): at each
+//! hit the shader adds what it can at once (emission seen along a camera or specular
+//! path), estimates direct light by next-event estimation — one shadow ray per point
+//! light, weighted by its Lambert term — and continues the path with a cosine-weighted
+//! diffuse bounce (whose weight is just the diffuse colour: cosine and density cancel)
+//! and, for mirrors and glass, the specular bounce, until the configured number of
+//! bounces. Random numbers come from [`crate::rng`]: pixel, sample and bounce, so the
+//! image does not depend on the order rays are traced in.
+//!
+//! Emissive triangles stand behind the scene's point lights (the builder puts a light
+//! just inside them): a diffuse bounce that reaches one adds nothing, or its light
+//! would be counted twice. Ambient light records are ignored: the bounces replace them.
+
+use glam::Vec3;
+
+use crate::hit::Hit;
+use crate::image::{LightRecord, SceneView};
+use crate::probe::MemoryProbe;
+use crate::ray::Ray;
+use crate::ray_record::{RayKind, RayRecord};
+use crate::rng::uniform;
+use crate::surface::Surface;
+use crate::whitted::{fresnel, reflect, refract};
+
+/// Settings of the path tracer.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PathOptions {
+    /// Bounces after the first hit (Purcell used 2).
+    pub bounces: u8,
+    /// Samples per pixel.
+    pub samples: u32,
+    /// End paths at random after the first bounce, reweighting the survivors (unbiased,
+    /// but a surviving path's weight can grow).
+    pub roulette: bool,
+    /// Radiance of rays that hit nothing.
+    pub background: Vec3,
+}
+
+/// A direction around unit `n` with density `cos θ / π` from two uniform numbers.
+pub fn cosine_direction(n: Vec3, u1: f32, u2: f32) -> Vec3 {
+    let r = libm::sqrtf(u1);
+    let phi = 2.0 * core::f32::consts::PI * u2;
+    let (x, y, z) = (r * libm::cosf(phi), r * libm::sinf(phi), libm::sqrtf((1.0 - u1).max(0.0)));
+    let helper = if n.x.abs() > 0.9 { Vec3::Y } else { Vec3::X };
+    let t = helper.cross(n).normalize_or_zero();
+    let b = n.cross(t);
+    t * x + b * y + n * z
+}
+
+fn clamp01(v: Vec3) -> Vec3 {
+    v.clamp(Vec3::ZERO, Vec3::ONE)
+}
+
+/// Shades the end of `rec`: returns the radiance added now (times the record's weight)
+/// and passes new records to `emit`.
+pub fn shade_path<P: MemoryProbe>(
+    scene: &SceneView<'_>,
+    rec: &RayRecord,
+    hit: Option<Hit>,
+    opts: &PathOptions,
+    probe: &mut P,
+    emit: &mut impl FnMut(RayRecord),
+) -> Vec3 {
+    let Some(hit) = hit else { return rec.weight * opts.background };
+    let s = Surface::at(scene, &rec.ray, &hit, probe);
+    let m = s.material;
+    let n = s.normal;
+    let mut now = Vec3::ZERO;
+    if rec.kind != RayKind::Path {
+        now += rec.weight * Vec3::from(m.emission);
+    }
+    if n == Vec3::ZERO {
+        return now;
+    }
+    let (lo, hi) = scene.bounds();
+    let extent = (hi - lo).max_element();
+    let transparent = m.dissolve < 1.0 || matches!(m.illum, 4 | 6 | 7 | 9);
+    let opacity = if m.dissolve < 1.0 { m.dissolve.clamp(0.0, 1.0) } else { 1.0 };
+    let diffuse = clamp01(Vec3::from(m.diffuse) * s.tint) * opacity;
+    // Next-event estimation.
+    if diffuse.max_element() > 0.0 {
+        for i in 0..scene.light_count() {
+            let l = scene.light(i, probe);
+            if l.kind != LightRecord::POINT {
+                continue;
+            }
+            let to_light = Vec3::from(l.position) - s.point;
+            let cos = n.dot(to_light.normalize_or_zero());
+            let weight = rec.weight * diffuse * Vec3::from(l.color) * cos;
+            if cos > 0.0 && weight.max_element() > 0.0 {
+                let origin = s.offset_point(to_light, extent);
+                let ray = Ray { origin, dir: Vec3::from(l.position) - origin, t_min: 0.0, t_max: 1.0 };
+                emit(rec.child(ray, weight, RayKind::Shadow, rec.depth));
+            }
+        }
+    }
+    if rec.depth >= opts.bounces {
+        return now;
+    }
+    let depth = rec.depth as u32;
+    let u = |dim: u32| uniform(rec.pixel, rec.sample, depth, dim);
+    let mut bounce = |dir: Vec3, weight: Vec3, kind: RayKind| {
+        if weight.max_element() > 0.0 && dir != Vec3::ZERO && weight.is_finite() {
+            let ray = Ray::new(s.offset_point(dir, extent), dir);
+            emit(rec.child(ray, weight, kind, rec.depth + 1));
+        }
+    };
+    // The diffuse bounce.
+    if diffuse.max_element() > 0.0 {
+        let mut weight = rec.weight * diffuse;
+        let survive = if opts.roulette && rec.depth >= 1 { diffuse.max_element().clamp(0.05, 0.95) } else { 1.0 };
+        if u(2) < survive {
+            weight /= survive;
+            bounce(cosine_direction(n, u(0), u(1)), weight, RayKind::Path);
+        }
+    }
+    // Mirrors and glass, as in Whitted's shader.
+    let d = rec.ray.dir.normalize_or_zero();
+    let ior = if m.ior > 0.0 && m.ior.is_finite() { m.ior } else { 1.0 };
+    let (eta_i, eta_t) = if s.entering { (1.0, ior) } else { (ior, 1.0) };
+    let kr = fresnel(-d.dot(n), eta_i, eta_t);
+    let ks = clamp01(Vec3::from(m.specular));
+    match m.illum {
+        3 => bounce(reflect(d, n), rec.weight * ks, RayKind::Reflection),
+        5 => {
+            let c = (1.0 + d.dot(n)).clamp(0.0, 1.0);
+            bounce(reflect(d, n), rec.weight * (ks + (Vec3::ONE - ks) * (c * c * c * c * c)), RayKind::Reflection)
+        }
+        7 => bounce(reflect(d, n), rec.weight * ks * kr, RayKind::Reflection),
+        _ => {}
+    }
+    if transparent {
+        let transmitted = if m.dissolve < 1.0 { 1.0 - opacity } else { 1.0 };
+        match refract(d, n, eta_i / eta_t) {
+            Some(t) => bounce(t, rec.weight * ((1.0 - kr) * transmitted), RayKind::Refraction),
+            None => bounce(reflect(d, n), rec.weight * transmitted, RayKind::Reflection),
+        }
+    }
+    now
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cosine_directions_stay_in_the_hemisphere_and_follow_the_cosine() {
+        for n in [Vec3::Z, Vec3::new(1.0, 2.0, -0.5).normalize(), Vec3::X, -Vec3::Y] {
+            let mut mean_cos = 0.0;
+            let k = 4096;
+            for i in 0..k {
+                let d = cosine_direction(n, uniform(i, 0, 0, 0), uniform(i, 0, 0, 1));
+                assert!((d.length() - 1.0).abs() < 1e-4);
+                assert!(d.dot(n) >= -1e-6);
+                mean_cos += d.dot(n) / k as f32;
+            }
+            // E[cos θ] under the cosine density is 2/3.
+            assert!((mean_cos - 2.0 / 3.0).abs() < 0.02, "{mean_cos}");
+        }
+    }
+}

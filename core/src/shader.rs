@@ -1,0 +1,47 @@
+//! The ray-emitting shaders behind one interface, so that a driver (the host's ray
+//! stream, the hardware model's shading unit) runs any algorithm the same way.
+
+use glam::Vec3;
+
+use crate::hit::Hit;
+use crate::image::SceneView;
+use crate::path::{shade_path, PathOptions};
+use crate::probe::MemoryProbe;
+use crate::ray_record::RayRecord;
+use crate::whitted::{shade_whitted, WhittedOptions};
+
+/// A shader that consumes hits and emits ray records.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Shader {
+    /// Whitted ray tracing.
+    Whitted(WhittedOptions),
+    /// Path tracing.
+    Path(PathOptions),
+}
+
+impl Shader {
+    /// Shades the end of `rec`: the radiance added now (times its weight); new records go
+    /// to `emit`.
+    #[inline]
+    pub fn shade<P: MemoryProbe>(
+        &self,
+        scene: &SceneView<'_>,
+        rec: &RayRecord,
+        hit: Option<Hit>,
+        probe: &mut P,
+        emit: &mut impl FnMut(RayRecord),
+    ) -> Vec3 {
+        match self {
+            Shader::Whitted(o) => shade_whitted(scene, rec, hit, o, probe, emit),
+            Shader::Path(o) => shade_path(scene, rec, hit, o, probe, emit),
+        }
+    }
+
+    /// Primary records per pixel (path tracing's samples).
+    pub fn samples(&self) -> u32 {
+        match self {
+            Shader::Whitted(_) => 1,
+            Shader::Path(o) => o.samples.max(1),
+        }
+    }
+}
