@@ -53,6 +53,7 @@ pub mod occlusion;
 pub mod packet;
 pub mod path;
 pub mod probe;
+pub mod radiance_sum;
 pub mod ray;
 pub mod ray_box;
 pub mod ray_record;

@@ -2,12 +2,14 @@
 //! are records in one first-in first-out stream. Primary hits are shaded in pixel order
 //! (one record per sample); every record a shader emits joins the stream; shadow rays
 //! take core's any-hit query, the others its closest-hit query and the shader again. A
-//! record's contribution is added to its pixel when it ends, in stream order, so the
-//! image does not depend on threads, tiles or packet sizes.
+//! record's contribution is added to its pixel when it ends, as an exact fixed-point sum
+//! ([`RadianceSum`]), so the image depends neither on the order rays end in nor on
+//! threads, tiles, packet sizes — or on being traced by the hardware model instead.
 
 use std::collections::VecDeque;
 
 use raypipe_core::occlusion::occluded;
+use raypipe_core::radiance_sum::RadianceSum;
 use raypipe_core::ray_record::{RayKind, RayRecord};
 use raypipe_core::shader::Shader;
 use raypipe_core::{Hit, Intersector, NoProbe, Ray, RayCounters, SceneView, Vec3};
@@ -27,11 +29,11 @@ pub fn shade_tile<I: Intersector>(
     counts: &mut KindCounts,
 ) -> Vec<Vec3> {
     let samples = shader.samples();
-    let mut radiance = vec![Vec3::ZERO; primaries.len()];
+    let mut radiance = vec![RadianceSum::default(); primaries.len()];
     let mut stream: VecDeque<RayRecord> = VecDeque::new();
     for (p, (ray, hit)) in primaries.iter().enumerate() {
         match ray {
-            None => radiance[p] = background,
+            None => radiance[p].add(background),
             Some(ray) => {
                 counts[RayKind::Primary as usize] += 1;
                 for s in 0..samples {
@@ -40,7 +42,7 @@ pub fn shade_tile<I: Intersector>(
                         sample: s,
                         ..RayRecord::primary(*ray, p as u32)
                     };
-                    radiance[p] += shader.shade(scene, &rec, *hit, &mut NoProbe, &mut |r| stream.push_back(r));
+                    radiance[p].add(shader.shade(scene, &rec, *hit, &mut NoProbe, &mut |r| stream.push_back(r)));
                 }
             }
         }
@@ -50,12 +52,12 @@ pub fn shade_tile<I: Intersector>(
         let Some(slot) = radiance.get_mut(rec.pixel as usize) else { continue };
         if rec.kind == RayKind::Shadow {
             if !occluded::<I, _>(scene, &rec.ray, &mut NoProbe) {
-                *slot += rec.weight;
+                slot.add(rec.weight);
             }
         } else {
             let hit = trace::<I, _>(scene, &rec.ray, &mut NoProbe, &mut RayCounters::default());
-            *slot += shader.shade(scene, &rec, hit, &mut NoProbe, &mut |r| stream.push_back(r));
+            slot.add(shader.shade(scene, &rec, hit, &mut NoProbe, &mut |r| stream.push_back(r)));
         }
     }
-    radiance
+    radiance.iter().map(RadianceSum::value).collect()
 }

@@ -1,0 +1,52 @@
+//! An order-independent sum of radiance contributions: each contribution is rounded once
+//! to fixed point (2^-32 steps) and added as an integer, so a pixel's value is the same
+//! whichever order its rays end in — on the host, where a tile's stream orders them, and
+//! in the hardware model, where packets come back as the units finish them.
+
+use glam::Vec3;
+
+/// Fixed-point scale: 2^32 steps per unit of radiance.
+const SCALE: f64 = 4_294_967_296.0;
+
+/// A pixel's radiance, summed exactly.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RadianceSum([u64; 3]);
+
+impl RadianceSum {
+    /// Adds a contribution (negative, NaN or infinite components count as zero or
+    /// saturate: radiance is never negative).
+    #[inline]
+    pub fn add(&mut self, c: Vec3) {
+        for (acc, v) in self.0.iter_mut().zip(c.to_array()) {
+            let fixed = if v.is_nan() || v <= 0.0 { 0 } else { (v as f64 * SCALE) as u64 };
+            *acc = acc.saturating_add(fixed);
+        }
+    }
+
+    /// The sum as linear RGB.
+    pub fn value(&self) -> Vec3 {
+        let [r, g, b] = self.0.map(|v| (v as f64 / SCALE) as f32);
+        Vec3::new(r, g, b)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_order_of_contributions_does_not_matter() {
+        let parts = [Vec3::new(0.1, 0.2, 0.3), Vec3::new(1e-7, 5.0, 0.0), Vec3::new(0.333, -1.0, f32::NAN)];
+        let mut a = RadianceSum::default();
+        let mut b = RadianceSum::default();
+        for p in parts {
+            a.add(p);
+        }
+        for p in parts.iter().rev() {
+            b.add(*p);
+        }
+        assert_eq!(a, b);
+        let v = a.value();
+        assert!((v.x - 0.4330001).abs() < 1e-6 && (v.y - 5.2).abs() < 1e-5 && (v.z - 0.3).abs() < 1e-6, "{v:?}");
+    }
+}
