@@ -80,6 +80,8 @@ pub struct SimulateArgs {
     /// Ray–triangle test (default: the one the image's triangle layout is for).
     #[arg(long, value_enum)]
     pub intersector: Option<IntersectorKind>,
+    #[command(flatten)]
+    pub algo: AlgoArgs,
 }
 
 /// `raypipe trace`.
@@ -299,13 +301,9 @@ pub struct BuildArgs {
     pub camera: CameraArgs,
 }
 
-/// `raypipe render`.
-#[derive(Args, Debug)]
-pub struct RenderArgs {
-    /// Rays per packet: 1 (single rays), 4 (2×2), 16 (4×4) or 64 (8×8); the image is the
-    /// same. Default: the faster one for the structure.
-    #[arg(long, value_enum)]
-    pub packet: Option<PacketSize>,
+/// The rendering algorithm and its settings.
+#[derive(Args, Debug, Clone)]
+pub struct AlgoArgs {
     /// Rendering algorithm.
     #[arg(long, value_enum, default_value_t = Algorithm::Cast)]
     pub algo: Algorithm,
@@ -321,6 +319,38 @@ pub struct RenderArgs {
     /// Path tracing: end paths at random after the first bounce (Russian roulette).
     #[arg(long)]
     pub roulette: bool,
+}
+
+impl AlgoArgs {
+    /// Checks the values and puts them into render options.
+    pub fn apply(&self, opts: &mut RenderOptions) -> Result<()> {
+        if self.max_depth > 64 {
+            bail!("--max-depth {} is more than 64", self.max_depth);
+        }
+        if self.bounces > 64 {
+            bail!("--bounces {} is more than 64", self.bounces);
+        }
+        if self.samples == 0 || self.samples > 65536 {
+            bail!("--samples must be between 1 and 65536 (got {})", self.samples);
+        }
+        opts.algo = self.algo;
+        opts.max_depth = self.max_depth as u8;
+        opts.bounces = self.bounces as u8;
+        opts.samples = self.samples;
+        opts.roulette = self.roulette;
+        Ok(())
+    }
+}
+
+/// `raypipe render`.
+#[derive(Args, Debug)]
+pub struct RenderArgs {
+    /// Rays per packet: 1 (single rays), 4 (2×2), 16 (4×4) or 64 (8×8); the image is the
+    /// same. Default: the faster one for the structure.
+    #[arg(long, value_enum)]
+    pub packet: Option<PacketSize>,
+    #[command(flatten)]
+    pub algo: AlgoArgs,
     /// An OBJ file or a scene image; the built-in Cornell box when omitted.
     pub scene: Option<PathBuf>,
     /// Output PNG.
@@ -541,26 +571,9 @@ fn cmd_render(a: RenderArgs) -> Result<()> {
     let cam = camera_for(&view, &a.camera)?;
     let kind = IntersectorKind::resolve(a.run.intersector, &view);
     let packet = a.packet.unwrap_or_else(|| PacketSize::auto_for(&view));
-    if a.max_depth > 64 {
-        bail!("--max-depth {} is more than 64", a.max_depth);
-    }
-    if a.bounces > 64 {
-        bail!("--bounces {} is more than 64", a.bounces);
-    }
-    if a.samples == 0 || a.samples > 65536 {
-        bail!("--samples must be between 1 and 65536 (got {})", a.samples);
-    }
-    let opts = RenderOptions {
-        threads: a.run.threads,
-        intersector: kind,
-        progress: true,
-        packet,
-        algo: a.algo,
-        max_depth: a.max_depth as u8,
-        bounces: a.bounces as u8,
-        samples: a.samples,
-        roulette: a.roulette,
-    };
+    let mut opts =
+        RenderOptions { threads: a.run.threads, intersector: kind, progress: true, packet, ..Default::default() };
+    a.algo.apply(&mut opts)?;
     let start = Instant::now();
     let frame = render::render(&view, &cam, &opts)?;
     let secs = start.elapsed().as_secs_f64();
@@ -587,8 +600,11 @@ fn cmd_simulate(a: SimulateArgs) -> Result<()> {
     let view = scene.view()?;
     let cam = camera_for(&view, &a.camera)?;
     let kind = IntersectorKind::resolve(a.intersector, &view);
+    let mut opts = RenderOptions::default();
+    a.algo.apply(&mut opts)?;
+    let shader = opts.shader(raypipe_core::Vec3::from(cam.background));
     let start = Instant::now();
-    let (frame, report) = simulate::simulate(&view, &cam, &cfg, kind, true)?;
+    let (frame, report) = simulate::simulate(&view, &cam, &cfg, kind, shader, true)?;
     let secs = start.elapsed().as_secs_f64();
     output::write_png(&a.output, frame.width, frame.height, &frame.pixels)?;
     output::write_bytes(&a.report, report.to_json().as_bytes())?;
@@ -759,7 +775,7 @@ fn cmd_bench(a: BenchArgs) -> Result<()> {
                 let mut last = None;
                 for _ in 0..a.runs.min(3) {
                     let start = Instant::now();
-                    let out = simulate::simulate(&view, &cam, cfg, kind, false)?;
+                    let out = simulate::simulate(&view, &cam, cfg, kind, None, false)?;
                     walls.push(start.elapsed().as_secs_f64());
                     last = Some(out.1);
                 }

@@ -19,12 +19,39 @@ use crate::tracer::trace;
 /// Rays traced, by kind (indexed by `RayKind as usize`).
 pub type KindCounts = [u64; 5];
 
-/// Radiance of a tile's pixels from their primary rays and hits (`None` ray: the eye ray
-/// missed the scene's bounds, the pixel is `background`).
+/// A tile of the image: its corner, its width, and the image's width. Records carry
+/// image-wide pixel numbers (path tracing draws its random numbers from them).
+#[derive(Clone, Copy, Debug)]
+pub struct TileGeometry {
+    /// Left column.
+    pub x0: u32,
+    /// Top row.
+    pub y0: u32,
+    /// Tile width.
+    pub width: u32,
+    /// Image width.
+    pub image_width: u32,
+}
+
+impl TileGeometry {
+    fn global(&self, local: usize) -> u32 {
+        let (x, y) = (self.x0 + local as u32 % self.width, self.y0 + local as u32 / self.width);
+        y * self.image_width + x
+    }
+
+    fn local(&self, global: u32) -> usize {
+        let (x, y) = (global % self.image_width, global / self.image_width);
+        ((y.wrapping_sub(self.y0)) * self.width + x.wrapping_sub(self.x0)) as usize
+    }
+}
+
+/// Radiance of a tile's pixels (row-major in the tile) from their primary rays and hits
+/// (`None` ray: the eye ray missed the scene's bounds, the pixel is `background`).
 pub fn shade_tile<I: Intersector>(
     scene: &SceneView<'_>,
     shader: &Shader,
     background: Vec3,
+    tile: TileGeometry,
     primaries: &[(Option<Ray>, Option<Hit>)],
     counts: &mut KindCounts,
 ) -> Vec<Vec3> {
@@ -40,7 +67,7 @@ pub fn shade_tile<I: Intersector>(
                     let rec = RayRecord {
                         weight: Vec3::splat(1.0 / samples as f32),
                         sample: s,
-                        ..RayRecord::primary(*ray, p as u32)
+                        ..RayRecord::primary(*ray, tile.global(p))
                     };
                     radiance[p].add(shader.shade(scene, &rec, *hit, &mut NoProbe, &mut |r| stream.push_back(r)));
                 }
@@ -49,7 +76,7 @@ pub fn shade_tile<I: Intersector>(
     }
     while let Some(rec) = stream.pop_front() {
         counts[rec.kind as usize] += 1;
-        let Some(slot) = radiance.get_mut(rec.pixel as usize) else { continue };
+        let Some(slot) = radiance.get_mut(tile.local(rec.pixel)) else { continue };
         if rec.kind == RayKind::Shadow {
             if !occluded::<I, _>(scene, &rec.ray, &mut NoProbe) {
                 slot.add(rec.weight);

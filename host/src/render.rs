@@ -13,7 +13,7 @@ use raypipe_core::shade::shade;
 use raypipe_core::{Intersector, NoProbe, Ray, RayCounters, SceneView};
 
 use crate::packets::{trace_tile, PacketSize};
-use crate::ray_stream::shade_tile;
+use crate::ray_stream::{shade_tile, TileGeometry};
 use raypipe_core::path::PathOptions;
 use raypipe_core::shader::Shader;
 use raypipe_core::whitted::WhittedOptions;
@@ -172,7 +172,8 @@ fn render_with<I: Intersector>(
                             primaries[(y - y0) as usize * tw + (x - x0) as usize] = (ray, hit);
                         };
                         trace_tile::<I>(scene, eye, (lo, hi), tile, opts.packet, &mut counters, &mut pc, &mut put);
-                        let radiance = shade_tile::<I>(scene, &shader, background, &primaries, &mut [0; 5]);
+                        let geometry = TileGeometry { x0, y0, width: tw as u32, image_width: w };
+                        let radiance = shade_tile::<I>(scene, &shader, background, geometry, &primaries, &mut [0; 5]);
                         for (o, r) in out.iter_mut().zip(radiance) {
                             *o = rgb8(r);
                         }

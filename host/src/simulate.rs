@@ -6,6 +6,7 @@ use std::path::Path;
 
 use anyhow::{anyhow, Result};
 use raypipe_core::image::CameraRecord;
+use raypipe_core::shader::Shader;
 use raypipe_core::SceneView;
 use raypipe_hw::{HwConfig, Report, Simulator};
 
@@ -38,13 +39,15 @@ pub fn simulate(
     camera: &CameraRecord,
     cfg: &HwConfig,
     intersector: IntersectorKind,
+    shader: Option<Shader>,
     show_progress: bool,
 ) -> Result<(Frame, Report)> {
     let eye = eye_rays(camera, "camera")?;
     let (width, height) = (eye.width, eye.height);
     let background = raypipe_core::Vec3::from(camera.background);
     with_intersector!(intersector, I => {
-        let mut sim = Simulator::<I>::new(*scene, eye, background, cfg).map_err(|e| anyhow!("hardware configuration: {e}"))?;
+        let mut sim = Simulator::<I>::with_shader(*scene, eye, background, shader, cfg)
+            .map_err(|e| anyhow!("hardware configuration: {e}"))?;
         let bar = progress::bar(0, "simulate", show_progress);
         sim.run(|done, total| {
             bar.set_length(total as u64);
@@ -52,7 +55,7 @@ pub fn simulate(
         })
         .map_err(|e| anyhow!(e))?;
         bar.finish_and_clear();
-        let frame = Frame { width, height, pixels: sim.framebuffer().to_vec() };
+        let frame = Frame { width, height, pixels: sim.framebuffer() };
         Ok((frame, sim.report()))
     })
 }

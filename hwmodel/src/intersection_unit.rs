@@ -13,7 +13,7 @@ use raypipe_core::{DataClass, SceneView};
 
 use crate::config::HwConfig;
 use crate::fifo::Fifo;
-use crate::jobs::{lanes, LeafJob};
+use crate::jobs::{lanes, LeafJob, Query};
 use crate::mem_port::{MemPort, PortProbe, Wait};
 use crate::unit_stats::{Activity, UnitStats};
 
@@ -140,9 +140,19 @@ impl<I: Intersector> IntersectionUnit<I> {
                     let mut k = 0;
                     while let Some(prim) = leaf.entry(scene, k, &mut probe) {
                         let verts = I::fetch(scene, prim, &mut probe);
-                        test_triangle::<I>(&prep, &ray, &verts, prim, &mut job.best[i]);
                         k += 1;
                         tests += 1;
+                        if job.query == Query::AnyHit {
+                            // The first hit in range ends a shadow ray's work here.
+                            if let Some((t, u, v)) = I::intersect(&prep, &verts) {
+                                if t >= ray.t_min && t <= ray.t_max {
+                                    job.best[i] = Some(raypipe_core::Hit { t, u, v, prim });
+                                    break;
+                                }
+                            }
+                        } else {
+                            test_triangle::<I>(&prep, &ray, &verts, prim, &mut job.best[i]);
+                        }
                     }
                 }
                 self.tests += tests;

@@ -12,11 +12,24 @@ const LANES: usize = MAX_PACKET as usize;
 /// A ray that is never traced (inactive lanes).
 pub const NO_RAY: Ray = Ray { origin: raypipe_core::Vec3::ZERO, dir: raypipe_core::Vec3::ZERO, t_min: 0.0, t_max: 0.0 };
 
-/// Ray generator → traversal unit: a packet of primary rays.
+/// What a packet asks of the traversal: the closest hit, or whether anything is hit at
+/// all (shadow rays; a lane ends at its first hit).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Query {
+    /// Closest hit.
+    Closest,
+    /// Any hit.
+    AnyHit,
+}
+
+/// Ray generator → traversal unit: a packet of rays.
 #[derive(Clone, Debug)]
 pub struct RayPacketJob {
-    /// Packet number (its pixel block, in tile order).
+    /// Packet number: its pixel block (in tile order) for primary rays, then the
+    /// shading unit's numbering of secondary packets.
     pub index: u32,
+    /// Closest or any hit.
+    pub query: Query,
     /// Lanes with a ray (inside the image and passing the scene-bounds test).
     pub lanes: u64,
     /// The rays.
@@ -30,6 +43,8 @@ pub struct LeafJob {
     pub thread: u8,
     /// Lanes at a leaf.
     pub lanes: u64,
+    /// Any-hit lanes stop at their first hit in range.
+    pub query: Query,
     /// Each lane's leaf.
     pub leaves: [Leaf; LANES],
     /// The rays.
@@ -45,7 +60,7 @@ pub struct HitPacket {
     pub index: u32,
     /// Lanes that were traced.
     pub lanes: u64,
-    /// Their closest hits.
+    /// Their closest hits (any-hit packets: any hit, or `None` if unblocked).
     pub hits: [Option<Hit>; LANES],
 }
 

@@ -5,6 +5,8 @@ use std::collections::BTreeMap;
 
 use serde::Serialize;
 
+use raypipe_core::ray_record::RayKind;
+
 use crate::cache::CacheStats;
 use crate::config::HwConfig;
 use crate::fifo::FifoStats;
@@ -119,6 +121,10 @@ pub struct Report {
     pub frames_per_second: f64,
     /// Traced rays per second at `config.clock_mhz`.
     pub rays_per_second: f64,
+    /// Rays traced, by kind (primary, shadow, reflection, refraction, path).
+    pub rays_by_kind: BTreeMap<String, u64>,
+    /// Most shadow and secondary ray records waiting in the shading unit at once.
+    pub ray_stream_peak: usize,
     /// Traversal steps issued (packet steps).
     pub traversal_steps: u64,
     /// Ray–triangle tests run.
@@ -159,6 +165,10 @@ pub struct Sources<'a> {
     pub rays: (u64, u64),
     /// Ray–triangle tests.
     pub tests: u64,
+    /// Rays by kind, in `RayKind::ALL` order.
+    pub rays_by_kind: [u64; 5],
+    /// Peak of the shading unit's ray stream.
+    pub stream_peak: usize,
 }
 
 fn ratio(a: f64, b: f64) -> f64 {
@@ -243,6 +253,8 @@ impl Report {
             cycles: s.cycles,
             frames_per_second: 1.0 / seconds,
             rays_per_second: rays as f64 / seconds,
+            rays_by_kind: RayKind::ALL.iter().map(|k| (k.name().to_string(), s.rays_by_kind[*k as usize])).collect(),
+            ray_stream_peak: s.stream_peak,
             traversal_steps,
             triangle_tests: s.tests,
             units,
@@ -284,6 +296,9 @@ impl Report {
             "work           {} traversal steps, {} ray-triangle tests",
             self.traversal_steps, self.triangle_tests
         ));
+        let kinds: Vec<String> =
+            self.rays_by_kind.iter().filter(|(_, &n)| n > 0).map(|(k, n)| format!("{k} {n}")).collect();
+        line(format!("rays by kind   {} (stream peak {} records)", kinds.join(", "), self.ray_stream_peak));
         line("unit                busy  stall   idle   SIMD".to_string());
         for u in &self.units {
             let all = (u.busy_cycles + u.stall_cycles + u.idle_cycles).max(1) as f64;

@@ -7,14 +7,19 @@
 //! Ports: `rays` out (one FIFO per traversal unit), `hits` in (one per traversal unit),
 //! and a memory port with the shading cache.
 
+use std::collections::{HashMap, VecDeque};
+
 use raypipe_core::camera::EyeRays;
 use raypipe_core::color::rgb8;
+use raypipe_core::radiance_sum::RadianceSum;
+use raypipe_core::ray_record::{RayKind, RayRecord};
 use raypipe_core::shade::shade;
+use raypipe_core::shader::Shader;
 use raypipe_core::{SceneView, Vec3};
 
 use crate::config::HwConfig;
 use crate::fifo::Fifo;
-use crate::jobs::{lanes, HitPacket, RayPacketJob, NO_RAY};
+use crate::jobs::{lanes, HitPacket, Query, RayPacketJob, NO_RAY};
 use crate::mem_port::{MemPort, PortProbe, Wait};
 use crate::traffic::FRAMEBUFFER;
 use crate::unit_stats::{Activity, UnitStats};
@@ -29,6 +34,7 @@ const FRAMEBUFFER_BASE: u64 = 1 << 32;
 struct Shading {
     wait: Wait,
     busy_until: u64,
+    primary: bool,
 }
 
 /// The ray generation & shading unit.
@@ -57,8 +63,21 @@ pub struct Rgs {
     pub gen_stats: UnitStats,
     /// Shader activity.
     pub shade_stats: UnitStats,
-    /// Packets shaded and written.
+    /// Primary packets shaded and written.
     pub packets_done: usize,
+    /// The ray-emitting shader (Whitted, path tracing), or `None` for ray casting.
+    shader: Option<Shader>,
+    /// Each pixel's radiance (ray-emitting shaders), summed exactly in any order.
+    radiance: Vec<RadianceSum>,
+    /// Records the shader emitted, waiting to be packed (first in, first out).
+    stream: VecDeque<RayRecord>,
+    /// Secondary packets in flight: their lanes' records.
+    in_flight: HashMap<u32, Vec<RayRecord>>,
+    next_secondary: u32,
+    /// Most records waiting at once.
+    pub stream_peak: usize,
+    /// Rays sent to traversal, by kind (`RayKind as usize`).
+    pub rays_by_kind: [u64; 5],
     /// Rays issued to traversal.
     pub rays_issued: u64,
     /// Rays shaded after traversal.
@@ -66,8 +85,9 @@ pub struct Rgs {
 }
 
 impl Rgs {
-    /// A generator for the view `eye` of the scene with bounds `bounds` (Purcell's test).
-    pub fn new(eye: EyeRays, bounds: (Vec3, Vec3), background: Vec3, cfg: &HwConfig) -> Rgs {
+    /// A generator for the view `eye` of the scene with bounds `bounds` (Purcell's test),
+    /// shading hits with `shader` (`None`: ray casting).
+    pub fn new(eye: EyeRays, bounds: (Vec3, Vec3), background: Vec3, shader: Option<Shader>, cfg: &HwConfig) -> Rgs {
         let side = cfg.packet_side();
         let mut blocks = Vec::new();
         for ty in (0..eye.height).step_by(TILE as usize) {
@@ -100,6 +120,13 @@ impl Rgs {
             gen_stats: UnitStats::default(),
             shade_stats: UnitStats::default(),
             packets_done: 0,
+            shader,
+            radiance: if shader.is_some() { vec![RadianceSum::default(); pixels] } else { Vec::new() },
+            stream: VecDeque::new(),
+            in_flight: HashMap::new(),
+            next_secondary: 0,
+            stream_peak: 0,
+            rays_by_kind: [0; 5],
             rays_issued: 0,
             rays_retired: 0,
         }
@@ -115,9 +142,21 @@ impl Rgs {
         (self.eye.width, self.eye.height)
     }
 
-    /// Every packet shaded.
+    /// Every packet shaded, and no ray left to trace.
     pub fn is_done(&self) -> bool {
         self.packets_done == self.blocks.len()
+            && self.stream.is_empty()
+            && self.in_flight.is_empty()
+            && self.generated.is_none()
+            && self.shading.is_none()
+    }
+
+    /// The image: the framebuffer (ray casting), or the summed radiance of each pixel.
+    pub fn image(&self) -> Vec<[u8; 3]> {
+        match self.shader {
+            None => self.framebuffer.clone(),
+            Some(_) => self.radiance.iter().map(|r| rgb8(r.value())).collect(),
+        }
     }
 
     /// The first cycle after `now` at which time alone changes something (a packet is
@@ -131,11 +170,13 @@ impl Rgs {
     /// One line describing the unit (for the watchdog).
     pub fn describe(&self) -> String {
         format!(
-            "rgs: {}/{} packets generated, {} waiting to be sent, {} shaded, shader {}",
+            "rgs: {}/{} packets generated, {} waiting to be sent, {} shaded, {} rays waiting, {} secondary packets out, shader {}",
             self.next_block,
             self.blocks.len(),
             self.generated.is_some() as u32,
             self.packets_done,
+            self.stream.len(),
+            self.in_flight.len(),
             if self.shading.is_some() { "busy" } else { "free" }
         )
     }
@@ -179,9 +220,19 @@ impl Rgs {
                 self.generated = Some(pending);
                 Activity::Busy
             }
+            // Secondary rays first (so the stream stays short), then the next block.
+            None if !self.stream.is_empty() => {
+                let job = self.pack_secondary();
+                self.gen_stats.issue(lanes(job.lanes), self.packet_size);
+                let cycles = (lanes(job.lanes)).div_ceil(self.rays_per_cycle).max(1);
+                self.generated = Some((job, now + cycles));
+                moved = true;
+                Activity::Busy
+            }
             None if self.next_block < self.blocks.len() => {
                 let b = self.next_block;
-                let mut job = Box::new(RayPacketJob { index: b as u32, lanes: 0, rays: [NO_RAY; 64] });
+                let mut job =
+                    Box::new(RayPacketJob { index: b as u32, query: Query::Closest, lanes: 0, rays: [NO_RAY; 64] });
                 for j in 0..self.packet_size as usize {
                     if let Some((x, y)) = self.pixel(b, j) {
                         if let Some(ray) = self.eye.ray_in_scene(x, y, self.bounds.0, self.bounds.1) {
@@ -190,6 +241,7 @@ impl Rgs {
                         }
                     }
                 }
+                self.rays_by_kind[RayKind::Primary as usize] += lanes(job.lanes);
                 self.gen_stats.issue(lanes(job.lanes), self.packet_size);
                 let cycles = self.packet_size.div_ceil(self.rays_per_cycle);
                 self.generated = Some((job, now + cycles));
@@ -204,8 +256,10 @@ impl Rgs {
         // Shader: finish the packet being shaded, or take the next finished one.
         if let Some(s) = &self.shading {
             if self.port.resolve(&s.wait).is_some_and(|r| r.max(s.busy_until) <= now) {
+                if s.primary {
+                    self.packets_done += 1;
+                }
                 self.shading = None;
-                self.packets_done += 1;
                 moved = true;
             }
         }
@@ -217,7 +271,11 @@ impl Rgs {
                 Some(u) => {
                     self.next_hits = (u + 1) % n;
                     let packet = hits[u].pop().expect("peeked");
-                    self.shade(now, scene, &packet);
+                    if (packet.index as usize) < self.blocks.len() {
+                        self.shade(now, scene, &packet);
+                    } else {
+                        self.shade_secondary(now, scene, &packet);
+                    }
                     moved = true;
                     Activity::Busy
                 }
@@ -240,24 +298,90 @@ impl Rgs {
         for (j, p) in where_.iter().enumerate() {
             let Some((x, y)) = *p else { continue };
             pixels += 1;
-            let color = if packet.lanes & (1 << j) != 0 {
-                match self.eye.ray_in_scene(x, y, self.bounds.0, self.bounds.1) {
-                    Some(ray) => shade(scene, &ray, packet.hits[j], self.background, &mut probe),
-                    None => self.background,
-                }
-            } else {
-                self.background
-            };
             let pixel = (y * self.eye.width + x) as usize;
-            self.framebuffer[pixel] = rgb8(color);
+            let ray = if packet.lanes & (1 << j) != 0 {
+                self.eye.ray_in_scene(x, y, self.bounds.0, self.bounds.1)
+            } else {
+                None
+            };
+            match (&self.shader, ray) {
+                (None, Some(ray)) => {
+                    self.framebuffer[pixel] = rgb8(shade(scene, &ray, packet.hits[j], self.background, &mut probe))
+                }
+                (None, None) => self.framebuffer[pixel] = rgb8(self.background),
+                (Some(shader), Some(ray)) => {
+                    let samples = shader.samples();
+                    for s in 0..samples {
+                        let rec = RayRecord {
+                            weight: Vec3::splat(1.0 / samples as f32),
+                            sample: s,
+                            ..RayRecord::primary(ray, pixel as u32)
+                        };
+                        let stream = &mut self.stream;
+                        let added = shader.shade(scene, &rec, packet.hits[j], &mut probe, &mut |r| stream.push_back(r));
+                        self.radiance[pixel].add(added);
+                    }
+                }
+                (Some(_), None) => self.radiance[pixel].add(self.background),
+            }
             self.hits[pixel] = if packet.lanes & (1 << j) != 0 { packet.hits[j] } else { None };
         }
+        self.stream_peak = self.stream_peak.max(self.stream.len());
         let wait = probe.wait;
         let first = self.blocks[b];
         let addr = FRAMEBUFFER_BASE + 4 * (first.1 as u64 * self.eye.width as u64 + first.0 as u64);
         self.port.write(FRAMEBUFFER, addr, 4 * pixels as u32);
         self.rays_retired += lanes(packet.lanes);
         self.shade_stats.issue(lanes(packet.lanes), self.packet_size);
-        self.shading = Some(Shading { wait, busy_until: now + pixels.div_ceil(self.shade_per_cycle) });
+        self.shading = Some(Shading { wait, busy_until: now + pixels.div_ceil(self.shade_per_cycle), primary: true });
+    }
+
+    /// Packs the oldest waiting records of one query type (shadow rays want any hit, the
+    /// others the closest) into a packet, in stream order.
+    fn pack_secondary(&mut self) -> Box<RayPacketJob> {
+        let any_hit = |r: &RayRecord| r.kind == RayKind::Shadow;
+        let query = if self.stream.front().is_some_and(any_hit) { Query::AnyHit } else { Query::Closest };
+        let index = self.blocks.len() as u32 + self.next_secondary;
+        self.next_secondary = self.next_secondary.wrapping_add(1);
+        let mut job = Box::new(RayPacketJob { index, query, lanes: 0, rays: [NO_RAY; 64] });
+        let mut records = Vec::with_capacity(self.packet_size as usize);
+        while records.len() < self.packet_size as usize {
+            match self.stream.front() {
+                Some(r) if any_hit(r) == (query == Query::AnyHit) => {
+                    let r = self.stream.pop_front().expect("front");
+                    job.rays[records.len()] = r.ray;
+                    job.lanes |= 1 << records.len();
+                    self.rays_by_kind[r.kind as usize] += 1;
+                    records.push(r);
+                }
+                _ => break,
+            }
+        }
+        self.in_flight.insert(index, records);
+        job
+    }
+
+    /// Takes a secondary packet back: unblocked shadow rays add their weight, the others
+    /// are shaded (and may emit more records).
+    fn shade_secondary(&mut self, now: u64, scene: &SceneView<'_>, packet: &HitPacket) {
+        let records = self.in_flight.remove(&packet.index).unwrap_or_default();
+        let mut probe = PortProbe { port: &mut self.port, now, wait: Wait::default() };
+        for (j, rec) in records.iter().enumerate() {
+            let hit = packet.hits[j];
+            let Some(slot) = self.radiance.get_mut(rec.pixel as usize) else { continue };
+            if rec.kind == RayKind::Shadow {
+                if hit.is_none() {
+                    slot.add(rec.weight);
+                }
+            } else if let Some(shader) = &self.shader {
+                let stream = &mut self.stream;
+                slot.add(shader.shade(scene, rec, hit, &mut probe, &mut |r| stream.push_back(r)));
+            }
+        }
+        self.stream_peak = self.stream_peak.max(self.stream.len());
+        self.rays_retired += lanes(packet.lanes);
+        self.shade_stats.issue(lanes(packet.lanes), self.packet_size);
+        let busy_until = now + (records.len() as u64).div_ceil(self.shade_per_cycle).max(1);
+        self.shading = Some(Shading { wait: probe.wait, busy_until, primary: false });
     }
 }

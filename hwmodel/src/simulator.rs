@@ -4,6 +4,7 @@
 //! `watchdog_cycles` and names every unit's state and every FIFO's occupancy.
 
 use raypipe_core::camera::EyeRays;
+use raypipe_core::shader::Shader;
 use raypipe_core::triangle::Intersector;
 use raypipe_core::{SceneView, Vec3};
 
@@ -46,8 +47,21 @@ pub struct Simulator<'s, I: Intersector> {
 }
 
 impl<'s, I: Intersector> Simulator<'s, I> {
-    /// Builds the chip of `cfg` (validated first) for the frame `eye` of `scene`.
+    /// Builds the chip of `cfg` (validated first) for the frame `eye` of `scene`, ray
+    /// casting.
     pub fn new(scene: SceneView<'s>, eye: EyeRays, background: Vec3, cfg: &HwConfig) -> Result<Self, String> {
+        Self::with_shader(scene, eye, background, None, cfg)
+    }
+
+    /// The same with a ray-emitting shader (Whitted ray tracing, path tracing) in the
+    /// shading unit: its shadow and secondary rays go round the chip as packets too.
+    pub fn with_shader(
+        scene: SceneView<'s>,
+        eye: EyeRays,
+        background: Vec3,
+        shader: Option<Shader>,
+        cfg: &HwConfig,
+    ) -> Result<Self, String> {
         cfg.validate()?;
         let units = cfg.traversal.units as usize;
         let f = &cfg.fifo;
@@ -58,7 +72,7 @@ impl<'s, I: Intersector> Simulator<'s, I> {
         Ok(Simulator {
             cfg: cfg.clone(),
             scene,
-            rgs: Rgs::new(eye, scene.test_bounds(), background, cfg),
+            rgs: Rgs::new(eye, scene.test_bounds(), background, shader, cfg),
             tus: (0..units).map(|u| TraversalUnit::new(u, cfg)).collect(),
             ius: (0..units).map(|u| IntersectionUnit::new(u, cfg)).collect(),
             ray_fifos: (0..units).map(|u| Fifo::new(format!("rays{u}"), f.rays)).collect(),
@@ -218,8 +232,8 @@ impl<'s, I: Intersector> Simulator<'s, I> {
     }
 
     /// The rendered image, row-major.
-    pub fn framebuffer(&self) -> &[[u8; 3]] {
-        &self.rgs.framebuffer
+    pub fn framebuffer(&self) -> Vec<[u8; 3]> {
+        self.rgs.image()
     }
 
     /// Each pixel's closest hit, row-major.
@@ -271,6 +285,8 @@ impl<'s, I: Intersector> Simulator<'s, I> {
             distinct: self.touched.iter().map(|w| w.count_ones() as u64).sum::<u64>() * 4,
             rays: (self.rgs.rays_issued, self.rgs.rays_retired),
             tests: self.ius.iter().map(|i| i.tests).sum(),
+            rays_by_kind: self.rgs.rays_by_kind,
+            stream_peak: self.rgs.stream_peak,
         })
     }
 }

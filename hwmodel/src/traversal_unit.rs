@@ -14,7 +14,7 @@ use raypipe_core::{Ray, SceneView};
 
 use crate::config::HwConfig;
 use crate::fifo::Fifo;
-use crate::jobs::{lanes, HitPacket, LeafJob, RayPacketJob, NO_RAY};
+use crate::jobs::{lanes, HitPacket, LeafJob, Query, RayPacketJob, NO_RAY};
 use crate::mem_port::{MemPort, PortProbe, Wait};
 use crate::unit_stats::{Activity, UnitStats};
 
@@ -49,6 +49,7 @@ struct Thread {
     not_before: u64,
     then: Next,
     index: u32,
+    query: Query,
     traced: u64,
     /// Lanes whose walk is not over.
     live: u64,
@@ -99,6 +100,7 @@ impl TraversalUnit {
                 not_before: 0,
                 then: Next::Step,
                 index: 0,
+                query: Query::Closest,
                 traced: 0,
                 live: 0,
                 at_leaf: 0,
@@ -181,7 +183,12 @@ impl TraversalUnit {
                     let t = &mut self.threads[k];
                     for i in crate::lane_iter(job.lanes) {
                         *t.walks[i].best_mut() = job.best[i];
-                        t.walks[i].finish_leaf();
+                        if t.query == Query::AnyHit && job.best[i].is_some() {
+                            // Blocked: a shadow ray needs no more of the walk.
+                            t.live &= !(1 << i);
+                        } else {
+                            t.walks[i].finish_leaf();
+                        }
                     }
                     t.at_leaf &= !job.lanes;
                     self.set(k, State::Ready);
@@ -212,6 +219,7 @@ impl TraversalUnit {
                 let mut job = Box::new(LeafJob {
                     thread: k as u8,
                     lanes: t.at_leaf,
+                    query: t.query,
                     leaves: t.leaves,
                     rays: *t.rays,
                     best: [None; 64],
@@ -231,6 +239,7 @@ impl TraversalUnit {
             if let Some(job) = rays.pop() {
                 let t = &mut self.threads[k];
                 t.index = job.index;
+                t.query = job.query;
                 t.traced = job.lanes;
                 t.live = job.lanes;
                 t.at_leaf = 0;

@@ -245,3 +245,47 @@ fn impossible_configurations_are_rejected_before_the_run() {
         assert!(err.contains(what), "{key}: {err}");
     }
 }
+
+/// Whitted ray tracing and path tracing on the chip: the shading unit emits shadow and
+/// secondary packets, and the image is the host's, bit for bit, whatever the chip.
+#[test]
+fn model_images_equal_the_host_for_every_algorithm() {
+    use raypipe::render::{render, Algorithm, RenderOptions};
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    for accel in [Accel::Grid, Accel::Bvh4] {
+        let scene = raypipe::scene::load(
+            Some(&root.join("fixtures/whitted.obj")),
+            &raypipe::scene::BuildOptions { accel, ..Default::default() },
+        )
+        .unwrap();
+        let view = scene.view().unwrap();
+        let cam = CameraRecord { width: 40, height: 30, ..*view.camera().unwrap() };
+        for algo in [Algorithm::Cast, Algorithm::Whitted, Algorithm::Path] {
+            let opts = RenderOptions { algo, samples: 2, bounces: 2, max_depth: 3, ..Default::default() };
+            let host = render(&view, &cam, &opts).unwrap();
+            let shader = opts.shader(Vec3::from(cam.background));
+            let mut configs = vec![HwConfig::preset("saarcor").unwrap(), HwConfig::preset("minimal").unwrap()];
+            let mut odd = HwConfig { packet_size: 4, ..HwConfig::default() };
+            odd.traversal.units = 3;
+            odd.traversal.threads = 2;
+            odd.fifo.leaves = 1;
+            odd.cache.nodes.size_bytes = 0;
+            configs.push(odd);
+            for (k, cfg) in configs.iter().enumerate() {
+                let eye = EyeRays::new(&Camera::from(&cam)).unwrap();
+                let mut sim =
+                    Simulator::<Watertight>::with_shader(view, eye, Vec3::from(cam.background), shader, cfg).unwrap();
+                if k == 2 {
+                    sim.shuffle_tick_order(99);
+                }
+                sim.run(|_, _| {}).unwrap();
+                assert!(sim.framebuffer() == host.pixels, "{accel:?} {algo:?} config {k}");
+                let r = sim.report();
+                assert_eq!(r.conservation.rays_issued, r.conservation.rays_retired);
+                assert_eq!(r.conservation.bytes_requested, r.conservation.bytes_delivered);
+                let secondary: u64 = r.rays_by_kind.iter().filter(|(k, _)| *k != "primary").map(|(_, n)| n).sum();
+                assert_eq!(secondary > 0, algo != Algorithm::Cast, "{algo:?}: {:?}", r.rays_by_kind);
+            }
+        }
+    }
+}
