@@ -134,6 +134,30 @@ impl EyeRays {
         Ray::new(self.eye, d.normalize())
     }
 
+    /// The inverse of [`EyeRays::ray`] for a rasterizer: the continuous pixel coordinates
+    /// of `p` (pixel centres at whole numbers, `y` downwards) and its depth along the view
+    /// direction, or `None` if `p` is not in front of the eye.
+    #[inline]
+    pub fn project(&self, p: Vec3) -> Option<(f32, f32, f32)> {
+        let v = p - self.eye;
+        let z = v.dot(self.forward);
+        if z.is_nan() || z <= 0.0 {
+            return None;
+        }
+        let sx = v.dot(self.right) / (z * self.half_w);
+        let sy = v.dot(self.up) / (z * self.half_h);
+        let x = (sx + 1.0) * 0.5 * self.width as f32 - 0.5;
+        let y = (1.0 - sy) * 0.5 * self.height as f32 - 0.5;
+        Some((x, y, z))
+    }
+
+    /// Cosine between the ray through pixel `(x, y)` and the view direction: a ray's
+    /// distance `t` is the view depth over it.
+    #[inline]
+    pub fn depth_per_distance(&self, x: u32, y: u32) -> f32 {
+        self.ray(x, y).dir.dot(self.forward)
+    }
+
     /// Purcell 2002 §3.1.1: the eye-ray kernel also tests the ray against the scene's
     /// bounding box and ends a ray that misses it at once (`None`). The ray's own
     /// interval is left as it is, so traversal computes the same hits either way.
@@ -162,6 +186,18 @@ mod tests {
         assert!((a.x + b.x).abs() < 1e-6 && (a.y + b.y).abs() < 1e-6);
         // Top-left pixel looks up and to the left (+x is image-left for forward +z, up +y).
         assert!(a.y > 0.0 && a.x > 0.0);
+    }
+
+    #[test]
+    fn projection_inverts_the_eye_ray() {
+        let e = EyeRays::new(&Camera { width: 7, height: 5, ..cam() }).unwrap();
+        for (x, y) in [(0, 0), (3, 2), (6, 4), (1, 3)] {
+            let r = e.ray(x, y);
+            let (px, py, z) = e.project(r.at(3.0)).unwrap();
+            assert!((px - x as f32).abs() < 1e-4 && (py - y as f32).abs() < 1e-4, "{x},{y}: {px},{py}");
+            assert!((z - 3.0 * e.depth_per_distance(x, y)).abs() < 1e-4);
+        }
+        assert_eq!(e.project(Vec3::new(0.0, 0.0, -6.0)), None, "behind the eye");
     }
 
     #[test]

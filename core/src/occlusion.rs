@@ -3,6 +3,7 @@
 //! the first triangle hit in range — no closest-hit ordering is needed, so a shadow ray
 //! usually ends long before a closest-hit query would (Purcell 2002 §3.1.4).
 
+use crate::counters::RayCounters;
 use crate::image::SceneView;
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
@@ -10,8 +11,14 @@ use crate::triangle::Intersector;
 use crate::walk::{Walk, WalkEvent};
 
 /// True if some triangle is hit by `ray` within its interval. Exactly the closest-hit
-/// query's "is there a hit", found sooner.
-pub fn occluded<I: Intersector, P: MemoryProbe>(scene: &SceneView<'_>, ray: &Ray, probe: &mut P) -> bool {
+/// query's "is there a hit", found sooner. `counters` receives the steps (nodes or
+/// voxels), leaves and triangle tests it took.
+pub fn occluded<I: Intersector, P: MemoryProbe>(
+    scene: &SceneView<'_>,
+    ray: &Ray,
+    probe: &mut P,
+    counters: &mut RayCounters,
+) -> bool {
     if !ray.is_valid() {
         return false;
     }
@@ -19,11 +26,13 @@ pub fn occluded<I: Intersector, P: MemoryProbe>(scene: &SceneView<'_>, ray: &Ray
     let mut walk = Walk::start(scene, ray);
     loop {
         match walk.step(scene, ray, probe) {
-            WalkEvent::Inner => {}
+            WalkEvent::Inner => counters.nodes += 1,
             WalkEvent::Leaf(leaf) => {
+                counters.leaves += 1;
                 let mut k = 0;
                 while let Some(prim) = leaf.entry(scene, k, probe) {
                     let tri = I::fetch(scene, prim, probe);
+                    counters.tri_tests += 1;
                     if let Some((t, _, _)) = I::intersect(&prep, &tri) {
                         if t >= ray.t_min && t <= ray.t_max {
                             return true;

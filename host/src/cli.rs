@@ -370,6 +370,10 @@ pub struct StatsArgs {
     /// Also trace the view as packets of this many rays and report their SIMD efficiency.
     #[arg(long, value_enum, default_value_t = PacketSize::Single)]
     pub packet: PacketSize,
+    /// Also report what an algorithm costs against ray casting (rays per pixel by kind,
+    /// traversal steps, triangle tests, shading, scene bytes).
+    #[command(flatten)]
+    pub algo: AlgoArgs,
     /// An OBJ file or a scene image; the built-in Cornell box when omitted.
     pub scene: Option<PathBuf>,
     #[command(flatten)]
@@ -604,7 +608,8 @@ fn cmd_simulate(a: SimulateArgs) -> Result<()> {
     a.algo.apply(&mut opts)?;
     let shader = opts.shader(raypipe_core::Vec3::from(cam.background));
     let start = Instant::now();
-    let (frame, report) = simulate::simulate(&view, &cam, &cfg, kind, shader, true)?;
+    let shadow_caster = opts.algo == Algorithm::Shadow;
+    let (frame, report) = simulate::simulate(&view, &cam, &cfg, kind, shader, shadow_caster, true)?;
     let secs = start.elapsed().as_secs_f64();
     output::write_png(&a.output, frame.width, frame.height, &frame.pixels)?;
     output::write_bytes(&a.report, report.to_json().as_bytes())?;
@@ -675,6 +680,34 @@ fn cmd_stats(a: StatsArgs) -> Result<()> {
             100.0 * p.counters.active_lanes as f64 / (p.counters.visits.max(1) as f64 * n),
             p.counters.tri_tests as f64 / s.rays.max(1) as f64
         );
+    }
+    if a.algo.algo != Algorithm::Cast {
+        let mut algo_opts = opts;
+        a.algo.apply(&mut algo_opts)?;
+        let cast = stats::algorithm_costs(&view, &cam, &RenderOptions { algo: Algorithm::Cast, ..algo_opts })?;
+        let c = stats::algorithm_costs(&view, &cam, &algo_opts)?;
+        let px = c.pixels.max(1) as f64;
+        let kinds: Vec<String> = raypipe_core::ray_record::RayKind::ALL
+            .iter()
+            .map(|k| format!("{} {:.2}", k.name(), c.rays[*k as usize] as f64 / px))
+            .collect();
+        let ratio = |a: u64, b: u64| if b == 0 { 0.0 } else { a as f64 / b as f64 };
+        println!("algorithm                 {:?}", a.algo.algo);
+        println!("rays per pixel            {}; total {:.2}", kinds.join(", "), c.rays.iter().sum::<u64>() as f64 / px);
+        println!(
+            "relative to ray casting   traversal steps x{:.2}, triangle tests x{:.2}, shading x{:.2}, scene bytes x{:.2}",
+            ratio(c.steps, cast.steps),
+            ratio(c.tests, cast.tests),
+            ratio(c.shades, cast.shades),
+            ratio(c.bytes, cast.bytes)
+        );
+        if a.algo.algo == Algorithm::Shadow {
+            let (differ, pixels, skipped) = stats::coverage_mismatch(&view, &cam, &algo_opts)?;
+            println!(
+                "shadow caster coverage    rasterization and ray casting disagree at {:.4}% of pixels ({differ} of {pixels}); {skipped} triangles reaching behind the eye left out",
+                100.0 * differ as f64 / pixels.max(1) as f64
+            );
+        }
     }
     Ok(())
 }
@@ -775,7 +808,7 @@ fn cmd_bench(a: BenchArgs) -> Result<()> {
                 let mut last = None;
                 for _ in 0..a.runs.min(3) {
                     let start = Instant::now();
-                    let out = simulate::simulate(&view, &cam, cfg, kind, None, false)?;
+                    let out = simulate::simulate(&view, &cam, cfg, kind, None, false, false)?;
                     walls.push(start.elapsed().as_secs_f64());
                     last = Some(out.1);
                 }

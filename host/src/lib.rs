@@ -21,6 +21,7 @@ pub mod obj;
 pub mod output;
 pub mod packets;
 pub mod progress;
+pub mod raster;
 pub mod ray_stream;
 pub mod render;
 pub mod scene;

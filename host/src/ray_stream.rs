@@ -12,12 +12,34 @@ use raypipe_core::occlusion::occluded;
 use raypipe_core::radiance_sum::RadianceSum;
 use raypipe_core::ray_record::{RayKind, RayRecord};
 use raypipe_core::shader::Shader;
-use raypipe_core::{Hit, Intersector, NoProbe, Ray, RayCounters, SceneView, Vec3};
+use raypipe_core::{Hit, Intersector, MemoryProbe, Ray, RayCounters, SceneView, Vec3};
 
 use crate::tracer::trace;
 
-/// Rays traced, by kind (indexed by `RayKind as usize`).
-pub type KindCounts = [u64; 5];
+/// What a tile's ray stream cost.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct StreamCounts {
+    /// Rays by kind (indexed by `RayKind as usize`; primary rays are the caller's).
+    pub rays: [u64; 5],
+    /// Traversal steps (nodes or voxels) of the secondary and shadow rays.
+    pub steps: u64,
+    /// Their ray–triangle tests.
+    pub tests: u64,
+    /// Hits shaded.
+    pub shades: u64,
+}
+
+impl StreamCounts {
+    /// Adds another tile's counts.
+    pub fn add(&mut self, o: &StreamCounts) {
+        for (a, b) in self.rays.iter_mut().zip(o.rays) {
+            *a += b;
+        }
+        self.steps += o.steps;
+        self.tests += o.tests;
+        self.shades += o.shades;
+    }
+}
 
 /// A tile of the image: its corner, its width, and the image's width. Records carry
 /// image-wide pixel numbers (path tracing draws its random numbers from them).
@@ -47,13 +69,15 @@ impl TileGeometry {
 
 /// Radiance of a tile's pixels (row-major in the tile) from their primary rays and hits
 /// (`None` ray: the eye ray missed the scene's bounds, the pixel is `background`).
-pub fn shade_tile<I: Intersector>(
+#[allow(clippy::too_many_arguments)]
+pub fn shade_tile<I: Intersector, P: MemoryProbe>(
     scene: &SceneView<'_>,
     shader: &Shader,
     background: Vec3,
     tile: TileGeometry,
     primaries: &[(Option<Ray>, Option<Hit>)],
-    counts: &mut KindCounts,
+    probe: &mut P,
+    counts: &mut StreamCounts,
 ) -> Vec<Vec3> {
     let samples = shader.samples();
     let mut radiance = vec![RadianceSum::default(); primaries.len()];
@@ -62,29 +86,33 @@ pub fn shade_tile<I: Intersector>(
         match ray {
             None => radiance[p].add(background),
             Some(ray) => {
-                counts[RayKind::Primary as usize] += 1;
                 for s in 0..samples {
                     let rec = RayRecord {
                         weight: Vec3::splat(1.0 / samples as f32),
                         sample: s,
                         ..RayRecord::primary(*ray, tile.global(p))
                     };
-                    radiance[p].add(shader.shade(scene, &rec, *hit, &mut NoProbe, &mut |r| stream.push_back(r)));
+                    counts.shades += hit.is_some() as u64;
+                    radiance[p].add(shader.shade(scene, &rec, *hit, probe, &mut |r| stream.push_back(r)));
                 }
             }
         }
     }
     while let Some(rec) = stream.pop_front() {
-        counts[rec.kind as usize] += 1;
+        counts.rays[rec.kind as usize] += 1;
         let Some(slot) = radiance.get_mut(tile.local(rec.pixel)) else { continue };
+        let mut c = RayCounters::default();
         if rec.kind == RayKind::Shadow {
-            if !occluded::<I, _>(scene, &rec.ray, &mut NoProbe) {
+            if !occluded::<I, _>(scene, &rec.ray, probe, &mut c) {
                 slot.add(rec.weight);
             }
         } else {
-            let hit = trace::<I, _>(scene, &rec.ray, &mut NoProbe, &mut RayCounters::default());
-            slot.add(shader.shade(scene, &rec, hit, &mut NoProbe, &mut |r| stream.push_back(r)));
+            let hit = trace::<I, _>(scene, &rec.ray, probe, &mut c);
+            counts.shades += hit.is_some() as u64;
+            slot.add(shader.shade(scene, &rec, hit, probe, &mut |r| stream.push_back(r)));
         }
+        counts.steps += c.nodes as u64;
+        counts.tests += c.tri_tests as u64;
     }
     radiance.iter().map(RadianceSum::value).collect()
 }

@@ -13,7 +13,8 @@ use raypipe_core::shade::shade;
 use raypipe_core::{Intersector, NoProbe, Ray, RayCounters, SceneView};
 
 use crate::packets::{trace_tile, PacketSize};
-use crate::ray_stream::{shade_tile, TileGeometry};
+use crate::raster::{gbuffer_hit, rasterize};
+use crate::ray_stream::{shade_tile, StreamCounts, TileGeometry};
 use raypipe_core::path::PathOptions;
 use raypipe_core::shader::Shader;
 use raypipe_core::whitted::WhittedOptions;
@@ -54,6 +55,9 @@ pub enum Algorithm {
     /// Ray casting: the first hit, Lambert-shaded from the lights without shadows.
     #[default]
     Cast,
+    /// Purcell's hybrid shadow caster: visibility from a rasterized G-buffer, then shadow
+    /// rays to the point lights.
+    Shadow,
     /// Whitted ray tracing: shadow rays to point lights, mirror reflection, refraction.
     Whitted,
     /// Path tracing: diffuse bounces, next-event estimation, samples per pixel.
@@ -65,6 +69,7 @@ impl RenderOptions {
     pub fn shader(&self, background: Vec3) -> Option<Shader> {
         match self.algo {
             Algorithm::Cast => None,
+            Algorithm::Shadow => Some(Shader::Whitted(WhittedOptions { max_depth: 0, background })),
             Algorithm::Whitted => Some(Shader::Whitted(WhittedOptions { max_depth: self.max_depth, background })),
             Algorithm::Path => Some(Shader::Path(PathOptions {
                 bounces: self.bounces,
@@ -144,6 +149,8 @@ fn render_with<I: Intersector>(
     let (w, h) = (eye.width, eye.height);
     let (lo, hi) = scene.test_bounds();
     let tiles = tiles(w, h);
+    // The shadow caster's visibility pass.
+    let gbuffer = (opts.algo == Algorithm::Shadow).then(|| rasterize(scene, eye));
     let bar = progress::bar(tiles.len() as u64, "render", opts.progress);
     let done: Vec<Vec<[u8; 3]>> = in_pool(opts.threads, || {
         tiles
@@ -168,12 +175,42 @@ fn render_with<I: Intersector>(
                         // Primary hits first (in packets), then the tile's ray stream in
                         // pixel order.
                         let mut primaries = vec![(None, None); out.len()];
-                        let mut put = |x: u32, y: u32, ray: Option<Ray>, hit| {
-                            primaries[(y - y0) as usize * tw + (x - x0) as usize] = (ray, hit);
-                        };
-                        trace_tile::<I>(scene, eye, (lo, hi), tile, opts.packet, &mut counters, &mut pc, &mut put);
+                        match &gbuffer {
+                            Some(g) => {
+                                for y in y0..y1 {
+                                    for x in x0..x1 {
+                                        primaries[(y - y0) as usize * tw + (x - x0) as usize] =
+                                            gbuffer_hit::<I>(scene, eye, g, x, y);
+                                    }
+                                }
+                            }
+                            None => {
+                                let mut put = |x: u32, y: u32, ray: Option<Ray>, hit| {
+                                    primaries[(y - y0) as usize * tw + (x - x0) as usize] = (ray, hit);
+                                };
+                                trace_tile::<I>(
+                                    scene,
+                                    eye,
+                                    (lo, hi),
+                                    tile,
+                                    opts.packet,
+                                    &mut counters,
+                                    &mut pc,
+                                    &mut put,
+                                );
+                            }
+                        }
                         let geometry = TileGeometry { x0, y0, width: tw as u32, image_width: w };
-                        let radiance = shade_tile::<I>(scene, &shader, background, geometry, &primaries, &mut [0; 5]);
+                        let mut counts = StreamCounts::default();
+                        let radiance = shade_tile::<I, _>(
+                            scene,
+                            &shader,
+                            background,
+                            geometry,
+                            &primaries,
+                            &mut NoProbe,
+                            &mut counts,
+                        );
                         for (o, r) in out.iter_mut().zip(radiance) {
                             *o = rgb8(r);
                         }

@@ -11,6 +11,7 @@ use raypipe_core::SceneView;
 use raypipe_hw::{HwConfig, Report, Simulator};
 
 use crate::progress;
+use crate::raster::{gbuffer_hit, rasterize};
 use crate::render::{eye_rays, Frame};
 use crate::tracer::IntersectorKind;
 use crate::with_intersector;
@@ -40,6 +41,7 @@ pub fn simulate(
     cfg: &HwConfig,
     intersector: IntersectorKind,
     shader: Option<Shader>,
+    shadow_caster: bool,
     show_progress: bool,
 ) -> Result<(Frame, Report)> {
     let eye = eye_rays(camera, "camera")?;
@@ -48,6 +50,15 @@ pub fn simulate(
     with_intersector!(intersector, I => {
         let mut sim = Simulator::<I>::with_shader(*scene, eye, background, shader, cfg)
             .map_err(|e| anyhow!("hardware configuration: {e}"))?;
+        if shadow_caster {
+            // Visibility from the host's rasterizer (the G-buffer pass), as on the host.
+            let g = rasterize(scene, &eye);
+            let hits = (0..height)
+                .flat_map(|y| (0..width).map(move |x| (x, y)))
+                .map(|(x, y)| gbuffer_hit::<I>(scene, &eye, &g, x, y).1)
+                .collect();
+            sim.set_visibility(hits);
+        }
         let bar = progress::bar(0, "simulate", show_progress);
         sim.run(|done, total| {
             bar.set_length(total as u64);

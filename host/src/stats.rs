@@ -11,9 +11,15 @@ use raypipe_core::{Intersector, RayCounters, SceneView};
 use raypipe_core::packet::PacketCounters;
 
 use crate::packets::{trace_tile, PacketSize};
-use crate::render::{eye_rays, in_pool, tiles, RenderOptions};
+use crate::raster::{gbuffer_hit, rasterize};
+use crate::ray_stream::{shade_tile, StreamCounts, TileGeometry};
+use crate::render::{eye_rays, in_pool, tiles, Algorithm, RenderOptions};
 use crate::tracer::trace;
 use crate::with_intersector;
+use raypipe_core::image::NULL_INDEX;
+use raypipe_core::ray_record::RayKind;
+use raypipe_core::shade::shade;
+use raypipe_core::NoProbe;
 
 /// Totals and maxima over all primary rays of a view.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -167,4 +173,137 @@ fn gather_packets_with<I: Intersector>(
                 a
             })
     })
+}
+
+/// What one frame of an algorithm costs — the analogue of Purcell 2002's Table 3.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct AlgoCosts {
+    /// Pixels.
+    pub pixels: u64,
+    /// Rays traced by kind (`RayKind as usize`; the shadow caster traces no primary ray).
+    pub rays: [u64; 5],
+    /// Traversal steps (nodes or voxels).
+    pub steps: u64,
+    /// Ray–triangle tests.
+    pub tests: u64,
+    /// Hits shaded.
+    pub shades: u64,
+    /// Scene bytes read (structure, triangles, shading data).
+    pub bytes: u64,
+}
+
+impl AlgoCosts {
+    fn merge(mut self, o: AlgoCosts) -> AlgoCosts {
+        self.pixels += o.pixels;
+        for (a, b) in self.rays.iter_mut().zip(o.rays) {
+            *a += b;
+        }
+        self.steps += o.steps;
+        self.tests += o.tests;
+        self.shades += o.shades;
+        self.bytes += o.bytes;
+        self
+    }
+}
+
+/// Counts what rendering the view with `opts.algo` costs (single rays; the counts do not
+/// depend on threads).
+pub fn algorithm_costs(scene: &SceneView<'_>, camera: &CameraRecord, opts: &RenderOptions) -> Result<AlgoCosts> {
+    let eye = eye_rays(camera, "camera")?;
+    with_intersector!(opts.intersector, I => costs_with::<I>(scene, &eye, camera, opts))
+}
+
+fn costs_with<I: Intersector>(
+    scene: &SceneView<'_>,
+    eye: &raypipe_core::camera::EyeRays,
+    camera: &CameraRecord,
+    opts: &RenderOptions,
+) -> Result<AlgoCosts> {
+    let background = raypipe_core::Vec3::from(camera.background);
+    let shader = opts.shader(background);
+    let gbuffer = (opts.algo == Algorithm::Shadow).then(|| rasterize(scene, eye));
+    let (lo, hi) = scene.test_bounds();
+    in_pool(opts.threads, || {
+        tiles(eye.width, eye.height)
+            .par_iter()
+            .map(|&(x0, y0, x1, y1)| {
+                let mut c = AlgoCosts::default();
+                let mut probe = ByteCounter::default();
+                let mut primaries = Vec::new();
+                for y in y0..y1 {
+                    for x in x0..x1 {
+                        c.pixels += 1;
+                        primaries.push(match &gbuffer {
+                            Some(g) => gbuffer_hit::<I>(scene, eye, g, x, y),
+                            None => match eye.ray_in_scene(x, y, lo, hi) {
+                                Some(ray) => {
+                                    let mut rc = RayCounters::default();
+                                    let hit = trace::<I, _>(scene, &ray, &mut probe, &mut rc);
+                                    c.rays[RayKind::Primary as usize] += 1;
+                                    c.steps += rc.nodes as u64;
+                                    c.tests += rc.tri_tests as u64;
+                                    (Some(ray), hit)
+                                }
+                                None => (None, None),
+                            },
+                        });
+                    }
+                }
+                match &shader {
+                    None => {
+                        for (ray, hit) in &primaries {
+                            if let Some(ray) = ray {
+                                c.shades += hit.is_some() as u64;
+                                std::hint::black_box(shade(scene, ray, *hit, background, &mut probe));
+                            }
+                        }
+                    }
+                    Some(shader) => {
+                        let geometry = TileGeometry { x0, y0, width: x1 - x0, image_width: eye.width };
+                        let mut s = StreamCounts::default();
+                        std::hint::black_box(shade_tile::<I, _>(
+                            scene, shader, background, geometry, &primaries, &mut probe, &mut s,
+                        ));
+                        for (a, b) in c.rays.iter_mut().zip(s.rays) {
+                            *a += b;
+                        }
+                        c.steps += s.steps;
+                        c.tests += s.tests;
+                        c.shades += s.shades;
+                    }
+                }
+                c.bytes = probe.bytes.iter().sum();
+                c
+            })
+            .reduce(AlgoCosts::default, AlgoCosts::merge)
+    })
+}
+
+/// Pixels where the rasterizer's nearest triangle differs from ray casting's (the shadow
+/// caster's coverage disagreements at triangle edges), and the triangles it left out.
+pub fn coverage_mismatch(
+    scene: &SceneView<'_>,
+    camera: &CameraRecord,
+    opts: &RenderOptions,
+) -> Result<(u64, u64, u32)> {
+    let eye = eye_rays(camera, "camera")?;
+    let g = rasterize(scene, &eye);
+    let (lo, hi) = scene.test_bounds();
+    let differ = with_intersector!(opts.intersector, I => {
+        (0..eye.height)
+            .into_par_iter()
+            .map(|y| {
+                (0..eye.width)
+                    .filter(|&x| {
+                        let cast = eye
+                            .ray_in_scene(x, y, lo, hi)
+                            .and_then(|r| trace::<I, _>(scene, &r, &mut NoProbe, &mut RayCounters::default()))
+                            .map_or(NULL_INDEX, |h| h.prim);
+                        cast != g.prim[(y * eye.width + x) as usize]
+                    })
+                    .count() as u64
+            })
+            .sum::<u64>()
+    });
+    Ok((differ, eye.width as u64 * eye.height as u64, g.skipped))
 }

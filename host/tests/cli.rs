@@ -407,3 +407,43 @@ fn impossible_hardware_configurations() {
         assert!(!dir.path().join("x.png").exists() && !dir.path().join("x.json").exists(), "{args:?}");
     }
 }
+
+#[test]
+fn algorithms_render_simulate_and_report_their_costs() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = fixtures().join("whitted.obj");
+    let scene = scene.to_str().unwrap();
+    for algo in ["cast", "shadow", "whitted", "path"] {
+        let common = ["--algo", algo, "--size", "48x36", "--samples", "2"];
+        let mut render = vec!["render", scene, "-o", "r.png"];
+        render.extend_from_slice(&common);
+        let o = raypipe(dir.path(), &render);
+        assert!(o.status.success(), "{algo}: {}", stderr(&o));
+        let mut sim = vec!["simulate", scene, "-o", "s.png", "--report", "s.json", "--preset", "saarcor"];
+        sim.extend_from_slice(&common);
+        let o = raypipe(dir.path(), &sim);
+        assert!(o.status.success(), "{algo}: {}", stderr(&o));
+        assert_eq!(decode(&dir.path().join("r.png")), decode(&dir.path().join("s.png")), "{algo}: model = host");
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.path().join("s.json")).unwrap()).unwrap();
+        assert!(json["rays_by_kind"]["shadow"].as_u64().unwrap() > 0 || algo == "cast", "{algo}");
+        let mut stats = vec!["stats", scene];
+        stats.extend_from_slice(&common);
+        let o = raypipe(dir.path(), &stats);
+        assert!(o.status.success(), "{algo}: {}", stderr(&o));
+        let out = String::from_utf8_lossy(&o.stdout);
+        if algo != "cast" {
+            assert!(out.contains("rays per pixel") && out.contains("relative to ray casting"), "{algo}: {out}");
+        }
+        if algo == "shadow" {
+            assert!(out.contains("rasterization and ray casting disagree at"), "{out}");
+        }
+    }
+    for (args, needle) in [
+        (vec!["render", "--algo", "path", "--samples", "0"], "--samples"),
+        (vec!["render", "--algo", "whitted", "--max-depth", "100"], "--max-depth"),
+        (vec!["simulate", "--algo", "path", "--bounces", "99"], "--bounces"),
+    ] {
+        assert_one_line_error(&raypipe(dir.path(), &args), needle);
+    }
+}

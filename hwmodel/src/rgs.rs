@@ -76,6 +76,11 @@ pub struct Rgs {
     next_secondary: u32,
     /// Most records waiting at once.
     pub stream_peak: usize,
+    /// The shadow caster's visibility: each pixel's hit from a rasterized G-buffer (then
+    /// no primary ray is traced: blocks go straight to shading).
+    visibility: Option<Vec<Option<raypipe_core::Hit>>>,
+    /// Blocks whose hits came from the G-buffer, waiting for the shader.
+    direct: VecDeque<Box<HitPacket>>,
     /// Rays sent to traversal, by kind (`RayKind as usize`).
     pub rays_by_kind: [u64; 5],
     /// Rays issued to traversal.
@@ -126,6 +131,8 @@ impl Rgs {
             in_flight: HashMap::new(),
             next_secondary: 0,
             stream_peak: 0,
+            visibility: None,
+            direct: VecDeque::new(),
             rays_by_kind: [0; 5],
             rays_issued: 0,
             rays_retired: 0,
@@ -135,6 +142,11 @@ impl Rgs {
     /// Number of packets in the frame.
     pub fn packet_count(&self) -> usize {
         self.blocks.len()
+    }
+
+    /// Takes primary visibility from a G-buffer (row-major hits) instead of tracing it.
+    pub fn set_visibility(&mut self, hits: Vec<Option<raypipe_core::Hit>>) {
+        self.visibility = Some(hits);
     }
 
     /// Image size.
@@ -149,6 +161,7 @@ impl Rgs {
             && self.in_flight.is_empty()
             && self.generated.is_none()
             && self.shading.is_none()
+            && self.direct.is_empty()
     }
 
     /// The image: the framebuffer (ray casting), or the summed radiance of each pixel.
@@ -229,6 +242,22 @@ impl Rgs {
                 moved = true;
                 Activity::Busy
             }
+            None if self.next_block < self.blocks.len() && self.visibility.is_some() => {
+                // The shadow caster: the block's hits are read from the G-buffer.
+                let b = self.next_block;
+                let mut packet = Box::new(HitPacket { index: b as u32, lanes: 0, hits: [None; 64] });
+                for j in 0..self.packet_size as usize {
+                    if let (Some((x, y)), Some(vis)) = (self.pixel(b, j), &self.visibility) {
+                        packet.lanes |= 1 << j;
+                        packet.hits[j] = vis.get((y * self.eye.width + x) as usize).copied().flatten();
+                    }
+                }
+                self.gen_stats.issue(lanes(packet.lanes), self.packet_size);
+                self.direct.push_back(packet);
+                self.next_block += 1;
+                moved = true;
+                Activity::Busy
+            }
             None if self.next_block < self.blocks.len() => {
                 let b = self.next_block;
                 let mut job =
@@ -267,19 +296,25 @@ impl Rgs {
             Activity::Stalled
         } else {
             let n = hits.len();
-            match (0..n).map(|k| (self.next_hits + k) % n).find(|&u| hits[u].peek().is_some()) {
-                Some(u) => {
-                    self.next_hits = (u + 1) % n;
-                    let packet = hits[u].pop().expect("peeked");
-                    if (packet.index as usize) < self.blocks.len() {
-                        self.shade(now, scene, &packet);
-                    } else {
-                        self.shade_secondary(now, scene, &packet);
+            if let Some(packet) = self.direct.pop_front() {
+                self.shade(now, scene, &packet);
+                moved = true;
+                Activity::Busy
+            } else {
+                match (0..n).map(|k| (self.next_hits + k) % n).find(|&u| hits[u].peek().is_some()) {
+                    Some(u) => {
+                        self.next_hits = (u + 1) % n;
+                        let packet = hits[u].pop().expect("peeked");
+                        if (packet.index as usize) < self.blocks.len() {
+                            self.shade(now, scene, &packet);
+                        } else {
+                            self.shade_secondary(now, scene, &packet);
+                        }
+                        moved = true;
+                        Activity::Busy
                     }
-                    moved = true;
-                    Activity::Busy
+                    None => Activity::Idle,
                 }
-                None => Activity::Idle,
             }
         };
         self.shade_stats.cycle(shade_activity);
@@ -299,10 +334,12 @@ impl Rgs {
             let Some((x, y)) = *p else { continue };
             pixels += 1;
             let pixel = (y * self.eye.width + x) as usize;
-            let ray = if packet.lanes & (1 << j) != 0 {
-                self.eye.ray_in_scene(x, y, self.bounds.0, self.bounds.1)
-            } else {
+            let ray = if packet.lanes & (1 << j) == 0 {
                 None
+            } else if self.visibility.is_some() {
+                Some(self.eye.ray(x, y))
+            } else {
+                self.eye.ray_in_scene(x, y, self.bounds.0, self.bounds.1)
             };
             match (&self.shader, ray) {
                 (None, Some(ray)) => {
@@ -331,7 +368,9 @@ impl Rgs {
         let first = self.blocks[b];
         let addr = FRAMEBUFFER_BASE + 4 * (first.1 as u64 * self.eye.width as u64 + first.0 as u64);
         self.port.write(FRAMEBUFFER, addr, 4 * pixels as u32);
-        self.rays_retired += lanes(packet.lanes);
+        if self.visibility.is_none() {
+            self.rays_retired += lanes(packet.lanes);
+        }
         self.shade_stats.issue(lanes(packet.lanes), self.packet_size);
         self.shading = Some(Shading { wait, busy_until: now + pixels.div_ceil(self.shade_per_cycle), primary: true });
     }

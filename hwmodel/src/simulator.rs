@@ -88,6 +88,12 @@ impl<'s, I: Intersector> Simulator<'s, I> {
         })
     }
 
+    /// The shadow caster: primary visibility comes from a rasterized G-buffer (each
+    /// pixel's hit, row-major), so only shadow rays are traced on the chip.
+    pub fn set_visibility(&mut self, hits: Vec<Option<raypipe_core::Hit>>) {
+        self.rgs.set_visibility(hits);
+    }
+
     /// Ticks the units in a pseudo-random order, reshuffled every cycle (for the test
     /// that proves the order cannot matter).
     pub fn shuffle_tick_order(&mut self, seed: u64) {

@@ -260,7 +260,7 @@ fn model_images_equal_the_host_for_every_algorithm() {
         .unwrap();
         let view = scene.view().unwrap();
         let cam = CameraRecord { width: 40, height: 30, ..*view.camera().unwrap() };
-        for algo in [Algorithm::Cast, Algorithm::Whitted, Algorithm::Path] {
+        for algo in [Algorithm::Cast, Algorithm::Shadow, Algorithm::Whitted, Algorithm::Path] {
             let opts = RenderOptions { algo, samples: 2, bounces: 2, max_depth: 3, ..Default::default() };
             let host = render(&view, &cam, &opts).unwrap();
             let shader = opts.shader(Vec3::from(cam.background));
@@ -278,6 +278,14 @@ fn model_images_equal_the_host_for_every_algorithm() {
                 if k == 2 {
                     sim.shuffle_tick_order(99);
                 }
+                if algo == Algorithm::Shadow {
+                    let g = raypipe::raster::rasterize(&view, &eye);
+                    let hits = (0..cam.height)
+                        .flat_map(|y| (0..cam.width).map(move |x| (x, y)))
+                        .map(|(x, y)| raypipe::raster::gbuffer_hit::<Watertight>(&view, &eye, &g, x, y).1)
+                        .collect();
+                    sim.set_visibility(hits);
+                }
                 sim.run(|_, _| {}).unwrap();
                 assert!(sim.framebuffer() == host.pixels, "{accel:?} {algo:?} config {k}");
                 let r = sim.report();
@@ -285,6 +293,11 @@ fn model_images_equal_the_host_for_every_algorithm() {
                 assert_eq!(r.conservation.bytes_requested, r.conservation.bytes_delivered);
                 let secondary: u64 = r.rays_by_kind.iter().filter(|(k, _)| *k != "primary").map(|(_, n)| n).sum();
                 assert_eq!(secondary > 0, algo != Algorithm::Cast, "{algo:?}: {:?}", r.rays_by_kind);
+                assert_eq!(
+                    r.rays_by_kind["primary"] == 0,
+                    algo == Algorithm::Shadow,
+                    "the shadow caster traces no primary ray"
+                );
             }
         }
     }

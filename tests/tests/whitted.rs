@@ -50,7 +50,7 @@ proptest! {
                 let origin = Vec3::from(*o) * 2.0;
                 let ray = Ray { origin, dir: Vec3::from(*target) - origin, t_min: *t_min, t_max: *t_max };
                 let hit = trace::<Watertight, _>(&view, &ray, &mut NoProbe, &mut RayCounters::default());
-                prop_assert_eq!(occluded::<Watertight, _>(&view, &ray, &mut NoProbe), hit.is_some(), "{:?} {:?}", accel, ray);
+                prop_assert_eq!(occluded::<Watertight, _>(&view, &ray, &mut NoProbe, &mut RayCounters::default()), hit.is_some(), "{:?} {:?}", accel, ray);
             }
         }
     }
@@ -82,7 +82,7 @@ proptest! {
             prop_assert_eq!(shadows.len(), 1);
             let s = shadows[0];
             prop_assert_eq!(s.kind, RayKind::Shadow);
-            prop_assert!(!occluded::<Watertight, _>(&view, &s.ray, &mut NoProbe), "blocked: {:?}", s.ray);
+            prop_assert!(!occluded::<Watertight, _>(&view, &s.ray, &mut NoProbe, &mut RayCounters::default()), "blocked: {:?}", s.ray);
         }
     }
 }
@@ -263,5 +263,43 @@ fn whitted_image_is_golden_and_the_same_for_every_structure_packet_and_thread_co
             let frame = render_whitted(&path, accel, packet, 1 + i % 3, (160, 120));
             assert!(frame.pixels == first.pixels, "{accel:?} {packet:?}");
         }
+    }
+}
+
+/// Purcell's hybrid shadow caster: the rasterizer's G-buffer replaces primary rays, and
+/// the image is ray casting plus shadows except where the two disagree on which triangle
+/// covers a pixel centre (at triangle edges) — few pixels.
+#[test]
+fn the_shadow_caster_equals_ray_casting_plus_shadows_where_coverage_agrees() {
+    for (scene_path, size) in
+        [(root().join("fixtures/whitted.obj"), (160, 120)), (root().join("fixtures/cornell_box.obj"), (96, 96))]
+    {
+        let scene = scene::load(Some(&scene_path), &BuildOptions { accel: Accel::Bvh4, ..Default::default() }).unwrap();
+        let view = scene.view().unwrap();
+        let cam = CameraRecord { width: size.0, height: size.1, ..*view.camera().unwrap() };
+        let base = RenderOptions { threads: Some(2), max_depth: 0, ..Default::default() };
+        let hybrid = render(&view, &cam, &RenderOptions { algo: Algorithm::Shadow, ..base }).unwrap();
+        let traced = render(&view, &cam, &RenderOptions { algo: Algorithm::Whitted, ..base }).unwrap();
+        let eye = raypipe_core::camera::EyeRays::new(&raypipe_core::Camera::from(&cam)).unwrap();
+        let g = raypipe::raster::rasterize(&view, &eye);
+        let (lo, hi) = view.test_bounds();
+        let mut disagree = 0;
+        for y in 0..cam.height {
+            for x in 0..cam.width {
+                let i = (y * cam.width + x) as usize;
+                let cast = eye
+                    .ray_in_scene(x, y, lo, hi)
+                    .and_then(|r| trace::<Watertight, _>(&view, &r, &mut NoProbe, &mut RayCounters::default()))
+                    .map_or(raypipe_core::image::NULL_INDEX, |h| h.prim);
+                if cast != g.prim[i] {
+                    disagree += 1;
+                } else {
+                    assert_eq!(hybrid.pixels[i], traced.pixels[i], "{} pixel ({x}, {y})", scene_path.display());
+                }
+            }
+        }
+        let n = (cam.width * cam.height) as usize;
+        assert!(disagree * 100 < n, "{}: {disagree} of {n} pixels disagree", scene_path.display());
+        assert_eq!(g.skipped, 0);
     }
 }
