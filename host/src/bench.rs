@@ -12,7 +12,7 @@ use raypipe_core::packet::PacketCounters;
 use raypipe_core::{Intersector, RayCounters, SceneView};
 
 use crate::packets::{trace_tile, PacketSize};
-use crate::render::{eye_rays, in_pool, tiles};
+use crate::render::{eye_rays, in_pool, tiles, RenderOptions};
 use crate::tracer::IntersectorKind;
 use crate::with_intersector;
 
@@ -104,4 +104,50 @@ fn run<I: Intersector>(
     let simd_efficiency = pc.active_lanes as f64 / (pc.visits.max(1) as f64 * packet.rays() as f64);
     let mrays = |s: &[f64]| rays as f64 / median(s) / 1e6;
     Ok(BenchResult { rays, mrays_single: mrays(&single_runs), mrays_all: mrays(&all_runs), threads, simd_efficiency })
+}
+
+/// An algorithm's whole frame: every ray it traces, by kind, and how many per second.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct AlgoBench {
+    /// Rays per frame by kind (`RayKind as usize`).
+    pub rays: [u64; 5],
+    /// Million rays per second, one thread (median of the runs).
+    pub mrays_single: f64,
+    /// Million rays per second, all threads.
+    pub mrays_all: f64,
+    /// Threads of the all-threads figure.
+    pub threads: usize,
+}
+
+/// Times rendering the view with `opts.algo` (primary rays in `opts.packet`, then the
+/// ray stream) and divides every ray it traced by the time.
+pub fn algorithm_rays(
+    scene: &SceneView<'_>,
+    camera: &CameraRecord,
+    opts: &RenderOptions,
+    runs: usize,
+    threads: Option<usize>,
+) -> Result<AlgoBench> {
+    let costs = crate::stats::algorithm_costs(scene, camera, &RenderOptions { threads, ..*opts })?;
+    let total: u64 = costs.rays.iter().sum();
+    let time = |n: Option<usize>| -> Result<(f64, usize)> {
+        let o = RenderOptions { threads: n, progress: false, ..*opts };
+        crate::render::render(scene, camera, &o)?; // warm-up
+        let mut secs = Vec::new();
+        for _ in 0..runs.max(1) {
+            let t = Instant::now();
+            std::hint::black_box(crate::render::render(scene, camera, &o)?);
+            secs.push(t.elapsed().as_secs_f64());
+        }
+        let used = n.unwrap_or_else(rayon::current_num_threads);
+        Ok((median(&secs), used))
+    };
+    let (single, _) = time(Some(1))?;
+    let (all, used) = time(threads)?;
+    Ok(AlgoBench {
+        rays: costs.rays,
+        mrays_single: total as f64 / single / 1e6,
+        mrays_all: total as f64 / all / 1e6,
+        threads: used,
+    })
 }

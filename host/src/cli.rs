@@ -424,6 +424,10 @@ pub struct BenchArgs {
     /// report its wall time against the host's fastest single-thread frame.
     #[arg(long, value_name = "PRESET")]
     pub simulate: Option<String>,
+    /// Also time a whole frame of this algorithm: every ray it traces (shadow, secondary,
+    /// path rays) per second.
+    #[command(flatten)]
+    pub algo: AlgoArgs,
 }
 
 /// Parses the process arguments, runs, and turns any error into one line on stderr.
@@ -800,6 +804,27 @@ fn cmd_bench(a: BenchArgs) -> Result<()> {
                     r.mrays_all,
                     r.threads,
                     simd
+                );
+            }
+            if a.algo.algo != Algorithm::Cast {
+                let mut opts =
+                    RenderOptions { intersector: kind, packet: PacketSize::auto_for(&view), ..Default::default() };
+                a.algo.apply(&mut opts)?;
+                let r = bench::algorithm_rays(&view, &cam, &opts, a.runs, a.threads)?;
+                let px = cam.width as f64 * cam.height as f64;
+                let kinds: Vec<String> = raypipe_core::ray_record::RayKind::ALL
+                    .iter()
+                    .filter(|k| r.rays[**k as usize] > 0)
+                    .map(|k| format!("{} {:.2}", k.name(), r.rays[*k as usize] as f64 / px))
+                    .collect();
+                println!(
+                    "{:<24} {:?}: rays per pixel {}; all rays {:.2} Mrays/s 1 thread, {:.2} Mrays/s {} threads",
+                    name,
+                    a.algo.algo,
+                    kinds.join(", "),
+                    r.mrays_single,
+                    r.mrays_all,
+                    r.threads
                 );
             }
             if let (Some(cfg), Some(preset)) = (&chip, &a.simulate) {
