@@ -129,6 +129,10 @@ pub struct RaysArgs {
 /// How to build the acceleration structure when the scene is an OBJ.
 #[derive(Args, Debug, Clone)]
 pub struct StructureArgs {
+    /// A point light "x,y,z" or "x,y,z,r,g,b" (repeatable), instead of the default light
+    /// (OBJ input; an image keeps its lights).
+    #[arg(long, value_name = "X,Y,Z[,R,G,B]", value_parser = parse_light, allow_hyphen_values = true)]
+    pub light: Vec<[f32; 6]>,
     /// Acceleration structure.
     #[arg(long, value_enum, default_value_t = Accel::Grid)]
     pub accel: Accel,
@@ -168,6 +172,16 @@ pub struct StructureArgs {
 impl StructureArgs {
     fn options(&self) -> BuildOptions {
         BuildOptions {
+            lights: self
+                .light
+                .iter()
+                .map(|l| raypipe_core::image::LightRecord {
+                    position: [l[0], l[1], l[2]],
+                    kind: raypipe_core::image::LightRecord::POINT,
+                    color: [l[3], l[4], l[5]],
+                    _pad: 0,
+                })
+                .collect(),
             accel: self.accel,
             grid: match self.grid_min_dim {
                 Some(n) => GridResolution::MinDim(n),
@@ -239,6 +253,23 @@ impl CameraArgs {
         render::eye_rays(&cam, &what)?;
         Ok(cam)
     }
+}
+
+fn parse_light(s: &str) -> Result<[f32; 6], String> {
+    let v: Vec<f32> =
+        s.split(',').map(|p| p.trim().parse::<f32>()).collect::<Result<_, _>>().map_err(|e| format!("{s:?}: {e}"))?;
+    let out = match v.as_slice() {
+        [x, y, z] => [*x, *y, *z, 1.0, 1.0, 1.0],
+        [x, y, z, r, g, b] => [*x, *y, *z, *r, *g, *b],
+        _ => return Err(format!("{s:?}: expected x,y,z or x,y,z,r,g,b")),
+    };
+    if out.iter().any(|c| !c.is_finite()) {
+        return Err(format!("{s:?}: not finite"));
+    }
+    if out[3..].iter().any(|c| *c < 0.0) {
+        return Err(format!("{s:?}: negative light colour"));
+    }
+    Ok(out)
 }
 
 fn parse_vec3(s: &str) -> Result<[f32; 3], String> {

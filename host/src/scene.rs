@@ -7,7 +7,9 @@ use std::time::Instant;
 use anyhow::{anyhow, bail, Result};
 use glam::Vec3;
 use raypipe_core::image::{CameraRecord, LightRecord, MAGIC};
-use raypipe_core::SceneView;
+use raypipe_core::{NoProbe, Ray, RayCounters, SceneView, Watertight};
+
+use crate::tracer::trace;
 
 use crate::aligned::AlignedBytes;
 use crate::bvh_builder::{build_bvh, collapse_to_bvh4, BvhParams};
@@ -47,8 +49,10 @@ pub enum TriangleLayout {
 }
 
 /// How to build a scene image from a mesh.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Debug, Default)]
 pub struct BuildOptions {
+    /// Point lights to use instead of the default one (a dim ambient term is kept).
+    pub lights: Vec<LightRecord>,
     /// Acceleration structure.
     pub accel: Accel,
     /// Grid resolution.
@@ -279,6 +283,10 @@ pub fn build(
     mesh.validate(&name)?;
     let (lo, hi) = mesh.bounds();
     let camera = camera.apply(&framing_camera(lo, hi));
+    if !opts.lights.is_empty() {
+        mesh.lights = opts.lights.clone();
+        mesh.lights.push(LightRecord { position: [0.0; 3], kind: LightRecord::AMBIENT, color: [0.1; 3], _pad: 0 });
+    }
     if mesh.lights.is_empty() {
         mesh.lights = default_lights(&mesh, &camera);
     }
@@ -326,9 +334,54 @@ pub fn build(
     report.grid_seconds = start.elapsed().as_secs_f64();
     let image = writer.finish().map_err(|e| anyhow!("{name}: {e}"))?;
     report.image_bytes = image.len();
-    let scene = Scene { name, image, report: Some(report) };
-    if let Err(e) = scene.view() {
-        bail!("internal error: built an invalid image: {e}");
+    let mut scene = Scene { name, image, report: Some(report) };
+    let view = match scene.view() {
+        Ok(v) => v,
+        Err(e) => bail!("internal error: built an invalid image: {e}"),
+    };
+    let enclosed = enclosed_lights(&view);
+    if let Some(report) = scene.report.as_mut() {
+        for (i, p) in enclosed {
+            report.warnings.push(format!(
+                "{}: light {i} at ({}, {}, {}) is inside closed geometry (every direction meets the back of a surface): it lights nothing outside",
+                scene.name, p[0], p[1], p[2]
+            ));
+        }
     }
     Ok(scene)
+}
+
+/// Point lights enclosed by geometry: every one of 14 rays from the light (axes and
+/// diagonals) meets the back of a triangle first.
+fn enclosed_lights(view: &SceneView<'_>) -> Vec<(u32, [f32; 3])> {
+    let mut dirs = vec![Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z];
+    for sx in [-1.0, 1.0] {
+        for sy in [-1.0, 1.0] {
+            for sz in [-1.0f32, 1.0] {
+                dirs.push(Vec3::new(sx, sy, sz).normalize());
+            }
+        }
+    }
+    let mut out = Vec::new();
+    for i in 0..view.light_count() {
+        let l = view.light(i, &mut NoProbe);
+        if l.kind != LightRecord::POINT {
+            continue;
+        }
+        let p = Vec3::from(l.position);
+        let backs = dirs
+            .iter()
+            .filter(|&&d| {
+                let ray = Ray::new(p, d);
+                trace::<Watertight, _>(view, &ray, &mut NoProbe, &mut RayCounters::default()).is_some_and(|h| {
+                    let [a, b, c] = view.triangle(h.prim, &mut NoProbe);
+                    (b - a).cross(c - a).dot(d) > 0.0
+                })
+            })
+            .count();
+        if backs == dirs.len() {
+            out.push((i, l.position));
+        }
+    }
+    out
 }

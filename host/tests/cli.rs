@@ -447,3 +447,36 @@ fn algorithms_render_simulate_and_report_their_costs() {
         assert_one_line_error(&raypipe(dir.path(), &args), needle);
     }
 }
+
+#[test]
+fn point_lights_from_the_command_line_and_enclosed_lights_are_warned_about() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = fixtures().join("whitted.obj");
+    let scene = scene.to_str().unwrap();
+    let o = raypipe(dir.path(), &["render", scene, "--algo", "whitted", "--size", "40x30", "-o", "a.png"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = raypipe(
+        dir.path(),
+        &["render", scene, "--algo", "whitted", "--size", "40x30", "-o", "b.png", "--light=-1.5,2.5,1.5,0.5,0.5,0.6"],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_ne!(decode(&dir.path().join("a.png")), decode(&dir.path().join("b.png")), "the light moved");
+    // A light inside a closed cube lights nothing outside it: a warning, not an error.
+    let mut obj = String::new();
+    for v in ["-1 -1 -1", "1 -1 -1", "1 1 -1", "-1 1 -1", "-1 -1 1", "1 -1 1", "1 1 1", "-1 1 1"] {
+        obj += &format!("v {v}\n");
+    }
+    for f in
+        ["1 3 2", "1 4 3", "5 6 7", "5 7 8", "1 2 6", "1 6 5", "4 8 7", "4 7 3", "1 5 8", "1 8 4", "2 3 7", "2 7 6"]
+    {
+        obj += &format!("f {f}\n");
+    }
+    let cube = write(dir.path(), "cube.obj", &obj);
+    let o = raypipe(dir.path(), &["render", cube.to_str().unwrap(), "--light", "0,0,0", "-o", "c.png"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("inside closed geometry"), "{}", stderr(&o));
+    let o = raypipe(dir.path(), &["render", cube.to_str().unwrap(), "--light", "0,3,0", "-o", "c.png"]);
+    assert!(!stderr(&o).contains("inside closed geometry"), "{}", stderr(&o));
+    let o = raypipe(dir.path(), &["render", "--light", "0,nan,0", "-o", "c.png"]);
+    assert!(!o.status.success());
+}
