@@ -61,6 +61,7 @@ pub mod rng;
 pub mod shade;
 pub mod shader;
 pub mod surface;
+pub mod texture;
 pub mod tree_step;
 pub mod triangle;
 pub mod wald;

@@ -5,9 +5,10 @@
 use glam::Vec3;
 
 use crate::hit::Hit;
-use crate::image::{MaterialRecord, SceneView};
+use crate::image::{MaterialRecord, SceneView, NULL_INDEX};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
+use crate::texture;
 
 /// The shading data at a hit.
 #[derive(Clone, Copy, Debug)]
@@ -46,6 +47,12 @@ impl Surface {
                 normal = n;
             }
             tint = Vec3::from(a.color) * w0 + Vec3::from(b.color) * w1 + Vec3::from(c.color) * w2;
+            if material.texture != NULL_INDEX {
+                let uv = [a.uv[0] * w0 + b.uv[0] * w1 + c.uv[0] * w2, a.uv[1] * w0 + b.uv[1] * w1 + c.uv[1] * w2];
+                if let Some(t) = texture::sample(scene, material.texture, uv, probe) {
+                    tint *= t;
+                }
+            }
         }
         let mut n = normal.normalize_or_zero();
         // Face the viewer: both sides of a triangle are lit alike.

@@ -4,8 +4,8 @@
 use anyhow::{bail, Result};
 use bytemuck::Pod;
 use raypipe_core::image::{
-    crc32, AccelKind, CameraRecord, Header, Position, SectionEntry, SectionKind, TriangleRecord, FORMAT_VERSION, MAGIC,
-    SECTION_ALIGN,
+    crc32, AccelKind, CameraRecord, Header, Position, SectionEntry, SectionKind, TextureRecord, TriangleRecord,
+    FORMAT_VERSION, MAGIC, SECTION_ALIGN,
 };
 
 use raypipe_core::image::WaldTriangle;
@@ -56,6 +56,21 @@ impl ImageWriter {
         }
         if !mesh.lights.is_empty() {
             w.add(SectionKind::Lights, &mesh.lights);
+        }
+        if !mesh.textures.is_empty() {
+            let mut records = Vec::new();
+            let mut texels: Vec<u32> = Vec::new();
+            for t in &mesh.textures {
+                records.push(TextureRecord {
+                    width: t.width,
+                    height: t.height,
+                    first: texels.len() as u32,
+                    wrap: t.wrap,
+                });
+                texels.extend(t.rgba.chunks_exact(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])));
+            }
+            w.add(SectionKind::Textures, &records);
+            w.add(SectionKind::Texels, &texels);
         }
         w
     }

@@ -27,5 +27,6 @@ pub mod render;
 pub mod scene;
 pub mod simulate;
 pub mod stats;
+pub mod texture_loader;
 pub mod tracer;
 pub mod tri_box;

@@ -21,6 +21,8 @@ pub struct Mesh {
     pub material_names: Vec<String>,
     /// Lights.
     pub lights: Vec<LightRecord>,
+    /// Diffuse textures, indexed by `MaterialRecord::texture`.
+    pub textures: Vec<crate::texture_loader::TextureImage>,
 }
 
 impl Mesh {

@@ -8,6 +8,7 @@ use anyhow::{anyhow, bail, Result};
 use raypipe_core::image::{MaterialRecord, ShadingVertex, NULL_INDEX};
 
 use crate::mesh::Mesh;
+use crate::texture_loader;
 
 /// What the loader noticed but did not reject.
 #[derive(Clone, Debug, Default)]
@@ -31,7 +32,7 @@ pub fn load_obj_file(path: &Path) -> Result<(Mesh, LoadNotes)> {
         return load_obj_gz(path, &name);
     }
     let result = tobj::load_obj(path, &load_options());
-    convert(&name, result)
+    convert(&name, Some(path.parent().unwrap_or(Path::new("."))), result)
 }
 
 /// A gzip-compressed OBJ (`scene.obj.gz`); its MTL files are read from beside it,
@@ -55,7 +56,7 @@ fn load_obj_gz(path: &Path, name: &str) -> Result<(Mesh, LoadNotes)> {
             Err(tobj::LoadError::OpenFileFailed)
         }
     });
-    convert(name, result)
+    convert(name, Some(path.parent().unwrap_or(Path::new("."))), result)
 }
 
 /// Loads an OBJ from memory; `mtl` resolves material library names to their text.
@@ -65,10 +66,11 @@ pub fn load_obj_str(name: &str, obj: &str, mtl: &dyn Fn(&Path) -> Option<String>
         Some(text) => tobj::load_mtl_buf(&mut std::io::BufReader::new(text.as_bytes())),
         None => Err(tobj::LoadError::OpenFileFailed),
     });
-    convert(name, result)
+    convert(name, None, result)
 }
 
-fn convert(name: &str, result: tobj::LoadResult) -> Result<(Mesh, LoadNotes)> {
+/// `dir`: where the OBJ is, for texture files (`None` for an OBJ held in memory).
+fn convert(name: &str, dir: Option<&Path>, result: tobj::LoadResult) -> Result<(Mesh, LoadNotes)> {
     let (models, materials) = result.map_err(|e| anyhow!("{name}: malformed OBJ: {}", describe(&e)))?;
     let mut notes = LoadNotes::default();
     let materials = match materials {
@@ -80,15 +82,25 @@ fn convert(name: &str, result: tobj::LoadResult) -> Result<(Mesh, LoadNotes)> {
         Err(e) => bail!("{name}: malformed MTL: {}", describe(&e)),
     };
 
-    let textured = materials.iter().filter(|m| m.diffuse_texture.is_some()).count();
-    if textured > 0 {
-        notes.warnings.push(format!(
-            "{name}: {textured} materials have diffuse textures, not supported yet; their diffuse colours are used"
-        ));
-    }
     let mut mesh = Mesh::default();
     for m in &materials {
-        mesh.materials.push(material_record(m));
+        let mut record = material_record(m);
+        if let Some(spec) = &m.diffuse_texture {
+            match dir.map(|d| texture_loader::load(d, spec)) {
+                Some(Ok(t)) => {
+                    record.texture = mesh.textures.len() as u32;
+                    mesh.textures.push(t);
+                }
+                Some(Err(e)) => {
+                    notes.warnings.push(format!("{name}: material '{}': {e}; its diffuse colour is used", m.name))
+                }
+                None => notes.warnings.push(format!(
+                    "{name}: material '{}': texture {spec} cannot be read from memory; its diffuse colour is used",
+                    m.name
+                )),
+            }
+        }
+        mesh.materials.push(record);
         mesh.material_names.push(m.name.clone());
     }
     let mut default_material = None;

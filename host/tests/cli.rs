@@ -480,3 +480,47 @@ fn point_lights_from_the_command_line_and_enclosed_lights_are_warned_about() {
     let o = raypipe(dir.path(), &["render", "--light", "0,nan,0", "-o", "c.png"]);
     assert!(!o.status.success());
 }
+
+/// A quad whose diffuse texture is a 2×2 checker (PNG): each quarter of the picture
+/// takes its texel's colour; a missing texture or an unsupported format is one warning
+/// and the material's own colour.
+#[test]
+fn diffuse_textures_are_sampled_and_bad_ones_fall_back_with_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let texels: [[u8; 3]; 4] = [[230, 20, 20], [20, 230, 20], [20, 20, 230], [230, 230, 230]];
+    let file = std::fs::File::create(dir.path().join("checker.png")).unwrap();
+    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), 2, 2);
+    enc.set_color(png::ColorType::Rgb);
+    enc.write_header().unwrap().write_image_data(texels.as_flattened()).unwrap();
+    let obj = "mtllib quad.mtl\nv -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nusemtl tex\nf 1/1 2/2 3/3 4/4\n";
+    write(dir.path(), "quad.obj", obj);
+    let camera = "eye 0 0 2.2\nlook_at 0 0 0\nup 0 1 0\nfov 60\nsize 40 40\nbackground 0 0 0\n";
+    write(dir.path(), "quad.camera", camera);
+    let render = |mtl: &str| {
+        write(dir.path(), "quad.mtl", mtl);
+        let o = raypipe(dir.path(), &["render", "quad.obj", "--light", "0,0,3", "-o", "q.png"]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        (decode(&dir.path().join("q.png")).2, stderr(&o))
+    };
+    let (px, err) = render("newmtl tex\nKd 1 1 1\nmap_Kd -clamp on checker.png\n");
+    assert!(!err.contains("warning"), "{err}");
+    let at = |x: usize, y: usize| &px[(y * 40 + x) * 3..(y * 40 + x) * 3 + 3];
+    // Top-left quarter: the texture's top-left texel (red); bottom-right: white.
+    let (tl, tr, bl, br) = (at(12, 12), at(27, 12), at(12, 27), at(27, 27));
+    assert!(tl[0] > 2 * tl[1] && tl[0] > 2 * tl[2], "top left {tl:?}");
+    assert!(tr[1] > 2 * tr[0] && tr[1] > 2 * tr[2], "top right {tr:?}");
+    assert!(bl[2] > 2 * bl[0] && bl[2] > 2 * bl[1], "bottom left {bl:?}");
+    assert!(br[0] > 100 && br[1] > 100 && br[2] > 100, "bottom right {br:?}");
+    for (mtl, needle) in [
+        ("newmtl tex\nKd 0.5 0.5 0.5\nmap_Kd missing.png\n", "missing.png"),
+        ("newmtl tex\nKd 0.5 0.5 0.5\nmap_Kd checker.bmp\n", "unsupported image format"),
+    ] {
+        if needle.contains("unsupported") {
+            std::fs::copy(dir.path().join("checker.png"), dir.path().join("checker.bmp")).unwrap();
+        }
+        let (px, err) = render(mtl);
+        assert!(err.contains("warning") && err.contains(needle), "{err}");
+        let c = &px[(20 * 40 + 20) * 3..(20 * 40 + 20) * 3 + 3];
+        assert!(c[0] == c[1] && c[1] == c[2] && c[0] > 0, "grey diffuse colour: {c:?}");
+    }
+}

@@ -133,11 +133,15 @@ pub enum SectionKind {
     /// Wald's precomputed projection triangles, [`crate::image::WaldTriangle`], 48 bytes
     /// each, one per triangle (an optional intersection layout).
     WaldTriangles = 14,
+    /// Diffuse textures, [`crate::image::TextureRecord`], 16 bytes each.
+    Textures = 15,
+    /// Texels of all textures, one `u32` each: RGBA, 8-bit sRGB, red in the low byte.
+    Texels = 16,
 }
 
 impl SectionKind {
     /// Every kind, in table order.
-    pub const ALL: [SectionKind; 14] = [
+    pub const ALL: [SectionKind; 16] = [
         SectionKind::Positions,
         SectionKind::Triangles,
         SectionKind::Grid,
@@ -152,6 +156,8 @@ impl SectionKind {
         SectionKind::KdNodes,
         SectionKind::Bvh4Nodes,
         SectionKind::WaldTriangles,
+        SectionKind::Textures,
+        SectionKind::Texels,
     ];
 
     /// Decodes a section-table kind.
@@ -164,7 +170,8 @@ impl SectionKind {
         match self {
             SectionKind::Positions | SectionKind::Triangles => 12,
             SectionKind::Grid | SectionKind::Materials | SectionKind::Camera => 64,
-            SectionKind::GridCells | SectionKind::PrimLists | SectionKind::TriangleMaterials => 4,
+            SectionKind::GridCells | SectionKind::PrimLists | SectionKind::TriangleMaterials | SectionKind::Texels => 4,
+            SectionKind::Textures => 16,
             SectionKind::ShadingVertices | SectionKind::Lights | SectionKind::BvhNodes => 32,
             SectionKind::KdNodes => 8,
             SectionKind::Bvh4Nodes => 128,
@@ -189,6 +196,8 @@ impl SectionKind {
             SectionKind::KdNodes => "KD_NODES",
             SectionKind::Bvh4Nodes => "BVH4_NODES",
             SectionKind::WaldTriangles => "WALD_TRIANGLES",
+            SectionKind::Textures => "TEXTURES",
+            SectionKind::Texels => "TEXELS",
         }
     }
 }

@@ -16,7 +16,7 @@ pub use embed::Aligned64;
 pub use header::{AccelKind, Header, SectionEntry, SectionKind, FORMAT_VERSION, MAGIC};
 pub use records::{
     Bvh4Node, BvhNode, CameraRecord, GridRecord, KdNode, LightRecord, MaterialRecord, Position, ShadingVertex,
-    TriangleRecord, WaldTriangle, NULL_INDEX,
+    TextureRecord, TriangleRecord, WaldTriangle, NULL_INDEX,
 };
 pub use view::{
     Bvh4View, BvhView, GridView, KdTreeView, SceneError, SceneView, IMAGE_ALIGN, MAX_TREE_DEPTH, SECTION_ALIGN,

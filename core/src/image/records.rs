@@ -311,3 +311,27 @@ pub struct WaldTriangle {
 }
 const _: () = assert!(core::mem::size_of::<WaldTriangle>() == 48);
 const _: () = assert!(core::mem::align_of::<WaldTriangle>() == 4);
+
+/// A diffuse texture, 16 bytes: its size, where its texels start in TEXELS (row-major,
+/// the top row first), and how coordinates outside `[0, 1]` wrap.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq)]
+pub struct TextureRecord {
+    /// Width in texels.
+    pub width: u32,
+    /// Height in texels.
+    pub height: u32,
+    /// First texel in TEXELS.
+    pub first: u32,
+    /// [`TextureRecord::REPEAT`] or [`TextureRecord::CLAMP`].
+    pub wrap: u32,
+}
+const _: () = assert!(core::mem::size_of::<TextureRecord>() == 16);
+const _: () = assert!(core::mem::align_of::<TextureRecord>() == 4);
+
+impl TextureRecord {
+    /// Coordinates wrap around (MTL's default).
+    pub const REPEAT: u32 = 0;
+    /// Coordinates clamp to the edge (MTL `-clamp on`).
+    pub const CLAMP: u32 = 1;
+}

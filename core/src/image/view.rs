@@ -9,7 +9,7 @@ use super::crc32::Crc32;
 use super::header::{AccelKind, Header, SectionEntry, SectionKind, CHECKSUM_OFFSET, FORMAT_VERSION, MAGIC};
 use super::records::{
     Bvh4Node, BvhNode, CameraRecord, GridRecord, KdNode, LightRecord, MaterialRecord, Position, ShadingVertex,
-    TriangleRecord, WaldTriangle, NULL_INDEX,
+    TextureRecord, TriangleRecord, WaldTriangle, NULL_INDEX,
 };
 use crate::probe::{DataClass, MemoryProbe};
 
@@ -135,6 +135,11 @@ pub enum SceneError {
     BadGrid,
     /// The last primitive list is not terminated by a null entry.
     UnterminatedList,
+    /// A texture's size or texel range is impossible, or its wrap mode unknown.
+    BadTexture {
+        /// The texture.
+        texture: u32,
+    },
     /// A tree node is malformed: a child not after its parent, a node referenced twice or
     /// never, a tree deeper than [`MAX_TREE_DEPTH`], a leaf range outside PRIM_LISTS, or
     /// a NaN box or split.
@@ -166,6 +171,7 @@ impl fmt::Display for SceneError {
                 "scene image is corrupted: checksum 0x{stored:08x} stored, 0x{computed:08x} computed"
             ),
             UnknownSection(v) => write!(f, "scene image has unknown section kind {v}"),
+            BadTexture { texture } => write!(f, "scene image texture {texture} has an impossible size, texel range or wrap mode"),
             DuplicateSection(s) => write!(f, "scene image has section {} twice", s.name()),
             MissingSection(s) => write!(f, "scene image lacks required section {}", s.name()),
             SectionMisaligned { section, offset } => write!(
@@ -453,6 +459,8 @@ pub struct SceneView<'a> {
     wald: &'a [WaldTriangle],
     tri_materials: &'a [u32],
     materials: &'a [MaterialRecord],
+    textures: &'a [TextureRecord],
+    texels: &'a [u32],
     lights: &'a [LightRecord],
     camera: Option<&'a CameraRecord>,
     positions_addr: u32,
@@ -460,6 +468,7 @@ pub struct SceneView<'a> {
     shading_addr: u32,
     tri_materials_addr: u32,
     materials_addr: u32,
+    texels_addr: u32,
     lights_addr: u32,
     wald_addr: u32,
 }
@@ -686,6 +695,25 @@ impl<'a> SceneView<'a> {
                 });
             }
         }
+        let textures: &[TextureRecord] = s.slice(K::Textures)?;
+        let texels: &[u32] = s.slice(K::Texels)?;
+        for (i, t) in textures.iter().enumerate() {
+            let n = (t.width as u64) * (t.height as u64);
+            let end = t.first as u64 + n;
+            if t.width == 0 || t.height == 0 || end > texels.len() as u64 || t.wrap > TextureRecord::CLAMP {
+                return Err(SceneError::BadTexture { texture: i as u32 });
+            }
+        }
+        for (i, m) in materials.iter().enumerate() {
+            if m.texture != NULL_INDEX && m.texture >= textures.len() as u32 {
+                return Err(SceneError::IndexOutOfRange {
+                    section: K::Materials,
+                    record: i as u32,
+                    value: m.texture,
+                    limit: textures.len() as u32,
+                });
+            }
+        }
         let wald: &[WaldTriangle] = s.slice(K::WaldTriangles)?;
         if !wald.is_empty() && wald.len() as u32 != nt {
             return Err(SceneError::CountMismatch {
@@ -719,6 +747,8 @@ impl<'a> SceneView<'a> {
             wald,
             tri_materials,
             materials,
+            textures,
+            texels,
             lights,
             camera: cameras.first(),
             positions_addr: s.addr(K::Positions),
@@ -726,6 +756,7 @@ impl<'a> SceneView<'a> {
             shading_addr: s.addr(K::ShadingVertices),
             tri_materials_addr: s.addr(K::TriangleMaterials),
             materials_addr: s.addr(K::Materials),
+            texels_addr: s.addr(K::Texels),
             lights_addr: s.addr(K::Lights),
             wald_addr: s.addr(K::WaldTriangles),
         })
@@ -989,6 +1020,19 @@ impl<'a> SceneView<'a> {
     /// The materials.
     pub fn materials(&self) -> &'a [MaterialRecord] {
         self.materials
+    }
+
+    /// Texture `index` (validated: its texels lie inside TEXELS).
+    pub fn texture(&self, index: u32) -> Option<TextureRecord> {
+        self.textures.get(index as usize).copied()
+    }
+
+    /// Texel `(x, y)` of texture `t` as RGBA bytes (sRGB), `x`, `y` already wrapped.
+    #[inline]
+    pub fn texel<P: MemoryProbe>(&self, t: &TextureRecord, x: u32, y: u32, probe: &mut P) -> [u8; 4] {
+        let i = t.first.wrapping_add(y.wrapping_mul(t.width)).wrapping_add(x);
+        probe.read(DataClass::Shading, self.texels_addr.wrapping_add(i.wrapping_mul(4)), 4);
+        self.texels.get(i as usize).copied().unwrap_or(0).to_le_bytes()
     }
 
     /// Reads triangle `prim` and its three vertex positions (intersection data).
