@@ -7,9 +7,11 @@
 //! bounces. Random numbers come from [`crate::rng`]: pixel, sample and bounce, so the
 //! image does not depend on the order rays are traced in.
 //!
-//! Emissive triangles stand behind the scene's point lights (the builder puts a light
-//! just inside them): a diffuse bounce that reaches one adds nothing, or its light
-//! would be counted twice. Ambient light records are ignored: the bounces replace them.
+//! Emissive triangles are area lights: next-event estimation samples a point on each
+//! (or on one chosen at random when there are many), so a diffuse bounce that reaches
+//! one adds nothing, or its light would be counted twice; the point light that stands
+//! in for them in the other algorithms is not used. Ambient light records are ignored:
+//! the bounces replace them.
 
 use glam::Vec3;
 
@@ -21,6 +23,9 @@ use crate::ray_record::{RayKind, RayRecord};
 use crate::rng::uniform;
 use crate::surface::Surface;
 use crate::whitted::{fresnel, reflect, refract};
+
+/// Above this many emitting triangles, one chosen at random is sampled per hit.
+pub const MAX_AREA_SAMPLES: u32 = 8;
 
 /// Settings of the path tracer.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -65,8 +70,11 @@ pub fn shade_path<P: MemoryProbe>(
     let s = Surface::at(scene, &rec.ray, &hit, probe);
     let m = s.material;
     let n = s.normal;
+    let areas = (0..scene.light_count()).filter(|&i| scene.light(i, probe).kind == LightRecord::AREA).count() as u32;
     let mut now = Vec3::ZERO;
-    if rec.kind != RayKind::Path {
+    // Emission seen along a camera or specular path; after a diffuse bounce only when no
+    // area light samples the emitters already.
+    if rec.kind != RayKind::Path || areas == 0 {
         now += rec.weight * Vec3::from(m.emission);
     }
     if n == Vec3::ZERO {
@@ -77,19 +85,49 @@ pub fn shade_path<P: MemoryProbe>(
     let transparent = m.dissolve < 1.0 || matches!(m.illum, 4 | 6 | 7 | 9);
     let opacity = if m.dissolve < 1.0 { m.dissolve.clamp(0.0, 1.0) } else { 1.0 };
     let diffuse = clamp01(Vec3::from(m.diffuse) * s.tint) * opacity;
-    // Next-event estimation.
+    // Next-event estimation: point lights, and points sampled on the emitting triangles.
+    let depth = rec.depth as u32;
+    let u = |dim: u32| uniform(rec.pixel, rec.sample, depth, dim);
     if diffuse.max_element() > 0.0 {
+        // Many emitters: one, chosen at random, stands for all of them.
+        let chosen = if areas > MAX_AREA_SAMPLES { Some((u(5) * areas as f32) as u32 % areas) } else { None };
+        let area_scale = if chosen.is_some() { areas as f32 } else { 1.0 };
+        let mut area_index = 0u32;
         for i in 0..scene.light_count() {
             let l = scene.light(i, probe);
-            if l.kind != LightRecord::POINT {
-                continue;
-            }
-            let to_light = Vec3::from(l.position) - s.point;
-            let cos = n.dot(to_light.normalize_or_zero());
-            let weight = rec.weight * diffuse * Vec3::from(l.color) * cos;
-            if cos > 0.0 && weight.max_element() > 0.0 {
+            let (target, weight) = match l.kind {
+                LightRecord::POINT => {
+                    let to_light = Vec3::from(l.position) - s.point;
+                    let cos = n.dot(to_light.normalize_or_zero());
+                    (Vec3::from(l.position), rec.weight * diffuse * Vec3::from(l.color) * cos.max(0.0))
+                }
+                LightRecord::AREA => {
+                    let k = area_index;
+                    area_index += 1;
+                    if chosen.is_some_and(|c| c != k) {
+                        continue;
+                    }
+                    let [a, b, c] = scene.triangle(l.triangle, probe);
+                    let (r1, r2) = (libm::sqrtf(u(6 + 2 * k)), u(7 + 2 * k));
+                    let q = a * (1.0 - r1) + b * (r1 * (1.0 - r2)) + c * (r1 * r2);
+                    let e = (b - a).cross(c - a);
+                    let to = q - s.point;
+                    let d2 = to.length_squared();
+                    let dir = to.normalize_or_zero();
+                    // Radiance Ke toward the side the triangle faces (its winding), area
+                    // |e|/2, Lambert BRDF kd/π.
+                    let cos_l = -e.normalize_or_zero().dot(dir);
+                    let g = n.dot(dir).max(0.0) * cos_l.max(0.0) * 0.5 * e.length() / (core::f32::consts::PI * d2);
+                    (q, rec.weight * diffuse * Vec3::from(l.color) * (g * area_scale))
+                }
+                _ => continue,
+            };
+            if weight.max_element() > 0.0 && weight.is_finite() {
+                let to_light = target - s.point;
                 let origin = s.offset_point(to_light, extent);
-                let ray = Ray { origin, dir: Vec3::from(l.position) - origin, t_min: 0.0, t_max: 1.0 };
+                // An area light's sample lies on its triangle: stop just short of it.
+                let t_max = if l.kind == LightRecord::AREA { 1.0 - 1e-4 } else { 1.0 };
+                let ray = Ray { origin, dir: target - origin, t_min: 0.0, t_max };
                 emit(rec.child(ray, weight, RayKind::Shadow, rec.depth));
             }
         }
@@ -97,8 +135,6 @@ pub fn shade_path<P: MemoryProbe>(
     if rec.depth >= opts.bounces {
         return now;
     }
-    let depth = rec.depth as u32;
-    let u = |dim: u32| uniform(rec.pixel, rec.sample, depth, dim);
     let mut bounce = |dir: Vec3, weight: Vec3, kind: RayKind| {
         if weight.max_element() > 0.0 && dir != Vec3::ZERO && weight.is_finite() {
             let ray = Ray::new(s.offset_point(dir, extent), dir);

@@ -28,7 +28,7 @@ pub fn shade<P: MemoryProbe>(
         let color = Vec3::from(l.color);
         if l.kind == LightRecord::AMBIENT {
             light += color;
-        } else {
+        } else if l.is_point() {
             let to_light = (Vec3::from(l.position) - point).normalize_or_zero();
             light += color * n.dot(to_light).max(0.0);
         }

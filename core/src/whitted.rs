@@ -98,6 +98,9 @@ pub fn shade_whitted<P: MemoryProbe>(
             now += diffuse * color;
             continue;
         }
+        if !l.is_point() {
+            continue;
+        }
         let to_light = Vec3::from(l.position) - s.point;
         let cos = n.dot(to_light.normalize_or_zero());
         let weight = rec.weight * diffuse * color * cos;

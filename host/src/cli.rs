@@ -179,7 +179,7 @@ impl StructureArgs {
                     position: [l[0], l[1], l[2]],
                     kind: raypipe_core::image::LightRecord::POINT,
                     color: [l[3], l[4], l[5]],
-                    _pad: 0,
+                    triangle: 0,
                 })
                 .collect(),
             accel: self.accel,

@@ -261,14 +261,26 @@ fn default_lights(mesh: &Mesh, camera: &CameraRecord) -> Vec<LightRecord> {
         // Nudge the light off the emitter, towards the middle of the scene.
         let p = p + (centre - p).normalize_or_zero() * (hi - lo).length() * 0.01;
         let color = emission / emission.max_element();
-        lights.push(LightRecord { position: p.to_array(), kind: LightRecord::POINT, color: color.to_array(), _pad: 0 });
+        lights.push(LightRecord {
+            position: p.to_array(),
+            kind: LightRecord::EMITTERS,
+            color: color.to_array(),
+            triangle: 0,
+        });
+        // The emitters themselves, for path tracing.
+        for (i, (t, &m)) in mesh.triangles.iter().zip(&mesh.tri_materials).enumerate() {
+            let ke = mesh.materials[m as usize].emission;
+            if Vec3::from(ke).max_element() > 0.0 && !mesh.is_degenerate(*t) {
+                lights.push(LightRecord { position: [0.0; 3], kind: LightRecord::AREA, color: ke, triangle: i as u32 });
+            }
+        }
     } else {
         let eye = Vec3::from(camera.eye);
         let up = Vec3::from(camera.up).normalize_or_zero();
         let p = eye + up * (eye - centre).length() * 0.25;
-        lights.push(LightRecord { position: p.to_array(), kind: LightRecord::POINT, color: [0.9; 3], _pad: 0 });
+        lights.push(LightRecord { position: p.to_array(), kind: LightRecord::POINT, color: [0.9; 3], triangle: 0 });
     }
-    lights.push(LightRecord { position: [0.0; 3], kind: LightRecord::AMBIENT, color: [0.1; 3], _pad: 0 });
+    lights.push(LightRecord { position: [0.0; 3], kind: LightRecord::AMBIENT, color: [0.1; 3], triangle: 0 });
     lights
 }
 
@@ -285,7 +297,7 @@ pub fn build(
     let camera = camera.apply(&framing_camera(lo, hi));
     if !opts.lights.is_empty() {
         mesh.lights = opts.lights.clone();
-        mesh.lights.push(LightRecord { position: [0.0; 3], kind: LightRecord::AMBIENT, color: [0.1; 3], _pad: 0 });
+        mesh.lights.push(LightRecord { position: [0.0; 3], kind: LightRecord::AMBIENT, color: [0.1; 3], triangle: 0 });
     }
     if mesh.lights.is_empty() {
         mesh.lights = default_lights(&mesh, &camera);

@@ -93,3 +93,64 @@ fn path_traced_image_is_golden_and_the_same_for_every_structure_packet_and_threa
     assert!(a.pixels == b.pixels);
     assert!(a.pixels != first.pixels);
 }
+
+/// Next-event estimation to an emissive quad above a floor: every sampled shadow ray
+/// reaches its point on the emitter unblocked (the emitter does not shadow itself), and
+/// its weight falls off with distance.
+#[test]
+fn area_light_samples_are_never_blocked_by_the_emitter_itself() {
+    use raypipe::mesh::Mesh;
+    use raypipe_core::image::MaterialRecord;
+    use raypipe_core::occlusion::occluded;
+    let positions = vec![
+        [-2.0, 0.0, -2.0],
+        [2.0, 0.0, -2.0],
+        [2.0, 0.0, 2.0],
+        [-2.0, 0.0, 2.0],
+        [-0.3, 2.0, -0.3],
+        [0.3, 2.0, -0.3],
+        [0.3, 2.0, 0.3],
+        [-0.3, 2.0, 0.3],
+    ];
+    // Floor facing up; emitter facing down.
+    let triangles = vec![[0, 2, 1], [0, 3, 2], [4, 5, 6], [4, 6, 7]];
+    let light = MaterialRecord { emission: [10.0; 3], ..MaterialRecord::DEFAULT };
+    let mesh = Mesh {
+        positions,
+        triangles,
+        tri_materials: vec![0, 0, 1, 1],
+        materials: vec![MaterialRecord::DEFAULT, light],
+        material_names: vec!["floor".into(), "light".into()],
+        ..Default::default()
+    };
+    let scene = scene::build("lit".into(), mesh, Vec::new(), Default::default(), &BuildOptions::default()).unwrap();
+    let view = scene.view().unwrap();
+    let opts = PathOptions { bounces: 0, samples: 1, roulette: false, background: Vec3::ZERO };
+    let mut near = 0.0f32;
+    let mut far = 0.0f32;
+    for i in 0..64u32 {
+        let x = (i % 8) as f32 * 0.5 - 1.75;
+        let z = (i / 8) as f32 * 0.5 - 1.75;
+        let ray = Ray::new(Vec3::new(x, 1.0, z + 0.01), Vec3::new(0.0, -1.0, 0.0));
+        let hit = trace::<Watertight, _>(&view, &ray, &mut NoProbe, &mut RayCounters::default());
+        assert!(hit.is_some_and(|h| h.prim < 2));
+        let mut out = Vec::new();
+        shade_path(&view, &RayRecord::primary(ray, i), hit, &opts, &mut NoProbe, &mut |r| out.push(r));
+        let shadows: Vec<_> = out.iter().filter(|r| r.kind == RayKind::Shadow).collect();
+        assert_eq!(shadows.len(), 2, "one sample per emitting triangle");
+        for s in &shadows {
+            assert!(
+                !occluded::<Watertight, _>(&view, &s.ray, &mut NoProbe, &mut RayCounters::default()),
+                "{:?}",
+                s.ray
+            );
+            let w = s.weight.x;
+            if x.abs() < 0.5 && z.abs() < 0.5 {
+                near = near.max(w);
+            } else if x.abs() > 1.5 && z.abs() > 1.5 {
+                far = far.max(w);
+            }
+        }
+    }
+    assert!(near > 2.0 * far && far > 0.0, "near {near}, far {far}");
+}

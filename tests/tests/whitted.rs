@@ -95,7 +95,12 @@ fn floor_scene(positions: Vec<[f32; 3]>, material: MaterialRecord, light: Vec3) 
         tri_materials: vec![0, 0],
         materials: vec![material],
         material_names: vec!["m".into()],
-        lights: vec![LightRecord { position: light.to_array(), kind: LightRecord::POINT, color: [1.0; 3], _pad: 0 }],
+        lights: vec![LightRecord {
+            position: light.to_array(),
+            kind: LightRecord::POINT,
+            color: [1.0; 3],
+            triangle: 0,
+        }],
         ..Default::default()
     };
     scene::build(
@@ -131,7 +136,7 @@ fn a_mirror_reflects_into_the_explicitly_reflected_direction() {
         tri_materials,
         materials: vec![mirror, MaterialRecord::DEFAULT],
         material_names: vec!["mirror".into(), "wall".into()],
-        lights: vec![LightRecord { position: [0.0, 2.5, 0.0], kind: LightRecord::POINT, color: [1.0; 3], _pad: 0 }],
+        lights: vec![LightRecord { position: [0.0, 2.5, 0.0], kind: LightRecord::POINT, color: [1.0; 3], triangle: 0 }],
         ..Default::default()
     };
     let scene = scene::build("mirror".into(), mesh, Vec::new(), Default::default(), &BuildOptions::default()).unwrap();
@@ -195,7 +200,7 @@ fn a_slab_with_the_index_of_air_changes_nothing() {
     let glass = MaterialRecord { diffuse: [0.0; 3], specular: [0.0; 3], ior: 1.0, illum: 7, ..MaterialRecord::DEFAULT };
     let mut tri_materials = vec![1; triangles.len()];
     tri_materials[..2].fill(0);
-    let light = LightRecord { position: [0.0, 0.0, 5.0], kind: LightRecord::POINT, color: [1.0; 3], _pad: 0 };
+    let light = LightRecord { position: [0.0, 0.0, 5.0], kind: LightRecord::POINT, color: [1.0; 3], triangle: 0 };
     let build = |tris: Vec<[u32; 3]>, mats: Vec<u32>| {
         let mesh = Mesh {
             positions: positions.clone(),

@@ -109,14 +109,15 @@ impl MaterialRecord {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
 pub struct LightRecord {
-    /// Position (point lights); unused for ambient light.
+    /// Position (point lights); unused otherwise.
     pub position: [f32; 3],
-    /// [`LightRecord::POINT`] or [`LightRecord::AMBIENT`].
+    /// [`LightRecord::POINT`], [`LightRecord::AMBIENT`], [`LightRecord::AREA`] or
+    /// [`LightRecord::EMITTERS`].
     pub kind: u32,
-    /// Colour times intensity.
+    /// Colour times intensity (area lights: the emitted radiance `Ke`).
     pub color: [f32; 3],
-    /// Unused, zero.
-    pub _pad: u32,
+    /// The emitting triangle of an area light; zero otherwise.
+    pub triangle: u32,
 }
 const _: () = assert!(core::mem::size_of::<LightRecord>() == 32);
 const _: () = assert!(core::mem::align_of::<LightRecord>() == 4);
@@ -126,6 +127,16 @@ impl LightRecord {
     pub const POINT: u32 = 0;
     /// Ambient light, added to every lit point.
     pub const AMBIENT: u32 = 1;
+    /// An emissive triangle as an area light (path tracing samples points on it).
+    pub const AREA: u32 = 2;
+    /// A point light standing in for the emissive triangles in ray casting, the shadow
+    /// caster and Whitted ray tracing (path tracing samples the area lights instead).
+    pub const EMITTERS: u32 = 3;
+
+    /// True for the lights the point-light shaders use (cast, shadow caster, Whitted).
+    pub fn is_point(&self) -> bool {
+        self.kind == LightRecord::POINT || self.kind == LightRecord::EMITTERS
+    }
 }
 
 /// The default pinhole camera and background, 64 bytes.

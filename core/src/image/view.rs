@@ -729,6 +729,27 @@ impl<'a> SceneView<'a> {
             }
         }
         let lights: &[LightRecord] = s.slice(K::Lights)?;
+        for (i, l) in lights.iter().enumerate() {
+            if l.kind > LightRecord::EMITTERS {
+                return Err(SceneError::IndexOutOfRange {
+                    section: K::Lights,
+                    record: i as u32,
+                    value: l.kind,
+                    limit: 4,
+                });
+            }
+            if l.kind == LightRecord::AREA && l.triangle >= nt {
+                return Err(SceneError::IndexOutOfRange {
+                    section: K::Lights,
+                    record: i as u32,
+                    value: l.triangle,
+                    limit: nt,
+                });
+            }
+            if !(l.position.iter().chain(&l.color).all(|v| v.is_finite())) {
+                return Err(SceneError::NonFinite { section: K::Lights, record: i as u32 });
+            }
+        }
         let cameras: &[CameraRecord] = s.slice(K::Camera)?;
         if cameras.len() > 1 {
             return Err(SceneError::CountMismatch { section: K::Camera, expected: 1, found: cameras.len() as u32 });
@@ -1013,7 +1034,7 @@ impl<'a> SceneView<'a> {
             position: [0.0; 3],
             kind: LightRecord::AMBIENT,
             color: [0.0; 3],
-            _pad: 0,
+            triangle: 0,
         })
     }
 
