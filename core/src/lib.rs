@@ -60,6 +60,7 @@ pub mod ray_record;
 pub mod rng;
 pub mod shade;
 pub mod shader;
+pub mod specular;
 pub mod surface;
 pub mod texture;
 pub mod tree_step;

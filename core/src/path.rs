@@ -21,8 +21,8 @@ use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::ray_record::{RayKind, RayRecord};
 use crate::rng::uniform;
+use crate::specular::specular_rays;
 use crate::surface::Surface;
-use crate::whitted::{fresnel, reflect, refract};
 
 /// Above this many emitting triangles, one chosen at random is sampled per hit.
 pub const MAX_AREA_SAMPLES: u32 = 8;
@@ -52,10 +52,6 @@ pub fn cosine_direction(n: Vec3, u1: f32, u2: f32) -> Vec3 {
     t * x + b * y + n * z
 }
 
-fn clamp01(v: Vec3) -> Vec3 {
-    v.clamp(Vec3::ZERO, Vec3::ONE)
-}
-
 /// Shades the end of `rec`: returns the radiance added now (times the record's weight)
 /// and passes new records to `emit`.
 pub fn shade_path<P: MemoryProbe>(
@@ -82,9 +78,7 @@ pub fn shade_path<P: MemoryProbe>(
     }
     let (lo, hi) = scene.bounds();
     let extent = (hi - lo).max_element();
-    let transparent = m.dissolve < 1.0 || matches!(m.illum, 4 | 6 | 7 | 9);
-    let opacity = if m.dissolve < 1.0 { m.dissolve.clamp(0.0, 1.0) } else { 1.0 };
-    let diffuse = clamp01(Vec3::from(m.diffuse) * s.tint) * opacity;
+    let diffuse = s.diffuse();
     // Next-event estimation: point lights, and points sampled on the emitting triangles.
     let depth = rec.depth as u32;
     let u = |dim: u32| uniform(rec.pixel, rec.sample, depth, dim);
@@ -152,26 +146,7 @@ pub fn shade_path<P: MemoryProbe>(
     }
     // Mirrors and glass, as in Whitted's shader.
     let d = rec.ray.dir.normalize_or_zero();
-    let ior = if m.ior > 0.0 && m.ior.is_finite() { m.ior } else { 1.0 };
-    let (eta_i, eta_t) = if s.entering { (1.0, ior) } else { (ior, 1.0) };
-    let kr = fresnel(-d.dot(n), eta_i, eta_t);
-    let ks = clamp01(Vec3::from(m.specular));
-    match m.illum {
-        3 => bounce(reflect(d, n), rec.weight * ks, RayKind::Reflection),
-        5 => {
-            let c = (1.0 + d.dot(n)).clamp(0.0, 1.0);
-            bounce(reflect(d, n), rec.weight * (ks + (Vec3::ONE - ks) * (c * c * c * c * c)), RayKind::Reflection)
-        }
-        7 => bounce(reflect(d, n), rec.weight * ks * kr, RayKind::Reflection),
-        _ => {}
-    }
-    if transparent {
-        let transmitted = if m.dissolve < 1.0 { 1.0 - opacity } else { 1.0 };
-        match refract(d, n, eta_i / eta_t) {
-            Some(t) => bounce(t, rec.weight * ((1.0 - kr) * transmitted), RayKind::Refraction),
-            None => bounce(reflect(d, n), rec.weight * transmitted, RayKind::Reflection),
-        }
-    }
+    specular_rays(&m, d, n, s.entering, |dir, factor, kind| bounce(dir, rec.weight * factor, kind));
     now
 }
 

@@ -66,6 +66,13 @@ impl Surface {
         Surface { point: ray.at(hit.t), normal: n, entering, geometric, material, tint }
     }
 
+    /// The diffuse reflectance: `Kd` times the vertex colour (and texture), clamped to
+    /// `[0, 1]`, times the opacity of a dissolved material.
+    pub fn diffuse(&self) -> Vec3 {
+        (Vec3::from(self.material.diffuse) * self.tint).clamp(Vec3::ZERO, Vec3::ONE)
+            * crate::specular::opacity(&self.material)
+    }
+
     /// A point just off the surface on the side `dir` leaves toward, so that a new ray
     /// from it does not hit this triangle again: the offset grows with the coordinates'
     /// magnitude (their rounding) and the scene's size.

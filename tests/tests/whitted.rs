@@ -15,7 +15,8 @@ use raypipe::tracer::trace;
 use raypipe_core::image::{CameraRecord, LightRecord, MaterialRecord};
 use raypipe_core::occlusion::occluded;
 use raypipe_core::ray_record::{RayKind, RayRecord};
-use raypipe_core::whitted::{reflect, shade_whitted, WhittedOptions};
+use raypipe_core::specular::reflect;
+use raypipe_core::whitted::{shade_whitted, WhittedOptions};
 use raypipe_core::{NoProbe, Ray, RayCounters, SceneView, Vec3, Watertight};
 use raypipe_tests::build_soup;
 
