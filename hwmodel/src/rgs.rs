@@ -70,7 +70,7 @@ pub struct Rgs {
     /// Each pixel's radiance (ray-emitting shaders), summed exactly in any order.
     radiance: Vec<RadianceSum>,
     /// Records the shader emitted, waiting to be packed (first in, first out).
-    stream: VecDeque<RayRecord>,
+    stream: RayStream,
     /// Secondary packets in flight: their lanes' records.
     in_flight: HashMap<u32, Vec<RayRecord>>,
     next_secondary: u32,
@@ -127,7 +127,7 @@ impl Rgs {
             packets_done: 0,
             shader,
             radiance: if shader.is_some() { vec![RadianceSum::default(); pixels] } else { Vec::new() },
-            stream: VecDeque::new(),
+            stream: RayStream::default(),
             in_flight: HashMap::new(),
             next_secondary: 0,
             stream_peak: 0,
@@ -355,7 +355,7 @@ impl Rgs {
                             ..RayRecord::primary(ray, pixel as u32)
                         };
                         let stream = &mut self.stream;
-                        let added = shader.shade(scene, &rec, packet.hits[j], &mut probe, &mut |r| stream.push_back(r));
+                        let added = shader.shade(scene, &rec, packet.hits[j], &mut probe, &mut |r| stream.push(r));
                         self.radiance[pixel].add(added);
                     }
                 }
@@ -375,26 +375,19 @@ impl Rgs {
         self.shading = Some(Shading { wait, busy_until: now + pixels.div_ceil(self.shade_per_cycle), primary: true });
     }
 
-    /// Packs the oldest waiting records of one query type (shadow rays want any hit, the
-    /// others the closest) into a packet, in stream order.
+    /// Packs waiting records of one kind — the kind of the oldest record — into a packet,
+    /// oldest first (shadow rays want any hit, the others the closest).
     fn pack_secondary(&mut self) -> Box<RayPacketJob> {
-        let any_hit = |r: &RayRecord| r.kind == RayKind::Shadow;
-        let query = if self.stream.front().is_some_and(any_hit) { Query::AnyHit } else { Query::Closest };
+        let records = self.stream.take_oldest_kind(self.packet_size as usize);
+        let kind = records.first().map_or(RayKind::Shadow, |r| r.kind);
+        let query = if kind == RayKind::Shadow { Query::AnyHit } else { Query::Closest };
         let index = self.blocks.len() as u32 + self.next_secondary;
         self.next_secondary = self.next_secondary.wrapping_add(1);
         let mut job = Box::new(RayPacketJob { index, query, lanes: 0, rays: [NO_RAY; 64] });
-        let mut records = Vec::with_capacity(self.packet_size as usize);
-        while records.len() < self.packet_size as usize {
-            match self.stream.front() {
-                Some(r) if any_hit(r) == (query == Query::AnyHit) => {
-                    let r = self.stream.pop_front().expect("front");
-                    job.rays[records.len()] = r.ray;
-                    job.lanes |= 1 << records.len();
-                    self.rays_by_kind[r.kind as usize] += 1;
-                    records.push(r);
-                }
-                _ => break,
-            }
+        for (j, r) in records.iter().enumerate() {
+            job.rays[j] = r.ray;
+            job.lanes |= 1 << j;
+            self.rays_by_kind[r.kind as usize] += 1;
         }
         self.in_flight.insert(index, records);
         job
@@ -414,7 +407,7 @@ impl Rgs {
                 }
             } else if let Some(shader) = &self.shader {
                 let stream = &mut self.stream;
-                slot.add(shader.shade(scene, rec, hit, &mut probe, &mut |r| stream.push_back(r)));
+                slot.add(shader.shade(scene, rec, hit, &mut probe, &mut |r| stream.push(r)));
             }
         }
         self.stream_peak = self.stream_peak.max(self.stream.len());
@@ -422,5 +415,41 @@ impl Rgs {
         self.shade_stats.issue(lanes(packet.lanes), self.packet_size);
         let busy_until = now + (records.len() as u64).div_ceil(self.shade_per_cycle).max(1);
         self.shading = Some(Shading { wait: probe.wait, busy_until, primary: false });
+    }
+}
+
+/// The records the shader emitted, one first-in first-out queue per kind, so that a
+/// packet gathers rays of one kind (Wald & Slusallek 2001: shadow rays toward the same
+/// light are coherent, reflections of neighbouring pixels too); each record keeps its
+/// emission number so that the oldest kind goes first.
+#[derive(Default)]
+struct RayStream {
+    queues: [VecDeque<(u64, RayRecord)>; 5],
+    next: u64,
+}
+
+impl RayStream {
+    fn push(&mut self, r: RayRecord) {
+        self.queues[r.kind as usize].push_back((self.next, r));
+        self.next += 1;
+    }
+
+    fn len(&self) -> usize {
+        self.queues.iter().map(VecDeque::len).sum()
+    }
+
+    fn is_empty(&self) -> bool {
+        self.queues.iter().all(VecDeque::is_empty)
+    }
+
+    /// Up to `n` records of the kind whose oldest record is the oldest of all.
+    fn take_oldest_kind(&mut self, n: usize) -> Vec<RayRecord> {
+        let Some(k) =
+            (0..self.queues.len()).filter(|&k| !self.queues[k].is_empty()).min_by_key(|&k| self.queues[k][0].0)
+        else {
+            return Vec::new();
+        };
+        let q = &mut self.queues[k];
+        q.drain(..n.min(q.len())).map(|(_, r)| r).collect()
     }
 }
