@@ -173,7 +173,9 @@ fn material_record(m: &tobj::Material) -> MaterialRecord {
     }
     r.shininess = m.shininess.unwrap_or(0.0);
     r.ior = m.optical_density.unwrap_or(1.0);
-    r.dissolve = m.dissolve.unwrap_or(1.0);
+    // `Tr` (transparency) is the complement of `d`; tobj keeps it as an unknown parameter.
+    let tr = m.unknown_param.get("Tr").and_then(|v| v.split_whitespace().next()?.parse::<f32>().ok());
+    r.dissolve = m.dissolve.or(tr.map(|t| 1.0 - t)).unwrap_or(1.0);
     r.illum = m.illumination_model.map_or(1, u32::from);
     r.texture = NULL_INDEX;
     if let Some(ke) = m.emissive {
@@ -200,5 +202,20 @@ fn describe(e: &tobj::LoadError) -> String {
         FaceNormalOutOfBounds => "a face references a normal that does not exist".into(),
         FaceColorOutOfBounds => "a face references a colour that does not exist".into(),
         other => format!("{other}"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn transparency_tr_is_the_complement_of_dissolve() {
+        let obj = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\nusemtl b\nf 1 2 3\n";
+        let mtl = "newmtl a\nKd 1 1 1\nTr 0.25\nnewmtl b\nKd 1 1 1\nd 0.5\nTr 0.9\n".to_string();
+        let (mesh, _) = load_obj_str("t.obj", obj, &|_| Some(mtl.clone())).unwrap();
+        let d = |name: &str| mesh.materials[mesh.material_names.iter().position(|n| n == name).unwrap()].dissolve;
+        assert_eq!(d("a"), 0.75);
+        assert_eq!(d("b"), 0.5, "d wins over Tr");
     }
 }
