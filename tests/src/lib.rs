@@ -3,8 +3,11 @@
 //! the helpers they share. The command-line suite lives in `host/tests/cli.rs`, because
 //! cargo tells only the binary's own package where the built `raypipe` is.
 
+use std::path::{Path, PathBuf};
+
 use raypipe::grid_builder::GridResolution;
 use raypipe::mesh::Mesh;
+use raypipe::render::Frame;
 use raypipe::scene::{self, Accel, BuildOptions, Scene};
 
 /// Builds a scene image with Wald's precomputed triangles as well.
@@ -27,4 +30,33 @@ pub fn reseal(bytes: &mut [u8]) {
     bytes[28..32].copy_from_slice(&[0; 4]);
     let c = raypipe_core::image::crc32(bytes);
     bytes[28..32].copy_from_slice(&c.to_le_bytes());
+}
+
+/// The repository root (for fixtures).
+pub fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// Reads an 8-bit RGB PNG.
+pub fn decode_png(path: &Path) -> Frame {
+    let file = std::fs::File::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let mut reader = png::Decoder::new(std::io::BufReader::new(file)).read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    buf.truncate(info.buffer_size());
+    Frame { width: info.width, height: info.height, pixels: buf.chunks(3).map(|c| [c[0], c[1], c[2]]).collect() }
+}
+
+/// Compares `frame` with `fixtures/golden/<name>` pixel for pixel (rendering is
+/// deterministic). With `RAYPIPE_BLESS` set, writes the golden image instead: look at it.
+pub fn check_golden(name: &str, frame: &Frame) {
+    let path = root().join("fixtures/golden").join(name);
+    if std::env::var_os("RAYPIPE_BLESS").is_some() {
+        raypipe::output::write_png(&path, frame.width, frame.height, &frame.pixels).unwrap();
+        return;
+    }
+    let golden = decode_png(&path);
+    assert_eq!((frame.width, frame.height), (golden.width, golden.height), "{name}: size");
+    let differing = frame.pixels.iter().zip(&golden.pixels).filter(|(a, b)| a != b).count();
+    assert_eq!(differing, 0, "{name}: {differing} pixels differ from the golden image");
 }

@@ -3,39 +3,13 @@
 //! comparison is exact. After an intended change, regenerate with
 //! `RAYPIPE_BLESS=1 cargo test -p raypipe-tests --test golden` and look at the images.
 
-use std::path::{Path, PathBuf};
-
 use raypipe::grid_builder::GridResolution;
 use raypipe::packets::PacketSize;
 use raypipe::render::{render, Frame, RenderOptions};
 use raypipe::scene::{self, Accel, BuildOptions};
 use raypipe::tracer::IntersectorKind;
 use raypipe_core::image::CameraRecord;
-
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
-fn decode(path: &Path) -> Frame {
-    let file = std::fs::File::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let mut reader = png::Decoder::new(std::io::BufReader::new(file)).read_info().unwrap();
-    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
-    let info = reader.next_frame(&mut buf).unwrap();
-    buf.truncate(info.buffer_size());
-    Frame { width: info.width, height: info.height, pixels: buf.chunks(3).map(|c| [c[0], c[1], c[2]]).collect() }
-}
-
-fn check(name: &str, frame: &Frame) {
-    let path = root().join("fixtures/golden").join(name);
-    if std::env::var_os("RAYPIPE_BLESS").is_some() {
-        raypipe::output::write_png(&path, frame.width, frame.height, &frame.pixels).unwrap();
-        return;
-    }
-    let golden = decode(&path);
-    assert_eq!((frame.width, frame.height), (golden.width, golden.height), "{name}: size");
-    let differing = frame.pixels.iter().zip(&golden.pixels).filter(|(a, b)| a != b).count();
-    assert_eq!(differing, 0, "{name}: {differing} pixels differ from the golden image");
-}
+use raypipe_tests::{check_golden, root};
 
 fn render_default(kind: IntersectorKind, threads: usize, accel: Accel, packet: PacketSize) -> Frame {
     let scene = scene::load_default(&BuildOptions { accel, ..Default::default() }).unwrap();
@@ -51,7 +25,10 @@ fn render_default(kind: IntersectorKind, threads: usize, accel: Accel, packet: P
 
 #[test]
 fn cornell_box_watertight() {
-    check("cornell_box_128.png", &render_default(IntersectorKind::Watertight, 2, Accel::Grid, PacketSize::Single));
+    check_golden(
+        "cornell_box_128.png",
+        &render_default(IntersectorKind::Watertight, 2, Accel::Grid, PacketSize::Single),
+    );
 }
 
 /// One image whatever the structure, packet size and thread count.
@@ -60,7 +37,7 @@ fn cornell_box_is_the_same_from_every_structure_and_packet_size() {
     for accel in [Accel::Grid, Accel::Kd, Accel::Bvh, Accel::Bvh4, Accel::None] {
         for (i, packet) in PacketSize::ALL.into_iter().enumerate() {
             let frame = render_default(IntersectorKind::Watertight, 1 + i % 3, accel, packet);
-            check("cornell_box_128.png", &frame);
+            check_golden("cornell_box_128.png", &frame);
         }
     }
 }
@@ -69,7 +46,10 @@ fn cornell_box_is_the_same_from_every_structure_and_packet_size() {
 fn cornell_box_moller_trumbore_matches_the_same_golden_image() {
     // Away from edges both kernels find the same triangles; on this scene the 8-bit
     // image is the same.
-    check("cornell_box_128.png", &render_default(IntersectorKind::MollerTrumbore, 1, Accel::Grid, PacketSize::P16));
+    check_golden(
+        "cornell_box_128.png",
+        &render_default(IntersectorKind::MollerTrumbore, 1, Accel::Grid, PacketSize::P16),
+    );
 }
 
 #[test]
@@ -78,7 +58,7 @@ fn tetra_fixture() {
     let view = scene.view().unwrap();
     let cam = CameraRecord { width: 96, height: 72, ..*view.camera().unwrap() };
     let frame = render(&view, &cam, &RenderOptions { threads: Some(3), ..Default::default() }).unwrap();
-    check("tetra_96x72.png", &frame);
+    check_golden("tetra_96x72.png", &frame);
 }
 
 /// The image embedded by the no_std proof is what `raypipe build` makes today.

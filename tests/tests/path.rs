@@ -2,7 +2,7 @@
 //! Russian roulette), and the image — random numbers included — is the same for every
 //! structure, packet size and thread count, and equal to its golden image.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use proptest::prelude::*;
 use raypipe::packets::PacketSize;
@@ -13,10 +13,7 @@ use raypipe_core::image::CameraRecord;
 use raypipe_core::path::{shade_path, PathOptions};
 use raypipe_core::ray_record::{RayKind, RayRecord};
 use raypipe_core::{NoProbe, Ray, RayCounters, Vec3, Watertight};
-
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
+use raypipe_tests::{check_golden, root};
 
 fn render_path(path: &Path, accel: Accel, packet: PacketSize, threads: usize, roulette: bool) -> Frame {
     let scene = scene::load(Some(path), &BuildOptions { accel, ..Default::default() }).unwrap();
@@ -70,17 +67,8 @@ proptest! {
 #[test]
 fn path_traced_image_is_golden_and_the_same_for_every_structure_packet_and_thread_count() {
     let path = root().join("fixtures/whitted.obj");
-    let golden_path = root().join("fixtures/golden/path_64x48.png");
     let first = render_path(&path, Accel::Bvh4, PacketSize::P64, 2, false);
-    if std::env::var_os("RAYPIPE_BLESS").is_some() {
-        raypipe::output::write_png(&golden_path, first.width, first.height, &first.pixels).unwrap();
-    }
-    let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&golden_path).unwrap()));
-    let mut reader = dec.read_info().unwrap();
-    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
-    reader.next_frame(&mut buf).unwrap();
-    let golden: Vec<[u8; 3]> = buf.chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
-    assert!(first.pixels == golden, "differs from fixtures/golden/path_64x48.png");
+    check_golden("path_64x48.png", &first);
     for (i, accel) in [Accel::Grid, Accel::Kd, Accel::Bvh, Accel::None].into_iter().enumerate() {
         for packet in [PacketSize::Single, PacketSize::P16] {
             let frame = render_path(&path, accel, packet, 1 + i % 3, false);

@@ -4,7 +4,7 @@
 //! index equals the air's changes nothing, and the image is the same for every
 //! structure, packet size and thread count (and equal to its golden image).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use proptest::prelude::*;
 use raypipe::mesh::Mesh;
@@ -18,11 +18,7 @@ use raypipe_core::ray_record::{RayKind, RayRecord};
 use raypipe_core::specular::reflect;
 use raypipe_core::whitted::{shade_whitted, WhittedOptions};
 use raypipe_core::{NoProbe, Ray, RayCounters, SceneView, Vec3, Watertight};
-use raypipe_tests::build_soup;
-
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
+use raypipe_tests::{build_soup, check_golden, root};
 
 fn coord() -> impl Strategy<Value = f32> {
     prop_oneof![3 => (-4i32..=4).prop_map(|i| i as f32 * 0.5), 1 => -2.0f32..2.0]
@@ -253,17 +249,8 @@ fn a_slab_with_the_index_of_air_changes_nothing() {
 #[test]
 fn whitted_image_is_golden_and_the_same_for_every_structure_packet_and_thread_count() {
     let path = root().join("fixtures/whitted.obj");
-    let golden_path = root().join("fixtures/golden/whitted_160x120.png");
     let first = render_whitted(&path, Accel::Grid, PacketSize::Single, 1, (160, 120));
-    if std::env::var_os("RAYPIPE_BLESS").is_some() {
-        raypipe::output::write_png(&golden_path, first.width, first.height, &first.pixels).unwrap();
-    }
-    let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&golden_path).unwrap()));
-    let mut reader = dec.read_info().unwrap();
-    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
-    reader.next_frame(&mut buf).unwrap();
-    let golden: Vec<[u8; 3]> = buf.chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
-    assert_eq!(first.pixels, golden, "differs from fixtures/golden/whitted_160x120.png");
+    check_golden("whitted_160x120.png", &first);
     for (i, accel) in [Accel::Kd, Accel::Bvh, Accel::Bvh4, Accel::None].into_iter().enumerate() {
         for packet in [PacketSize::Single, PacketSize::P4, PacketSize::P64] {
             let frame = render_whitted(&path, accel, packet, 1 + i % 3, (160, 120));
@@ -308,16 +295,7 @@ fn the_shadow_caster_equals_ray_casting_plus_shadows_where_coverage_agrees() {
         assert!(disagree * 100 < n, "{}: {disagree} of {n} pixels disagree", scene_path.display());
         assert_eq!(g.skipped, 0);
         if scene_path.ends_with("whitted.obj") {
-            let golden_path = root().join("fixtures/golden/shadow_160x120.png");
-            if std::env::var_os("RAYPIPE_BLESS").is_some() {
-                raypipe::output::write_png(&golden_path, hybrid.width, hybrid.height, &hybrid.pixels).unwrap();
-            }
-            let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&golden_path).unwrap()));
-            let mut reader = dec.read_info().unwrap();
-            let mut buf = vec![0; reader.output_buffer_size().unwrap()];
-            reader.next_frame(&mut buf).unwrap();
-            let golden: Vec<[u8; 3]> = buf.chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
-            assert!(hybrid.pixels == golden, "differs from fixtures/golden/shadow_160x120.png");
+            check_golden("shadow_160x120.png", &hybrid);
         }
     }
 }
