@@ -29,16 +29,10 @@ pub fn occluded<I: Intersector, P: MemoryProbe>(
             WalkEvent::Inner => counters.nodes += 1,
             WalkEvent::Leaf(leaf) => {
                 counters.leaves += 1;
-                let mut k = 0;
-                while let Some(prim) = leaf.entry(scene, k, probe) {
-                    let tri = I::fetch(scene, prim, probe);
-                    counters.tri_tests += 1;
-                    if let Some((t, _, _)) = I::intersect(&prep, &tri) {
-                        if t >= ray.t_min && t <= ray.t_max {
-                            return true;
-                        }
-                    }
-                    k += 1;
+                let mut hit = None;
+                counters.tri_tests += leaf.test::<I, P>(scene, &prep, ray, true, &mut hit, probe);
+                if hit.is_some() {
+                    return true;
                 }
                 walk.finish_leaf();
             }

@@ -39,13 +39,20 @@ pub fn test_triangle<I: Intersector>(
     prim: u32,
     best: &mut Option<Hit>,
 ) -> bool {
-    if let Some((t, u, v)) = I::intersect(prep, tri) {
-        // Written so NaN is rejected.
-        if t >= ray.t_min && t <= ray.t_max {
+    match in_range(ray, I::intersect(prep, tri), prim) {
+        Some(hit) => {
             let before = *best;
-            keep_closest(best, Hit { t, u, v, prim });
-            return before != *best;
+            keep_closest(best, hit);
+            before != *best
         }
+        None => false,
     }
-    false
+}
+
+/// An intersection result as a hit of triangle `prim`, if it lies in `[t_min, t_max]`.
+#[inline(always)]
+pub fn in_range(ray: &Ray, result: Option<(f32, f32, f32)>, prim: u32) -> Option<Hit> {
+    let (t, u, v) = result?;
+    // Written so NaN is rejected.
+    (t >= ray.t_min && t <= ray.t_max).then_some(Hit { t, u, v, prim })
 }

@@ -16,6 +16,7 @@ use crate::kdtree::KdTraversal;
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::tree_step::TreeEvent;
+use crate::triangle::{in_range, test_triangle, Intersector};
 
 /// Where a leaf's triangle ids are.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -67,6 +68,37 @@ impl Leaf {
             }
             Leaf::All { count } => (k < count).then_some(k),
         }
+    }
+}
+
+impl Leaf {
+    /// The leaf kernel: tests the leaf's triangles against `ray` into `best` — every one
+    /// for a closest-hit query, only up to the first hit in range for an any-hit query
+    /// (shadow rays). Returns how many it tested.
+    #[inline]
+    pub fn test<I: Intersector, P: MemoryProbe>(
+        &self,
+        scene: &SceneView<'_>,
+        prep: &I::Prepared,
+        ray: &Ray,
+        any_hit: bool,
+        best: &mut Option<Hit>,
+        probe: &mut P,
+    ) -> u32 {
+        let mut k = 0;
+        while let Some(prim) = self.entry(scene, k, probe) {
+            let verts = I::fetch(scene, prim, probe);
+            k += 1;
+            if any_hit {
+                if let Some(hit) = in_range(ray, I::intersect(prep, &verts), prim) {
+                    *best = Some(hit);
+                    break;
+                }
+            } else {
+                test_triangle::<I>(prep, ray, &verts, prim, best);
+            }
+        }
+        k
     }
 }
 
@@ -208,23 +240,14 @@ impl Walk {
 
 /// Traces `ray` by driving its [`Walk`] to the end: what the hardware model does, in one
 /// loop (tests compare it with the structures' own tracers).
-pub fn trace_walk<I: crate::triangle::Intersector, P: MemoryProbe>(
-    scene: &SceneView<'_>,
-    ray: &Ray,
-    probe: &mut P,
-) -> Option<Hit> {
+pub fn trace_walk<I: Intersector, P: MemoryProbe>(scene: &SceneView<'_>, ray: &Ray, probe: &mut P) -> Option<Hit> {
     let prep = I::prepare(ray);
     let mut walk = Walk::start(scene, ray);
     loop {
         match walk.step(scene, ray, probe) {
             WalkEvent::Inner => {}
             WalkEvent::Leaf(leaf) => {
-                let mut k = 0;
-                while let Some(prim) = leaf.entry(scene, k, probe) {
-                    let verts = I::fetch(scene, prim, probe);
-                    crate::triangle::test_triangle::<I>(&prep, ray, &verts, prim, walk.best_mut());
-                    k += 1;
-                }
+                leaf.test::<I, P>(scene, &prep, ray, false, walk.best_mut(), probe);
                 walk.finish_leaf();
             }
             WalkEvent::Done => return walk.best(),

@@ -8,7 +8,7 @@
 
 use std::marker::PhantomData;
 
-use raypipe_core::triangle::{test_triangle, Intersector};
+use raypipe_core::triangle::Intersector;
 use raypipe_core::{DataClass, SceneView};
 
 use crate::config::HwConfig;
@@ -133,27 +133,12 @@ impl<I: Intersector> IntersectionUnit<I> {
             if let Some(mut job) = leaves.pop() {
                 let mut probe = PortProbe { port: &mut self.port, now, wait: Wait::default() };
                 let mut tests = 0u64;
+                let any_hit = job.query == Query::AnyHit;
                 for i in crate::lane_iter(job.lanes) {
                     let ray = job.rays[i];
                     let prep = I::prepare(&ray);
                     let leaf = job.leaves[i];
-                    let mut k = 0;
-                    while let Some(prim) = leaf.entry(scene, k, &mut probe) {
-                        let verts = I::fetch(scene, prim, &mut probe);
-                        k += 1;
-                        tests += 1;
-                        if job.query == Query::AnyHit {
-                            // The first hit in range ends a shadow ray's work here.
-                            if let Some((t, u, v)) = I::intersect(&prep, &verts) {
-                                if t >= ray.t_min && t <= ray.t_max {
-                                    job.best[i] = Some(raypipe_core::Hit { t, u, v, prim });
-                                    break;
-                                }
-                            }
-                        } else {
-                            test_triangle::<I>(&prep, &ray, &verts, prim, &mut job.best[i]);
-                        }
-                    }
+                    tests += leaf.test::<I, _>(scene, &prep, &ray, any_hit, &mut job.best[i], &mut probe) as u64;
                 }
                 self.tests += tests;
                 self.stats.issue(lanes(job.lanes), self.packet_size);
