@@ -7,6 +7,7 @@ use crate::hit::Hit;
 use crate::image::SceneView;
 use crate::path::{shade_path, PathOptions};
 use crate::probe::MemoryProbe;
+use crate::radiance_sum::RadianceSum;
 use crate::ray_record::RayRecord;
 use crate::whitted::{shade_whitted, WhittedOptions};
 
@@ -34,6 +35,25 @@ impl Shader {
         match self {
             Shader::Whitted(o) => shade_whitted(scene, rec, hit, o, probe, emit),
             Shader::Path(o) => shade_path(scene, rec, hit, o, probe, emit),
+        }
+    }
+
+    /// Shades the hit of a primary record (`RayRecord::primary`): one record per sample,
+    /// each of weight `1 / samples`, their radiance added to `sum` one by one.
+    #[inline]
+    pub fn shade_primary<P: MemoryProbe>(
+        &self,
+        scene: &SceneView<'_>,
+        primary: RayRecord,
+        hit: Option<Hit>,
+        sum: &mut RadianceSum,
+        probe: &mut P,
+        emit: &mut impl FnMut(RayRecord),
+    ) {
+        let samples = self.samples();
+        for s in 0..samples {
+            let rec = RayRecord { weight: Vec3::splat(1.0 / samples as f32), sample: s, ..primary };
+            sum.add(self.shade(scene, &rec, hit, probe, emit));
         }
     }
 

@@ -79,22 +79,21 @@ pub fn shade_tile<I: Intersector, P: MemoryProbe>(
     probe: &mut P,
     counts: &mut StreamCounts,
 ) -> Vec<Vec3> {
-    let samples = shader.samples();
     let mut radiance = vec![RadianceSum::default(); primaries.len()];
     let mut stream: VecDeque<RayRecord> = VecDeque::new();
     for (p, (ray, hit)) in primaries.iter().enumerate() {
         match ray {
             None => radiance[p].add(background),
             Some(ray) => {
-                for s in 0..samples {
-                    let rec = RayRecord {
-                        weight: Vec3::splat(1.0 / samples as f32),
-                        sample: s,
-                        ..RayRecord::primary(*ray, tile.global(p))
-                    };
-                    counts.shades += hit.is_some() as u64;
-                    radiance[p].add(shader.shade(scene, &rec, *hit, probe, &mut |r| stream.push_back(r)));
-                }
+                counts.shades += hit.is_some() as u64 * shader.samples() as u64;
+                shader.shade_primary(
+                    scene,
+                    RayRecord::primary(*ray, tile.global(p)),
+                    *hit,
+                    &mut radiance[p],
+                    probe,
+                    &mut |r| stream.push_back(r),
+                );
             }
         }
     }

@@ -347,17 +347,16 @@ impl Rgs {
                 }
                 (None, None) => self.framebuffer[pixel] = rgb8(self.background),
                 (Some(shader), Some(ray)) => {
-                    let samples = shader.samples();
-                    for s in 0..samples {
-                        let rec = RayRecord {
-                            weight: Vec3::splat(1.0 / samples as f32),
-                            sample: s,
-                            ..RayRecord::primary(ray, pixel as u32)
-                        };
-                        let stream = &mut self.stream;
-                        let added = shader.shade(scene, &rec, packet.hits[j], &mut probe, &mut |r| stream.push(r));
-                        self.radiance[pixel].add(added);
-                    }
+                    let stream = &mut self.stream;
+                    let sum = &mut self.radiance[pixel];
+                    shader.shade_primary(
+                        scene,
+                        RayRecord::primary(ray, pixel as u32),
+                        packet.hits[j],
+                        sum,
+                        &mut probe,
+                        &mut |r| stream.push(r),
+                    );
                 }
                 (Some(_), None) => self.radiance[pixel].add(self.background),
             }
