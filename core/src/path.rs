@@ -18,7 +18,6 @@ use glam::Vec3;
 use crate::hit::Hit;
 use crate::image::{LightRecord, SceneView};
 use crate::probe::MemoryProbe;
-use crate::ray::Ray;
 use crate::ray_record::{RayKind, RayRecord};
 use crate::rng::uniform;
 use crate::specular::specular_rays;
@@ -76,8 +75,6 @@ pub fn shade_path<P: MemoryProbe>(
     if n == Vec3::ZERO {
         return now;
     }
-    let (lo, hi) = scene.bounds();
-    let extent = (hi - lo).max_element();
     let diffuse = s.diffuse();
     // Next-event estimation: point lights, and points sampled on the emitting triangles.
     let depth = rec.depth as u32;
@@ -89,11 +86,11 @@ pub fn shade_path<P: MemoryProbe>(
         let mut area_index = 0u32;
         for i in 0..scene.light_count() {
             let l = scene.light(i, probe);
-            let (target, weight) = match l.kind {
+            match l.kind {
                 LightRecord::POINT => {
-                    let to_light = Vec3::from(l.position) - s.point;
-                    let cos = n.dot(to_light.normalize_or_zero());
-                    (Vec3::from(l.position), rec.weight * diffuse * Vec3::from(l.color) * cos.max(0.0))
+                    if let Some(shadow) = s.point_light_shadow(rec, &l, diffuse) {
+                        emit(shadow);
+                    }
                 }
                 LightRecord::AREA => {
                     let k = area_index;
@@ -112,17 +109,13 @@ pub fn shade_path<P: MemoryProbe>(
                     // |e|/2, Lambert BRDF kd/π.
                     let cos_l = -e.normalize_or_zero().dot(dir);
                     let g = n.dot(dir).max(0.0) * cos_l.max(0.0) * 0.5 * e.length() / (core::f32::consts::PI * d2);
-                    (q, rec.weight * diffuse * Vec3::from(l.color) * (g * area_scale))
+                    let weight = rec.weight * diffuse * Vec3::from(l.color) * (g * area_scale);
+                    if weight.max_element() > 0.0 && weight.is_finite() {
+                        // The sample lies on its triangle: stop just short of it.
+                        emit(rec.child(s.ray_toward(q, 1.0 - 1e-4), weight, RayKind::Shadow, rec.depth));
+                    }
                 }
-                _ => continue,
-            };
-            if weight.max_element() > 0.0 && weight.is_finite() {
-                let to_light = target - s.point;
-                let origin = s.offset_point(to_light, extent);
-                // An area light's sample lies on its triangle: stop just short of it.
-                let t_max = if l.kind == LightRecord::AREA { 1.0 - 1e-4 } else { 1.0 };
-                let ray = Ray { origin, dir: target - origin, t_min: 0.0, t_max };
-                emit(rec.child(ray, weight, RayKind::Shadow, rec.depth));
+                _ => {}
             }
         }
     }
@@ -131,8 +124,7 @@ pub fn shade_path<P: MemoryProbe>(
     }
     let mut bounce = |dir: Vec3, weight: Vec3, kind: RayKind| {
         if weight.max_element() > 0.0 && dir != Vec3::ZERO && weight.is_finite() {
-            let ray = Ray::new(s.offset_point(dir, extent), dir);
-            emit(rec.child(ray, weight, kind, rec.depth + 1));
+            emit(rec.child(s.ray_along(dir), weight, kind, rec.depth + 1));
         }
     };
     // The diffuse bounce.

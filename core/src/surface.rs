@@ -5,9 +5,10 @@
 use glam::Vec3;
 
 use crate::hit::Hit;
-use crate::image::{MaterialRecord, SceneView, NULL_INDEX};
+use crate::image::{LightRecord, MaterialRecord, SceneView, NULL_INDEX};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
+use crate::ray_record::{RayKind, RayRecord};
 use crate::texture;
 
 /// The shading data at a hit.
@@ -26,6 +27,8 @@ pub struct Surface {
     pub material: MaterialRecord,
     /// Interpolated vertex colour (white without shading vertices).
     pub tint: Vec3,
+    /// The scene's largest extent (new rays start off the surface in proportion to it).
+    pub scene_extent: f32,
 }
 
 impl Surface {
@@ -63,7 +66,9 @@ impl Surface {
         if !entering {
             n = -n;
         }
-        Surface { point: ray.at(hit.t), normal: n, entering, geometric, material, tint }
+        let (lo, hi) = scene.bounds();
+        let scene_extent = (hi - lo).max_element();
+        Surface { point: ray.at(hit.t), normal: n, entering, geometric, material, tint, scene_extent }
     }
 
     /// The diffuse reflectance: `Kd` times the vertex colour (and texture), clamped to
@@ -76,10 +81,34 @@ impl Surface {
     /// A point just off the surface on the side `dir` leaves toward, so that a new ray
     /// from it does not hit this triangle again: the offset grows with the coordinates'
     /// magnitude (their rounding) and the scene's size.
-    pub fn offset_point(&self, dir: Vec3, scene_extent: f32) -> Vec3 {
+    pub fn offset_point(&self, dir: Vec3) -> Vec3 {
         let g = self.geometric.normalize_or_zero();
         let g = if g.dot(dir) < 0.0 { -g } else { g };
-        let scale = 1e-4 * scene_extent.max(f32::MIN_POSITIVE) + 64.0 * f32::EPSILON * self.point.abs().max_element();
+        let scale =
+            1e-4 * self.scene_extent.max(f32::MIN_POSITIVE) + 64.0 * f32::EPSILON * self.point.abs().max_element();
         self.point + g * scale
+    }
+
+    /// A new ray from just off the surface along `dir`.
+    pub fn ray_along(&self, dir: Vec3) -> Ray {
+        Ray::new(self.offset_point(dir), dir)
+    }
+
+    /// A shadow ray from just off the surface to `target`, which lies at `t = 1`; only
+    /// what lies before `t_max` can block it.
+    pub fn ray_toward(&self, target: Vec3, t_max: f32) -> Ray {
+        let origin = self.offset_point(target - self.point);
+        Ray { origin, dir: target - origin, t_min: 0.0, t_max }
+    }
+
+    /// The shadow ray of a point light (Lambert, no fall-off: the ray caster's light)
+    /// continuing `rec`, weighted by `diffuse` — `None` if the light is behind the
+    /// surface or the weight is nothing.
+    pub fn point_light_shadow(&self, rec: &RayRecord, light: &LightRecord, diffuse: Vec3) -> Option<RayRecord> {
+        let position = Vec3::from(light.position);
+        let cos = self.normal.dot((position - self.point).normalize_or_zero());
+        let weight = rec.weight * diffuse * Vec3::from(light.color) * cos;
+        (cos > 0.0 && weight.max_element() > 0.0 && weight.is_finite())
+            .then(|| rec.child(self.ray_toward(position, 1.0), weight, RayKind::Shadow, rec.depth))
     }
 }

@@ -13,8 +13,7 @@ use glam::Vec3;
 use crate::hit::Hit;
 use crate::image::{LightRecord, SceneView};
 use crate::probe::MemoryProbe;
-use crate::ray::Ray;
-use crate::ray_record::{RayKind, RayRecord};
+use crate::ray_record::RayRecord;
 use crate::specular::specular_rays;
 use crate::surface::Surface;
 
@@ -40,8 +39,6 @@ pub fn shade_whitted<P: MemoryProbe>(
     let Some(hit) = hit else { return rec.weight * opts.background };
     let s = Surface::at(scene, &rec.ray, &hit, probe);
     let m = s.material;
-    let (lo, hi) = scene.bounds();
-    let extent = (hi - lo).max_element();
     let diffuse = s.diffuse();
     let mut now = Vec3::from(m.emission);
     let n = s.normal;
@@ -55,22 +52,15 @@ pub fn shade_whitted<P: MemoryProbe>(
         if !l.is_point() {
             continue;
         }
-        let to_light = Vec3::from(l.position) - s.point;
-        let cos = n.dot(to_light.normalize_or_zero());
-        let weight = rec.weight * diffuse * color * cos;
-        if cos > 0.0 && weight.max_element() > 0.0 {
-            let origin = s.offset_point(to_light, extent);
-            // The light sits at t = 1: only what lies before it can block it.
-            let ray = Ray { origin, dir: Vec3::from(l.position) - origin, t_min: 0.0, t_max: 1.0 };
-            emit(rec.child(ray, weight, RayKind::Shadow, rec.depth));
+        if let Some(shadow) = s.point_light_shadow(rec, &l, diffuse) {
+            emit(shadow);
         }
     }
     if rec.depth < opts.max_depth && n != Vec3::ZERO {
         let d = rec.ray.dir.normalize_or_zero();
         specular_rays(&m, d, n, s.entering, |dir, factor, kind| {
             if factor.max_element() > 0.0 && dir != Vec3::ZERO {
-                let ray = Ray::new(s.offset_point(dir, extent), dir);
-                emit(rec.child(ray, rec.weight * factor, kind, rec.depth + 1));
+                emit(rec.child(s.ray_along(dir), rec.weight * factor, kind, rec.depth + 1));
             }
         });
     }
