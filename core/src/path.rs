@@ -65,7 +65,7 @@ pub fn shade_path<P: MemoryProbe>(
     let s = Surface::at(scene, &rec.ray, &hit, probe);
     let m = s.material;
     let n = s.normal;
-    let areas = (0..scene.light_count()).filter(|&i| scene.light(i, probe).kind == LightRecord::AREA).count() as u32;
+    let areas = scene.area_light_count();
     let mut now = Vec3::ZERO;
     // Emission seen along a camera or specular path; after a diffuse bounce only when no
     // area light samples the emitters already.

@@ -462,6 +462,7 @@ pub struct SceneView<'a> {
     textures: &'a [TextureRecord],
     texels: &'a [u32],
     lights: &'a [LightRecord],
+    area_lights: u32,
     camera: Option<&'a CameraRecord>,
     positions_addr: u32,
     triangles_addr: u32,
@@ -729,6 +730,7 @@ impl<'a> SceneView<'a> {
             }
         }
         let lights: &[LightRecord] = s.slice(K::Lights)?;
+        let area_lights = lights.iter().filter(|l| l.kind == LightRecord::AREA).count() as u32;
         for (i, l) in lights.iter().enumerate() {
             if l.kind > LightRecord::EMITTERS {
                 return Err(SceneError::IndexOutOfRange {
@@ -771,6 +773,7 @@ impl<'a> SceneView<'a> {
             textures,
             texels,
             lights,
+            area_lights,
             camera: cameras.first(),
             positions_addr: s.addr(K::Positions),
             triangles_addr: s.addr(K::Triangles),
@@ -1024,6 +1027,11 @@ impl<'a> SceneView<'a> {
     /// Number of lights.
     pub fn light_count(&self) -> u32 {
         self.lights.len() as u32
+    }
+
+    /// Number of area lights (emissive triangles), counted at parse.
+    pub fn area_light_count(&self) -> u32 {
+        self.area_lights
     }
 
     /// Reads light `index` (a default black ambient light if out of range).
