@@ -41,9 +41,8 @@ enum State {
 
 const STATES: usize = 6;
 
-/// One packet's registers.
+/// One packet's registers (its control state is its bit in the unit's state masks).
 struct Thread {
-    state: State,
     /// While waiting: for what, until when, and what comes next.
     wait: Wait,
     not_before: u64,
@@ -95,7 +94,6 @@ impl TraversalUnit {
         let n = cfg.traversal.threads.clamp(1, 64) as usize;
         let threads = (0..n)
             .map(|_| Thread {
-                state: State::Free,
                 wait: Wait::default(),
                 not_before: 0,
                 then: Next::Step,
@@ -127,9 +125,10 @@ impl TraversalUnit {
 
     fn set(&mut self, k: usize, state: State) {
         let bit = 1u64 << k;
-        self.masks[self.threads[k].state as usize] &= !bit;
+        for m in &mut self.masks {
+            *m &= !bit;
+        }
         self.masks[state as usize] |= bit;
-        self.threads[k].state = state;
     }
 
     /// True if no packet is in flight.
