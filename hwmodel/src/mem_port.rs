@@ -8,21 +8,17 @@ use raypipe_core::{DataClass, MemoryProbe};
 
 use crate::cache::{Cache, Lookup};
 use crate::config::CacheConfig;
-use crate::traffic::{class_index, CLASSES};
+use crate::traffic::CLASSES;
 
 /// A request to the memory channel.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Request {
     /// Request number within its port.
     pub id: u32,
-    /// First byte.
-    pub addr: u64,
     /// Bytes to transfer.
     pub bytes: u32,
     /// Traffic class index.
     pub class: usize,
-    /// A posted write (nobody waits for it).
-    pub write: bool,
 }
 
 /// Ready cycle of a request the channel has not scheduled yet.
@@ -88,10 +84,10 @@ impl MemPort {
         }
     }
 
-    fn request(&mut self, addr: u64, bytes: u32, class: usize, write: bool) -> u32 {
+    fn request(&mut self, bytes: u32, class: usize) -> u32 {
         let id = self.ready.len() as u32;
         self.ready.push(UNSCHEDULED);
-        self.staged.push(Request { id, addr, bytes, class, write });
+        self.staged.push(Request { id, bytes, class });
         self.requested[class] += bytes as u64;
         id
     }
@@ -100,7 +96,7 @@ impl MemPort {
     pub fn read(&mut self, class: usize, addr: u32, bytes: u32, now: u64, wait: &mut Wait) {
         self.read_log.push((addr, bytes));
         let Some(c) = self.route.get(class).copied().flatten() else {
-            let id = self.request(addr as u64, bytes, class, false);
+            let id = self.request(bytes, class);
             wait.last = wait.last.max(Some(id));
             return;
         };
@@ -122,7 +118,7 @@ impl MemPort {
                 }
                 Lookup::Absent => {
                     cache.stats.misses[class] += 1;
-                    let id = self.request(line * line_bytes as u64, line_bytes, class, false);
+                    let id = self.request(line_bytes, class);
                     self.caches[c].1.install(line, id);
                     wait.last = wait.last.max(Some(id));
                 }
@@ -131,8 +127,8 @@ impl MemPort {
     }
 
     /// A posted write (framebuffer): it costs channel bandwidth, nobody waits for it.
-    pub fn write(&mut self, class: usize, addr: u64, bytes: u32) {
-        self.request(addr, bytes, class, true);
+    pub fn write(&mut self, class: usize, bytes: u32) {
+        self.request(bytes, class);
     }
 
     /// Called by the channel at the edge: request `id`'s data arrives at `cycle`.
@@ -168,6 +164,6 @@ pub struct PortProbe<'p> {
 impl MemoryProbe for PortProbe<'_> {
     #[inline]
     fn read(&mut self, class: DataClass, addr: u32, bytes: u32) {
-        self.port.read(class_index(class), addr, bytes, self.now, &mut self.wait);
+        self.port.read(class as usize, addr, bytes, self.now, &mut self.wait);
     }
 }

@@ -27,9 +27,6 @@ use crate::unit_stats::{Activity, UnitStats};
 /// Pixels per tile side (packets are issued tile by tile, as the host renders).
 pub const TILE: u32 = 16;
 
-/// Framebuffer base address: above any scene image (a 32-bit address space).
-const FRAMEBUFFER_BASE: u64 = 1 << 32;
-
 /// A packet being shaded.
 struct Shading {
     wait: Wait,
@@ -364,9 +361,7 @@ impl Rgs {
         }
         self.stream_peak = self.stream_peak.max(self.stream.len());
         let wait = probe.wait;
-        let first = self.blocks[b];
-        let addr = FRAMEBUFFER_BASE + 4 * (first.1 as u64 * self.eye.width as u64 + first.0 as u64);
-        self.port.write(FRAMEBUFFER, addr, 4 * pixels as u32);
+        self.port.write(FRAMEBUFFER, 4 * pixels as u32);
         if self.visibility.is_none() {
             self.rays_retired += lanes(packet.lanes);
         }

@@ -1,7 +1,5 @@
-//! The classes of memory traffic the model accounts: core's scene data classes plus the
-//! framebuffer the shading unit writes.
-
-use raypipe_core::DataClass;
+//! The classes of memory traffic the model accounts: core's scene data classes (indexed
+//! by `DataClass as usize`) plus the framebuffer the shading unit writes.
 
 /// Number of traffic classes.
 pub const CLASSES: usize = 5;
@@ -11,8 +9,3 @@ pub const FRAMEBUFFER: usize = 4;
 
 /// Report names, by class index.
 pub const CLASS_NAMES: [&str; CLASSES] = ["nodes", "prim_lists", "triangles", "shading", "framebuffer"];
-
-/// Class index of a scene read.
-pub fn class_index(class: DataClass) -> usize {
-    class as usize
-}

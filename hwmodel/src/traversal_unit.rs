@@ -73,10 +73,6 @@ pub struct TraversalUnit {
     pub port: MemPort,
     /// Activity and SIMD lanes.
     pub stats: UnitStats,
-    /// Rays received (active lanes of packets taken in).
-    pub rays_in: u64,
-    /// Rays sent on to shading.
-    pub rays_out: u64,
 }
 
 /// The lowest set bit of `mask` at or after `start` (wrapping), if any.
@@ -118,8 +114,6 @@ impl TraversalUnit {
             next_issue: 0,
             port: MemPort::new(format!("traversal{id}"), &cfg.cache.nodes),
             stats: UnitStats::default(),
-            rays_in: 0,
-            rays_out: 0,
         }
     }
 
@@ -203,7 +197,6 @@ impl TraversalUnit {
                 for i in crate::lane_iter(t.traced) {
                     out.hits[i] = t.walks[i].best();
                 }
-                self.rays_out += lanes(t.traced);
                 let _ = hits.push(out);
                 self.set(k, State::Free);
                 moved = true;
@@ -246,7 +239,6 @@ impl TraversalUnit {
                 for i in crate::lane_iter(job.lanes) {
                     t.walks[i] = Walk::start(scene, &job.rays[i]);
                 }
-                self.rays_in += lanes(job.lanes);
                 self.set(k, if job.lanes == 0 { State::Finished } else { State::Ready });
                 moved = true;
             }
