@@ -166,6 +166,43 @@ impl<T> Fifo<T> {
     }
 }
 
+/// What the clock, the watchdog and the report need of any FIFO, whatever it carries.
+pub trait AnyFifo {
+    /// Name for reports and the watchdog.
+    fn name(&self) -> &str;
+    /// Committed entries.
+    fn occupancy(&self) -> usize;
+    /// Configured depth.
+    fn depth(&self) -> usize;
+    /// Statistics.
+    fn stats(&self) -> &FifoStats;
+    /// The clock edge (see [`Fifo::commit`]).
+    fn commit(&mut self) -> bool;
+    /// See [`Fifo::repeat_last`].
+    fn repeat_last(&mut self, cycles: u64);
+}
+
+impl<T> AnyFifo for Fifo<T> {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn occupancy(&self) -> usize {
+        Fifo::len(self)
+    }
+    fn depth(&self) -> usize {
+        Fifo::depth(self)
+    }
+    fn stats(&self) -> &FifoStats {
+        &self.stats
+    }
+    fn commit(&mut self) -> bool {
+        Fifo::commit(self)
+    }
+    fn repeat_last(&mut self, cycles: u64) {
+        Fifo::repeat_last(self, cycles)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

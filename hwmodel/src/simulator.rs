@@ -9,7 +9,7 @@ use raypipe_core::triangle::Intersector;
 use raypipe_core::{SceneView, Vec3};
 
 use crate::config::HwConfig;
-use crate::fifo::Fifo;
+use crate::fifo::{AnyFifo, Fifo};
 use crate::intersection_unit::IntersectionUnit;
 use crate::jobs::{HitPacket, LeafJob, RayPacketJob};
 use crate::mem_port::MemPort;
@@ -172,13 +172,7 @@ impl<'s, I: Intersector> Simulator<'s, I> {
         }
         // The edge: FIFOs commit, then the channel takes this cycle's requests in port
         // order (shading, traversal units, intersection units).
-        for f in &mut self.ray_fifos {
-            moved |= f.commit();
-        }
-        for f in self.leaf_fifos.iter_mut().chain(self.result_fifos.iter_mut()) {
-            moved |= f.commit();
-        }
-        for f in &mut self.hit_fifos {
+        for f in self.fifos_mut() {
             moved |= f.commit();
         }
         let touched = &mut self.touched;
@@ -191,6 +185,24 @@ impl<'s, I: Intersector> Simulator<'s, I> {
             channel.accept(now, port);
         }
         moved
+    }
+
+    /// Every FIFO: ray, leaf, result and hit FIFOs, unit by unit.
+    fn fifos(&self) -> impl Iterator<Item = &dyn AnyFifo> {
+        let (r, l) =
+            (self.ray_fifos.iter().map(|f| f as &dyn AnyFifo), self.leaf_fifos.iter().map(|f| f as &dyn AnyFifo));
+        let (q, h) =
+            (self.result_fifos.iter().map(|f| f as &dyn AnyFifo), self.hit_fifos.iter().map(|f| f as &dyn AnyFifo));
+        r.chain(l).chain(q).chain(h)
+    }
+
+    /// Every FIFO, to commit or account.
+    fn fifos_mut(&mut self) -> impl Iterator<Item = &mut dyn AnyFifo> {
+        let r = self.ray_fifos.iter_mut().map(|f| f as &mut dyn AnyFifo);
+        let l = self.leaf_fifos.iter_mut().map(|f| f as &mut dyn AnyFifo);
+        let q = self.result_fifos.iter_mut().map(|f| f as &mut dyn AnyFifo);
+        let h = self.hit_fifos.iter_mut().map(|f| f as &mut dyn AnyFifo);
+        r.chain(l).chain(q).chain(h)
     }
 
     /// The earliest cycle after now at which some unit's wait is over.
@@ -209,9 +221,7 @@ impl<'s, I: Intersector> Simulator<'s, I> {
         self.rgs.shade_stats.repeat_last(n);
         self.tus.iter_mut().for_each(|t| t.stats.repeat_last(n));
         self.ius.iter_mut().for_each(|i| i.stats.repeat_last(n));
-        self.ray_fifos.iter_mut().for_each(|f| f.repeat_last(n));
-        self.leaf_fifos.iter_mut().chain(self.result_fifos.iter_mut()).for_each(|f| f.repeat_last(n));
-        self.hit_fifos.iter_mut().for_each(|f| f.repeat_last(n));
+        self.fifos_mut().for_each(|f| f.repeat_last(n));
     }
 
     /// The watchdog's message: every unit's state and every FIFO's occupancy.
@@ -220,13 +230,8 @@ impl<'s, I: Intersector> Simulator<'s, I> {
         parts.extend(self.tus.iter().map(|t| t.describe()));
         parts.extend(self.ius.iter().map(|i| i.describe()));
         let fifos = self
-            .ray_fifos
-            .iter()
-            .map(|f| (f.name.as_str(), f.len(), f.depth()))
-            .chain(self.leaf_fifos.iter().map(|f| (f.name.as_str(), f.len(), f.depth())))
-            .chain(self.result_fifos.iter().map(|f| (f.name.as_str(), f.len(), f.depth())))
-            .chain(self.hit_fifos.iter().map(|f| (f.name.as_str(), f.len(), f.depth())))
-            .map(|(n, l, d)| format!("{n} {l}/{d}"))
+            .fifos()
+            .map(|f| format!("{} {}/{}", f.name(), f.occupancy(), f.depth()))
             .collect::<Vec<_>>()
             .join(", ");
         format!(
@@ -264,15 +269,7 @@ impl<'s, I: Intersector> Simulator<'s, I> {
             vec![("rgs.generate".to_string(), &self.rgs.gen_stats), ("rgs.shade".to_string(), &self.rgs.shade_stats)];
         units.extend(self.tus.iter().map(|t| (format!("traversal{}", t.id), &t.stats)));
         units.extend(self.ius.iter().map(|i| (format!("intersection{}", i.id), &i.stats)));
-        let fifos = self
-            .ray_fifos
-            .iter()
-            .map(|f| (f.name.clone(), f.depth(), &f.stats))
-            .chain(
-                self.leaf_fifos.iter().chain(self.result_fifos.iter()).map(|f| (f.name.clone(), f.depth(), &f.stats)),
-            )
-            .chain(self.hit_fifos.iter().map(|f| (f.name.clone(), f.depth(), &f.stats)))
-            .collect();
+        let fifos = self.fifos().map(|f| (f.name().to_string(), f.depth(), f.stats())).collect();
         let ports: Vec<&MemPort> = std::iter::once(&self.rgs.port)
             .chain(self.tus.iter().map(|t| &t.port))
             .chain(self.ius.iter().map(|i| &i.port))
