@@ -1,4 +1,5 @@
-//! Linear colour to 8-bit sRGB, shared by every driver so images agree bit for bit.
+//! Linear colour to 8-bit sRGB and back, shared by every driver so images agree bit for
+//! bit.
 
 /// Encodes one linear channel as 8-bit sRGB (IEC 61966-2-1), clamping to `[0, 1]`;
 /// NaN becomes 0.
@@ -15,9 +16,27 @@ pub fn rgb8(c: glam::Vec3) -> [u8; 3] {
     [linear_to_srgb8(c.x), linear_to_srgb8(c.y), linear_to_srgb8(c.z)]
 }
 
+/// 8-bit sRGB to linear (IEC 61966-2-1), for texels.
+#[inline]
+pub fn srgb8_to_linear(c: u8) -> f32 {
+    let c = c as f32 / 255.0;
+    if c <= 0.040_45 {
+        c / 12.92
+    } else {
+        libm::powf((c + 0.055) / 1.055, 2.4)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn srgb_decoding_matches_the_encoder() {
+        for c in [0u8, 1, 10, 100, 128, 200, 255] {
+            assert_eq!(linear_to_srgb8(srgb8_to_linear(c)), c);
+        }
+    }
 
     #[test]
     fn endpoints_and_clamping() {

@@ -4,19 +4,9 @@
 
 use glam::Vec3;
 
+use crate::color::srgb8_to_linear;
 use crate::image::{SceneView, TextureRecord};
 use crate::probe::MemoryProbe;
-
-/// 8-bit sRGB to linear (IEC 61966-2-1).
-#[inline]
-pub fn srgb8_to_linear(c: u8) -> f32 {
-    let c = c as f32 / 255.0;
-    if c <= 0.040_45 {
-        c / 12.92
-    } else {
-        libm::powf((c + 0.055) / 1.055, 2.4)
-    }
-}
 
 fn wrap(i: i64, n: u32, mode: u32) -> u32 {
     if mode == TextureRecord::CLAMP {
@@ -52,13 +42,6 @@ pub fn sample<P: MemoryProbe>(scene: &SceneView<'_>, index: u32, uv: [f32; 2], p
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn srgb_decoding_matches_the_encoder() {
-        for c in [0u8, 1, 10, 100, 128, 200, 255] {
-            assert_eq!(crate::color::linear_to_srgb8(srgb8_to_linear(c)), c);
-        }
-    }
 
     #[test]
     fn wrapping() {
