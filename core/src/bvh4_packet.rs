@@ -3,7 +3,7 @@
 //! exactly the rays that enter its box.
 
 use crate::bvh4::{nearest_first, slab4};
-use glam::{Vec3A, Vec4};
+use glam::{BVec4A, Vec3A, Vec4};
 
 use crate::aabb::SLAB_GROWTH;
 use crate::hit::Hit;
@@ -85,13 +85,69 @@ impl Frustum {
     }
 }
 
-/// Lanes `4g .. 4g + 4` of a per-ray array as one SIMD register (a single load).
-#[inline(always)]
-fn load4<const N: usize>(a: &[f32; N], g: usize) -> Vec4 {
-    match a.get(4 * g..4 * g + 4).and_then(|s| <[f32; 4]>::try_from(s).ok()) {
-        Some(v) => Vec4::from_array(v),
-        None => Vec4::ZERO,
+/// Lanes of a group of four as a SIMD mask, by the group's 4 bits of the active mask.
+const GROUP_LANES: [BVec4A; 16] = {
+    let mut t = [BVec4A::new(false, false, false, false); 16];
+    let mut m = 0;
+    while m < 16 {
+        t[m] = BVec4A::new(m & 1 != 0, m & 2 != 0, m & 4 != 0, m & 8 != 0);
+        m += 1;
     }
+    t
+};
+
+/// Groups of four lanes in the largest packet.
+const GROUPS: usize = MAX_PACKET / 4;
+
+/// The packet regrouped as SIMD registers of four lanes each, with reciprocal
+/// directions: loaded once, so that a leaf's box test per group is six aligned loads.
+struct Groups {
+    org: [[Vec4; GROUPS]; 3],
+    inv: [[Vec4; GROUPS]; 3],
+    t_min: [Vec4; GROUPS],
+    /// Each lane's best-hit distance so far (or its ray's end).
+    ends: [Vec4; GROUPS],
+    /// Per group, the largest end of its active lanes (−∞ without any).
+    group_end: [f32; GROUPS],
+}
+
+impl Groups {
+    fn new<const N: usize>(p: &RayPacket<N>, groups: usize, mask: u64) -> Groups {
+        let lanes = |a: &[f32; N], g: usize| {
+            Vec4::from_array(core::array::from_fn(|k| a.get(4 * g + k).copied().unwrap_or(0.0)))
+        };
+        let mut q = Groups {
+            org: [[Vec4::ZERO; GROUPS]; 3],
+            inv: [[Vec4::ZERO; GROUPS]; 3],
+            t_min: [Vec4::ZERO; GROUPS],
+            ends: [Vec4::ZERO; GROUPS],
+            group_end: [f32::NEG_INFINITY; GROUPS],
+        };
+        for g in 0..groups.min(GROUPS) {
+            for (a, (o, d)) in [(&p.ox, &p.dx), (&p.oy, &p.dy), (&p.oz, &p.dz)].into_iter().enumerate() {
+                q.org[a][g] = lanes(o, g);
+                q.inv[a][g] = recip4(lanes(d, g));
+            }
+            q.t_min[g] = lanes(&p.t_min, g);
+            q.ends[g] = lanes(&p.t_max, g);
+            q.update_end(g, mask);
+        }
+        q
+    }
+
+    /// Recomputes group `g`'s largest end.
+    #[inline(always)]
+    fn update_end(&mut self, g: usize, mask: u64) {
+        let act = GROUP_LANES[((mask >> (4 * g)) & 0xF) as usize];
+        self.group_end[g] = Vec4::select(act, self.ends[g], Vec4::NEG_INFINITY).max_element();
+    }
+}
+
+/// [`recip`] of four components at once (the same bits: `1/±0 = ±∞` clamps to `±1e30`).
+#[inline(always)]
+fn recip4(d: Vec4) -> Vec4 {
+    let limit = Vec4::splat(crate::ray_box::INV_LIMIT);
+    (Vec4::ONE / d).min(limit).max(-limit)
 }
 
 /// Traces all active rays of `packet`; `hits[i]` receives ray `i`'s closest hit.
@@ -109,38 +165,20 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
     probe: &mut P,
     counters: &mut PacketCounters,
 ) {
-    let rays: [_; N] = core::array::from_fn(|i| packet.ray(i));
     *hits = [None; N];
     let mask = packet.active;
     if mask == 0 {
         return;
     }
+    let frustum = Frustum::new(packet, mask);
+    let groups = N.div_ceil(4);
+    let mut q = Groups::new(packet, groups, mask);
+    // How far any ray of the packet still looks.
+    let mut t_end = q.group_end.iter().take(groups).fold(f32::NEG_INFINITY, |m, &e| m.max(e));
     // The watertight constants are computed the first time a ray enters a leaf: most
     // rays of a frame never do.
     let mut preps: [I::Prepared; N] = [I::Prepared::default(); N];
     let mut prepared = 0u64;
-    let frustum = Frustum::new(packet, mask);
-    // Reciprocal directions for the 4-rays-at-once leaf box test (the packet is already
-    // a structure of arrays).
-    let org = [&packet.ox, &packet.oy, &packet.oz];
-    let inv: [[f32; N]; 3] = [
-        core::array::from_fn(|i| recip(packet.dx[i])),
-        core::array::from_fn(|i| recip(packet.dy[i])),
-        core::array::from_fn(|i| recip(packet.dz[i])),
-    ];
-    let t_min = &packet.t_min;
-    let mut ends: [f32; N] = packet.t_max;
-    // Per group of four lanes, the largest of their ends (for whole-group culling), and
-    // the largest of all: how far any ray of the packet still looks.
-    let groups = N.div_ceil(4);
-    let group_end_of = |ends: &[f32; N], g: usize| {
-        (4 * g..(4 * g + 4).min(N)).filter(|&j| mask & (1 << j) != 0).fold(f32::NEG_INFINITY, |m, j| m.max(ends[j]))
-    };
-    let mut group_end = [f32::NEG_INFINITY; MAX_PACKET / 4];
-    for (g, e) in group_end.iter_mut().enumerate().take(groups) {
-        *e = group_end_of(&ends, g);
-    }
-    let mut t_end = group_end.iter().take(groups).fold(f32::NEG_INFINITY, |m, &e| m.max(e));
     // (child or first entry, leaf count or 0, entry bound, leaf box as min xyz, max xyz)
     let mut stack: heapless::Vec<(u32, u32, f32, [f32; 6]), STACK> = heapless::Vec::new();
     let mut current = (0u32, 0u32, [0f32; 6], 0f32);
@@ -159,12 +197,13 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
                     let mut needed = 0u32;
                     let mut t = Vec4::INFINITY;
                     for i in Lanes(mask) {
-                        let end = hits[i].map_or(rays[i].t_max, |h: Hit| h.t);
-                        let (tn, m) = slab4(&RayBox::new(&rays[i]), node, rays[i].t_min, end);
+                        let ray = packet.ray(i);
+                        let end = hits[i].map_or(ray.t_max, |h: Hit| h.t);
+                        let (tn, m) = slab4(&RayBox::new(&ray), node, ray.t_min, end);
                         if m != 0 {
                             c.active_lanes += 1;
                             needed |= m;
-                            let hit = glam::BVec4A::new(m & 1 != 0, m & 2 != 0, m & 4 != 0, m & 8 != 0);
+                            let hit = BVec4A::new(m & 1 != 0, m & 2 != 0, m & 4 != 0, m & 8 != 0);
                             t = t.min(Vec4::select(hit, tn, Vec4::INFINITY));
                         }
                     }
@@ -187,25 +226,25 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
             }
         } else {
             let mut enter = 0u64;
-            if frustum.is_some() && N.is_multiple_of(4) {
+            if frustum.is_some() {
                 // Four rays against the leaf box at once (no zero direction components,
                 // so the plain slab test is exact here).
-                for (g, &group_end) in group_end.iter().enumerate().take(N / 4) {
+                let lo = [Vec4::splat(leaf_box[0]), Vec4::splat(leaf_box[1]), Vec4::splat(leaf_box[2])];
+                let hi = [Vec4::splat(leaf_box[3]), Vec4::splat(leaf_box[4]), Vec4::splat(leaf_box[5])];
+                for g in 0..groups.min(GROUPS) {
                     let m4 = (mask >> (4 * g)) & 0xF;
                     // `leaf_t` bounds every ray's entry from below: a group whose rays all
                     // have nearer hits skips the exact test.
-                    if m4 == 0 || leaf_t > group_end {
+                    if m4 == 0 || leaf_t > q.group_end[g] {
                         continue;
                     }
-                    let mut tn = load4(t_min, g);
-                    let mut tf = load4(&ends, g);
+                    let mut tn = q.t_min[g];
+                    let mut tf = q.ends[g];
                     for a in 0..3 {
-                        let o = load4(org[a], g);
-                        let iv = load4(&inv[a], g);
-                        let p = (Vec4::splat(leaf_box[a]) - o) * iv;
-                        let q = (Vec4::splat(leaf_box[a + 3]) - o) * iv;
-                        tn = tn.max(p.min(q));
-                        tf = tf.min(p.max(q) * SLAB_GROWTH);
+                        let p = (lo[a] - q.org[a][g]) * q.inv[a][g];
+                        let r = (hi[a] - q.org[a][g]) * q.inv[a][g];
+                        tn = tn.max(p.min(r));
+                        tf = tf.min(p.max(r) * SLAB_GROWTH);
                     }
                     enter |= ((tn.cmple(tf).bitmask() as u64) & m4) << (4 * g);
                 }
@@ -213,7 +252,9 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
                 let lo = Vec3A::new(leaf_box[0], leaf_box[1], leaf_box[2]);
                 let hi = Vec3A::new(leaf_box[3], leaf_box[4], leaf_box[5]);
                 for i in Lanes(mask) {
-                    if RayBox::new(&rays[i]).entry(lo, hi, rays[i].t_min, ends[i]).is_some() {
+                    let ray = packet.ray(i);
+                    let end = hits[i].map_or(ray.t_max, |h: Hit| h.t);
+                    if RayBox::new(&ray).entry(lo, hi, ray.t_min, end).is_some() {
                         enter |= 1 << i;
                     }
                 }
@@ -221,28 +262,25 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
             c.active_lanes += enter.count_ones() as u64;
             if enter != 0 {
                 for i in Lanes(enter & !prepared) {
-                    preps[i] = I::prepare(&rays[i]);
+                    preps[i] = I::prepare(&packet.ray(i));
                 }
                 prepared |= enter;
-                for e in index..index.wrapping_add(count) {
-                    let prim = bvh.prim(e, probe);
-                    let verts = I::fetch(scene, prim, probe);
-                    for i in Lanes(enter) {
-                        test_triangle::<I>(&preps[i], &rays[i], &verts, prim, &mut hits[i]);
-                    }
-                }
+                test_leaf::<I, P, N>(scene, bvh, packet, &preps, enter, index, count, hits, probe);
                 c.tri_tests += count as u64 * enter.count_ones() as u64;
                 let mut touched = 0u64;
                 for i in Lanes(enter) {
-                    ends[i] = hits[i].map_or(rays[i].t_max, |h: Hit| h.t);
+                    let end = hits[i].map_or(packet.t_max[i], |h: Hit| h.t);
+                    if let Some(e) = q.ends.get_mut(i / 4) {
+                        *e = Vec4::select(GROUP_LANES[1 << (i % 4)], Vec4::splat(end), *e);
+                    }
                     touched |= 1 << (i / 4);
                 }
                 for g in Lanes(touched) {
-                    if let Some(e) = group_end.get_mut(g) {
-                        *e = group_end_of(&ends, g);
+                    if g < GROUPS {
+                        q.update_end(g, mask);
                     }
                 }
-                t_end = group_end.iter().take(groups).fold(f32::NEG_INFINITY, |m, &e| m.max(e));
+                t_end = q.group_end.iter().take(groups).fold(f32::NEG_INFINITY, |m, &e| m.max(e));
             }
         }
         // Pop the next entry whose entry bound is not beyond every ray's best hit.
@@ -256,6 +294,49 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
             }
             current = (child, count, b, t);
             break;
+        }
+    }
+}
+
+/// Leaf triangles fetched together (larger leaves are tested triangle by triangle).
+const LEAF_BUFFER: usize = 8;
+
+/// Tests the leaf's triangles (list entries `first .. first + count`) with the rays of
+/// `enter`, each triangle read once.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn test_leaf<I: Intersector, P: MemoryProbe, const N: usize>(
+    scene: &SceneView<'_>,
+    bvh: &Bvh4View<'_>,
+    packet: &RayPacket<N>,
+    preps: &[I::Prepared; N],
+    enter: u64,
+    first: u32,
+    count: u32,
+    hits: &mut PacketHits<N>,
+    probe: &mut P,
+) {
+    let mut tris: heapless::Vec<(u32, I::Triangle), LEAF_BUFFER> = heapless::Vec::new();
+    if count as usize <= LEAF_BUFFER {
+        for e in first..first.wrapping_add(count) {
+            let prim = bvh.prim(e, probe);
+            let _ = tris.push((prim, I::fetch(scene, prim, probe)));
+        }
+        // Ray by ray: each ray's registers stay put while it meets the triangles.
+        for i in Lanes(enter) {
+            let ray = packet.ray(i);
+            let (prep, best) = (&preps[i.min(N - 1)], &mut hits[i.min(N - 1)]);
+            for (prim, verts) in &tris {
+                test_triangle::<I>(prep, &ray, verts, *prim, best);
+            }
+        }
+    } else {
+        for e in first..first.wrapping_add(count) {
+            let prim = bvh.prim(e, probe);
+            let verts = I::fetch(scene, prim, probe);
+            for i in Lanes(enter) {
+                test_triangle::<I>(&preps[i.min(N - 1)], &packet.ray(i), &verts, prim, &mut hits[i.min(N - 1)]);
+            }
         }
     }
 }

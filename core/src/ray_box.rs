@@ -21,7 +21,7 @@ pub struct RayBox {
 }
 
 /// Largest reciprocal used; directions below `1e-30` in a component act as zero.
-const INV_LIMIT: f32 = 1e30;
+pub(crate) const INV_LIMIT: f32 = 1e30;
 
 impl RayBox {
     /// Precomputes the reciprocal direction.

@@ -70,27 +70,31 @@ fn trace_with<I: Intersector, const N: usize>(
     rays: &[Ray],
     threads: Option<usize>,
 ) -> Result<Vec<HitRecord>> {
+    // Each chunk writes its own slice of one preallocated output: no per-chunk vectors
+    // to gather and copy afterwards.
+    let mut out = vec![record(None); rays.len()];
     in_pool(threads, || {
-        rays.par_chunks(CHUNK)
-            .flat_map_iter(|chunk| {
+        out.par_chunks_mut(CHUNK).zip(rays.par_chunks(CHUNK)).for_each(|(out, chunk)| {
+            if N == 1 {
                 let mut c = RayCounters::default();
-                let mut out = Vec::with_capacity(chunk.len());
-                if N == 1 {
-                    out.extend(chunk.iter().map(|r| record(trace::<I, _>(scene, r, &mut NoProbe, &mut c))));
-                } else {
-                    let mut pc = PacketCounters::default();
-                    let mut hits = [None; N];
-                    for group in chunk.chunks(N) {
-                        let mut packet = RayPacket::<N>::new();
-                        for (i, r) in group.iter().enumerate() {
-                            packet.set(i, r);
-                        }
-                        trace_packet::<I, _, N>(scene, &packet, &mut hits, &mut NoProbe, &mut pc);
-                        out.extend(hits[..group.len()].iter().map(|h| record(*h)));
+                for (o, r) in out.iter_mut().zip(chunk) {
+                    *o = record(trace::<I, _>(scene, r, &mut NoProbe, &mut c));
+                }
+            } else {
+                let mut pc = PacketCounters::default();
+                let mut hits = [None; N];
+                for (out, group) in out.chunks_mut(N).zip(chunk.chunks(N)) {
+                    let mut packet = RayPacket::<N>::new();
+                    for (i, r) in group.iter().enumerate() {
+                        packet.set(i, r);
+                    }
+                    trace_packet::<I, _, N>(scene, &packet, &mut hits, &mut NoProbe, &mut pc);
+                    for (o, h) in out.iter_mut().zip(&hits) {
+                        *o = record(*h);
                     }
                 }
-                out
-            })
-            .collect()
-    })
+            }
+        })
+    })?;
+    Ok(out)
 }
