@@ -13,16 +13,66 @@ use crate::image::{Bvh4Node, Bvh4View, SceneView, MAX_TREE_DEPTH};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::ray_box::RayBox;
-use crate::tree_step::{trace_tree, TreeEvent, TreeWalk};
-use crate::triangle::Intersector;
+use crate::tree_step::{TreeEvent, TreeWalk};
+use crate::triangle::{test_triangle, Intersector};
 
 /// Stack capacity: at most three entries wait per level of a tree of [`MAX_TREE_DEPTH`].
 const STACK: usize = 3 * MAX_TREE_DEPTH as usize + 4;
 
+/// The ray as the 4-wide node test reads it: origin and reciprocal direction splatted
+/// over four lanes, and per axis which of a box's two planes is entered first (the
+/// ray's octant). Each axis then costs one subtraction and one product per plane and no
+/// min/max (the sign trick of Williams et al. 2005, as in Embree's BVH4).
+#[derive(Clone, Copy, Debug)]
+pub struct NodeRay {
+    org: [Vec4; 3],
+    inv: [Vec4; 3],
+    // Per axis, the node row (see `rows`) of the near and the far plane.
+    near: [usize; 3],
+    far: [usize; 3],
+    rb: RayBox,
+}
+
+impl NodeRay {
+    /// Precomputes the splats and the octant.
+    #[inline]
+    pub fn new(ray: &Ray) -> NodeRay {
+        let rb = RayBox::new(ray);
+        let (o, inv) = (rb.origin.to_array(), rb.inv.to_array());
+        let neg = [inv[0] < 0.0, inv[1] < 0.0, inv[2] < 0.0];
+        NodeRay {
+            org: o.map(Vec4::splat),
+            inv: inv.map(Vec4::splat),
+            near: core::array::from_fn(|a| a + 3 * neg[a] as usize),
+            far: core::array::from_fn(|a| a + 3 * !neg[a] as usize),
+            rb,
+        }
+    }
+}
+
 /// Entry distances of the ray into the four child boxes of `n`, within `[t0, t1]`, and
 /// the bit mask of those it hits (empty slots, whose boxes are inverted, never).
 #[inline(always)]
-pub fn slab4(rb: &RayBox, n: &Bvh4Node, t0: f32, t1: f32) -> (Vec4, u32) {
+pub fn slab4(r: &NodeRay, n: &Bvh4Node, t0: f32, t1: f32) -> (Vec4, u32) {
+    if r.rb.zero_axes != 0 {
+        return slab4_exact(&r.rb, n, t0, t1);
+    }
+    // The node's planes as rows: min x, y, z, then max x, y, z (then children, counts).
+    let rows: &[[f32; 4]; 8] = bytemuck::cast_ref(n);
+    let near = |a: usize| (Vec4::from_array(rows[r.near[a] & 7]) - r.org[a]) * r.inv[a];
+    let far = |a: usize| (Vec4::from_array(rows[r.far[a] & 7]) - r.org[a]) * r.inv[a];
+    // The product is monotone in the plane, so these are the min and max of the two
+    // planes' distances for a valid box; an inverted (empty) slot gets near > far on
+    // every axis and fails the comparison.
+    let tn = near(0).max(near(1)).max(near(2).max(Vec4::splat(t0)));
+    let tf = (far(0).min(far(1)).min(far(2)) * SLAB_GROWTH).min(Vec4::splat(t1));
+    (tn, tn.cmple(tf).bitmask())
+}
+
+/// [`slab4`] for any ray, including one with a zero direction component (whose axis is
+/// tested as "origin inside the slab", see [`RayBox`]).
+#[inline(always)]
+pub fn slab4_exact(rb: &RayBox, n: &Bvh4Node, t0: f32, t1: f32) -> (Vec4, u32) {
     let (o, inv) = (rb.origin, rb.inv);
     let ax = (Vec4::from_array(n.min_x) - o.x) * inv.x;
     let bx = (Vec4::from_array(n.max_x) - o.x) * inv.x;
@@ -64,13 +114,13 @@ pub fn slab4(rb: &RayBox, n: &Bvh4Node, t0: f32, t1: f32) -> (Vec4, u32) {
 /// the best hit so far. One [`Bvh4Traversal::step`] reads one node.
 #[derive(Clone, Debug)]
 pub struct Bvh4Traversal {
-    rb: RayBox,
+    ray: NodeRay,
     t_min: f32,
     // The best hit's distance (or the ray's end): boxes entered beyond it are skipped.
     t_end: f32,
     current: (u32, u32),
     // heapless: fixed capacity, and nothing is written until pushed (no per-ray memset).
-    stack: heapless::Vec<(u32, u32, f32), STACK>,
+    stack: Stack,
     done: bool,
     /// Closest hit so far.
     pub best: Option<Hit>,
@@ -81,7 +131,7 @@ impl Bvh4Traversal {
     #[inline]
     pub fn new(ray: &Ray) -> Bvh4Traversal {
         Bvh4Traversal {
-            rb: RayBox::new(ray),
+            ray: NodeRay::new(ray),
             t_min: ray.t_min,
             t_end: ray.t_max,
             current: (0, 0),
@@ -103,36 +153,12 @@ impl Bvh4Traversal {
             return TreeEvent::Leaf { first: index, count };
         }
         let node = bvh.node(index, probe);
-        let (tn, mask) = slab4(&self.rb, node, self.t_min, self.t_end);
+        let (tn, mask) = slab4(&self.ray, node, self.t_min, self.t_end);
         if mask == 0 {
             self.pop();
             return TreeEvent::Inner;
         }
-        let t = tn.to_array();
-        let first = mask.trailing_zeros() as usize & 3;
-        let rest = mask & (mask - 1);
-        if rest == 0 {
-            // One child hit (the common case for coherent rays): no sorting.
-            self.current = (node.child[first], node.count[first]);
-            return TreeEvent::Inner;
-        }
-        if rest & (rest - 1) == 0 {
-            // Two children: one comparison.
-            let second = rest.trailing_zeros() as usize & 3;
-            let (near, far) = if t[second] < t[first] { (second, first) } else { (first, second) };
-            // Cannot be full: `parse` bounds the depth (see `STACK`).
-            let _ = self.stack.push((node.child[far], node.count[far], t[far]));
-            self.current = (node.child[near], node.count[near]);
-            return TreeEvent::Inner;
-        }
-        // Three or four.
-        let (order, m) = nearest_first(mask, &t);
-        // Push the far ones (farthest first), continue with the nearest.
-        for &k in order[1..m].iter().rev() {
-            let _ = self.stack.push((node.child[k], node.count[k], t[k]));
-        }
-        let k = order[0];
-        self.current = (node.child[k], node.count[k]);
+        self.current = descend(node, tn, mask, &mut self.stack);
         TreeEvent::Inner
     }
 
@@ -146,15 +172,52 @@ impl Bvh4Traversal {
     /// Pops the next entry that may still hold a closer hit, or ends the walk.
     #[inline(always)]
     fn pop(&mut self) {
-        loop {
-            let Some((c, n, t)) = self.stack.pop() else {
-                self.done = true;
-                return;
-            };
-            if t <= self.t_end {
-                self.current = (c, n);
-                return;
-            }
+        match pop_next(&mut self.stack, self.t_end) {
+            Some(next) => self.current = next,
+            None => self.done = true,
+        }
+    }
+}
+
+/// The traversal stack: `(child or first entry, leaf count or 0, entry distance)`.
+type Stack = heapless::Vec<(u32, u32, f32), STACK>;
+
+/// Moves on from `node`, whose hit slots are `mask` (non-empty) with entry distances
+/// `tn`: returns the nearest slot's `(child, count)` and pushes the others, farthest
+/// first.
+#[inline(always)]
+fn descend(node: &Bvh4Node, tn: Vec4, mask: u32, stack: &mut Stack) -> (u32, u32) {
+    let t = tn.to_array();
+    let first = mask.trailing_zeros() as usize & 3;
+    let rest = mask & (mask - 1);
+    if rest == 0 {
+        // One child hit (the common case for coherent rays): no sorting.
+        return (node.child[first], node.count[first]);
+    }
+    if rest & (rest - 1) == 0 {
+        // Two children: one comparison.
+        let second = rest.trailing_zeros() as usize & 3;
+        let (near, far) = if t[second] < t[first] { (second, first) } else { (first, second) };
+        // Cannot be full: `parse` bounds the depth (see `STACK`).
+        let _ = stack.push((node.child[far], node.count[far], t[far]));
+        return (node.child[near], node.count[near]);
+    }
+    // Three or four.
+    let (order, m) = nearest_first(mask, &t);
+    for &k in order[1..m].iter().rev() {
+        let _ = stack.push((node.child[k], node.count[k], t[k]));
+    }
+    let k = order[0];
+    (node.child[k], node.count[k])
+}
+
+/// Pops the next entry whose entry distance is not beyond `t_end`.
+#[inline(always)]
+fn pop_next(stack: &mut Stack, t_end: f32) -> Option<(u32, u32)> {
+    loop {
+        let (c, n, t) = stack.pop()?;
+        if t <= t_end {
+            return Some((c, n));
         }
     }
 }
@@ -197,6 +260,10 @@ impl TreeWalk<Bvh4View<'_>> for Bvh4Traversal {
 }
 
 /// The closest hit of `ray` through the 4-wide BVH.
+///
+/// The host's loop: the same walk as [`Bvh4Traversal::step`] (the same node test,
+/// [`descend`] and [`pop_next`]), with its registers held in locals rather than in a
+/// walk record, so that they stay in machine registers across nodes.
 #[inline]
 pub fn trace_bvh4<I: Intersector, P: MemoryProbe>(
     scene: &SceneView<'_>,
@@ -205,5 +272,44 @@ pub fn trace_bvh4<I: Intersector, P: MemoryProbe>(
     probe: &mut P,
     counters: &mut RayCounters,
 ) -> Option<Hit> {
-    trace_tree::<I, P, _, _>(scene, bvh, Bvh4Traversal::new(ray), ray, probe, counters)
+    if !ray.is_valid() {
+        return None;
+    }
+    let r = NodeRay::new(ray);
+    // The watertight constants wait for the first leaf: many rays never reach one.
+    let mut prep = None;
+    let mut best = None;
+    let mut t_end = ray.t_max;
+    let mut stack = Stack::new();
+    let (mut index, mut count) = (0u32, 0u32);
+    let (mut nodes, mut leaves, mut tests) = (0u32, 0u32, 0u32);
+    loop {
+        if count == 0 {
+            nodes += 1;
+            let node = bvh.node(index, probe);
+            let (tn, mask) = slab4(&r, node, ray.t_min, t_end);
+            if mask != 0 {
+                (index, count) = descend(node, tn, mask, &mut stack);
+                continue;
+            }
+        } else {
+            leaves += 1;
+            let prep = prep.get_or_insert_with(|| I::prepare(ray));
+            for e in index..index.wrapping_add(count) {
+                let prim = bvh.prim(e, probe);
+                let verts = I::fetch(scene, prim, probe);
+                test_triangle::<I>(prep, ray, &verts, prim, &mut best);
+            }
+            tests += count;
+            t_end = best.map_or(t_end, |h: Hit| h.t);
+        }
+        match pop_next(&mut stack, t_end) {
+            Some(next) => (index, count) = next,
+            None => break,
+        }
+    }
+    counters.nodes += nodes;
+    counters.leaves += leaves;
+    counters.tri_tests += tests;
+    best
 }

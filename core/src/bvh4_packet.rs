@@ -2,7 +2,7 @@
 //! hit one of the node's boxes, nearest child first; a leaf intersects its triangles with
 //! exactly the rays that enter its box.
 
-use crate::bvh4::{nearest_first, slab4};
+use crate::bvh4::{nearest_first, slab4_exact};
 use glam::{BVec4A, Vec3A, Vec4};
 
 use crate::aabb::SLAB_GROWTH;
@@ -199,7 +199,7 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
                     for i in Lanes(mask) {
                         let ray = packet.ray(i);
                         let end = hits[i].map_or(ray.t_max, |h: Hit| h.t);
-                        let (tn, m) = slab4(&RayBox::new(&ray), node, ray.t_min, end);
+                        let (tn, m) = slab4_exact(&RayBox::new(&ray), node, ray.t_min, end);
                         if m != 0 {
                             c.active_lanes += 1;
                             needed |= m;
