@@ -10,7 +10,7 @@ use crate::hit::Hit;
 use crate::image::{Bvh4Node, Bvh4View, SceneView, MAX_TREE_DEPTH, NULL_INDEX};
 use crate::packet::{Lanes, PacketCounters, PacketHits, RayPacket, MAX_PACKET};
 use crate::probe::MemoryProbe;
-use crate::ray_box::{recip, RayBox};
+use crate::ray_box::RayBox;
 use crate::triangle::{test_triangle, Intersector};
 
 const STACK: usize = 3 * MAX_TREE_DEPTH as usize + 4;
@@ -22,39 +22,40 @@ const STACK: usize = 3 * MAX_TREE_DEPTH as usize + 4;
 /// rejected by every ray (Reshetov et al. 2005; Wald et al. 2007).
 #[derive(Clone, Copy, Debug)]
 struct Frustum {
-    olo: [f32; 3],
-    ohi: [f32; 3],
-    ilo: [f32; 3],
-    ihi: [f32; 3],
+    // Per axis, splatted over four lanes (one per child box).
+    olo: [Vec4; 3],
+    ohi: [Vec4; 3],
+    ilo: [Vec4; 3],
+    ihi: [Vec4; 3],
     t_min: f32,
 }
 
 impl Frustum {
-    fn new<const N: usize>(p: &RayPacket<N>, mask: u64) -> Option<Frustum> {
-        let mut f = Frustum {
-            olo: [f32::INFINITY; 3],
-            ohi: [f32::NEG_INFINITY; 3],
-            ilo: [f32::INFINITY; 3],
-            ihi: [f32::NEG_INFINITY; 3],
-            t_min: f32::INFINITY,
-        };
-        for i in Lanes(mask) {
-            let o = [p.ox[i], p.oy[i], p.oz[i]];
-            let d = [p.dx[i], p.dy[i], p.dz[i]];
-            for a in 0..3 {
-                // A zero direction component needs the exact per-ray rule of `RayBox`.
-                if d[a] == 0.0 {
-                    return None;
-                }
-                let inv = recip(d[a]);
-                f.olo[a] = f.olo[a].min(o[a]);
-                f.ohi[a] = f.ohi[a].max(o[a]);
-                f.ilo[a] = f.ilo[a].min(inv);
-                f.ihi[a] = f.ihi[a].max(inv);
-            }
-            f.t_min = f.t_min.min(p.t_min[i]);
+    /// The frustum of the packet's active lanes; `None` if a direction has a zero
+    /// component (the exact per-ray rule of `RayBox` is needed then).
+    fn new(q: &Groups, groups: usize, mask: u64) -> Option<Frustum> {
+        if q.zero_dir {
+            return None;
         }
-        Some(f)
+        let (inf, ninf) = (Vec4::INFINITY, Vec4::NEG_INFINITY);
+        let (mut olo, mut ohi, mut ilo, mut ihi, mut t_min) = ([inf; 3], [ninf; 3], [inf; 3], [ninf; 3], inf);
+        for g in 0..groups.min(GROUPS) {
+            let act = GROUP_LANES[((mask >> (4 * g)) & 0xF) as usize];
+            for a in 0..3 {
+                olo[a] = olo[a].min(Vec4::select(act, q.org[a][g], inf));
+                ohi[a] = ohi[a].max(Vec4::select(act, q.org[a][g], ninf));
+                ilo[a] = ilo[a].min(Vec4::select(act, q.inv[a][g], inf));
+                ihi[a] = ihi[a].max(Vec4::select(act, q.inv[a][g], ninf));
+            }
+            t_min = t_min.min(Vec4::select(act, q.t_min[g], inf));
+        }
+        Some(Frustum {
+            olo: olo.map(|v| Vec4::splat(v.min_element())),
+            ohi: ohi.map(|v| Vec4::splat(v.max_element())),
+            ilo: ilo.map(|v| Vec4::splat(v.min_element())),
+            ihi: ihi.map(|v| Vec4::splat(v.max_element())),
+            t_min: t_min.min_element(),
+        })
     }
 
     /// Lower bound of the entry distance into each child box, and which boxes some ray
@@ -65,8 +66,7 @@ impl Frustum {
         let mut far = Vec4::splat(f32::INFINITY);
         let planes = [(n.min_x, n.max_x), (n.min_y, n.max_y), (n.min_z, n.max_z)];
         for (a, (lo, hi)) in planes.into_iter().enumerate() {
-            let (il, ih) = (Vec4::splat(self.ilo[a]), Vec4::splat(self.ihi[a]));
-            let (ol, oh) = (Vec4::splat(self.olo[a]), Vec4::splat(self.ohi[a]));
+            let (il, ih, ol, oh) = (self.ilo[a], self.ihi[a], self.olo[a], self.ohi[a]);
             let (lo, hi) = (Vec4::from_array(lo), Vec4::from_array(hi));
             let p = [(lo - oh) * il, (lo - oh) * ih, (lo - ol) * il, (lo - ol) * ih];
             let q = [(hi - oh) * il, (hi - oh) * ih, (hi - ol) * il, (hi - ol) * ih];
@@ -109,6 +109,8 @@ struct Groups {
     ends: [Vec4; GROUPS],
     /// Per group, the largest end of its active lanes (−∞ without any).
     group_end: [f32; GROUPS],
+    /// Some active lane has a zero direction component.
+    zero_dir: bool,
 }
 
 impl Groups {
@@ -122,11 +124,15 @@ impl Groups {
             t_min: [Vec4::ZERO; GROUPS],
             ends: [Vec4::ZERO; GROUPS],
             group_end: [f32::NEG_INFINITY; GROUPS],
+            zero_dir: false,
         };
         for g in 0..groups.min(GROUPS) {
+            let act = GROUP_LANES[((mask >> (4 * g)) & 0xF) as usize];
             for (a, (o, d)) in [(&p.ox, &p.dx), (&p.oy, &p.dy), (&p.oz, &p.dz)].into_iter().enumerate() {
+                let d = lanes(d, g);
                 q.org[a][g] = lanes(o, g);
-                q.inv[a][g] = recip4(lanes(d, g));
+                q.inv[a][g] = recip4(d);
+                q.zero_dir |= (d.cmpeq(Vec4::ZERO) & act).any();
             }
             q.t_min[g] = lanes(&p.t_min, g);
             q.ends[g] = lanes(&p.t_max, g);
@@ -170,9 +176,9 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
     if mask == 0 {
         return;
     }
-    let frustum = Frustum::new(packet, mask);
     let groups = N.div_ceil(4);
     let mut q = Groups::new(packet, groups, mask);
+    let frustum = Frustum::new(&q, groups, mask);
     // How far any ray of the packet still looks.
     let mut t_end = q.group_end.iter().take(groups).fold(f32::NEG_INFINITY, |m, &e| m.max(e));
     // The watertight constants are computed the first time a ray enters a leaf: most

@@ -19,9 +19,10 @@ pub struct Watertight;
 #[derive(Clone, Copy, Debug, Default)]
 pub struct ShearedRay {
     org: Vec3,
-    kx: usize,
-    ky: usize,
-    kz: usize,
+    // Axis indices as bytes: the record stays small (packets keep one per ray).
+    kx: u8,
+    ky: u8,
+    kz: u8,
     sx: f32,
     sy: f32,
     sz: f32,
@@ -55,7 +56,15 @@ impl Intersector for Watertight {
         if d[kz] < 0.0 {
             core::mem::swap(&mut kx, &mut ky);
         }
-        ShearedRay { org: ray.origin, kx, ky, kz, sx: d[kx] / d[kz], sy: d[ky] / d[kz], sz: 1.0 / d[kz] }
+        ShearedRay {
+            org: ray.origin,
+            kx: kx as u8,
+            ky: ky as u8,
+            kz: kz as u8,
+            sx: d[kx] / d[kz],
+            sy: d[ky] / d[kz],
+            sz: 1.0 / d[kz],
+        }
     }
 
     #[inline(always)]
@@ -64,7 +73,7 @@ impl Intersector for Watertight {
         let a = (v[0] - s.org).to_array();
         let b = (v[1] - s.org).to_array();
         let c = (v[2] - s.org).to_array();
-        let (kx, ky, kz) = (s.kx, s.ky, s.kz);
+        let (kx, ky, kz) = (s.kx as usize, s.ky as usize, s.kz as usize);
         let ax = a[kx] - s.sx * a[kz];
         let ay = a[ky] - s.sy * a[kz];
         let bx = b[kx] - s.sx * b[kz];

@@ -83,8 +83,10 @@ fn trace_with<I: Intersector, const N: usize>(
             } else {
                 let mut pc = PacketCounters::default();
                 let mut hits = [None; N];
+                // One packet record, refilled: only the active mask needs clearing.
+                let mut packet = RayPacket::<N>::new();
                 for (out, group) in out.chunks_mut(N).zip(chunk.chunks(N)) {
-                    let mut packet = RayPacket::<N>::new();
+                    packet.active = 0;
                     for (i, r) in group.iter().enumerate() {
                         packet.set(i, r);
                     }
