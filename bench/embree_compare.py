@@ -38,16 +38,17 @@ def raypipe(binary, *args):
     return out.stdout
 
 
-def embree_trace(tris, origins, dirs, runs):
+def embree_scene(tris, origins, dirs):
     scene = rtcs.EmbreeScene()
     TriangleMesh(scene, tris.reshape(-1, 3, 3))
-    res = scene.run(origins[:1024], dirs[:1024], output=1)  # warm-up, builds the BVH
-    times = []
-    for _ in range(runs):
-        t = time.perf_counter()
-        res = scene.run(origins, dirs, output=1)
-        times.append(time.perf_counter() - t)
-    return res, statistics.median(times)
+    scene.run(origins[:1024], dirs[:1024], output=1)  # warm-up, builds the BVH
+    return scene
+
+
+def embree_run(scene, origins, dirs):
+    t = time.perf_counter()
+    res = scene.run(origins, dirs, output=1)
+    return res, time.perf_counter() - t
 
 
 def main():
@@ -56,7 +57,7 @@ def main():
     ap.add_argument("--size", default="1024x1024")
     ap.add_argument("--accel", default="bvh4", help="raypipe structure: grid, kd, bvh or bvh4")
     ap.add_argument("--packet", default="64", help="raypipe packet size for the packet figure: 4, 16 or 64")
-    ap.add_argument("--runs", type=int, default=3)
+    ap.add_argument("--runs", type=int, default=7, help="interleaved rounds (the median is reported)")
     ap.add_argument("--camera", help="raypipe camera file for the view")
     ap.add_argument("--raypipe", default=os.path.join(os.path.dirname(__file__), "..", "target", "release", "raypipe"))
     a = ap.parse_args()
@@ -69,21 +70,29 @@ def main():
                 "--block", side, *cam)
         image = os.path.join(tmp, "scene.rpsi")
         raypipe(a.raypipe, "build", a.mesh, "-o", image, "--accel", a.accel)
-        secs = {}
-        for packet in ("1", a.packet):
-            out = raypipe(a.raypipe, "trace", image, "--rays", rays_p, "--hits", hits_p + packet,
-                          "--threads", "1", "--runs", str(a.runs), "--packet", packet)
-            secs[packet] = float(re.search(r"in ([0-9.]+) s", out).group(1))
         rays = np.load(rays_p)
         tris = np.load(tris_p).astype(np.float32)
+        origins = np.ascontiguousarray(rays[:, 0:3], dtype=np.float32)
+        dirs = np.ascontiguousarray(rays[:, 3:6], dtype=np.float32)
+        scene = embree_scene(tris, origins, dirs)
+        # Interleaved rounds (raypipe single, raypipe packets, Embree), so that all three
+        # see the same machine: medians over the rounds, ratios of the medians. Each
+        # raypipe round is itself the median of 3 runs in one process (warm, as Embree's
+        # scene is).
+        secs = {"1": [], a.packet: [], "embree": []}
+        for _ in range(a.runs):
+            for packet in ("1", a.packet):
+                out = raypipe(a.raypipe, "trace", image, "--rays", rays_p, "--hits", hits_p + packet,
+                              "--threads", "1", "--runs", "3", "--packet", packet)
+                secs[packet].append(float(re.search(r"in ([0-9.]+) s", out).group(1)))
+            res, t = embree_run(scene, origins, dirs)
+            secs["embree"].append(t)
+        secs = {k: statistics.median(v) for k, v in secs.items()}
+        em_secs = secs["embree"]
         hits = np.load(hits_p + "1")
         packet_hits = np.load(hits_p + a.packet)
         if packet_hits.tobytes() != hits.tobytes():
             sys.exit("error: raypipe's packet hits differ from its single-ray hits")
-
-    origins = np.ascontiguousarray(rays[:, 0:3], dtype=np.float32)
-    dirs = np.ascontiguousarray(rays[:, 3:6], dtype=np.float32)
-    res, em_secs = embree_trace(tris, origins, dirs, a.runs)
 
     n = len(rays)
     e_prim = np.asarray(res["primID"]).astype(np.int64)
@@ -103,7 +112,7 @@ def main():
     rp = n / secs["1"] / 1e6
     rpp = n / secs[a.packet] / 1e6
     em = n / em_secs / 1e6
-    print(f"mesh        {a.mesh} ({len(tris)} triangles), {n} primary rays, single thread, median of {a.runs}")
+    print(f"mesh        {a.mesh} ({len(tris)} triangles), {n} primary rays, single thread, median of {a.runs} interleaved rounds")
     print(f"embree      rtcIntersect1           {em:8.2f} Mrays/s")
     print(f"raypipe     {a.accel} single rays      {rp:8.2f} Mrays/s   ratio {rp / em:.2f}")
     print(f"raypipe     {a.accel} packets of {a.packet:<3}  {rpp:8.2f} Mrays/s   ratio {rpp / em:.2f}")

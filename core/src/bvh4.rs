@@ -4,7 +4,7 @@
 //! 2008; Embree's BVH4). Leaves are stack entries like nodes, so a leaf is intersected
 //! only when it is the nearest thing left to visit.
 
-use glam::{BVec4A, Vec4};
+use glam::{BVec4A, Vec3A, Vec4, Vec4Swizzles};
 
 use crate::aabb::SLAB_GROWTH;
 use crate::counters::RayCounters;
@@ -38,13 +38,13 @@ impl NodeRay {
     #[inline]
     pub fn new(ray: &Ray) -> NodeRay {
         let rb = RayBox::new(ray);
-        let (o, inv) = (rb.origin.to_array(), rb.inv.to_array());
-        let neg = [inv[0] < 0.0, inv[1] < 0.0, inv[2] < 0.0];
+        let neg = rb.inv.cmplt(Vec3A::ZERO).bitmask() as usize;
+        let (o, inv) = (Vec4::from((rb.origin, 0.0)), Vec4::from((rb.inv, 0.0)));
         NodeRay {
-            org: o.map(Vec4::splat),
-            inv: inv.map(Vec4::splat),
-            near: core::array::from_fn(|a| a + 3 * neg[a] as usize),
-            far: core::array::from_fn(|a| a + 3 * !neg[a] as usize),
+            org: [o.xxxx(), o.yyyy(), o.zzzz()],
+            inv: [inv.xxxx(), inv.yyyy(), inv.zzzz()],
+            near: core::array::from_fn(|a| a + 3 * ((neg >> a) & 1)),
+            far: core::array::from_fn(|a| a + 3 * (!(neg >> a) & 1)),
             rb,
         }
     }

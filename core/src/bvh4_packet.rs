@@ -6,12 +6,13 @@ use crate::bvh4::{nearest_first, slab4_exact};
 use glam::{BVec4A, Vec3A, Vec4};
 
 use crate::aabb::SLAB_GROWTH;
+use crate::hit::keep_closest;
 use crate::hit::Hit;
 use crate::image::{Bvh4Node, Bvh4View, SceneView, MAX_TREE_DEPTH, NULL_INDEX};
 use crate::packet::{Lanes, PacketCounters, PacketHits, RayPacket, MAX_PACKET};
 use crate::probe::MemoryProbe;
 use crate::ray_box::RayBox;
-use crate::triangle::{test_triangle, Intersector};
+use crate::triangle::{in_range, test_triangle, Intersector};
 
 const STACK: usize = 3 * MAX_TREE_DEPTH as usize + 4;
 
@@ -183,8 +184,7 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
     let mut t_end = q.group_end.iter().take(groups).fold(f32::NEG_INFINITY, |m, &e| m.max(e));
     // The watertight constants are computed the first time a ray enters a leaf: most
     // rays of a frame never do.
-    let mut preps: [I::Prepared; N] = [I::Prepared::default(); N];
-    let mut prepared = 0u64;
+    let mut preps = Preps::<I, N>::new();
     // (child or first entry, leaf count or 0, entry bound, leaf box as min xyz, max xyz)
     let mut stack: heapless::Vec<(u32, u32, f32, [f32; 6]), STACK> = heapless::Vec::new();
     let mut current = (0u32, 0u32, [0f32; 6], 0f32);
@@ -267,10 +267,7 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
             }
             c.active_lanes += enter.count_ones() as u64;
             if enter != 0 {
-                for i in Lanes(enter & !prepared) {
-                    preps[i] = I::prepare(&packet.ray(i));
-                }
-                prepared |= enter;
+                preps.prepare(packet, mask, enter);
                 test_leaf::<I, P, N>(scene, bvh, packet, &preps, enter, index, count, hits, probe);
                 c.tri_tests += count as u64 * enter.count_ones() as u64;
                 let mut touched = 0u64;
@@ -304,44 +301,97 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
     }
 }
 
-/// Leaf triangles fetched together (larger leaves are tested triangle by triangle).
-const LEAF_BUFFER: usize = 8;
+/// The rays' intersection constants, computed for a group of four lanes the first time
+/// one of its rays enters a leaf (most rays of a frame never do), one by one and as four
+/// SIMD lanes for the intersector's four-ray form.
+struct Preps<I: Intersector, const N: usize> {
+    one: [I::Prepared; N],
+    four: [Option<I::Prepared4>; GROUPS],
+    // Groups whose constants are computed.
+    ready: u32,
+}
+
+impl<I: Intersector, const N: usize> Preps<I, N> {
+    fn new() -> Self {
+        Preps { one: [I::Prepared::default(); N], four: [None; GROUPS], ready: 0 }
+    }
+
+    /// Makes the constants of every group with a lane in `enter` ready.
+    #[inline(always)]
+    fn prepare(&mut self, packet: &RayPacket<N>, mask: u64, enter: u64) {
+        for g in Lanes(groups_of(enter) & !(self.ready as u64)) {
+            let m4 = (mask >> (4 * g)) & 0xF;
+            for i in Lanes(m4 << (4 * g)) {
+                if let Some(p) = self.one.get_mut(i) {
+                    *p = I::prepare(&packet.ray(i));
+                }
+            }
+            // Inactive lanes borrow an active lane's constants (their results are unused).
+            let any = 4 * g + m4.trailing_zeros() as usize;
+            let lane = |k: usize| {
+                let i = if m4 & (1 << k) != 0 { 4 * g + k } else { any };
+                &self.one[i.min(N - 1)]
+            };
+            if let Some(f) = self.four.get_mut(g) {
+                *f = I::gather_rays4([lane(0), lane(1), lane(2), lane(3)]);
+            }
+            self.ready |= 1 << g;
+        }
+    }
+}
+
+/// Bit `g` set when some lane of group `g` (lanes `4g .. 4g + 4`) is in `lanes`.
+#[inline(always)]
+fn groups_of(lanes: u64) -> u64 {
+    let mut g = 0u64;
+    for k in 0..GROUPS {
+        g |= (((lanes >> (4 * k)) & 0xF != 0) as u64) << k;
+    }
+    g
+}
 
 /// Tests the leaf's triangles (list entries `first .. first + count`) with the rays of
-/// `enter`, each triangle read once.
+/// `enter`, each triangle read once: four rays at a time where two or more of a group
+/// enter and the intersector has a four-ray form, one by one otherwise.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn test_leaf<I: Intersector, P: MemoryProbe, const N: usize>(
     scene: &SceneView<'_>,
     bvh: &Bvh4View<'_>,
     packet: &RayPacket<N>,
-    preps: &[I::Prepared; N],
+    preps: &Preps<I, N>,
     enter: u64,
     first: u32,
     count: u32,
     hits: &mut PacketHits<N>,
     probe: &mut P,
 ) {
-    let mut tris: heapless::Vec<(u32, I::Triangle), LEAF_BUFFER> = heapless::Vec::new();
-    if count as usize <= LEAF_BUFFER {
-        for e in first..first.wrapping_add(count) {
-            let prim = bvh.prim(e, probe);
-            let _ = tris.push((prim, I::fetch(scene, prim, probe)));
-        }
-        // Ray by ray: each ray's registers stay put while it meets the triangles.
-        for i in Lanes(enter) {
-            let ray = packet.ray(i);
-            let (prep, best) = (&preps[i.min(N - 1)], &mut hits[i.min(N - 1)]);
-            for (prim, verts) in &tris {
-                test_triangle::<I>(prep, &ray, verts, *prim, best);
-            }
-        }
-    } else {
-        for e in first..first.wrapping_add(count) {
-            let prim = bvh.prim(e, probe);
-            let verts = I::fetch(scene, prim, probe);
-            for i in Lanes(enter) {
-                test_triangle::<I>(&preps[i.min(N - 1)], &packet.ray(i), &verts, prim, &mut hits[i.min(N - 1)]);
+    let groups = groups_of(enter);
+    for e in first..first.wrapping_add(count) {
+        let prim = bvh.prim(e, probe);
+        let verts = I::fetch(scene, prim, probe);
+        for g in Lanes(groups) {
+            let m4 = (enter >> (4 * g)) & 0xF;
+            let four = preps.four.get(g).copied().flatten();
+            match four {
+                Some(rays) if m4.count_ones() >= 2 => {
+                    let r = I::intersect_rays4(&rays, &verts);
+                    for k in Lanes(m4 & (r.hit | r.redo) as u64) {
+                        let i = (4 * g + k).min(N - 1);
+                        let ray = packet.ray(i);
+                        if r.redo & (1 << k) != 0 {
+                            test_triangle::<I>(&preps.one[i], &ray, &verts, prim, &mut hits[i]);
+                        } else if let Some(hit) = in_range(&ray, Some((r.t[k], r.u[k], r.v[k])), prim) {
+                            keep_closest(&mut hits[i], hit);
+                        }
+                    }
+                }
+                _ => {
+                    for i in Lanes(m4 << (4 * g)) {
+                        let i = i.min(N - 1);
+                        test_triangle::<I>(&preps.one[i], &packet.ray(i), &verts, prim, &mut hits[i]);
+                    }
+                }
             }
         }
     }

@@ -27,8 +27,10 @@ impl RayBox {
     /// Precomputes the reciprocal direction.
     #[inline]
     pub fn new(ray: &Ray) -> RayBox {
-        let inv = Vec3A::new(recip(ray.dir.x), recip(ray.dir.y), recip(ray.dir.z));
-        let zero_axes = (ray.dir.x == 0.0) as u8 | ((ray.dir.y == 0.0) as u8) << 1 | ((ray.dir.z == 0.0) as u8) << 2;
+        // `recip` on all three components at once.
+        let d = Vec3A::from(ray.dir);
+        let inv = (Vec3A::ONE / d).max(Vec3A::splat(-INV_LIMIT)).min(Vec3A::splat(INV_LIMIT));
+        let zero_axes = d.cmpeq(Vec3A::ZERO).bitmask() as u8;
         RayBox { origin: ray.origin.into(), inv, zero_axes }
     }
 
@@ -63,15 +65,8 @@ impl RayBox {
 /// `1 / d` clamped to `±1e30` (zero gives `±1e30` by its sign): always finite.
 #[inline]
 pub fn recip(d: f32) -> f32 {
-    if d == 0.0 {
-        if d.is_sign_negative() {
-            -INV_LIMIT
-        } else {
-            INV_LIMIT
-        }
-    } else {
-        (1.0 / d).clamp(-INV_LIMIT, INV_LIMIT)
-    }
+    // `1 / ±0` is `±∞`, which the clamp turns into `±1e30`.
+    (1.0 / d).clamp(-INV_LIMIT, INV_LIMIT)
 }
 
 #[cfg(test)]
@@ -89,5 +84,16 @@ mod tests {
         // Beyond the ray's end: rejected; ending exactly at the entry: accepted.
         assert_eq!(b.entry(Vec3A::ZERO, Vec3A::ONE, 0.0, 4.0), None);
         assert_eq!(b.entry(Vec3A::ZERO, Vec3A::ONE, 0.0, 5.0), Some(5.0));
+    }
+
+    #[test]
+    fn reciprocals_are_finite_and_keep_the_sign_of_zero() {
+        assert_eq!(recip(0.0), INV_LIMIT);
+        assert_eq!(recip(-0.0), -INV_LIMIT);
+        assert_eq!(recip(1e-38), INV_LIMIT);
+        assert_eq!(recip(-4.0), -0.25);
+        let b = RayBox::new(&Ray::new(Vec3::ZERO, Vec3::new(-0.0, 2.0, 0.0)));
+        assert_eq!(b.inv.to_array(), [-INV_LIMIT, 0.5, INV_LIMIT]);
+        assert_eq!(b.zero_axes, 0b101);
     }
 }

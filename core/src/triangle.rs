@@ -27,6 +27,31 @@ pub trait Intersector {
     /// `(t, u, v)` where `u` and `v` weight the second and third vertex, or `None`.
     /// `t` is not range-checked here; [`test_triangle`] does that.
     fn intersect(prep: &Self::Prepared, tri: &Self::Triangle) -> Option<(f32, f32, f32)>;
+    /// Four rays' constants as SIMD lanes, for [`Intersector::intersect_rays4`].
+    type Prepared4: Copy;
+    /// Gathers four prepared rays into SIMD lanes, or `None` when this test has no
+    /// four-ray form or the four rays cannot share one.
+    fn gather_rays4(preps: [&Self::Prepared; 4]) -> Option<Self::Prepared4>;
+    /// One triangle against four rays at once: lane by lane the bits of
+    /// [`Intersector::intersect`], except for the lanes in `redo`, which the caller tests
+    /// with `intersect`.
+    fn intersect_rays4(rays: &Self::Prepared4, tri: &Self::Triangle) -> Rays4Result;
+}
+
+/// The outcome of [`Intersector::intersect_rays4`]: per lane `(t, u, v)` where `hit`
+/// has the lane's bit, and the lanes to test again one at a time.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Rays4Result {
+    /// Distances.
+    pub t: [f32; 4],
+    /// Barycentric weight of the second vertex.
+    pub u: [f32; 4],
+    /// Barycentric weight of the third vertex.
+    pub v: [f32; 4],
+    /// Lanes with a hit (range not checked).
+    pub hit: u32,
+    /// Lanes the four-ray form cannot decide.
+    pub redo: u32,
 }
 
 /// Tests triangle `prim` and keeps the hit if it lies in `[t_min, t_max]` and is closer

@@ -4,12 +4,12 @@
 //! ray through a shared edge or vertex hits at least one of the triangles sharing it.
 //! When an edge function is exactly zero it is recomputed in double precision (§3.4).
 
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 
 use crate::image::SceneView;
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
-use crate::triangle::Intersector;
+use crate::triangle::{Intersector, Rays4Result};
 
 /// The watertight test (default).
 #[derive(Clone, Copy, Debug, Default)]
@@ -32,6 +32,55 @@ impl Intersector for Watertight {
     type Prepared = ShearedRay;
     type Triangle = [Vec3; 3];
     const NAME: &'static str = "watertight";
+    type Prepared4 = ShearedRays4;
+
+    #[inline(always)]
+    fn gather_rays4(r: [&ShearedRay; 4]) -> Option<ShearedRays4> {
+        let k = (r[0].kx, r[0].ky, r[0].kz);
+        if r.iter().any(|s| (s.kx, s.ky, s.kz) != k) {
+            return None;
+        }
+        let lanes = |f: fn(&ShearedRay) -> f32| Vec4::new(f(r[0]), f(r[1]), f(r[2]), f(r[3]));
+        Some(ShearedRays4 {
+            org: [lanes(|s| s.org.x), lanes(|s| s.org.y), lanes(|s| s.org.z)],
+            sx: lanes(|s| s.sx),
+            sy: lanes(|s| s.sy),
+            sz: lanes(|s| s.sz),
+            k: [k.0 as usize % 3, k.1 as usize % 3, k.2 as usize % 3],
+        })
+    }
+
+    /// [`Watertight::intersect`] with the four rays in SIMD lanes: per lane the same
+    /// operations in the same order. A lane with an edge function of exactly zero is
+    /// left to the scalar test (its double-precision recomputation).
+    #[inline(always)]
+    fn intersect_rays4(r: &ShearedRays4, v: &[Vec3; 3]) -> Rays4Result {
+        let [kx, ky, kz] = r.k;
+        // Vertex coordinates relative to each ray's origin, per axis.
+        let rel = |p: Vec3| -> [Vec4; 3] { core::array::from_fn(|a| Vec4::splat(p[a]) - r.org[a]) };
+        let (a, b, c) = (rel(v[0]), rel(v[1]), rel(v[2]));
+        let ax = a[kx] - r.sx * a[kz];
+        let ay = a[ky] - r.sy * a[kz];
+        let bx = b[kx] - r.sx * b[kz];
+        let by = b[ky] - r.sy * b[kz];
+        let cx = c[kx] - r.sx * c[kz];
+        let cy = c[ky] - r.sy * c[kz];
+        let eu = cx * by - cy * bx;
+        let ev = ax * cy - ay * cx;
+        let ew = bx * ay - by * ax;
+        let zero = Vec4::ZERO;
+        let redo = (eu.cmpeq(zero) | ev.cmpeq(zero) | ew.cmpeq(zero)).bitmask();
+        let neg = eu.cmplt(zero) | ev.cmplt(zero) | ew.cmplt(zero);
+        let pos = eu.cmpgt(zero) | ev.cmpgt(zero) | ew.cmpgt(zero);
+        let det = eu + ev + ew;
+        let hit = (!(neg & pos) & det.cmpne(zero)).bitmask() & !redo;
+        if hit == 0 {
+            return Rays4Result { redo, ..Rays4Result::default() };
+        }
+        let t_scaled = eu * (r.sz * a[kz]) + ev * (r.sz * b[kz]) + ew * (r.sz * c[kz]);
+        let inv = Vec4::ONE / det;
+        Rays4Result { t: (t_scaled * inv).to_array(), u: (ev * inv).to_array(), v: (ew * inv).to_array(), hit, redo }
+    }
 
     #[inline(always)]
     fn fetch<P: MemoryProbe>(scene: &SceneView<'_>, prim: u32, probe: &mut P) -> [Vec3; 3] {
@@ -103,4 +152,14 @@ impl Intersector for Watertight {
         let inv = 1.0 / det;
         Some((t_scaled * inv, ev * inv, ew * inv))
     }
+}
+
+/// Four rays' shear constants as SIMD lanes (rays with one axis permutation).
+#[derive(Clone, Copy, Debug)]
+pub struct ShearedRays4 {
+    org: [Vec4; 3],
+    sx: Vec4,
+    sy: Vec4,
+    sz: Vec4,
+    k: [usize; 3],
 }

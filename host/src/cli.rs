@@ -119,7 +119,8 @@ pub struct RaysArgs {
     #[arg(long, value_name = "NPY")]
     pub triangles: Option<PathBuf>,
     /// Write the rays in square blocks of this side (e.g. 8: each run of 64 rays is an 8×8
-    /// pixel block, ready for `trace --packet 64`); 1 = row by row.
+    /// pixel block, ready for `trace --packet 64`), in the Z-order of the host's packet
+    /// lanes within a block (runs of 4 are 2×2 pixels); 1 = row by row.
     #[arg(long, value_name = "SIDE", default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=64))]
     pub block: u32,
     #[command(flatten)]
@@ -897,8 +898,11 @@ fn cmd_rays(a: RaysArgs) -> Result<()> {
     let b = a.block;
     for by in (0..cam.height).step_by(b as usize) {
         for bx in (0..cam.width).step_by(b as usize) {
-            for y in by..(by + b).min(cam.height) {
-                for x in bx..(bx + b).min(cam.width) {
+            // The lane order of the host's packets (Z-order within the block).
+            for lane in 0..b * b {
+                let (i, j) = crate::packets::lane_pixel(lane, b);
+                let (x, y) = (bx + i, by + j);
+                if x < cam.width && y < cam.height {
                     let r = eye.ray(x, y);
                     data.extend_from_slice(&[
                         r.origin.x, r.origin.y, r.origin.z, r.dir.x, r.dir.y, r.dir.z, r.t_min, r.t_max,

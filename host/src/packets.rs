@@ -118,28 +118,61 @@ fn blocks<I: Intersector, const N: usize>(
         for bx in (x0..x1).step_by(side as usize) {
             let mut packet = RayPacket::<N>::new();
             let mut rays = [None; N];
-            for j in 0..side {
-                for i in 0..side {
-                    let (x, y) = (bx + i, by + j);
-                    if x < x1 && y < y1 {
-                        let lane = (j * side + i) as usize;
-                        if let Some(r) = eye.ray_in_scene(x, y, lo, hi) {
-                            packet.set(lane, &r);
-                            rays[lane] = Some(r);
-                        }
+            for lane in 0..side * side {
+                let (i, j) = lane_pixel(lane, side);
+                let (x, y) = (bx + i, by + j);
+                if x < x1 && y < y1 {
+                    if let Some(r) = eye.ray_in_scene(x, y, lo, hi) {
+                        packet.set(lane as usize, &r);
+                        rays[lane as usize] = Some(r);
                     }
                 }
             }
             trace_packet::<I, _, N>(scene, &packet, &mut hits, &mut NoProbe, counters);
-            for j in 0..side {
-                for i in 0..side {
-                    let (x, y) = (bx + i, by + j);
-                    if x < x1 && y < y1 {
-                        let lane = (j * side + i) as usize;
-                        f(x, y, rays[lane], hits[lane]);
-                    }
+            for lane in 0..side * side {
+                let (i, j) = lane_pixel(lane, side);
+                let (x, y) = (bx + i, by + j);
+                if x < x1 && y < y1 {
+                    f(x, y, rays[lane as usize], hits[lane as usize]);
                 }
             }
         }
+    }
+}
+
+/// The pixel `(i, j)` of lane `lane` in a square block of side `side`: Z-order (Morton)
+/// when the side is a power of two, so that each run of four lanes is a 2×2 pixel quad
+/// and each run of sixteen a 4×4 block — the lane groups a packet's SIMD leaf tests take
+/// together are then as compact as they can be; row by row otherwise.
+pub fn lane_pixel(lane: u32, side: u32) -> (u32, u32) {
+    if !side.is_power_of_two() {
+        return (lane % side.max(1), lane / side.max(1));
+    }
+    let (mut i, mut j) = (0, 0);
+    for b in 0..16 {
+        i |= ((lane >> (2 * b)) & 1) << b;
+        j |= ((lane >> (2 * b + 1)) & 1) << b;
+    }
+    (i, j)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::lane_pixel;
+
+    #[test]
+    fn lanes_cover_the_block_once_in_z_order() {
+        for side in [1, 2, 3, 4, 8] {
+            let mut seen = vec![false; (side * side) as usize];
+            for lane in 0..side * side {
+                let (i, j) = lane_pixel(lane, side);
+                assert!(i < side && j < side);
+                assert!(!std::mem::replace(&mut seen[(j * side + i) as usize], true));
+            }
+        }
+        // Runs of four are 2×2 quads.
+        assert_eq!((0..4).map(|l| lane_pixel(l, 8)).collect::<Vec<_>>(), [(0, 0), (1, 0), (0, 1), (1, 1)]);
+        assert_eq!(lane_pixel(4, 8), (2, 0));
+        assert_eq!(lane_pixel(63, 8), (7, 7));
     }
 }
