@@ -453,3 +453,51 @@ fn collinear_triangles_never_hit() {
         }
     }
 }
+
+fn hit_bits(h: Option<(f32, f32, f32)>) -> Option<[u32; 3]> {
+    h.map(|(t, u, v)| [t.to_bits(), u.to_bits(), v.to_bits()])
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 400, ..ProptestConfig::default() })]
+
+    /// The watertight test's four-ray form (packets) gives, lane by lane, the bits of the
+    /// one-ray test, or hands the lane back (`redo`) where an edge function is exactly
+    /// zero. Vertices on a lattice and rays aimed at lattice points (through vertices
+    /// and edges) make exact zeros common.
+    #[test]
+    fn four_ray_watertight_test_matches_the_one_ray_test(
+        tri in [point(), point(), point()],
+        origin in point(),
+        aims in [(0u8..7, point()), (0u8..7, point()), (0u8..7, point()), (0u8..7, point())],
+    ) {
+        let v = tri.map(Vec3::from);
+        let o = Vec3::from(origin);
+        // Each lane aims at a vertex, an edge midpoint, the centroid or a lattice point.
+        let target = |(kind, p): (u8, [f32; 3])| match kind {
+            0..=2 => v[kind as usize],
+            3..=5 => (v[kind as usize - 3] + v[(kind as usize - 2) % 3]) * 0.5,
+            _ if kind == 6 && p[0] > 0.0 => (v[0] + v[1] + v[2]) / 3.0,
+            _ => Vec3::from(p),
+        };
+        let rays: Vec<Ray> = aims.iter().map(|&a| Ray::new(o, target(a) - o)).filter(|r| r.is_valid()).collect();
+        prop_assume!(!rays.is_empty());
+        let preps: Vec<_> = rays.iter().map(Watertight::prepare).collect();
+        // Lanes must share one axis order: a lane that does not repeats the first ray.
+        let lane = |k: usize| {
+            let p = &preps[k.min(preps.len() - 1)];
+            if Watertight::gather_rays4([&preps[0], p, p, p]).is_some() { k.min(preps.len() - 1) } else { 0 }
+        };
+        let lanes = [lane(0), lane(1), lane(2), lane(3)];
+        let four = Watertight::gather_rays4(lanes.map(|k| &preps[k]));
+        prop_assert!(four.is_some());
+        let r = Watertight::intersect_rays4(&four.unwrap(), &v);
+        for (k, &i) in lanes.iter().enumerate() {
+            if r.redo & (1 << k) != 0 {
+                continue;
+            }
+            let lane = (r.hit & (1 << k) != 0).then_some((r.t[k], r.u[k], r.v[k]));
+            prop_assert_eq!(hit_bits(lane), hit_bits(Watertight::intersect(&preps[i], &v)), "lane {}", k);
+        }
+    }
+}
