@@ -116,8 +116,10 @@ struct Groups {
 
 impl Groups {
     fn new<const N: usize>(p: &RayPacket<N>, groups: usize, mask: u64) -> Groups {
-        let lanes = |a: &[f32; N], g: usize| {
-            Vec4::from_array(core::array::from_fn(|k| a.get(4 * g + k).copied().unwrap_or(0.0)))
+        let lanes = |a: &[f32; N], g: usize| match a.get(4 * g..4 * g + 4) {
+            // One load; only a packet of fewer than four rays takes the other arm.
+            Some(l) => Vec4::from_slice(l),
+            None => Vec4::from_array(core::array::from_fn(|k| a.get(4 * g + k).copied().unwrap_or(0.0))),
         };
         let mut q = Groups {
             org: [[Vec4::ZERO; GROUPS]; 3],

@@ -81,6 +81,25 @@ impl<const N: usize> RayPacket<N> {
         }
     }
 
+    /// Stores `rays` in lanes `0 ..` (at most `N`) and makes exactly their valid ones
+    /// active, as [`RayPacket::set`] one by one would after clearing the mask.
+    #[inline]
+    pub fn fill(&mut self, rays: &[Ray]) {
+        let mut active = 0u64;
+        for (i, r) in rays.iter().take(N).enumerate() {
+            self.ox[i] = r.origin.x;
+            self.oy[i] = r.origin.y;
+            self.oz[i] = r.origin.z;
+            self.dx[i] = r.dir.x;
+            self.dy[i] = r.dir.y;
+            self.dz[i] = r.dir.z;
+            self.t_min[i] = r.t_min;
+            self.t_max[i] = r.t_max;
+            active |= (r.is_valid() as u64) << i;
+        }
+        self.active = active;
+    }
+
     /// Ray `i`.
     #[inline]
     pub fn ray(&self, i: usize) -> Ray {

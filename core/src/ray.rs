@@ -1,6 +1,6 @@
 //! The ray record.
 
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 
 /// A ray `origin + t * dir` restricted to `t_min <= t <= t_max`.
 ///
@@ -36,8 +36,9 @@ impl Ray {
         // `x − x` is 0 for a finite `x` and NaN otherwise: one test for all six
         // components, without a branch per component. The comparison `t_min <= t_max`
         // fails for a NaN on either side.
+        let (o, d) = (Vec3A::from(self.origin), Vec3A::from(self.dir));
         #[allow(clippy::eq_op)]
-        let finite = (self.origin - self.origin) + (self.dir - self.dir) == Vec3::ZERO;
-        finite & (self.dir != Vec3::ZERO) & (self.t_min <= self.t_max)
+        let finite = ((o - o) + (d - d)).cmpeq(Vec3A::ZERO).all();
+        finite & d.cmpne(Vec3A::ZERO).any() & (self.t_min <= self.t_max)
     }
 }

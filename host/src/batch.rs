@@ -86,10 +86,7 @@ fn trace_with<I: Intersector, const N: usize>(
                 // One packet record, refilled: only the active mask needs clearing.
                 let mut packet = RayPacket::<N>::new();
                 for (out, group) in out.chunks_mut(N).zip(chunk.chunks(N)) {
-                    packet.active = 0;
-                    for (i, r) in group.iter().enumerate() {
-                        packet.set(i, r);
-                    }
+                    packet.fill(group);
                     trace_packet::<I, _, N>(scene, &packet, &mut hits, &mut NoProbe, &mut pc);
                     for (o, h) in out.iter_mut().zip(&hits) {
                         *o = record(*h);
