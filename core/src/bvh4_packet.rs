@@ -1,6 +1,7 @@
 //! Packet traversal of the 4-wide BVH: the packet visits a node if any of its rays may
 //! hit one of the node's boxes, nearest child first; a leaf intersects its triangles with
-//! exactly the rays that enter its box.
+//! exactly the rays that enter its box, in groups of four lanes (SIMD registers) for the
+//! box test and, where the intersector has a four-ray form, for the triangles too.
 
 use crate::bvh4::{nearest_first, slab4_exact};
 use glam::{BVec4A, Vec3A, Vec4};
@@ -163,7 +164,8 @@ fn recip4(d: Vec4) -> Vec4 {
 ///
 /// Inner nodes are tested once for the whole packet with the interval-arithmetic
 /// [`Frustum`]; at a leaf each ray tests the leaf's box (up to its own best hit) and only
-/// the rays that enter it test the triangles. Since the frustum test is conservative,
+/// the rays that enter it test the triangles (four rays against one triangle at once where
+/// two or more of a group of four lanes enter). Since the frustum test is conservative,
 /// every ray still tests every triangle its single-ray walk would. A packet whose rays
 /// have a zero direction component falls back to one exact 4-box test per ray and node.
 pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
