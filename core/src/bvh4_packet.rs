@@ -153,7 +153,7 @@ impl Groups {
     }
 }
 
-/// [`recip`] of four components at once (the same bits: `1/±0 = ±∞` clamps to `±1e30`).
+/// [`crate::ray_box::recip`] of four components at once (the same bits: `1/±0 = ±∞` clamps to `±1e30`).
 #[inline(always)]
 fn recip4(d: Vec4) -> Vec4 {
     let limit = Vec4::splat(crate::ray_box::INV_LIMIT);

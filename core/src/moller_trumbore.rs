@@ -7,7 +7,7 @@ use glam::Vec3;
 use crate::image::SceneView;
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
-use crate::triangle::{Intersector, Rays4Result};
+use crate::triangle::Intersector;
 
 /// Relative determinant below which a ray counts as parallel to the triangle.
 pub const PARALLEL_EPSILON: f32 = 1e-5;
@@ -29,16 +29,6 @@ impl Intersector for MollerTrumbore {
     const NAME: &'static str = "moller-trumbore";
     // No four-ray form: packets test ray by ray.
     type Prepared4 = ();
-
-    #[inline(always)]
-    fn gather_rays4(_: [&Self::Prepared; 4]) -> Option<()> {
-        None
-    }
-
-    #[inline(always)]
-    fn intersect_rays4(_: &(), _: &Self::Triangle) -> Rays4Result {
-        Rays4Result { redo: 0xF, ..Rays4Result::default() }
-    }
 
     #[inline(always)]
     fn fetch<P: MemoryProbe>(scene: &SceneView<'_>, prim: u32, probe: &mut P) -> [Vec3; 3] {

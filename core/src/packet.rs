@@ -66,14 +66,7 @@ impl<const N: usize> RayPacket<N> {
         if i >= N {
             return;
         }
-        self.ox[i] = r.origin.x;
-        self.oy[i] = r.origin.y;
-        self.oz[i] = r.origin.z;
-        self.dx[i] = r.dir.x;
-        self.dy[i] = r.dir.y;
-        self.dz[i] = r.dir.z;
-        self.t_min[i] = r.t_min;
-        self.t_max[i] = r.t_max;
+        self.store(i, r);
         if r.is_valid() {
             self.active |= 1 << i;
         } else {
@@ -87,17 +80,23 @@ impl<const N: usize> RayPacket<N> {
     pub fn fill(&mut self, rays: &[Ray]) {
         let mut active = 0u64;
         for (i, r) in rays.iter().take(N).enumerate() {
-            self.ox[i] = r.origin.x;
-            self.oy[i] = r.origin.y;
-            self.oz[i] = r.origin.z;
-            self.dx[i] = r.dir.x;
-            self.dy[i] = r.dir.y;
-            self.dz[i] = r.dir.z;
-            self.t_min[i] = r.t_min;
-            self.t_max[i] = r.t_max;
+            self.store(i, r);
             active |= (r.is_valid() as u64) << i;
         }
         self.active = active;
+    }
+
+    /// Writes ray `r` into lane `i < N`.
+    #[inline(always)]
+    fn store(&mut self, i: usize, r: &Ray) {
+        self.ox[i] = r.origin.x;
+        self.oy[i] = r.origin.y;
+        self.oz[i] = r.origin.z;
+        self.dx[i] = r.dir.x;
+        self.dy[i] = r.dir.y;
+        self.dz[i] = r.dir.z;
+        self.t_min[i] = r.t_min;
+        self.t_max[i] = r.t_max;
     }
 
     /// Ray `i`.

@@ -30,12 +30,19 @@ pub trait Intersector {
     /// Four rays' constants as SIMD lanes, for [`Intersector::intersect_rays4`].
     type Prepared4: Copy;
     /// Gathers four prepared rays into SIMD lanes, or `None` when this test has no
-    /// four-ray form or the four rays cannot share one.
-    fn gather_rays4(preps: [&Self::Prepared; 4]) -> Option<Self::Prepared4>;
+    /// four-ray form (the default: packets then test ray by ray) or the four rays cannot
+    /// share one.
+    #[inline(always)]
+    fn gather_rays4(_preps: [&Self::Prepared; 4]) -> Option<Self::Prepared4> {
+        None
+    }
     /// One triangle against four rays at once: lane by lane the bits of
     /// [`Intersector::intersect`], except for the lanes in `redo`, which the caller tests
-    /// with `intersect`.
-    fn intersect_rays4(rays: &Self::Prepared4, tri: &Self::Triangle) -> Rays4Result;
+    /// with `intersect` (by default all four).
+    #[inline(always)]
+    fn intersect_rays4(_rays: &Self::Prepared4, _tri: &Self::Triangle) -> Rays4Result {
+        Rays4Result { redo: 0xF, ..Rays4Result::default() }
+    }
 }
 
 /// The outcome of [`Intersector::intersect_rays4`]: per lane `(t, u, v)` where `hit`

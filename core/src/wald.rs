@@ -15,7 +15,7 @@ use crate::image::{SceneView, WaldTriangle};
 use crate::moller_trumbore::PARALLEL_EPSILON;
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
-use crate::triangle::{Intersector, Rays4Result};
+use crate::triangle::Intersector;
 
 /// The projection test with Wald's 48-byte triangles.
 #[derive(Clone, Copy, Debug, Default)]
@@ -96,16 +96,6 @@ impl Intersector for WaldProjection {
     const NAME: &'static str = "wald";
     // No four-ray form: packets test ray by ray.
     type Prepared4 = ();
-
-    #[inline(always)]
-    fn gather_rays4(_: [&Self::Prepared; 4]) -> Option<()> {
-        None
-    }
-
-    #[inline(always)]
-    fn intersect_rays4(_: &(), _: &Self::Triangle) -> Rays4Result {
-        Rays4Result { redo: 0xF, ..Rays4Result::default() }
-    }
 
     #[inline]
     fn prepare(ray: &Ray) -> WaldRay {

@@ -4,6 +4,8 @@
 //! ray through a shared edge or vertex hits at least one of the triangles sharing it.
 //! When an edge function is exactly zero it is recomputed in double precision (§3.4).
 
+use core::ops::{Add, Mul, Sub};
+
 use glam::{Vec3, Vec4};
 
 use crate::image::SceneView;
@@ -55,19 +57,11 @@ impl Intersector for Watertight {
     /// left to the scalar test (its double-precision recomputation).
     #[inline(always)]
     fn intersect_rays4(r: &ShearedRays4, v: &[Vec3; 3]) -> Rays4Result {
-        let [kx, ky, kz] = r.k;
+        let kz = r.k[2];
         // Vertex coordinates relative to each ray's origin, per axis.
         let rel = |p: Vec3| -> [Vec4; 3] { core::array::from_fn(|a| Vec4::splat(p[a]) - r.org[a]) };
         let (a, b, c) = (rel(v[0]), rel(v[1]), rel(v[2]));
-        let ax = a[kx] - r.sx * a[kz];
-        let ay = a[ky] - r.sy * a[kz];
-        let bx = b[kx] - r.sx * b[kz];
-        let by = b[ky] - r.sy * b[kz];
-        let cx = c[kx] - r.sx * c[kz];
-        let cy = c[ky] - r.sy * c[kz];
-        let eu = cx * by - cy * bx;
-        let ev = ax * cy - ay * cx;
-        let ew = bx * ay - by * ax;
+        let (_, [eu, ev, ew]) = shear_edges(a, b, c, r.k, r.sx, r.sy);
         let zero = Vec4::ZERO;
         let redo = (eu.cmpeq(zero) | ev.cmpeq(zero) | ew.cmpeq(zero)).bitmask();
         let neg = eu.cmplt(zero) | ev.cmplt(zero) | ew.cmplt(zero);
@@ -77,7 +71,7 @@ impl Intersector for Watertight {
         if hit == 0 {
             return Rays4Result { redo, ..Rays4Result::default() };
         }
-        let t_scaled = eu * (r.sz * a[kz]) + ev * (r.sz * b[kz]) + ew * (r.sz * c[kz]);
+        let t_scaled = scaled_distance([eu, ev, ew], [a[kz], b[kz], c[kz]], r.sz);
         let inv = Vec4::ONE / det;
         Rays4Result { t: (t_scaled * inv).to_array(), u: (ev * inv).to_array(), v: (ew * inv).to_array(), hit, redo }
     }
@@ -122,21 +116,10 @@ impl Intersector for Watertight {
         let a = (v[0] - s.org).to_array();
         let b = (v[1] - s.org).to_array();
         let c = (v[2] - s.org).to_array();
-        let (kx, ky, kz) = (s.kx as usize, s.ky as usize, s.kz as usize);
-        let ax = a[kx] - s.sx * a[kz];
-        let ay = a[ky] - s.sy * a[kz];
-        let bx = b[kx] - s.sx * b[kz];
-        let by = b[ky] - s.sy * b[kz];
-        let cx = c[kx] - s.sx * c[kz];
-        let cy = c[ky] - s.sy * c[kz];
-        let mut eu = cx * by - cy * bx;
-        let mut ev = ax * cy - ay * cx;
-        let mut ew = bx * ay - by * ax;
+        let k = [s.kx as usize, s.ky as usize, s.kz as usize];
+        let (sheared, [mut eu, mut ev, mut ew]) = shear_edges(a, b, c, k, s.sx, s.sy);
         if eu == 0.0 || ev == 0.0 || ew == 0.0 {
-            let (ax, ay, bx, by, cx, cy) = (ax as f64, ay as f64, bx as f64, by as f64, cx as f64, cy as f64);
-            eu = (cx * by - cy * bx) as f32;
-            ev = (ax * cy - ay * cx) as f32;
-            ew = (bx * ay - by * ax) as f32;
+            [eu, ev, ew] = edges(sheared.map(f64::from)).map(|e| e as f32);
         }
         if (eu < 0.0 || ev < 0.0 || ew < 0.0) && (eu > 0.0 || ev > 0.0 || ew > 0.0) {
             return None;
@@ -145,13 +128,47 @@ impl Intersector for Watertight {
         if det == 0.0 {
             return None;
         }
-        let az = s.sz * a[kz];
-        let bz = s.sz * b[kz];
-        let cz = s.sz * c[kz];
-        let t_scaled = eu * az + ev * bz + ew * cz;
+        let kz = k[2];
+        let t_scaled = scaled_distance([eu, ev, ew], [a[kz], b[kz], c[kz]], s.sz);
         let inv = 1.0 / det;
         Some((t_scaled * inv, ev * inv, ew * inv))
     }
+}
+
+/// Fig. 1, lines 15–29, on vertices `a`, `b`, `c` already relative to the ray origin:
+/// the sheared 2D coordinates `[ax, ay, bx, by, cx, cy]` and the edge functions
+/// `[U, V, W]`. Generic so that one ray (`f32`) and four (`Vec4` lanes) go through the
+/// same operations in the same order, hence round alike.
+#[inline(always)]
+fn shear_edges<T: Copy + Sub<Output = T> + Mul<Output = T>>(
+    a: [T; 3],
+    b: [T; 3],
+    c: [T; 3],
+    [kx, ky, kz]: [usize; 3],
+    sx: T,
+    sy: T,
+) -> ([T; 6], [T; 3]) {
+    let ax = a[kx] - sx * a[kz];
+    let ay = a[ky] - sy * a[kz];
+    let bx = b[kx] - sx * b[kz];
+    let by = b[ky] - sy * b[kz];
+    let cx = c[kx] - sx * c[kz];
+    let cy = c[ky] - sy * c[kz];
+    let sheared = [ax, ay, bx, by, cx, cy];
+    (sheared, edges(sheared))
+}
+
+/// The edge functions `[U, V, W]` of the sheared 2D vertices `[ax, ay, bx, by, cx, cy]`.
+#[inline(always)]
+fn edges<T: Copy + Sub<Output = T> + Mul<Output = T>>([ax, ay, bx, by, cx, cy]: [T; 6]) -> [T; 3] {
+    [cx * by - cy * bx, ax * cy - ay * cx, bx * ay - by * ax]
+}
+
+/// Fig. 1, lines 37–40: the hit distance scaled by the determinant, from the edge
+/// functions `e` and the vertices' coordinates `z` along the ray's major axis.
+#[inline(always)]
+fn scaled_distance<T: Copy + Add<Output = T> + Mul<Output = T>>(e: [T; 3], z: [T; 3], sz: T) -> T {
+    e[0] * (sz * z[0]) + e[1] * (sz * z[1]) + e[2] * (sz * z[2])
 }
 
 /// Four rays' shear constants as SIMD lanes (rays with one axis permutation).
