@@ -87,6 +87,15 @@ impl Frustum {
     }
 }
 
+/// How the packet culls boxes: by its frustum, or ray by ray with each ray's exact box
+/// test when some ray has a zero direction component (see [`RayBox`]).
+// No heap in core to box the per-ray tests; the record lives on the stack for one packet.
+#[allow(clippy::large_enum_variant)]
+enum Cull<const N: usize> {
+    Frustum(Frustum),
+    Exact([RayBox; N]),
+}
+
 /// Lanes of a group of four as a SIMD mask, by the group's 4 bits of the active mask.
 const GROUP_LANES: [BVec4A; 16] = {
     let mut t = [BVec4A::new(false, false, false, false); 16];
@@ -183,7 +192,10 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
     }
     let groups = N.div_ceil(4);
     let mut q = Groups::new(packet, groups, mask);
-    let frustum = Frustum::new(&q, groups, mask);
+    let cull: Cull<N> = match Frustum::new(&q, groups, mask) {
+        Some(f) => Cull::Frustum(f),
+        None => Cull::Exact(core::array::from_fn(|i| RayBox::new(&packet.ray(i)))),
+    };
     // How far any ray of the packet still looks.
     let mut t_end = q.group_end.iter().take(groups).fold(f32::NEG_INFINITY, |m, &e| m.max(e));
     // The watertight constants are computed the first time a ray enters a leaf: most
@@ -198,18 +210,17 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
         c.visits += 1;
         if count == 0 {
             let node = bvh.node(index, probe);
-            let (tn, needed) = match &frustum {
-                Some(f) => {
+            let (tn, needed) = match &cull {
+                Cull::Frustum(f) => {
                     c.active_lanes += mask.count_ones() as u64;
                     f.slab4(node, t_end)
                 }
-                None => {
+                Cull::Exact(boxes) => {
                     let mut needed = 0u32;
                     let mut t = Vec4::INFINITY;
                     for i in Lanes(mask) {
-                        let ray = packet.ray(i);
-                        let end = hits[i].map_or(ray.t_max, |h: Hit| h.t);
-                        let (tn, m) = slab4_exact(&RayBox::new(&ray), node, ray.t_min, end);
+                        let end = hits[i].map_or(packet.t_max[i], |h: Hit| h.t);
+                        let (tn, m) = slab4_exact(&boxes[i], node, packet.t_min[i], end);
                         if m != 0 {
                             c.active_lanes += 1;
                             needed |= m;
@@ -236,7 +247,16 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
             }
         } else {
             let mut enter = 0u64;
-            if frustum.is_some() {
+            if let Cull::Exact(boxes) = &cull {
+                let lo = Vec3A::new(leaf_box[0], leaf_box[1], leaf_box[2]);
+                let hi = Vec3A::new(leaf_box[3], leaf_box[4], leaf_box[5]);
+                for i in Lanes(mask) {
+                    let end = hits[i].map_or(packet.t_max[i], |h: Hit| h.t);
+                    if boxes[i].entry(lo, hi, packet.t_min[i], end).is_some() {
+                        enter |= 1 << i;
+                    }
+                }
+            } else {
                 // Four rays against the leaf box at once (no zero direction components,
                 // so the plain slab test is exact here).
                 let lo = [Vec4::splat(leaf_box[0]), Vec4::splat(leaf_box[1]), Vec4::splat(leaf_box[2])];
@@ -257,16 +277,6 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
                         tf = tf.min(p.max(r) * SLAB_GROWTH);
                     }
                     enter |= ((tn.cmple(tf).bitmask() as u64) & m4) << (4 * g);
-                }
-            } else {
-                let lo = Vec3A::new(leaf_box[0], leaf_box[1], leaf_box[2]);
-                let hi = Vec3A::new(leaf_box[3], leaf_box[4], leaf_box[5]);
-                for i in Lanes(mask) {
-                    let ray = packet.ray(i);
-                    let end = hits[i].map_or(ray.t_max, |h: Hit| h.t);
-                    if RayBox::new(&ray).entry(lo, hi, ray.t_min, end).is_some() {
-                        enter |= 1 << i;
-                    }
                 }
             }
             c.active_lanes += enter.count_ones() as u64;
