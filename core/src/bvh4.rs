@@ -13,8 +13,8 @@ use crate::image::{Bvh4Node, Bvh4View, SceneView, MAX_TREE_DEPTH};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::ray_box::RayBox;
-use crate::tree_step::{TreeEvent, TreeWalk};
-use crate::triangle::{test_triangle, Intersector};
+use crate::tree_step::{test_leaf, TreeEvent, TreeWalk};
+use crate::triangle::Intersector;
 
 /// Stack capacity: at most three entries wait per level of a tree of [`MAX_TREE_DEPTH`].
 const STACK: usize = 3 * MAX_TREE_DEPTH as usize + 4;
@@ -295,11 +295,7 @@ pub fn trace_bvh4<I: Intersector, P: MemoryProbe>(
         } else {
             leaves += 1;
             let prep = prep.get_or_insert_with(|| I::prepare(ray));
-            for e in index..index.wrapping_add(count) {
-                let prim = bvh.prim(e, probe);
-                let verts = I::fetch(scene, prim, probe);
-                test_triangle::<I>(prep, ray, &verts, prim, &mut best);
-            }
+            test_leaf::<I, P, _>(scene, bvh, prep, ray, (index, count), &mut best, probe);
             tests += count;
             t_end = best.map_or(t_end, |h: Hit| h.t);
         }

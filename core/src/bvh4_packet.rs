@@ -12,7 +12,7 @@ use crate::hit::Hit;
 use crate::image::{Bvh4Node, Bvh4View, SceneView, MAX_TREE_DEPTH, NULL_INDEX};
 use crate::packet::{Lanes, PacketCounters, PacketHits, RayPacket, MAX_PACKET};
 use crate::probe::MemoryProbe;
-use crate::ray_box::RayBox;
+use crate::ray_box::{recip4, RayBox};
 use crate::triangle::{in_range, test_triangle, Intersector};
 
 const STACK: usize = 3 * MAX_TREE_DEPTH as usize + 4;
@@ -160,13 +160,6 @@ impl Groups {
         let act = GROUP_LANES[((mask >> (4 * g)) & 0xF) as usize];
         self.group_end[g] = Vec4::select(act, self.ends[g], Vec4::NEG_INFINITY).max_element();
     }
-}
-
-/// [`crate::ray_box::recip`] of four components at once (the same bits: `1/±0 = ±∞` clamps to `±1e30`).
-#[inline(always)]
-fn recip4(d: Vec4) -> Vec4 {
-    let limit = Vec4::splat(crate::ray_box::INV_LIMIT);
-    (Vec4::ONE / d).min(limit).max(-limit)
 }
 
 /// Traces all active rays of `packet`; `hits[i]` receives ray `i`'s closest hit.

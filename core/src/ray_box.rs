@@ -3,7 +3,7 @@
 //! far distance is grown by `1 + 2·gamma(3)` so that rounding never rejects a box the
 //! ray touches.
 
-use glam::Vec3A;
+use glam::{Vec3A, Vec4};
 
 use crate::aabb::SLAB_GROWTH;
 use crate::ray::Ray;
@@ -21,15 +21,14 @@ pub struct RayBox {
 }
 
 /// Largest reciprocal used; directions below `1e-30` in a component act as zero.
-pub(crate) const INV_LIMIT: f32 = 1e30;
+const INV_LIMIT: f32 = 1e30;
 
 impl RayBox {
     /// Precomputes the reciprocal direction.
     #[inline]
     pub fn new(ray: &Ray) -> RayBox {
-        // `recip` on all three components at once.
         let d = Vec3A::from(ray.dir);
-        let inv = (Vec3A::ONE / d).max(Vec3A::splat(-INV_LIMIT)).min(Vec3A::splat(INV_LIMIT));
+        let inv = Vec3A::from_vec4(recip4(Vec4::from((d, 1.0))));
         let zero_axes = d.cmpeq(Vec3A::ZERO).bitmask() as u8;
         RayBox { origin: ray.origin.into(), inv, zero_axes }
     }
@@ -60,6 +59,13 @@ impl RayBox {
             None
         }
     }
+}
+
+/// [`recip`] of four components at once (the same bits).
+#[inline(always)]
+pub fn recip4(d: Vec4) -> Vec4 {
+    let limit = Vec4::splat(INV_LIMIT);
+    (Vec4::ONE / d).min(limit).max(-limit)
 }
 
 /// `1 / d` clamped to `±1e30` (zero gives `±1e30` by its sign): always finite.
@@ -95,5 +101,7 @@ mod tests {
         let b = RayBox::new(&Ray::new(Vec3::ZERO, Vec3::new(-0.0, 2.0, 0.0)));
         assert_eq!(b.inv.to_array(), [-INV_LIMIT, 0.5, INV_LIMIT]);
         assert_eq!(b.zero_axes, 0b101);
+        let d = [0.0, -0.0, 3.0, -1e-38];
+        assert_eq!(recip4(Vec4::from_array(d)).to_array(), d.map(recip));
     }
 }

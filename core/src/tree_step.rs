@@ -61,11 +61,7 @@ pub fn trace_tree<I: Intersector, P: MemoryProbe, V: PrimLists, W: TreeWalk<V>>(
             TreeEvent::Inner => nodes += 1,
             TreeEvent::Leaf { first, count } => {
                 leaves += 1;
-                for e in first..first.wrapping_add(count) {
-                    let prim = view.prim(e, probe);
-                    let verts = I::fetch(scene, prim, probe);
-                    test_triangle::<I>(&prep, ray, &verts, prim, walk.best_mut());
-                }
+                test_leaf::<I, P, V>(scene, view, &prep, ray, (first, count), walk.best_mut(), probe);
                 tests += count;
                 walk.finish_leaf();
             }
@@ -76,4 +72,23 @@ pub fn trace_tree<I: Intersector, P: MemoryProbe, V: PrimLists, W: TreeWalk<V>>(
     counters.leaves += leaves;
     counters.tri_tests += tests;
     *walk.best_mut()
+}
+
+/// A tree leaf's triangles — PRIM_LISTS entries `first .. first + count` of `view` —
+/// tested against `ray`, keeping the closest hit in `best`.
+#[inline(always)]
+pub fn test_leaf<I: Intersector, P: MemoryProbe, V: PrimLists>(
+    scene: &SceneView<'_>,
+    view: &V,
+    prep: &I::Prepared,
+    ray: &Ray,
+    (first, count): (u32, u32),
+    best: &mut Option<Hit>,
+    probe: &mut P,
+) {
+    for e in first..first.wrapping_add(count) {
+        let prim = view.prim(e, probe);
+        let verts = I::fetch(scene, prim, probe);
+        test_triangle::<I>(prep, ray, &verts, prim, best);
+    }
 }
