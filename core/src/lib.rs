@@ -54,6 +54,7 @@ pub mod packet;
 pub mod path;
 pub mod probe;
 pub mod radiance_sum;
+pub mod raster;
 pub mod ray;
 pub mod ray_box;
 pub mod ray_record;
