@@ -36,6 +36,7 @@ pub mod brute_force;
 pub mod bvh;
 pub mod bvh4;
 pub mod bvh4_packet;
+pub mod bvh8;
 pub mod bvh_packet;
 pub mod camera;
 pub mod color;
@@ -70,6 +71,7 @@ pub mod wald;
 pub mod walk;
 pub mod watertight;
 pub mod whitted;
+pub mod wide_bvh;
 
 pub use camera::{Camera, CameraError};
 pub use counters::RayCounters;

@@ -3,11 +3,12 @@
 //! plain data"). Each [`Walk::step`] reads one node or voxel and reports an event; at a
 //! [`Leaf`] the intersection side reads the leaf's triangle ids with [`Leaf::entry`],
 //! tests them into [`Walk::best_mut`], and calls [`Walk::finish_leaf`]. The walks are the
-//! structures' own step kernels (grid, kd-tree, BVH, 4-wide BVH), so a driver of `Walk`
+//! structures' own step kernels (grid, kd-tree, BVH, 4- and 8-wide BVH), so a driver of `Walk`
 //! finds exactly the host's hit.
 
 use crate::bvh::BvhTraversal;
 use crate::bvh4::Bvh4Traversal;
+use crate::bvh8::Bvh8Traversal;
 use crate::dda::Voxel;
 use crate::grid::{GridEvent, GridTraversal};
 use crate::hit::Hit;
@@ -59,6 +60,8 @@ impl Leaf {
                 }
                 let pos = first.wrapping_add(k);
                 if let Some(bvh) = scene.bvh4() {
+                    Some(bvh.prim(pos, probe))
+                } else if let Some(bvh) = scene.bvh8() {
                     Some(bvh.prim(pos, probe))
                 } else if let Some(bvh) = scene.bvh() {
                     Some(bvh.prim(pos, probe))
@@ -127,6 +130,8 @@ pub enum Walk {
     Bvh(BvhTraversal),
     /// 4-wide BVH.
     Bvh4(Bvh4Traversal),
+    /// 8-wide BVH.
+    Bvh8(Bvh8Traversal),
     /// No structure: one leaf of every triangle.
     All {
         /// The single leaf was handed out.
@@ -144,6 +149,8 @@ impl Walk {
             Walk::Grid(GridTraversal::new(grid, ray), None)
         } else if scene.bvh4().is_some() {
             Walk::Bvh4(Bvh4Traversal::new(ray))
+        } else if scene.bvh8().is_some() {
+            Walk::Bvh8(Bvh8Traversal::new(ray))
         } else if scene.bvh().is_some() {
             Walk::Bvh(BvhTraversal::new(ray))
         } else if let Some(kd) = scene.kdtree() {
@@ -188,6 +195,10 @@ impl Walk {
                 Some(bvh) => tree(trav.step(bvh, probe)),
                 None => WalkEvent::Done,
             },
+            Walk::Bvh8(trav) => match scene.bvh8() {
+                Some(bvh) => tree(trav.step(bvh, probe)),
+                None => WalkEvent::Done,
+            },
             Walk::All { visited, .. } => {
                 if *visited {
                     WalkEvent::Done
@@ -210,7 +221,7 @@ impl Walk {
             }
             Walk::Kd(trav) => trav.finish_leaf(),
             Walk::Bvh(trav) => trav.finish_leaf(),
-            Walk::Bvh4(trav) => trav.finish_leaf(),
+            Walk::Bvh4(trav) | Walk::Bvh8(trav) => trav.finish_leaf(),
             Walk::All { .. } => {}
         }
     }
@@ -221,7 +232,7 @@ impl Walk {
             Walk::Grid(trav, _) => trav.best,
             Walk::Kd(trav) => trav.best,
             Walk::Bvh(trav) => trav.best,
-            Walk::Bvh4(trav) => trav.best,
+            Walk::Bvh4(trav) | Walk::Bvh8(trav) => trav.best,
             Walk::All { best, .. } => *best,
         }
     }
@@ -232,7 +243,7 @@ impl Walk {
             Walk::Grid(trav, _) => &mut trav.best,
             Walk::Kd(trav) => &mut trav.best,
             Walk::Bvh(trav) => &mut trav.best,
-            Walk::Bvh4(trav) => &mut trav.best,
+            Walk::Bvh4(trav) | Walk::Bvh8(trav) => &mut trav.best,
             Walk::All { best, .. } => best,
         }
     }

@@ -4,7 +4,7 @@
 //! triangle lying on a box face is never culled by the rounding of the entry distance.
 
 use glam::DVec3;
-use raypipe_core::image::{BvhNode, MAX_TREE_DEPTH};
+use raypipe_core::image::{BvhNode, WideNode, MAX_TREE_DEPTH};
 
 use crate::mesh::Mesh;
 
@@ -336,27 +336,41 @@ fn round_up(v: DVec3) -> [f32; 3] {
     })
 }
 
-/// A built 4-wide BVH.
+/// A built wide BVH (4- or 8-wide nodes).
 #[derive(Clone, Debug, Default)]
-pub struct BuiltBvh4 {
+pub struct BuiltWideBvh<N> {
     /// Nodes; 0 is the root.
-    pub nodes: Vec<raypipe_core::image::Bvh4Node>,
+    pub nodes: Vec<N>,
     /// Triangle ids referenced by the leaves.
     pub prims: Vec<u32>,
     /// Depth of the deepest node (root = 1).
     pub depth: u32,
 }
 
-/// Collapses a binary BVH into a 4-wide one: each 4-wide node takes the (up to) four
-/// descendants reached by repeatedly opening the largest inner child (Wald et al. 2008).
+/// A built 4-wide BVH.
+pub type BuiltBvh4 = BuiltWideBvh<raypipe_core::image::Bvh4Node>;
+/// A built 8-wide BVH.
+pub type BuiltBvh8 = BuiltWideBvh<raypipe_core::image::Bvh8Node>;
+
+/// Collapses a binary BVH into a 4-wide one (see [`collapse_wide`]).
 pub fn collapse_to_bvh4(bvh: &BuiltBvh) -> BuiltBvh4 {
-    use raypipe_core::image::Bvh4Node;
+    collapse_wide(bvh)
+}
+
+/// Collapses a binary BVH into an 8-wide one (see [`collapse_wide`]).
+pub fn collapse_to_bvh8(bvh: &BuiltBvh) -> BuiltBvh8 {
+    collapse_wide(bvh)
+}
+
+/// Collapses a binary BVH into a wide one: each wide node takes the (up to `WIDTH`)
+/// descendants reached by repeatedly opening the largest inner child (Wald et al. 2008).
+pub fn collapse_wide<N: WideNode>(bvh: &BuiltBvh) -> BuiltWideBvh<N> {
     let area = |n: &BvhNode| {
         let e = [n.max[0] - n.min[0], n.max[1] - n.min[1], n.max[2] - n.min[2]];
         e[0] * e[1] + e[1] * e[2] + e[2] * e[0]
     };
-    let mut out = BuiltBvh4 { nodes: vec![Bvh4Node::EMPTY], prims: bvh.prims.clone(), depth: 1 };
-    // (binary node whose children fill 4-wide node `target`, depth)
+    let mut out = BuiltWideBvh { nodes: vec![*N::empty()], prims: bvh.prims.clone(), depth: 1 };
+    // (binary node whose children fill wide node `target`, depth)
     let mut todo = vec![(0usize, 0usize, 1u32)];
     while let Some((src, target, depth)) = todo.pop() {
         out.depth = out.depth.max(depth);
@@ -366,7 +380,7 @@ pub fn collapse_to_bvh4(bvh: &BuiltBvh) -> BuiltBvh4 {
         } else {
             vec![root.first as usize, root.first as usize + 1]
         };
-        while slots.len() < 4 {
+        while slots.len() < N::WIDTH {
             let open = slots
                 .iter()
                 .enumerate()
@@ -377,23 +391,15 @@ pub fn collapse_to_bvh4(bvh: &BuiltBvh) -> BuiltBvh4 {
             slots[k] = f;
             slots.push(f + 1);
         }
-        let mut node = Bvh4Node::EMPTY;
+        let mut node = *N::empty();
         for (k, &s) in slots.iter().enumerate() {
             let n = &bvh.nodes[s];
-            node.min_x[k] = n.min[0];
-            node.min_y[k] = n.min[1];
-            node.min_z[k] = n.min[2];
-            node.max_x[k] = n.max[0];
-            node.max_y[k] = n.max[1];
-            node.max_z[k] = n.max[2];
             if n.count > 0 {
-                node.child[k] = n.first;
-                node.count[k] = n.count;
+                node.set_slot(k, n.min, n.max, n.first, n.count);
             } else {
                 let child = out.nodes.len();
-                out.nodes.push(Bvh4Node::EMPTY);
-                node.child[k] = child as u32;
-                node.count[k] = 0;
+                out.nodes.push(*N::empty());
+                node.set_slot(k, n.min, n.max, child as u32, 0);
                 todo.push((s, child, depth + 1));
             }
         }

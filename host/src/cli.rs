@@ -422,7 +422,7 @@ pub struct BenchArgs {
     /// OBJ files or scene images to measure besides the built-in Cornell box.
     pub scenes: Vec<PathBuf>,
     /// Structures to build and measure (for OBJ scenes; an image has its own).
-    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Accel::Grid, Accel::Kd, Accel::Bvh, Accel::Bvh4])]
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Accel::Grid, Accel::Kd, Accel::Bvh, Accel::Bvh4, Accel::Bvh8])]
     pub accel: Vec<Accel>,
     /// Image size of the primary-ray frame.
     #[arg(long, value_name = "WxH", value_parser = parse_size, default_value = "1024x1024")]
@@ -502,6 +502,7 @@ fn accel_name(a: Accel) -> &'static str {
         Accel::Kd => "kd-tree",
         Accel::Bvh => "BVH",
         Accel::Bvh4 => "BVH4",
+        Accel::Bvh8 => "BVH8",
         Accel::None => "brute force",
     }
 }
@@ -512,6 +513,8 @@ fn structure_summary(view: &raypipe_core::SceneView<'_>) -> String {
         format!("grid {}x{}x{}", g.dims[0], g.dims[1], g.dims[2])
     } else if let Some(b) = view.bvh4() {
         format!("BVH4 {} nodes", b.node_count())
+    } else if let Some(b) = view.bvh8() {
+        format!("BVH8 {} nodes", b.node_count())
     } else if let Some(b) = view.bvh() {
         format!("BVH {} nodes", b.node_count())
     } else if let Some(k) = view.kdtree() {
@@ -547,7 +550,7 @@ fn cmd_build(a: BuildArgs) -> Result<()> {
     println!("scene        {}", a.scene.display());
     println!("triangles    {} ({} degenerate), vertices {}", r.triangles, r.degenerate, r.vertices);
     match a.structure.accel {
-        Accel::Kd | Accel::Bvh | Accel::Bvh4 => {
+        Accel::Kd | Accel::Bvh | Accel::Bvh4 | Accel::Bvh8 => {
             println!(
                 "{:<12} {} nodes, depth {}, {} triangle references ({:.2} per triangle)",
                 accel_name(a.structure.accel),
@@ -821,6 +824,9 @@ fn cmd_bench(a: BenchArgs) -> Result<()> {
                 best_single = best_single.max(r.mrays_single);
                 let simd = if packet == PacketSize::Single {
                     "-".to_string()
+                } else if !crate::tracer::has_packet_kernel(&view) {
+                    // Traced ray by ray: no lock-step, no SIMD efficiency to report.
+                    "by ray".to_string()
                 } else {
                     format!("{:.0}%", 100.0 * r.simd_efficiency)
                 };

@@ -12,7 +12,7 @@ use raypipe_core::image::WaldTriangle;
 use raypipe_core::Vec3;
 
 use crate::aligned::AlignedBytes;
-use crate::bvh_builder::{BuiltBvh, BuiltBvh4};
+use crate::bvh_builder::{BuiltBvh, BuiltBvh4, BuiltBvh8};
 use crate::grid_builder::BuiltGrid;
 use crate::kd_builder::BuiltKd;
 use crate::mesh::Mesh;
@@ -112,6 +112,14 @@ impl ImageWriter {
     pub fn bvh4(&mut self, bvh: &BuiltBvh4) -> &mut Self {
         self.accel = AccelKind::Bvh4 as u32;
         self.add(SectionKind::Bvh4Nodes, &bvh.nodes);
+        self.add(SectionKind::PrimLists, &bvh.prims);
+        self
+    }
+
+    /// Adds an 8-wide BVH.
+    pub fn bvh8(&mut self, bvh: &BuiltBvh8) -> &mut Self {
+        self.accel = AccelKind::Bvh8 as u32;
+        self.add(SectionKind::Bvh8Nodes, &bvh.nodes);
         self.add(SectionKind::PrimLists, &bvh.prims);
         self
     }

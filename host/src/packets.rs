@@ -48,7 +48,8 @@ impl PacketSize {
     /// The faster grouping for primary rays of the structure the image holds, as measured
     /// with `raypipe bench --packet 1,4,16,64` on the bunny, Sponza and the conference
     /// room: 8×8 frustum packets for the 4-wide BVH, 4×4 lock-step packets for the grid,
-    /// single rays for the kd-tree and the binary BVH.
+    /// single rays for the kd-tree, the binary BVH and the 8-wide BVH (which has no packet
+    /// kernel).
     pub fn auto_for(scene: &SceneView<'_>) -> PacketSize {
         if scene.bvh4().is_some() {
             PacketSize::P64
@@ -85,23 +86,55 @@ pub fn trace_tile<I: Intersector>(
 ) {
     match size {
         PacketSize::Single => {
-            let (x0, y0, x1, y1) = tile;
-            for y in y0..y1 {
-                for x in x0..x1 {
-                    match eye.ray_in_scene(x, y, bounds.0, bounds.1) {
-                        Some(ray) => {
-                            let hit = trace::<I, _>(scene, &ray, &mut NoProbe, counters);
-                            f(x, y, Some(ray), hit);
-                        }
-                        None => f(x, y, None, None),
-                    }
-                }
+            #[cfg(target_arch = "x86_64")]
+            if std::is_x86_feature_detected!("avx2") {
+                // SAFETY: the CPU has the features the function is compiled for.
+                unsafe { singles_avx2::<I>(scene, eye, bounds, tile, counters, f) };
+                return;
             }
+            singles::<I>(scene, eye, bounds, tile, counters, f)
         }
         PacketSize::P4 => blocks::<I, 4>(scene, eye, bounds, tile, 2, packet_counters, f),
         PacketSize::P16 => blocks::<I, 16>(scene, eye, bounds, tile, 4, packet_counters, f),
         PacketSize::P64 => blocks::<I, 64>(scene, eye, bounds, tile, 8, packet_counters, f),
     }
+}
+
+/// The tile's rays one by one.
+#[inline(always)]
+fn singles<I: Intersector>(
+    scene: &SceneView<'_>,
+    eye: &EyeRays,
+    (lo, hi): (Vec3, Vec3),
+    (x0, y0, x1, y1): (u32, u32, u32, u32),
+    counters: &mut RayCounters,
+    f: &mut impl FnMut(u32, u32, Option<Ray>, Option<Hit>),
+) {
+    for y in y0..y1 {
+        for x in x0..x1 {
+            match eye.ray_in_scene(x, y, lo, hi) {
+                Some(ray) => {
+                    let hit = trace::<I, _>(scene, &ray, &mut NoProbe, counters);
+                    f(x, y, Some(ray), hit);
+                }
+                None => f(x, y, None, None),
+            }
+        }
+    }
+}
+
+/// [`singles`] compiled for AVX2 (see [`crate::batch`]'s `trace_singles_avx2`).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx,avx2,bmi1,bmi2,lzcnt,popcnt")]
+unsafe fn singles_avx2<I: Intersector>(
+    scene: &SceneView<'_>,
+    eye: &EyeRays,
+    bounds: (Vec3, Vec3),
+    tile: (u32, u32, u32, u32),
+    counters: &mut RayCounters,
+    f: &mut impl FnMut(u32, u32, Option<Ray>, Option<Hit>),
+) {
+    singles::<I>(scene, eye, bounds, tile, counters, f)
 }
 
 fn blocks<I: Intersector, const N: usize>(

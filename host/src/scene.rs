@@ -12,7 +12,7 @@ use raypipe_core::{NoProbe, Ray, RayCounters, SceneView, Watertight};
 use crate::tracer::trace;
 
 use crate::aligned::AlignedBytes;
-use crate::bvh_builder::{build_bvh, collapse_to_bvh4, BvhParams};
+use crate::bvh_builder::{build_bvh, collapse_to_bvh4, collapse_to_bvh8, BvhParams};
 use crate::camera_file::CameraSpec;
 use crate::default_scene;
 use crate::grid_builder::{build_grid, GridResolution};
@@ -33,6 +33,8 @@ pub enum Accel {
     Bvh,
     /// 4-wide BVH (the binary BVH collapsed, 128-byte nodes tested with SIMD).
     Bvh4,
+    /// 8-wide BVH (the binary BVH collapsed, 256-byte nodes tested with SIMD).
+    Bvh8,
     /// None: every ray tests every triangle (the reference).
     None,
 }
@@ -340,6 +342,11 @@ pub fn build(
             let bvh = collapse_to_bvh4(&build_bvh(&mesh, &opts.bvh));
             report.tree(bvh.nodes.len(), 128, bvh.depth, bvh.prims.len());
             writer.bvh4(&bvh);
+        }
+        Accel::Bvh8 => {
+            let bvh = collapse_to_bvh8(&build_bvh(&mesh, &opts.bvh));
+            report.tree(bvh.nodes.len(), 256, bvh.depth, bvh.prims.len());
+            writer.bvh8(&bvh);
         }
         Accel::None => {}
     }

@@ -4,6 +4,7 @@
 use raypipe_core::bvh::trace_bvh;
 use raypipe_core::bvh4::trace_bvh4;
 use raypipe_core::bvh4_packet::trace_bvh4_packet;
+use raypipe_core::bvh8::trace_bvh8;
 use raypipe_core::bvh_packet::trace_bvh_packet;
 use raypipe_core::grid::trace_grid;
 use raypipe_core::grid_packet::trace_grid_packet;
@@ -42,7 +43,7 @@ impl IntersectorKind {
 }
 
 /// Traces one ray with the scene's structure.
-#[inline]
+#[inline(always)]
 pub fn trace<I: Intersector, P: MemoryProbe>(
     scene: &SceneView<'_>,
     ray: &Ray,
@@ -53,6 +54,8 @@ pub fn trace<I: Intersector, P: MemoryProbe>(
         trace_grid::<I, P>(scene, grid, ray, probe, counters)
     } else if let Some(bvh) = scene.bvh4() {
         trace_bvh4::<I, P>(scene, bvh, ray, probe, counters)
+    } else if let Some(bvh) = scene.bvh8() {
+        trace_bvh8::<I, P>(scene, bvh, ray, probe, counters)
     } else if let Some(bvh) = scene.bvh() {
         trace_bvh::<I, P>(scene, bvh, ray, probe, counters)
     } else if let Some(kd) = scene.kdtree() {
@@ -83,6 +86,12 @@ macro_rules! with_intersector {
     };
 }
 
+/// Whether the scene's structure has a packet kernel; packets of the others (no
+/// structure, the 8-wide BVH) are traced ray by ray.
+pub fn has_packet_kernel(scene: &SceneView<'_>) -> bool {
+    scene.grid().is_some() || scene.bvh4().is_some() || scene.bvh().is_some() || scene.kdtree().is_some()
+}
+
 /// Traces a packet with the scene's structure, in lock-step.
 #[inline]
 pub fn trace_packet<I: Intersector, P: MemoryProbe, const N: usize>(
@@ -101,15 +110,15 @@ pub fn trace_packet<I: Intersector, P: MemoryProbe, const N: usize>(
     } else if let Some(kd) = scene.kdtree() {
         trace_kdtree_packet::<I, P, N>(scene, kd, packet, hits, probe, counters)
     } else {
-        // No structure: each ray against every triangle.
+        // No packet kernel (no structure, or the 8-wide BVH, whose single-ray kernel is
+        // its fast path): each ray by itself.
         let mut c = RayCounters::default();
         for (i, hit) in hits.iter_mut().enumerate() {
-            *hit = if packet.active & (1 << i) != 0 {
-                trace_brute_force::<I, P>(scene, &packet.ray(i), probe, &mut c)
-            } else {
-                None
-            };
+            *hit =
+                if packet.active & (1 << i) != 0 { trace::<I, P>(scene, &packet.ray(i), probe, &mut c) } else { None };
         }
+        counters.visits += (c.nodes + c.leaves) as u64;
+        counters.active_lanes += (c.nodes + c.leaves) as u64;
         counters.tri_tests += c.tri_tests as u64;
     }
 }

@@ -144,6 +144,8 @@ fn check<I: Intersector>(view: &SceneView<'_>, ray: &Ray) -> Result<(Option<Hit>
                 "bvh"
             } else if view.bvh4().is_some() {
                 "bvh4"
+            } else if view.bvh8().is_some() {
+                "bvh8"
             } else if view.kdtree().is_some() {
                 "kd-tree"
             } else {
@@ -175,7 +177,8 @@ proptest! {
         let kd = build_soup(soup.positions.clone(), soup.triangles.clone(), Accel::Kd, 1);
         let bvh = build_soup(soup.positions.clone(), soup.triangles.clone(), Accel::Bvh, 1);
         let bvh4 = build_soup(soup.positions.clone(), soup.triangles.clone(), Accel::Bvh4, 1);
-        for scene in [&grid, &kd, &bvh, &bvh4] {
+        let bvh8 = build_soup(soup.positions.clone(), soup.triangles.clone(), Accel::Bvh8, 1);
+        for scene in [&grid, &kd, &bvh, &bvh4, &bvh8] {
             let view = scene.view().expect("valid image");
             for (kind, range) in &rays {
                 // Rays on cell boundaries are placed with the grid's geometry.
@@ -220,7 +223,7 @@ fn no_leak_through_shared_edges_of_a_closed_cube() {
     let p: Vec<[f32; 3]> = (0..8).map(|i| [(i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32]).collect();
     let quads = [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]];
     let tris: Vec<[u32; 3]> = quads.iter().flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]).collect();
-    for accel in [Accel::Grid, Accel::Kd, Accel::Bvh, Accel::Bvh4] {
+    for accel in [Accel::Grid, Accel::Kd, Accel::Bvh, Accel::Bvh4, Accel::Bvh8] {
         let scene = build_soup(p.clone(), tris.clone(), accel, 3);
         let view = scene.view().unwrap();
         let mut n = 0;
@@ -257,7 +260,7 @@ proptest! {
         eye in [-8.0f32..8.0, -8.0f32..8.0, -8.0f32..8.0],
         look in point(),
         fov in 10.0f32..120.0,
-        accel in prop_oneof![Just(Accel::Grid), Just(Accel::Kd), Just(Accel::Bvh), Just(Accel::Bvh4)],
+        accel in prop_oneof![Just(Accel::Grid), Just(Accel::Kd), Just(Accel::Bvh), Just(Accel::Bvh4), Just(Accel::Bvh8)],
     ) {
         use raypipe_core::camera::{Camera, EyeRays};
         let scene = build_soup(soup.positions.clone(), soup.triangles.clone(), accel, 4);
@@ -307,6 +310,26 @@ fn packet_matches_single<const N: usize>(view: &SceneView<'_>, rays: &[Ray]) -> 
     Ok(())
 }
 
+/// The host's ray-batch driver (`raypipe trace`), whose single-ray loop runs the AVX2
+/// build of the kernels where the CPU has it, returns the bits of [`trace`] ray by ray.
+fn batch_matches_single(view: &SceneView<'_>, rays: &[Ray]) -> Result<(), TestCaseError> {
+    use raypipe::batch::trace_batch;
+    use raypipe::packets::PacketSize;
+    use raypipe::tracer::IntersectorKind;
+    for packet in [PacketSize::Single, PacketSize::P64] {
+        let hits = trace_batch(view, rays, IntersectorKind::Watertight, packet, Some(1)).unwrap();
+        for (r, h) in rays.iter().zip(&hits) {
+            let single = trace::<Watertight, _>(view, r, &mut NoProbe, &mut RayCounters::default());
+            let want = single.map_or((f32::INFINITY.to_bits(), 0, 0, -1), |s| {
+                (s.t.to_bits(), s.u.to_bits(), s.v.to_bits(), s.prim as i32)
+            });
+            let got = (h.t.to_bits(), h.u.to_bits(), h.v.to_bits(), h.prim);
+            prop_assert_eq!(got, want, "{:?} batch for {:?}", packet, r);
+        }
+    }
+    Ok(())
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 300, ..ProptestConfig::default() })]
 
@@ -319,7 +342,7 @@ proptest! {
         eye in [-8.0f32..8.0, -8.0f32..8.0, -8.0f32..8.0],
         look in point(),
         random in prop::collection::vec(ray_kind(), 64),
-        accel in prop_oneof![Just(Accel::Grid), Just(Accel::Kd), Just(Accel::Bvh), Just(Accel::Bvh4), Just(Accel::None)],
+        accel in prop_oneof![Just(Accel::Grid), Just(Accel::Kd), Just(Accel::Bvh), Just(Accel::Bvh4), Just(Accel::Bvh8), Just(Accel::None)],
     ) {
         use raypipe_core::camera::{Camera, EyeRays};
         let scene = build_soup(soup.positions.clone(), soup.triangles.clone(), accel, 3);
@@ -334,6 +357,7 @@ proptest! {
         packet_matches_single::<4>(&view, &rays)?;
         packet_matches_single::<16>(&view, &rays)?;
         packet_matches_single::<64>(&view, &rays)?;
+        batch_matches_single(&view, &rays)?;
     }
 }
 
@@ -346,7 +370,7 @@ proptest! {
     fn wald_triangle_layout_returns_the_brute_force_hit(
         soup in soup(),
         rays in prop::collection::vec(ray_kind(), 32),
-        accel in prop_oneof![Just(Accel::Grid), Just(Accel::Kd), Just(Accel::Bvh), Just(Accel::Bvh4)],
+        accel in prop_oneof![Just(Accel::Grid), Just(Accel::Kd), Just(Accel::Bvh), Just(Accel::Bvh4), Just(Accel::Bvh8)],
     ) {
         let stored = build_soup_wald(soup.positions.clone(), soup.triangles.clone(), accel);
         let sview = stored.view().unwrap();
@@ -384,7 +408,7 @@ proptest! {
         let scaled = Soup { positions: positions.clone(), triangles: soup.triangles.clone(), flat_axis: soup.flat_axis };
         let grid = build_soup(positions.clone(), soup.triangles.clone(), Accel::Grid, 3);
         let gview = grid.view().unwrap();
-        for accel in [Accel::Grid, Accel::Kd, Accel::Bvh, Accel::Bvh4] {
+        for accel in [Accel::Grid, Accel::Kd, Accel::Bvh, Accel::Bvh4, Accel::Bvh8] {
             let scene = build_soup(positions.clone(), soup.triangles.clone(), accel, 3);
             let view = scene.view().unwrap();
             for k in &rays {
@@ -406,7 +430,7 @@ proptest! {
     /// the tangent case where only a consistent kernel keeps structures in agreement.
     #[test]
     fn rays_in_a_triangles_plane(soup in soup(), picks in prop::collection::vec((any::<prop::sample::Index>(), 0u8..3, -0.5f32..1.5), 24)) {
-        let scenes: Vec<_> = [Accel::Grid, Accel::Kd, Accel::Bvh, Accel::Bvh4]
+        let scenes: Vec<_> = [Accel::Grid, Accel::Kd, Accel::Bvh, Accel::Bvh4, Accel::Bvh8]
             .into_iter()
             .map(|a| build_soup(soup.positions.clone(), soup.triangles.clone(), a, 3))
             .collect();
@@ -437,7 +461,7 @@ proptest! {
 fn collinear_triangles_never_hit() {
     let p = vec![[-2.0, 0.25, 1.5], [1.0, 0.25, 1.5], [-0.98723924, 0.25, 1.5], [0.0, 0.0, 0.0]];
     let tris = vec![[0, 1, 2], [2, 0, 1], [0, 1, 3]];
-    for accel in [Accel::None, Accel::Grid, Accel::Kd, Accel::Bvh, Accel::Bvh4] {
+    for accel in [Accel::None, Accel::Grid, Accel::Kd, Accel::Bvh, Accel::Bvh4, Accel::Bvh8] {
         let scene = build_soup(p.clone(), tris.clone(), accel, 4);
         let view = scene.view().unwrap();
         assert_eq!(view.triangle_indices(0), [0, 0, 0]);

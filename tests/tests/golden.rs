@@ -34,7 +34,7 @@ fn cornell_box_watertight() {
 /// One image whatever the structure, packet size and thread count.
 #[test]
 fn cornell_box_is_the_same_from_every_structure_and_packet_size() {
-    for accel in [Accel::Grid, Accel::Kd, Accel::Bvh, Accel::Bvh4, Accel::None] {
+    for accel in [Accel::Grid, Accel::Kd, Accel::Bvh, Accel::Bvh4, Accel::Bvh8, Accel::None] {
         for (i, packet) in PacketSize::ALL.into_iter().enumerate() {
             let frame = render_default(IntersectorKind::Watertight, 1 + i % 3, accel, packet);
             check_golden("cornell_box_128.png", &frame);

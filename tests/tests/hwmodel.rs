@@ -32,7 +32,14 @@ fn soup() -> impl Strategy<Value = (Vec<[f32; 3]>, Vec<[u32; 3]>)> {
 }
 
 fn accel() -> impl Strategy<Value = Accel> {
-    prop_oneof![Just(Accel::Grid), Just(Accel::Kd), Just(Accel::Bvh), Just(Accel::Bvh4), Just(Accel::None)]
+    prop_oneof![
+        Just(Accel::Grid),
+        Just(Accel::Kd),
+        Just(Accel::Bvh),
+        Just(Accel::Bvh4),
+        Just(Accel::Bvh8),
+        Just(Accel::None)
+    ]
 }
 
 /// A random but valid chip.
@@ -186,7 +193,7 @@ fn count_outside(view: &SceneView<'_>, eye: &EyeRays) -> u64 {
 fn the_tick_order_changes_nothing() {
     let positions = vec![[0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0, 2.0], [2.0, 2.0, 1.0]];
     let tris = vec![[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3], [1, 4, 2], [3, 4, 0]];
-    for accel in [Accel::Grid, Accel::Kd, Accel::Bvh, Accel::Bvh4] {
+    for accel in [Accel::Grid, Accel::Kd, Accel::Bvh, Accel::Bvh4, Accel::Bvh8] {
         let scene = build_soup(positions.clone(), tris.clone(), accel, 3);
         let view = scene.view().unwrap();
         let cam = camera(&view, (24, 20), [0.3, -0.2, 0.1]);

@@ -196,7 +196,7 @@ proptest! {
     fn random_corruption_never_panics(
         edits in prop::collection::vec((any::<prop::sample::Index>(), any::<u8>()), 1..6),
         cut in any::<Option<prop::sample::Index>>(),
-        accel in prop_oneof![Just(Accel::Grid), Just(Accel::Kd), Just(Accel::Bvh), Just(Accel::Bvh4)],
+        accel in prop_oneof![Just(Accel::Grid), Just(Accel::Kd), Just(Accel::Bvh), Just(Accel::Bvh4), Just(Accel::Bvh8)],
     ) {
         let mut b = soup_image(accel);
         for (i, v) in &edits {
@@ -272,8 +272,27 @@ fn tree_corruptions() {
         put_u32(b, root + 112, 3)
     })));
     assert!(tree(corrupt_image(&bvh4, |b| b[root..root + 4].copy_from_slice(&f32::NAN.to_le_bytes()))));
+    let bvh8 = cornell_with(Accel::Bvh8);
+    let (_, nodes) = entry_pos(&bvh8, SectionKind::Bvh8Nodes);
+    let root = nodes.offset as usize;
+    let tree = |e: SceneError| matches!(e, SceneError::BadTree { section: SectionKind::Bvh8Nodes, .. });
+    // Slot 0's child index (offset 192) back to the root, a leaf range past the list, a
+    // NaN plane, and an empty slot (child null) whose box is not inverted.
+    assert!(tree(corrupt_image(&bvh8, |b| {
+        put_u32(b, root + 192, 0);
+        put_u32(b, root + 224, 0)
+    })));
+    assert!(tree(corrupt_image(&bvh8, |b| {
+        put_u32(b, root + 192, 1_000_000);
+        put_u32(b, root + 224, 3)
+    })));
+    assert!(tree(corrupt_image(&bvh8, |b| b[root..root + 4].copy_from_slice(&f32::NAN.to_le_bytes()))));
+    assert!(tree(corrupt_image(&bvh8, |b| {
+        put_u32(b, root + 192, u32::MAX);
+        put_u32(b, root + 224, 0)
+    })));
     // Every structure's image is otherwise valid and traceable.
-    for img in [&bvh, &kd, &bvh4] {
+    for img in [&bvh, &kd, &bvh4, &bvh8] {
         assert!(SceneView::parse(img).is_ok());
     }
 }

@@ -40,7 +40,7 @@ proptest! {
     ) {
         let n = positions.len();
         let tris: Vec<[u32; 3]> = picks.iter().map(|[a, b, c]| [a.index(n) as u32, b.index(n) as u32, c.index(n) as u32]).collect();
-        for accel in [Accel::Grid, Accel::Kd, Accel::Bvh, Accel::Bvh4, Accel::None] {
+        for accel in [Accel::Grid, Accel::Kd, Accel::Bvh, Accel::Bvh4, Accel::Bvh8, Accel::None] {
             let scene = build_soup(positions.clone(), tris.clone(), accel, 3);
             let view = scene.view().unwrap();
             for (o, target, t_min, t_max) in &rays {
@@ -251,7 +251,7 @@ fn whitted_image_is_golden_and_the_same_for_every_structure_packet_and_thread_co
     let path = root().join("fixtures/whitted.obj");
     let first = render_whitted(&path, Accel::Grid, PacketSize::Single, 1, (160, 120));
     check_golden("whitted_160x120.png", &first);
-    for (i, accel) in [Accel::Kd, Accel::Bvh, Accel::Bvh4, Accel::None].into_iter().enumerate() {
+    for (i, accel) in [Accel::Kd, Accel::Bvh, Accel::Bvh4, Accel::Bvh8, Accel::None].into_iter().enumerate() {
         for packet in [PacketSize::Single, PacketSize::P4, PacketSize::P64] {
             let frame = render_whitted(&path, accel, packet, 1 + i % 3, (160, 120));
             assert!(frame.pixels == first.pixels, "{accel:?} {packet:?}");

@@ -84,6 +84,8 @@ pub enum AccelKind {
     KdTree = 3,
     /// A 4-wide BVH (sections BVH4_NODES, PRIM_LISTS).
     Bvh4 = 4,
+    /// An 8-wide BVH (sections BVH8_NODES, PRIM_LISTS).
+    Bvh8 = 5,
 }
 
 impl AccelKind {
@@ -95,6 +97,7 @@ impl AccelKind {
             2 => Some(AccelKind::Bvh),
             3 => Some(AccelKind::KdTree),
             4 => Some(AccelKind::Bvh4),
+            5 => Some(AccelKind::Bvh8),
             _ => None,
         }
     }
@@ -137,11 +140,13 @@ pub enum SectionKind {
     Textures = 15,
     /// Texels of all textures, one `u32` each: RGBA, 8-bit sRGB, red in the low byte.
     Texels = 16,
+    /// 8-wide BVH nodes, [`crate::image::Bvh8Node`], 256 bytes each; node 0 is the root.
+    Bvh8Nodes = 17,
 }
 
 impl SectionKind {
     /// Every kind, in table order.
-    pub const ALL: [SectionKind; 16] = [
+    pub const ALL: [SectionKind; 17] = [
         SectionKind::Positions,
         SectionKind::Triangles,
         SectionKind::Grid,
@@ -158,6 +163,7 @@ impl SectionKind {
         SectionKind::WaldTriangles,
         SectionKind::Textures,
         SectionKind::Texels,
+        SectionKind::Bvh8Nodes,
     ];
 
     /// Decodes a section-table kind.
@@ -175,6 +181,7 @@ impl SectionKind {
             SectionKind::ShadingVertices | SectionKind::Lights | SectionKind::BvhNodes => 32,
             SectionKind::KdNodes => 8,
             SectionKind::Bvh4Nodes => 128,
+            SectionKind::Bvh8Nodes => 256,
             SectionKind::WaldTriangles => 48,
         }
     }
@@ -195,6 +202,7 @@ impl SectionKind {
             SectionKind::BvhNodes => "BVH_NODES",
             SectionKind::KdNodes => "KD_NODES",
             SectionKind::Bvh4Nodes => "BVH4_NODES",
+            SectionKind::Bvh8Nodes => "BVH8_NODES",
             SectionKind::WaldTriangles => "WALD_TRIANGLES",
             SectionKind::Textures => "TEXTURES",
             SectionKind::Texels => "TEXELS",

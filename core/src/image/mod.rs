@@ -15,9 +15,10 @@ pub use crc32::{crc32, Crc32};
 pub use embed::Aligned64;
 pub use header::{AccelKind, Header, SectionEntry, SectionKind, FORMAT_VERSION, MAGIC};
 pub use records::{
-    Bvh4Node, BvhNode, CameraRecord, GridRecord, KdNode, LightRecord, MaterialRecord, Position, ShadingVertex,
-    TextureRecord, TriangleRecord, WaldTriangle, NULL_INDEX,
+    Bvh4Node, Bvh8Node, BvhNode, CameraRecord, GridRecord, KdNode, LightRecord, MaterialRecord, Position,
+    ShadingVertex, TextureRecord, TriangleRecord, WaldTriangle, WideNode, NULL_INDEX,
 };
 pub use view::{
-    Bvh4View, BvhView, GridView, KdTreeView, SceneError, SceneView, IMAGE_ALIGN, MAX_TREE_DEPTH, SECTION_ALIGN,
+    Bvh4View, Bvh8View, BvhView, GridView, KdTreeView, SceneError, SceneView, WideBvhView, IMAGE_ALIGN, MAX_TREE_DEPTH,
+    SECTION_ALIGN,
 };

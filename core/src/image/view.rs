@@ -8,8 +8,8 @@ use glam::Vec3;
 use super::crc32::Crc32;
 use super::header::{AccelKind, Header, SectionEntry, SectionKind, CHECKSUM_OFFSET, FORMAT_VERSION, MAGIC};
 use super::records::{
-    Bvh4Node, BvhNode, CameraRecord, GridRecord, KdNode, LightRecord, MaterialRecord, Position, ShadingVertex,
-    TextureRecord, TriangleRecord, WaldTriangle, NULL_INDEX,
+    Bvh4Node, Bvh8Node, BvhNode, CameraRecord, GridRecord, KdNode, LightRecord, MaterialRecord, Position,
+    ShadingVertex, TextureRecord, TriangleRecord, WaldTriangle, WideNode, NULL_INDEX,
 };
 use crate::probe::{DataClass, MemoryProbe};
 
@@ -302,16 +302,21 @@ impl<'a> BvhView<'a> {
     }
 }
 
-/// A 4-wide BVH of a scene image.
+/// A wide (4- or 8-wide) BVH of a scene image.
 #[derive(Clone, Copy, Debug)]
-pub struct Bvh4View<'a> {
-    nodes: &'a [Bvh4Node],
+pub struct WideBvhView<'a, N: WideNode> {
+    nodes: &'a [N],
     prims: &'a [u32],
     nodes_addr: u32,
     prims_addr: u32,
 }
 
-impl<'a> Bvh4View<'a> {
+/// A 4-wide BVH of a scene image.
+pub type Bvh4View<'a> = WideBvhView<'a, Bvh4Node>;
+/// An 8-wide BVH of a scene image.
+pub type Bvh8View<'a> = WideBvhView<'a, Bvh8Node>;
+
+impl<'a, N: WideNode> WideBvhView<'a, N> {
     /// Number of nodes.
     pub fn node_count(&self) -> usize {
         self.nodes.len()
@@ -319,9 +324,10 @@ impl<'a> Bvh4View<'a> {
 
     /// Reads node `index`.
     #[inline]
-    pub fn node<P: MemoryProbe>(&self, index: u32, probe: &mut P) -> &'a Bvh4Node {
-        probe.read(DataClass::Nodes, self.nodes_addr.wrapping_add(index.wrapping_mul(128)), 128);
-        self.nodes.get(index as usize).unwrap_or(&Bvh4Node::EMPTY)
+    pub fn node<P: MemoryProbe>(&self, index: u32, probe: &mut P) -> &'a N {
+        let size = core::mem::size_of::<N>() as u32;
+        probe.read(DataClass::Nodes, self.nodes_addr.wrapping_add(index.wrapping_mul(size)), size);
+        self.nodes.get(index as usize).unwrap_or_else(|| N::empty())
     }
 
     /// Reads primitive-list entry `pos`.
@@ -378,10 +384,10 @@ impl crate::tree_step::PrimLists for BvhView<'_> {
     }
 }
 
-impl crate::tree_step::PrimLists for Bvh4View<'_> {
+impl<N: WideNode> crate::tree_step::PrimLists for WideBvhView<'_, N> {
     #[inline(always)]
     fn prim<P: MemoryProbe>(&self, pos: u32, probe: &mut P) -> u32 {
-        Bvh4View::prim(self, pos, probe)
+        WideBvhView::prim(self, pos, probe)
     }
 }
 
@@ -392,13 +398,13 @@ impl crate::tree_step::PrimLists for KdTreeView<'_> {
     }
 }
 
-/// The inner children of one tree node (at most four: the 4-wide BVH).
-type Children = heapless::Vec<u32, 4>;
+/// The inner children of one tree node (at most eight: the 8-wide BVH).
+type Children = heapless::Vec<u32, 8>;
 
 /// Checks, with a fixed-capacity stack and no allocation, that `children(i)` describes a
 /// tree rooted at node 0: every child comes after its parent and inside the section, no
 /// path is [`MAX_TREE_DEPTH`] nodes deep (the traversal kernels' stacks hold one entry per
-/// level, three for the 4-wide BVH), and the walk visits exactly `n` nodes. `children(i)`
+/// level, seven for the 8-wide BVH), and the walk visits exactly `n` nodes. `children(i)`
 /// is `Err` for a malformed node, else the node's inner children (none for a leaf).
 fn validate_tree(
     n: usize,
@@ -409,8 +415,8 @@ fn validate_tree(
     if n == 0 {
         return Err(bad(0));
     }
-    // (node, depth); a depth-first walk pushes at most three more entries per level.
-    let mut stack: heapless::Vec<(u32, u32), { 3 * MAX_TREE_DEPTH as usize + 1 }> = heapless::Vec::new();
+    // (node, depth); a depth-first walk pushes at most seven more entries per level.
+    let mut stack: heapless::Vec<(u32, u32), { 7 * MAX_TREE_DEPTH as usize + 1 }> = heapless::Vec::new();
     let _ = stack.push((0, 0));
     let mut visited = 0usize;
     while let Some((i, depth)) = stack.pop() {
@@ -454,6 +460,7 @@ pub struct SceneView<'a> {
     grid: Option<GridView<'a>>,
     bvh: Option<BvhView<'a>>,
     bvh4: Option<Bvh4View<'a>>,
+    bvh8: Option<Bvh8View<'a>>,
     kd: Option<KdTreeView<'a>>,
     shading: &'a [ShadingVertex],
     wald: &'a [WaldTriangle],
@@ -658,13 +665,14 @@ impl<'a> SceneView<'a> {
             }
         }
 
-        let (mut grid, mut bvh, mut kd, mut bvh4) = (None, None, None, None);
+        let (mut grid, mut bvh, mut kd, mut bvh4, mut bvh8) = (None, None, None, None, None);
         match accel {
             AccelKind::None => {}
             AccelKind::Grid => grid = Some(Self::validate_grid(s, nt, bmin, bmax)?),
             AccelKind::Bvh => bvh = Some(Self::validate_bvh(s, nt)?),
             AccelKind::KdTree => kd = Some(Self::validate_kd(s, nt, bmin, bmax)?),
-            AccelKind::Bvh4 => bvh4 = Some(Self::validate_bvh4(s, nt)?),
+            AccelKind::Bvh4 => bvh4 = Some(Self::validate_wide(s, SectionKind::Bvh4Nodes, nt)?),
+            AccelKind::Bvh8 => bvh8 = Some(Self::validate_wide(s, SectionKind::Bvh8Nodes, nt)?),
         }
 
         // Shading data: optional, but when present it must match the geometry.
@@ -765,6 +773,7 @@ impl<'a> SceneView<'a> {
             grid,
             bvh,
             bvh4,
+            bvh8,
             kd,
             shading,
             wald,
@@ -927,18 +936,19 @@ impl<'a> SceneView<'a> {
         })
     }
 
-    fn validate_bvh4(s: &Sections<'a>, nt: u32) -> Result<Bvh4View<'a>, SceneError> {
-        let section = SectionKind::Bvh4Nodes;
-        let nodes: &[Bvh4Node] = s.required(section)?;
+    fn validate_wide<N: WideNode>(
+        s: &Sections<'a>,
+        section: SectionKind,
+        nt: u32,
+    ) -> Result<WideBvhView<'a, N>, SceneError> {
+        let nodes: &[N] = s.required(section)?;
         let prims = Self::prim_list(s, nt)?;
         let np = prims.len() as u64;
         validate_tree(nodes.len(), section, |i| {
             let node = &nodes[i];
             let mut inner = Children::new();
-            for k in 0..4 {
-                let (c, count) = (node.child[k], node.count[k]);
-                let lo = [node.min_x[k], node.min_y[k], node.min_z[k]];
-                let hi = [node.max_x[k], node.max_y[k], node.max_z[k]];
+            for k in 0..N::WIDTH {
+                let (lo, hi, c, count) = node.slot(k);
                 if !(finite3(lo) && finite3(hi)) {
                     return Err(());
                 }
@@ -953,13 +963,18 @@ impl<'a> SceneView<'a> {
                     if c as u64 + count as u64 > np {
                         return Err(());
                     }
-                } else {
-                    let _ = inner.push(c);
+                } else if inner.push(c).is_err() {
+                    return Err(());
                 }
             }
             Ok(inner)
         })?;
-        Ok(Bvh4View { nodes, prims, nodes_addr: s.addr(section), prims_addr: s.addr(SectionKind::PrimLists) })
+        Ok(WideBvhView { nodes, prims, nodes_addr: s.addr(section), prims_addr: s.addr(SectionKind::PrimLists) })
+    }
+
+    /// The 8-wide BVH, if the image holds one.
+    pub fn bvh8(&self) -> Option<&Bvh8View<'a>> {
+        self.bvh8.as_ref()
     }
 
     /// The 4-wide BVH, if the image holds one.

@@ -1,0 +1,205 @@
+//! 8-wide BVH node test: one node holds the boxes of eight children, tested together by
+//! an 8-lane slab test written over plain arrays, which the compiler turns into two SSE
+//! registers per plane, or one AVX register where the caller is compiled for AVX (the
+//! host's AVX2 build of its loops). A ray visits fewer, wider nodes than in the 4-wide
+//! BVH (Embree's BVH8). The walk itself is the wide BVH's ([`crate::wide_bvh`]).
+
+use crate::aabb::SLAB_GROWTH;
+use crate::counters::RayCounters;
+use crate::hit::Hit;
+use crate::image::{Bvh8Node, Bvh8View, SceneView};
+use crate::probe::MemoryProbe;
+use crate::ray::Ray;
+use crate::triangle::Intersector;
+use crate::wide_bvh::{trace_wide_bvh, NodeRay, WideBvhTraversal, WideSlab};
+
+/// `max` as the SIMD instruction computes it (the second operand when either is NaN),
+/// written so that the compiler emits exactly that instruction.
+#[inline(always)]
+fn max(a: f32, b: f32) -> f32 {
+    if a > b {
+        a
+    } else {
+        b
+    }
+}
+
+/// `min`, likewise.
+#[inline(always)]
+fn min(a: f32, b: f32) -> f32 {
+    if a < b {
+        a
+    } else {
+        b
+    }
+}
+
+/// Entry distances of the ray into the eight child boxes of `n`, within `[t0, t1]`, and
+/// the bit mask of those it hits (empty slots, whose boxes are inverted, never). The
+/// same arithmetic as [`crate::bvh4::slab4`], eight lanes wide.
+#[inline(always)]
+pub fn slab8(r: &NodeRay, n: &Bvh8Node, t0: f32, t1: f32) -> ([f32; 8], u32) {
+    if r.rb.zero_axes != 0 {
+        return slab8_exact(r, n, t0, t1);
+    }
+    // The node's planes as rows: min x, y, z, then max x, y, z (then children, counts).
+    let rows: &[[f32; 8]; 8] = bytemuck::cast_ref(n);
+    let (o, inv) = (r.rb.origin.to_array(), r.rb.inv.to_array());
+    let (nx, ny, nz) = (&rows[r.near[0] & 7], &rows[r.near[1] & 7], &rows[r.near[2] & 7]);
+    let (fx, fy, fz) = (&rows[r.far[0] & 7], &rows[r.far[1] & 7], &rows[r.far[2] & 7]);
+    let mut tn = [0.0f32; 8];
+    let mut hit = [0u8; 8];
+    for k in 0..8 {
+        // Monotone in the plane: these are the min and max of the two planes' distances
+        // for a valid box; an inverted (empty) slot gets near > far and fails.
+        let near = max(max((nx[k] - o[0]) * inv[0], (ny[k] - o[1]) * inv[1]), max((nz[k] - o[2]) * inv[2], t0));
+        let far = min(min((fx[k] - o[0]) * inv[0], (fy[k] - o[1]) * inv[1]), (fz[k] - o[2]) * inv[2]);
+        let far = min(far * SLAB_GROWTH, t1);
+        tn[k] = near;
+        hit[k] = (near <= far) as u8;
+    }
+    (tn, mask8(hit))
+}
+
+/// The bits of eight lanes' outcomes (bit `k` for lane `k`, from bytes of 0 or 1).
+/// One multiplication gathers byte `k`'s low bit into bit `56 + k` with no carries
+/// (the compiler does not find a move-mask for a loop over the lanes).
+#[inline(always)]
+fn mask8(hit: [u8; 8]) -> u32 {
+    (u64::from_le_bytes(hit).wrapping_mul(0x0102_0408_1020_4080) >> 56) as u32
+}
+
+/// [`slab8`] for any ray, including one with a zero direction component (whose axis is
+/// tested as "origin inside the slab", see [`crate::ray_box::RayBox`]).
+#[inline(never)]
+pub fn slab8_exact(r: &NodeRay, n: &Bvh8Node, t0: f32, t1: f32) -> ([f32; 8], u32) {
+    let (o, inv, zero) = (r.rb.origin.to_array(), r.rb.inv.to_array(), r.rb.zero_axes);
+    let lo = [&n.min_x, &n.min_y, &n.min_z];
+    let hi = [&n.max_x, &n.max_y, &n.max_z];
+    let mut tn = [0.0f32; 8];
+    let mut hit = [0u8; 8];
+    for k in 0..8 {
+        let (mut near, mut far, mut inside) = (t0, f32::INFINITY, true);
+        for a in 0..3 {
+            if zero & (1 << a) != 0 {
+                inside &= o[a] >= lo[a][k] && o[a] <= hi[a][k];
+            } else {
+                let (p, q) = ((lo[a][k] - o[a]) * inv[a], (hi[a][k] - o[a]) * inv[a]);
+                near = max(min(p, q), near);
+                far = min(max(p, q), far);
+            }
+        }
+        let far = min(far * SLAB_GROWTH, t1);
+        tn[k] = near;
+        // Inverted (empty) slots: min > max on x.
+        hit[k] = (near <= far && inside && lo[0][k] <= hi[0][k]) as u8;
+    }
+    (tn, mask8(hit))
+}
+
+impl WideSlab for Bvh8Node {
+    type Dist = [f32; 8];
+
+    #[inline(always)]
+    fn slab(&self, r: &NodeRay, t0: f32, t1: f32) -> ([f32; 8], u32) {
+        slab8(r, self, t0, t1)
+    }
+
+    #[inline(always)]
+    fn link(&self, k: usize) -> (u32, u32) {
+        (self.child[k & 7], self.count[k & 7])
+    }
+}
+
+/// One ray's walk through the 8-wide BVH.
+pub type Bvh8Traversal = WideBvhTraversal;
+
+/// The closest hit of `ray` through the 8-wide BVH (see [`trace_wide_bvh`]).
+#[inline(always)]
+pub fn trace_bvh8<I: Intersector, P: MemoryProbe>(
+    scene: &SceneView<'_>,
+    bvh: &Bvh8View<'_>,
+    ray: &Ray,
+    probe: &mut P,
+    counters: &mut RayCounters,
+) -> Option<Hit> {
+    trace_wide_bvh::<Bvh8Node, I, P>(scene, bvh, ray, probe, counters)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bvh4::slab4;
+    use crate::image::{Bvh4Node, WideNode};
+    use glam::Vec3;
+
+    /// A small deterministic generator (no dependencies in core).
+    struct Lcg(u64);
+    impl Lcg {
+        fn unit(&mut self) -> f32 {
+            self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (self.0 >> 40) as f32 / (1u64 << 24) as f32
+        }
+        fn range(&mut self, lo: f32, hi: f32) -> f32 {
+            lo + (hi - lo) * self.unit()
+        }
+    }
+
+    /// The 8-lane test gives, slot for slot, the 4-lane test's verdict and entry distance
+    /// (bit for bit), for rays of every octant, rays with zero direction components, and
+    /// nodes with empty slots.
+    #[test]
+    fn eight_lanes_agree_with_two_four_lane_nodes() {
+        let mut g = Lcg(7);
+        for case in 0..4000 {
+            let mut wide = Bvh8Node::EMPTY;
+            let mut halves = [Bvh4Node::EMPTY; 2];
+            let used = 1 + case % 8;
+            for k in 0..used {
+                let c: [f32; 3] = core::array::from_fn(|_| g.range(-4.0, 4.0));
+                let e: [f32; 3] = core::array::from_fn(|_| if g.unit() < 0.1 { 0.0 } else { g.range(0.0, 2.0) });
+                let lo = [c[0] - e[0], c[1] - e[1], c[2] - e[2]];
+                let hi = [c[0] + e[0], c[1] + e[1], c[2] + e[2]];
+                wide.set_slot(k, lo, hi, k as u32 + 1, 0);
+                halves[k / 4].set_slot(k % 4, lo, hi, k as u32 + 1, 0);
+            }
+            let mut d: [f32; 3] = core::array::from_fn(|_| g.range(-1.0, 1.0));
+            if case % 5 == 0 {
+                d[case % 3] = 0.0;
+            }
+            if d == [0.0; 3] {
+                d[0] = 1.0;
+            }
+            let mut o: [f32; 3] = core::array::from_fn(|_| g.range(-6.0, 6.0));
+            if case % 5 == 0 && case % 2 == 0 {
+                // On a face of a box, along an axis the ray does not move on.
+                let (a, k) = (case % 3, (case / 7) % used);
+                let (lo, hi, _, _) = wide.slot(k);
+                o[a] = if case % 4 == 0 { lo[a] } else { hi[a] };
+            }
+            let ray = Ray::new(Vec3::from(o), Vec3::from(d));
+            let r = NodeRay::new(&ray);
+            let (t0, t1) = (0.0, if case % 3 == 0 { g.range(0.5, 8.0) } else { f32::INFINITY });
+            let (t8, m8) = slab8(&r, &wide, t0, t1);
+            for (h, node) in halves.iter().enumerate() {
+                let (t4, m4) = slab4(&r, node, t0, t1);
+                let t4 = t4.to_array();
+                assert_eq!((m8 >> (4 * h)) & 0xF, m4, "case {case}: masks differ");
+                for k in 0..4 {
+                    if m4 & (1 << k) != 0 {
+                        assert_eq!(t8[4 * h + k].to_bits(), t4[k].to_bits(), "case {case} slot {k}");
+                    }
+                }
+            }
+            assert_eq!(m8 >> used, 0, "case {case}: an empty slot was hit");
+        }
+    }
+
+    #[test]
+    fn lane_mask_gathers_each_byte_into_its_bit() {
+        for m in 0u32..256 {
+            let bytes: [u8; 8] = core::array::from_fn(|k| ((m >> k) & 1) as u8);
+            assert_eq!(mask8(bytes), m);
+        }
+    }
+}

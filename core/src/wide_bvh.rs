@@ -1,0 +1,278 @@
+//! The walk through a wide BVH (4 or 8 children per node), whatever its width: one node
+//! holds its children's boxes, tested together by one SIMD slab test (the node's
+//! [`WideSlab`]); hit children are visited nearest first, the others pushed on a
+//! fixed-capacity stack (Wald, Benthin & Boulos 2008; Embree's BVH4 and BVH8). Leaves
+//! are stack entries like nodes, so a leaf is intersected only when it is the nearest
+//! thing left to visit.
+
+use core::ops::Index;
+
+use glam::{Vec3A, Vec4, Vec4Swizzles};
+
+use crate::counters::RayCounters;
+use crate::hit::Hit;
+use crate::image::{SceneView, WideBvhView, WideNode, MAX_TREE_DEPTH};
+use crate::probe::MemoryProbe;
+use crate::ray::Ray;
+use crate::ray_box::RayBox;
+use crate::tree_step::{test_leaf, TreeEvent, TreeWalk};
+use crate::triangle::Intersector;
+
+/// Stack capacity: at most seven entries wait per level of a tree of [`MAX_TREE_DEPTH`].
+const STACK: usize = 7 * MAX_TREE_DEPTH as usize + 8;
+
+/// The traversal stack: `(child or first entry, leaf count or 0, entry distance)`.
+type Stack = heapless::Vec<(u32, u32, f32), STACK>;
+
+/// The ray as a node test reads it: origin and reciprocal direction splatted over four
+/// lanes, and per axis which of a box's two planes is entered first (the ray's octant).
+/// Each axis then costs one subtraction and one product per plane and no min/max (the
+/// sign trick of Williams et al. 2005, as in Embree).
+#[derive(Clone, Copy, Debug)]
+pub struct NodeRay {
+    /// Origin, one axis splatted per register.
+    pub org: [Vec4; 3],
+    /// Reciprocal direction, one axis splatted per register.
+    pub inv: [Vec4; 3],
+    /// Per axis, the node row (min x, y, z, then max x, y, z) of the near plane.
+    pub near: [usize; 3],
+    /// Per axis, the node row of the far plane.
+    pub far: [usize; 3],
+    /// The scalar slab constants (and the zero-direction axes).
+    pub rb: RayBox,
+}
+
+impl NodeRay {
+    /// Precomputes the splats and the octant.
+    #[inline]
+    pub fn new(ray: &Ray) -> NodeRay {
+        let rb = RayBox::new(ray);
+        let neg = rb.inv.cmplt(Vec3A::ZERO).bitmask() as usize;
+        let (o, inv) = (Vec4::from((rb.origin, 0.0)), Vec4::from((rb.inv, 0.0)));
+        NodeRay {
+            org: [o.xxxx(), o.yyyy(), o.zzzz()],
+            inv: [inv.xxxx(), inv.yyyy(), inv.zzzz()],
+            near: core::array::from_fn(|a| a + 3 * ((neg >> a) & 1)),
+            far: core::array::from_fn(|a| a + 3 * (!(neg >> a) & 1)),
+            rb,
+        }
+    }
+}
+
+/// A wide node's slab test: the entry distances of the ray into each child box within
+/// `[t0, t1]`, and the bit mask of the children it hits (never an empty slot). It must
+/// never reject a box the ray touches (see [`crate::ray_box`]).
+pub trait WideSlab: WideNode {
+    /// Entry distances, one per slot.
+    type Dist: Copy + Index<usize, Output = f32>;
+    /// The node test.
+    fn slab(&self, r: &NodeRay, t0: f32, t1: f32) -> (Self::Dist, u32);
+    /// Child (node index or first list entry) and leaf count of slot `k`.
+    fn link(&self, k: usize) -> (u32, u32);
+}
+
+/// The traversal registers of one ray in a wide BVH: the entry to visit next, a
+/// fixed-capacity stack of `(child or first entry, leaf count or 0, entry distance)`, and
+/// the best hit so far. One [`WideBvhTraversal::step`] reads one node.
+#[derive(Clone, Debug)]
+pub struct WideBvhTraversal {
+    ray: NodeRay,
+    t_min: f32,
+    // The best hit's distance (or the ray's end): boxes entered beyond it are skipped.
+    t_end: f32,
+    current: (u32, u32),
+    // heapless: fixed capacity, and nothing is written until pushed (no per-ray memset).
+    stack: Stack,
+    done: bool,
+    /// Closest hit so far.
+    pub best: Option<Hit>,
+}
+
+impl WideBvhTraversal {
+    /// Starts a ray at the root; an invalid ray is done at once.
+    #[inline]
+    pub fn new(ray: &Ray) -> WideBvhTraversal {
+        WideBvhTraversal {
+            ray: NodeRay::new(ray),
+            t_min: ray.t_min,
+            t_end: ray.t_max,
+            current: (0, 0),
+            stack: heapless::Vec::new(),
+            done: !ray.is_valid(),
+            best: None,
+        }
+    }
+
+    /// Reads one inner node and moves to its nearest hit child (pushing the others), or
+    /// reports the leaf the walk stands on.
+    #[inline(always)]
+    pub fn step<N: WideSlab, P: MemoryProbe>(&mut self, bvh: &WideBvhView<'_, N>, probe: &mut P) -> TreeEvent {
+        if self.done {
+            return TreeEvent::Done;
+        }
+        let (index, count) = self.current;
+        if count > 0 {
+            return TreeEvent::Leaf { first: index, count };
+        }
+        let node = bvh.node(index, probe);
+        let (tn, mask) = node.slab(&self.ray, self.t_min, self.t_end);
+        if mask == 0 {
+            self.pop();
+            return TreeEvent::Inner;
+        }
+        self.current = descend(node, &tn, mask, &mut self.stack);
+        TreeEvent::Inner
+    }
+
+    /// After a leaf's triangles: nearer boxes only from now on, and on to the next entry.
+    #[inline(always)]
+    pub fn finish_leaf(&mut self) {
+        self.t_end = self.best.map_or(self.t_end, |h| h.t);
+        self.pop();
+    }
+
+    /// Pops the next entry that may still hold a closer hit, or ends the walk.
+    #[inline(always)]
+    fn pop(&mut self) {
+        match pop_next(&mut self.stack, self.t_end) {
+            Some(next) => self.current = next,
+            None => self.done = true,
+        }
+    }
+}
+
+/// Moves on from `node`, whose hit slots are `mask` (non-empty) with entry distances
+/// `t`: returns the nearest slot's `(child, count)` and pushes the others, farthest
+/// first.
+#[inline(always)]
+fn descend<N: WideSlab>(node: &N, t: &N::Dist, mask: u32, stack: &mut Stack) -> (u32, u32) {
+    let first = mask.trailing_zeros() as usize;
+    let rest = mask & (mask - 1);
+    if rest == 0 {
+        // One child hit (the common case for coherent rays): no sorting.
+        return node.link(first);
+    }
+    if rest & (rest - 1) == 0 {
+        // Two children: one comparison.
+        let second = rest.trailing_zeros() as usize;
+        let (near, far) = if t[second] < t[first] { (second, first) } else { (first, second) };
+        let (c, n) = node.link(far);
+        // Cannot be full: `parse` bounds the depth (see `STACK`).
+        let _ = stack.push((c, n, t[far]));
+        return node.link(near);
+    }
+    // Three or more: pushed in slot order, then the new entries sorted farthest first,
+    // ties in slot order (insertion sort: at most eight), and the nearest popped.
+    let base = stack.len();
+    let mut m = mask;
+    while m != 0 {
+        let k = m.trailing_zeros() as usize;
+        m &= m - 1;
+        let (c, n) = node.link(k);
+        let _ = stack.push((c, n, t[k]));
+    }
+    let s = &mut stack[base..];
+    for i in 1..s.len() {
+        let mut j = i;
+        while j > 0 && s[j - 1].2 <= s[j].2 {
+            s.swap(j - 1, j);
+            j -= 1;
+        }
+    }
+    let (c, n, _) = stack.pop().unwrap_or((0, 0, 0.0));
+    (c, n)
+}
+
+/// Pops the next entry whose entry distance is not beyond `t_end`.
+#[inline(always)]
+fn pop_next(stack: &mut Stack, t_end: f32) -> Option<(u32, u32)> {
+    loop {
+        let (c, n, t) = stack.pop()?;
+        if t <= t_end {
+            return Some((c, n));
+        }
+    }
+}
+
+impl<N: WideSlab> TreeWalk<WideBvhView<'_, N>> for WideBvhTraversal {
+    #[inline(always)]
+    fn step<P: MemoryProbe>(&mut self, view: &WideBvhView<'_, N>, _ray: &Ray, probe: &mut P) -> TreeEvent {
+        WideBvhTraversal::step(self, view, probe)
+    }
+
+    #[inline(always)]
+    fn finish_leaf(&mut self) {
+        WideBvhTraversal::finish_leaf(self)
+    }
+
+    #[inline(always)]
+    fn best_mut(&mut self) -> &mut Option<Hit> {
+        &mut self.best
+    }
+}
+
+/// A leaf of [`trace_wide_bvh`], out of line: the node loop then keeps the ray's
+/// constants in registers instead of sharing them with the triangle test's.
+#[inline(never)]
+fn leaf<N: WideSlab, I: Intersector, P: MemoryProbe>(
+    scene: &SceneView<'_>,
+    bvh: &WideBvhView<'_, N>,
+    prep: &mut Option<I::Prepared>,
+    ray: &Ray,
+    range: (u32, u32),
+    best: &mut Option<Hit>,
+    probe: &mut P,
+) {
+    // The watertight constants wait for the first leaf: many rays never reach one.
+    let prep = prep.get_or_insert_with(|| I::prepare(ray));
+    test_leaf::<I, P, _>(scene, bvh, prep, ray, range, best, probe);
+}
+
+/// The closest hit of `ray` through a wide BVH.
+///
+/// The host's loop: the same walk as [`WideBvhTraversal::step`] (the same node test,
+/// [`descend`] and [`pop_next`]), with its registers held in locals rather than in a
+/// walk record, so that they stay in machine registers across nodes.
+#[inline(always)]
+pub fn trace_wide_bvh<N: WideSlab, I: Intersector, P: MemoryProbe>(
+    scene: &SceneView<'_>,
+    bvh: &WideBvhView<'_, N>,
+    ray: &Ray,
+    probe: &mut P,
+    counters: &mut RayCounters,
+) -> Option<Hit> {
+    if !ray.is_valid() {
+        return None;
+    }
+    let r = NodeRay::new(ray);
+    let mut prep = None;
+    let mut best = None;
+    let mut t_end = ray.t_max;
+    let mut stack = Stack::new();
+    let (mut index, mut count) = (0u32, 0u32);
+    let (mut nodes, mut leaves, mut tests) = (0u32, 0u32, 0u32);
+    loop {
+        if count == 0 {
+            nodes += 1;
+            let node = bvh.node(index, probe);
+            let (tn, mask) = node.slab(&r, ray.t_min, t_end);
+            if mask != 0 {
+                (index, count) = descend(node, &tn, mask, &mut stack);
+                continue;
+            }
+        } else {
+            leaves += 1;
+            leaf::<N, I, P>(scene, bvh, &mut prep, ray, (index, count), &mut best, probe);
+            tests += count;
+            t_end = best.map_or(t_end, |h: Hit| h.t);
+        }
+        match pop_next(&mut stack, t_end) {
+            Some(next) => (index, count) = next,
+            None => break,
+        }
+    }
+    counters.nodes += nodes;
+    counters.leaves += leaves;
+    counters.tri_tests += tests;
+    best
+}
