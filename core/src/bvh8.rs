@@ -10,8 +10,9 @@ use crate::hit::Hit;
 use crate::image::{Bvh8Node, Bvh8View, SceneView};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
+use crate::ray_box::RayBox;
 use crate::triangle::Intersector;
-use crate::wide_bvh::{trace_wide_bvh, NodeRay, WideBvhTraversal, WideSlab};
+use crate::wide_bvh::{stack_capacity, trace_wide_bvh, WideBvhTraversal, WideSlab};
 
 /// `max` as the SIMD instruction computes it (the second operand when either is NaN),
 /// written so that the compiler emits exactly that instruction.
@@ -35,28 +36,28 @@ fn min(a: f32, b: f32) -> f32 {
 }
 
 /// Entry distances of the ray into the eight child boxes of `n`, within `[t0, t1]`, and
-/// the bit mask of those it hits (empty slots, whose boxes are inverted, never). The
-/// same arithmetic as [`crate::bvh4::slab4`], eight lanes wide.
+/// the bit mask of those it hits (never an empty slot). The slab test of
+/// [`crate::ray_box`] eight lanes wide: per axis the two planes' distances, their min
+/// and max (no per-ray plane selection: on eight lanes the selection's index arithmetic
+/// costs more than the min and max it saves), and empty slots, whose boxes are
+/// inverted, masked out.
 #[inline(always)]
-pub fn slab8(r: &NodeRay, n: &Bvh8Node, t0: f32, t1: f32) -> ([f32; 8], u32) {
-    if r.rb.zero_axes != 0 {
+pub fn slab8(r: &RayBox, n: &Bvh8Node, t0: f32, t1: f32) -> ([f32; 8], u32) {
+    if r.zero_axes != 0 {
         return slab8_exact(r, n, t0, t1);
     }
-    // The node's planes as rows: min x, y, z, then max x, y, z (then children, counts).
-    let rows: &[[f32; 8]; 8] = bytemuck::cast_ref(n);
-    let (o, inv) = (r.rb.origin.to_array(), r.rb.inv.to_array());
-    let (nx, ny, nz) = (&rows[r.near[0] & 7], &rows[r.near[1] & 7], &rows[r.near[2] & 7]);
-    let (fx, fy, fz) = (&rows[r.far[0] & 7], &rows[r.far[1] & 7], &rows[r.far[2] & 7]);
+    let (o, inv) = (r.origin.to_array(), r.inv.to_array());
     let mut tn = [0.0f32; 8];
     let mut hit = [0u8; 8];
     for k in 0..8 {
-        // Monotone in the plane: these are the min and max of the two planes' distances
-        // for a valid box; an inverted (empty) slot gets near > far and fails.
-        let near = max(max((nx[k] - o[0]) * inv[0], (ny[k] - o[1]) * inv[1]), max((nz[k] - o[2]) * inv[2], t0));
-        let far = min(min((fx[k] - o[0]) * inv[0], (fy[k] - o[1]) * inv[1]), (fz[k] - o[2]) * inv[2]);
+        let (ax, bx) = ((n.min_x[k] - o[0]) * inv[0], (n.max_x[k] - o[0]) * inv[0]);
+        let (ay, by) = ((n.min_y[k] - o[1]) * inv[1], (n.max_y[k] - o[1]) * inv[1]);
+        let (az, bz) = ((n.min_z[k] - o[2]) * inv[2], (n.max_z[k] - o[2]) * inv[2]);
+        let near = max(max(min(ax, bx), min(ay, by)), max(min(az, bz), t0));
+        let far = min(min(max(ax, bx), max(ay, by)), max(az, bz));
         let far = min(far * SLAB_GROWTH, t1);
         tn[k] = near;
-        hit[k] = (near <= far) as u8;
+        hit[k] = (near <= far && n.min_x[k] <= n.max_x[k]) as u8;
     }
     (tn, mask8(hit))
 }
@@ -72,8 +73,8 @@ fn mask8(hit: [u8; 8]) -> u32 {
 /// [`slab8`] for any ray, including one with a zero direction component (whose axis is
 /// tested as "origin inside the slab", see [`crate::ray_box::RayBox`]).
 #[inline(never)]
-pub fn slab8_exact(r: &NodeRay, n: &Bvh8Node, t0: f32, t1: f32) -> ([f32; 8], u32) {
-    let (o, inv, zero) = (r.rb.origin.to_array(), r.rb.inv.to_array(), r.rb.zero_axes);
+pub fn slab8_exact(r: &RayBox, n: &Bvh8Node, t0: f32, t1: f32) -> ([f32; 8], u32) {
+    let (o, inv, zero) = (r.origin.to_array(), r.inv.to_array(), r.zero_axes);
     let lo = [&n.min_x, &n.min_y, &n.min_z];
     let hi = [&n.max_x, &n.max_y, &n.max_z];
     let mut tn = [0.0f32; 8];
@@ -98,10 +99,16 @@ pub fn slab8_exact(r: &NodeRay, n: &Bvh8Node, t0: f32, t1: f32) -> ([f32; 8], u3
 }
 
 impl WideSlab for Bvh8Node {
+    type Ray = RayBox;
     type Dist = [f32; 8];
 
     #[inline(always)]
-    fn slab(&self, r: &NodeRay, t0: f32, t1: f32) -> ([f32; 8], u32) {
+    fn ray(ray: &Ray) -> RayBox {
+        RayBox::new(ray)
+    }
+
+    #[inline(always)]
+    fn slab(&self, r: &RayBox, t0: f32, t1: f32) -> ([f32; 8], u32) {
         slab8(r, self, t0, t1)
     }
 
@@ -112,7 +119,7 @@ impl WideSlab for Bvh8Node {
 }
 
 /// One ray's walk through the 8-wide BVH.
-pub type Bvh8Traversal = WideBvhTraversal;
+pub type Bvh8Traversal = WideBvhTraversal<Bvh8Node, { stack_capacity(8) }>;
 
 /// The closest hit of `ray` through the 8-wide BVH (see [`trace_wide_bvh`]).
 #[inline(always)]
@@ -123,13 +130,13 @@ pub fn trace_bvh8<I: Intersector, P: MemoryProbe>(
     probe: &mut P,
     counters: &mut RayCounters,
 ) -> Option<Hit> {
-    trace_wide_bvh::<Bvh8Node, I, P>(scene, bvh, ray, probe, counters)
+    trace_wide_bvh::<Bvh8Node, { stack_capacity(8) }, I, P>(scene, bvh, ray, probe, counters)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bvh4::slab4;
+    use crate::bvh4::{slab4, NodeRay};
     use crate::image::{Bvh4Node, WideNode};
     use glam::Vec3;
 
@@ -180,14 +187,16 @@ mod tests {
             let ray = Ray::new(Vec3::from(o), Vec3::from(d));
             let r = NodeRay::new(&ray);
             let (t0, t1) = (0.0, if case % 3 == 0 { g.range(0.5, 8.0) } else { f32::INFINITY });
-            let (t8, m8) = slab8(&r, &wide, t0, t1);
+            let (t8, m8) = slab8(&RayBox::new(&ray), &wide, t0, t1);
             for (h, node) in halves.iter().enumerate() {
                 let (t4, m4) = slab4(&r, node, t0, t1);
                 let t4 = t4.to_array();
                 assert_eq!((m8 >> (4 * h)) & 0xF, m4, "case {case}: masks differ");
                 for k in 0..4 {
                     if m4 & (1 << k) != 0 {
-                        assert_eq!(t8[4 * h + k].to_bits(), t4[k].to_bits(), "case {case} slot {k}");
+                        // Equal values (the min/max form may give +0 where the 4-lane
+                        // plane selection gives −0).
+                        assert_eq!(t8[4 * h + k], t4[k], "case {case} slot {k}");
                     }
                 }
             }

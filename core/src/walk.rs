@@ -221,7 +221,8 @@ impl Walk {
             }
             Walk::Kd(trav) => trav.finish_leaf(),
             Walk::Bvh(trav) => trav.finish_leaf(),
-            Walk::Bvh4(trav) | Walk::Bvh8(trav) => trav.finish_leaf(),
+            Walk::Bvh4(trav) => trav.finish_leaf(),
+            Walk::Bvh8(trav) => trav.finish_leaf(),
             Walk::All { .. } => {}
         }
     }
@@ -232,7 +233,8 @@ impl Walk {
             Walk::Grid(trav, _) => trav.best,
             Walk::Kd(trav) => trav.best,
             Walk::Bvh(trav) => trav.best,
-            Walk::Bvh4(trav) | Walk::Bvh8(trav) => trav.best,
+            Walk::Bvh4(trav) => trav.best,
+            Walk::Bvh8(trav) => trav.best,
             Walk::All { best, .. } => *best,
         }
     }
@@ -243,7 +245,8 @@ impl Walk {
             Walk::Grid(trav, _) => &mut trav.best,
             Walk::Kd(trav) => &mut trav.best,
             Walk::Bvh(trav) => &mut trav.best,
-            Walk::Bvh4(trav) | Walk::Bvh8(trav) => &mut trav.best,
+            Walk::Bvh4(trav) => &mut trav.best,
+            Walk::Bvh8(trav) => &mut trav.best,
             Walk::All { best, .. } => best,
         }
     }

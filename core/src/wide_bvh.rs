@@ -7,66 +7,37 @@
 
 use core::ops::Index;
 
-use glam::{Vec3A, Vec4, Vec4Swizzles};
-
 use crate::counters::RayCounters;
 use crate::hit::Hit;
 use crate::image::{SceneView, WideBvhView, WideNode, MAX_TREE_DEPTH};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
-use crate::ray_box::RayBox;
 use crate::tree_step::{test_leaf, TreeEvent, TreeWalk};
 use crate::triangle::Intersector;
 
-/// Stack capacity: at most seven entries wait per level of a tree of [`MAX_TREE_DEPTH`].
-const STACK: usize = 7 * MAX_TREE_DEPTH as usize + 8;
-
-/// The traversal stack: `(child or first entry, leaf count or 0, entry distance)`.
-type Stack = heapless::Vec<(u32, u32, f32), STACK>;
-
-/// The ray as a node test reads it: origin and reciprocal direction splatted over four
-/// lanes, and per axis which of a box's two planes is entered first (the ray's octant).
-/// Each axis then costs one subtraction and one product per plane and no min/max (the
-/// sign trick of Williams et al. 2005, as in Embree).
-#[derive(Clone, Copy, Debug)]
-pub struct NodeRay {
-    /// Origin, one axis splatted per register.
-    pub org: [Vec4; 3],
-    /// Reciprocal direction, one axis splatted per register.
-    pub inv: [Vec4; 3],
-    /// Per axis, the node row (min x, y, z, then max x, y, z) of the near plane.
-    pub near: [usize; 3],
-    /// Per axis, the node row of the far plane.
-    pub far: [usize; 3],
-    /// The scalar slab constants (and the zero-direction axes).
-    pub rb: RayBox,
+/// Stack capacity for nodes of `width` children: at most `width − 1` entries wait per
+/// level of a tree of [`MAX_TREE_DEPTH`] (the image validation bounds the depth).
+pub const fn stack_capacity(width: usize) -> usize {
+    (width - 1) * MAX_TREE_DEPTH as usize + width
 }
 
-impl NodeRay {
-    /// Precomputes the splats and the octant.
-    #[inline]
-    pub fn new(ray: &Ray) -> NodeRay {
-        let rb = RayBox::new(ray);
-        let neg = rb.inv.cmplt(Vec3A::ZERO).bitmask() as usize;
-        let (o, inv) = (Vec4::from((rb.origin, 0.0)), Vec4::from((rb.inv, 0.0)));
-        NodeRay {
-            org: [o.xxxx(), o.yyyy(), o.zzzz()],
-            inv: [inv.xxxx(), inv.yyyy(), inv.zzzz()],
-            near: core::array::from_fn(|a| a + 3 * ((neg >> a) & 1)),
-            far: core::array::from_fn(|a| a + 3 * (!(neg >> a) & 1)),
-            rb,
-        }
-    }
-}
+/// The traversal stack of `C` entries: `(child or first entry, leaf count or 0, entry
+/// distance)`. Its capacity is a parameter so that a 4-wide walk does not carry the
+/// 8-wide one's (the hardware model keeps a walk per ray in flight).
+type Stack<const C: usize> = heapless::Vec<(u32, u32, f32), C>;
 
 /// A wide node's slab test: the entry distances of the ray into each child box within
 /// `[t0, t1]`, and the bit mask of the children it hits (never an empty slot). It must
 /// never reject a box the ray touches (see [`crate::ray_box`]).
 pub trait WideSlab: WideNode {
+    /// The ray's constants as the node test reads them, computed once per ray.
+    type Ray: Copy + core::fmt::Debug;
     /// Entry distances, one per slot.
     type Dist: Copy + Index<usize, Output = f32>;
+    /// Computes the ray's constants.
+    fn ray(ray: &Ray) -> Self::Ray;
     /// The node test.
-    fn slab(&self, r: &NodeRay, t0: f32, t1: f32) -> (Self::Dist, u32);
+    fn slab(&self, r: &Self::Ray, t0: f32, t1: f32) -> (Self::Dist, u32);
     /// Child (node index or first list entry) and leaf count of slot `k`.
     fn link(&self, k: usize) -> (u32, u32);
 }
@@ -75,25 +46,25 @@ pub trait WideSlab: WideNode {
 /// fixed-capacity stack of `(child or first entry, leaf count or 0, entry distance)`, and
 /// the best hit so far. One [`WideBvhTraversal::step`] reads one node.
 #[derive(Clone, Debug)]
-pub struct WideBvhTraversal {
-    ray: NodeRay,
+pub struct WideBvhTraversal<N: WideSlab, const C: usize> {
+    ray: N::Ray,
     t_min: f32,
     // The best hit's distance (or the ray's end): boxes entered beyond it are skipped.
     t_end: f32,
     current: (u32, u32),
     // heapless: fixed capacity, and nothing is written until pushed (no per-ray memset).
-    stack: Stack,
+    stack: Stack<C>,
     done: bool,
     /// Closest hit so far.
     pub best: Option<Hit>,
 }
 
-impl WideBvhTraversal {
+impl<N: WideSlab, const C: usize> WideBvhTraversal<N, C> {
     /// Starts a ray at the root; an invalid ray is done at once.
     #[inline]
-    pub fn new(ray: &Ray) -> WideBvhTraversal {
+    pub fn new(ray: &Ray) -> WideBvhTraversal<N, C> {
         WideBvhTraversal {
-            ray: NodeRay::new(ray),
+            ray: N::ray(ray),
             t_min: ray.t_min,
             t_end: ray.t_max,
             current: (0, 0),
@@ -106,7 +77,7 @@ impl WideBvhTraversal {
     /// Reads one inner node and moves to its nearest hit child (pushing the others), or
     /// reports the leaf the walk stands on.
     #[inline(always)]
-    pub fn step<N: WideSlab, P: MemoryProbe>(&mut self, bvh: &WideBvhView<'_, N>, probe: &mut P) -> TreeEvent {
+    pub fn step<P: MemoryProbe>(&mut self, bvh: &WideBvhView<'_, N>, probe: &mut P) -> TreeEvent {
         if self.done {
             return TreeEvent::Done;
         }
@@ -145,8 +116,8 @@ impl WideBvhTraversal {
 /// `t`: returns the nearest slot's `(child, count)` and pushes the others, farthest
 /// first.
 #[inline(always)]
-fn descend<N: WideSlab>(node: &N, t: &N::Dist, mask: u32, stack: &mut Stack) -> (u32, u32) {
-    let first = mask.trailing_zeros() as usize;
+fn descend<N: WideSlab, const C: usize>(node: &N, t: &N::Dist, mask: u32, stack: &mut Stack<C>) -> (u32, u32) {
+    let first = mask.trailing_zeros() as usize & (N::WIDTH - 1);
     let rest = mask & (mask - 1);
     if rest == 0 {
         // One child hit (the common case for coherent rays): no sorting.
@@ -154,38 +125,44 @@ fn descend<N: WideSlab>(node: &N, t: &N::Dist, mask: u32, stack: &mut Stack) -> 
     }
     if rest & (rest - 1) == 0 {
         // Two children: one comparison.
-        let second = rest.trailing_zeros() as usize;
+        let second = rest.trailing_zeros() as usize & (N::WIDTH - 1);
         let (near, far) = if t[second] < t[first] { (second, first) } else { (first, second) };
         let (c, n) = node.link(far);
-        // Cannot be full: `parse` bounds the depth (see `STACK`).
+        // Cannot be full: `parse` bounds the depth (see `stack_capacity`).
         let _ = stack.push((c, n, t[far]));
         return node.link(near);
     }
-    // Three or more: pushed in slot order, then the new entries sorted farthest first,
-    // ties in slot order (insertion sort: at most eight), and the nearest popped.
-    let base = stack.len();
+    // Three or more: sorted by entry distance, ties in slot order, as 64-bit keys (the
+    // distance's bits made to order as unsigned integers, then the slot), an insertion
+    // sort in registers; the others pushed farthest first, the nearest returned.
+    let mut keys = [u64::MAX; 8];
+    let mut n = 0;
     let mut m = mask;
     while m != 0 {
-        let k = m.trailing_zeros() as usize;
+        let k = m.trailing_zeros() as usize & (N::WIDTH - 1);
         m &= m - 1;
-        let (c, n) = node.link(k);
-        let _ = stack.push((c, n, t[k]));
-    }
-    let s = &mut stack[base..];
-    for i in 1..s.len() {
-        let mut j = i;
-        while j > 0 && s[j - 1].2 <= s[j].2 {
-            s.swap(j - 1, j);
+        let b = t[k].to_bits();
+        let key = (u64::from(b ^ (((b as i32 >> 31) as u32) | 0x8000_0000)) << 32) | k as u64;
+        let mut j = n & 7;
+        while j > 0 && keys[j - 1] > key {
+            keys[j] = keys[j - 1];
             j -= 1;
         }
+        keys[j] = key;
+        n += 1;
     }
-    let (c, n, _) = stack.pop().unwrap_or((0, 0, 0.0));
-    (c, n)
+    for &key in keys[1..n.min(8)].iter().rev() {
+        let k = key as usize & (N::WIDTH - 1);
+        let (c, cnt) = node.link(k);
+        // Cannot be full: `parse` bounds the depth (see `stack_capacity`).
+        let _ = stack.push((c, cnt, t[k]));
+    }
+    node.link(keys[0] as usize & (N::WIDTH - 1))
 }
 
 /// Pops the next entry whose entry distance is not beyond `t_end`.
 #[inline(always)]
-fn pop_next(stack: &mut Stack, t_end: f32) -> Option<(u32, u32)> {
+fn pop_next<const C: usize>(stack: &mut Stack<C>, t_end: f32) -> Option<(u32, u32)> {
     loop {
         let (c, n, t) = stack.pop()?;
         if t <= t_end {
@@ -194,7 +171,7 @@ fn pop_next(stack: &mut Stack, t_end: f32) -> Option<(u32, u32)> {
     }
 }
 
-impl<N: WideSlab> TreeWalk<WideBvhView<'_, N>> for WideBvhTraversal {
+impl<N: WideSlab, const C: usize> TreeWalk<WideBvhView<'_, N>> for WideBvhTraversal<N, C> {
     #[inline(always)]
     fn step<P: MemoryProbe>(&mut self, view: &WideBvhView<'_, N>, _ray: &Ray, probe: &mut P) -> TreeEvent {
         WideBvhTraversal::step(self, view, probe)
@@ -234,7 +211,7 @@ fn leaf<N: WideSlab, I: Intersector, P: MemoryProbe>(
 /// [`descend`] and [`pop_next`]), with its registers held in locals rather than in a
 /// walk record, so that they stay in machine registers across nodes.
 #[inline(always)]
-pub fn trace_wide_bvh<N: WideSlab, I: Intersector, P: MemoryProbe>(
+pub fn trace_wide_bvh<N: WideSlab, const C: usize, I: Intersector, P: MemoryProbe>(
     scene: &SceneView<'_>,
     bvh: &WideBvhView<'_, N>,
     ray: &Ray,
@@ -244,11 +221,11 @@ pub fn trace_wide_bvh<N: WideSlab, I: Intersector, P: MemoryProbe>(
     if !ray.is_valid() {
         return None;
     }
-    let r = NodeRay::new(ray);
+    let r = N::ray(ray);
     let mut prep = None;
     let mut best = None;
     let mut t_end = ray.t_max;
-    let mut stack = Stack::new();
+    let mut stack = Stack::<C>::new();
     let (mut index, mut count) = (0u32, 0u32);
     let (mut nodes, mut leaves, mut tests) = (0u32, 0u32, 0u32);
     loop {
