@@ -55,8 +55,8 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("mesh", help="OBJ (or .obj.gz) file")
     ap.add_argument("--size", default="1024x1024")
-    ap.add_argument("--accel", default="bvh8",
-                    help="raypipe structure for single rays: grid, kd, bvh, bvh4 or bvh8")
+    ap.add_argument("--accel", default="bvh4,bvh8",
+                    help="raypipe structures for single rays (comma-separated): grid, kd, bvh, bvh4, bvh8")
     ap.add_argument("--packet-accel", default="bvh4",
                     help="raypipe structure for packets (bvh4 has the 8x8 frustum kernel; bvh8 has none)")
     ap.add_argument("--packet", default="64", help="raypipe packet size for the packet figure: 4, 16 or 64")
@@ -71,13 +71,16 @@ def main():
         side = {"4": "2", "16": "4", "64": "8"}[a.packet]
         raypipe(a.raypipe, "rays", a.mesh, "-o", rays_p, "--triangles", tris_p, "--size", a.size,
                 "--block", side, *cam)
-        # Each mode on its fastest structure: single rays on the 8-wide BVH, packets on the
-        # 4-wide BVH's frustum kernel (by default).
+        # Single rays on each structure asked for (by default the 4- and the 8-wide BVH),
+        # packets on the 4-wide BVH's frustum kernel.
+        singles = a.accel.split(",")
         images = {}
-        for accel in {a.accel, a.packet_accel}:
+        for accel in set(singles) | {a.packet_accel}:
             images[accel] = os.path.join(tmp, f"scene-{accel}.rpsi")
             raypipe(a.raypipe, "build", a.mesh, "-o", images[accel], "--accel", accel)
-        image_of = {"1": images[a.accel], a.packet: images[a.packet_accel]}
+        # (label, image, packet size)
+        modes = [(f"{s} single rays", images[s], "1") for s in singles]
+        modes.append((f"{a.packet_accel} packets of {a.packet}", images[a.packet_accel], a.packet))
         rays = np.load(rays_p)
         tris = np.load(tris_p).astype(np.float32)
         origins = np.ascontiguousarray(rays[:, 0:3], dtype=np.float32)
@@ -87,20 +90,21 @@ def main():
         # see the same machine: medians over the rounds, ratios of the medians. Each
         # raypipe round is itself the median of 3 runs in one process (warm, as Embree's
         # scene is).
-        secs = {"1": [], a.packet: [], "embree": []}
+        secs = {label: [] for label, _, _ in modes}
+        secs["embree"] = []
         for _ in range(a.runs):
-            for packet in ("1", a.packet):
-                out = raypipe(a.raypipe, "trace", image_of[packet], "--rays", rays_p, "--hits", hits_p + packet,
+            for k, (label, image, packet) in enumerate(modes):
+                out = raypipe(a.raypipe, "trace", image, "--rays", rays_p, "--hits", f"{hits_p}{k}",
                               "--threads", "1", "--runs", "3", "--packet", packet)
-                secs[packet].append(float(re.search(r"in ([0-9.]+) s", out).group(1)))
+                secs[label].append(float(re.search(r"in ([0-9.]+) s", out).group(1)))
             res, t = embree_run(scene, origins, dirs)
             secs["embree"].append(t)
         secs = {k: statistics.median(v) for k, v in secs.items()}
         em_secs = secs["embree"]
-        hits = np.load(hits_p + "1")
-        packet_hits = np.load(hits_p + a.packet)
-        if packet_hits.tobytes() != hits.tobytes():
-            sys.exit("error: raypipe's packet hits differ from its single-ray hits")
+        hits = np.load(f"{hits_p}0")
+        for k in range(1, len(modes)):
+            if np.load(f"{hits_p}{k}").tobytes() != hits.tobytes():
+                sys.exit(f"error: raypipe's hits with {modes[k][0]} differ from those with {modes[0][0]}")
 
     n = len(rays)
     e_prim = np.asarray(res["primID"]).astype(np.int64)
@@ -117,13 +121,12 @@ def main():
     agree = same_miss | same_prim | close_t
     differ = n - int(agree.sum())
 
-    rp = n / secs["1"] / 1e6
-    rpp = n / secs[a.packet] / 1e6
     em = n / em_secs / 1e6
     print(f"mesh        {a.mesh} ({len(tris)} triangles), {n} primary rays, single thread, median of {a.runs} interleaved rounds")
-    print(f"embree      rtcIntersect1           {em:8.2f} Mrays/s")
-    print(f"raypipe     {a.accel} single rays      {rp:8.2f} Mrays/s   ratio {rp / em:.2f}")
-    print(f"raypipe     {a.packet_accel} packets of {a.packet:<3}  {rpp:8.2f} Mrays/s   ratio {rpp / em:.2f}")
+    print(f"embree      {'rtcIntersect1':<22} {em:8.2f} Mrays/s")
+    for label, _, _ in modes:
+        r = n / secs[label] / 1e6
+        print(f"raypipe     {label:<22} {r:8.2f} Mrays/s   ratio {r / em:.2f}")
     print(f"agreement   {100.0 * agree.mean():.4f}% ({differ} rays differ: "
           f"{int((e_hit != r_hit).sum())} hit/miss, {int((e_hit & r_hit & ~same_prim & ~close_t).sum())} other triangle)")
     return 0 if agree.mean() >= 0.9999 else 1

@@ -5,6 +5,7 @@
 //! BVH (Embree's BVH8). The walk itself is the wide BVH's ([`crate::wide_bvh`]).
 
 use crate::aabb::SLAB_GROWTH;
+use crate::bvh4::NodeRay;
 use crate::counters::RayCounters;
 use crate::hit::Hit;
 use crate::image::{Bvh8Node, Bvh8View, SceneView};
@@ -36,28 +37,28 @@ fn min(a: f32, b: f32) -> f32 {
 }
 
 /// Entry distances of the ray into the eight child boxes of `n`, within `[t0, t1]`, and
-/// the bit mask of those it hits (never an empty slot). The slab test of
-/// [`crate::ray_box`] eight lanes wide: per axis the two planes' distances, their min
-/// and max (no per-ray plane selection: on eight lanes the selection's index arithmetic
-/// costs more than the min and max it saves), and empty slots, whose boxes are
-/// inverted, masked out.
+/// the bit mask of those it hits (empty slots, whose boxes are inverted, never). The
+/// same arithmetic as [`crate::bvh4::slab4`], eight lanes wide.
 #[inline(always)]
-pub fn slab8(r: &RayBox, n: &Bvh8Node, t0: f32, t1: f32) -> ([f32; 8], u32) {
-    if r.zero_axes != 0 {
-        return slab8_exact(r, n, t0, t1);
+pub fn slab8(r: &NodeRay, n: &Bvh8Node, t0: f32, t1: f32) -> ([f32; 8], u32) {
+    if r.rb.zero_axes != 0 {
+        return slab8_exact(&r.rb, n, t0, t1);
     }
-    let (o, inv) = (r.origin.to_array(), r.inv.to_array());
+    // The node's planes as rows: min x, y, z, then max x, y, z (then children, counts).
+    let rows: &[[f32; 8]; 8] = bytemuck::cast_ref(n);
+    let (o, inv) = (r.rb.origin.to_array(), r.rb.inv.to_array());
+    let (nx, ny, nz) = (&rows[r.near[0] & 7], &rows[r.near[1] & 7], &rows[r.near[2] & 7]);
+    let (fx, fy, fz) = (&rows[r.far[0] & 7], &rows[r.far[1] & 7], &rows[r.far[2] & 7]);
     let mut tn = [0.0f32; 8];
     let mut hit = [0u8; 8];
     for k in 0..8 {
-        let (ax, bx) = ((n.min_x[k] - o[0]) * inv[0], (n.max_x[k] - o[0]) * inv[0]);
-        let (ay, by) = ((n.min_y[k] - o[1]) * inv[1], (n.max_y[k] - o[1]) * inv[1]);
-        let (az, bz) = ((n.min_z[k] - o[2]) * inv[2], (n.max_z[k] - o[2]) * inv[2]);
-        let near = max(max(min(ax, bx), min(ay, by)), max(min(az, bz), t0));
-        let far = min(min(max(ax, bx), max(ay, by)), max(az, bz));
+        // Monotone in the plane: these are the min and max of the two planes' distances
+        // for a valid box; an inverted (empty) slot gets near > far and fails.
+        let near = max(max((nx[k] - o[0]) * inv[0], (ny[k] - o[1]) * inv[1]), max((nz[k] - o[2]) * inv[2], t0));
+        let far = min(min((fx[k] - o[0]) * inv[0], (fy[k] - o[1]) * inv[1]), (fz[k] - o[2]) * inv[2]);
         let far = min(far * SLAB_GROWTH, t1);
         tn[k] = near;
-        hit[k] = (near <= far && n.min_x[k] <= n.max_x[k]) as u8;
+        hit[k] = (near <= far) as u8;
     }
     (tn, mask8(hit))
 }
@@ -99,16 +100,16 @@ pub fn slab8_exact(r: &RayBox, n: &Bvh8Node, t0: f32, t1: f32) -> ([f32; 8], u32
 }
 
 impl WideSlab for Bvh8Node {
-    type Ray = RayBox;
+    type Ray = NodeRay;
     type Dist = [f32; 8];
 
     #[inline(always)]
-    fn ray(ray: &Ray) -> RayBox {
-        RayBox::new(ray)
+    fn ray(ray: &Ray) -> NodeRay {
+        NodeRay::new(ray)
     }
 
     #[inline(always)]
-    fn slab(&self, r: &RayBox, t0: f32, t1: f32) -> ([f32; 8], u32) {
+    fn slab(&self, r: &NodeRay, t0: f32, t1: f32) -> ([f32; 8], u32) {
         slab8(r, self, t0, t1)
     }
 
@@ -136,7 +137,7 @@ pub fn trace_bvh8<I: Intersector, P: MemoryProbe>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bvh4::{slab4, NodeRay};
+    use crate::bvh4::slab4;
     use crate::image::{Bvh4Node, WideNode};
     use glam::Vec3;
 
@@ -187,7 +188,7 @@ mod tests {
             let ray = Ray::new(Vec3::from(o), Vec3::from(d));
             let r = NodeRay::new(&ray);
             let (t0, t1) = (0.0, if case % 3 == 0 { g.range(0.5, 8.0) } else { f32::INFINITY });
-            let (t8, m8) = slab8(&RayBox::new(&ray), &wide, t0, t1);
+            let (t8, m8) = slab8(&r, &wide, t0, t1);
             for (h, node) in halves.iter().enumerate() {
                 let (t4, m4) = slab4(&r, node, t0, t1);
                 let t4 = t4.to_array();

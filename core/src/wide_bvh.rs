@@ -132,32 +132,28 @@ fn descend<N: WideSlab, const C: usize>(node: &N, t: &N::Dist, mask: u32, stack:
         let _ = stack.push((c, n, t[far]));
         return node.link(near);
     }
-    // Three or more: sorted by entry distance, ties in slot order, as 64-bit keys (the
-    // distance's bits made to order as unsigned integers, then the slot), an insertion
-    // sort in registers; the others pushed farthest first, the nearest returned.
-    let mut keys = [u64::MAX; 8];
-    let mut n = 0;
+    // Three or more: pushed in slot order, then the new entries sorted farthest first,
+    // ties in slot order (insertion sort: at most eight), and the nearest popped. (Sorting
+    // 64-bit keys in registers first took fewer instructions but measured slower.)
+    let base = stack.len();
     let mut m = mask;
     while m != 0 {
         let k = m.trailing_zeros() as usize & (N::WIDTH - 1);
         m &= m - 1;
-        let b = t[k].to_bits();
-        let key = (u64::from(b ^ (((b as i32 >> 31) as u32) | 0x8000_0000)) << 32) | k as u64;
-        let mut j = n & 7;
-        while j > 0 && keys[j - 1] > key {
-            keys[j] = keys[j - 1];
+        let (c, n) = node.link(k);
+        // Cannot be full: `parse` bounds the depth (see `stack_capacity`).
+        let _ = stack.push((c, n, t[k]));
+    }
+    let s = &mut stack[base..];
+    for i in 1..s.len() {
+        let mut j = i;
+        while j > 0 && s[j - 1].2 <= s[j].2 {
+            s.swap(j - 1, j);
             j -= 1;
         }
-        keys[j] = key;
-        n += 1;
     }
-    for &key in keys[1..n.min(8)].iter().rev() {
-        let k = key as usize & (N::WIDTH - 1);
-        let (c, cnt) = node.link(k);
-        // Cannot be full: `parse` bounds the depth (see `stack_capacity`).
-        let _ = stack.push((c, cnt, t[k]));
-    }
-    node.link(keys[0] as usize & (N::WIDTH - 1))
+    let (c, n, _) = stack.pop().unwrap_or((0, 0, 0.0));
+    (c, n)
 }
 
 /// Pops the next entry whose entry distance is not beyond `t_end`.
@@ -186,23 +182,6 @@ impl<N: WideSlab, const C: usize> TreeWalk<WideBvhView<'_, N>> for WideBvhTraver
     fn best_mut(&mut self) -> &mut Option<Hit> {
         &mut self.best
     }
-}
-
-/// A leaf of [`trace_wide_bvh`], out of line: the node loop then keeps the ray's
-/// constants in registers instead of sharing them with the triangle test's.
-#[inline(never)]
-fn leaf<N: WideSlab, I: Intersector, P: MemoryProbe>(
-    scene: &SceneView<'_>,
-    bvh: &WideBvhView<'_, N>,
-    prep: &mut Option<I::Prepared>,
-    ray: &Ray,
-    range: (u32, u32),
-    best: &mut Option<Hit>,
-    probe: &mut P,
-) {
-    // The watertight constants wait for the first leaf: many rays never reach one.
-    let prep = prep.get_or_insert_with(|| I::prepare(ray));
-    test_leaf::<I, P, _>(scene, bvh, prep, ray, range, best, probe);
 }
 
 /// The closest hit of `ray` through a wide BVH.
@@ -239,7 +218,10 @@ pub fn trace_wide_bvh<N: WideSlab, const C: usize, I: Intersector, P: MemoryProb
             }
         } else {
             leaves += 1;
-            leaf::<N, I, P>(scene, bvh, &mut prep, ray, (index, count), &mut best, probe);
+            // The watertight constants wait for the first leaf: many rays never reach one.
+            // (Inline: a call here measured 11% slower on Sponza, though fewer instructions.)
+            let prep = prep.get_or_insert_with(|| I::prepare(ray));
+            test_leaf::<I, P, _>(scene, bvh, prep, ray, (index, count), &mut best, probe);
             tests += count;
             t_end = best.map_or(t_end, |h: Hit| h.t);
         }
