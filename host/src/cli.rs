@@ -708,7 +708,9 @@ fn cmd_stats(a: StatsArgs) -> Result<()> {
     let classes: Vec<String> =
         DataClass::ALL.iter().map(|c| format!("{} {:.1}", c.name(), s.per_ray(s.bytes.bytes[*c as usize]))).collect();
     println!("bytes read per ray        {}", classes.join(", "));
-    if a.packet != PacketSize::Single {
+    if a.packet != PacketSize::Single && !crate::tracer::has_packet_kernel(&view) {
+        println!("packets {:<17} none: the structure has no packet kernel (rays traced one by one)", a.packet.label());
+    } else if a.packet != PacketSize::Single {
         let p = stats::gather_packets(&view, &cam, &opts, a.packet)?;
         let n = a.packet.rays() as f64;
         println!(
