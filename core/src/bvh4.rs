@@ -1,8 +1,8 @@
-//! 4-wide BVH traversal: one node holds the boxes of four children, tested together by a
-//! 4-lane slab test (SSE on x86-64 through glam's `Vec4`); hit children are visited
-//! nearest first, the others pushed on a fixed-capacity stack (Wald, Benthin & Boulos
-//! 2008; Embree's BVH4). Leaves are stack entries like nodes, so a leaf is intersected
-//! only when it is the nearest thing left to visit.
+//! 4-wide BVH node test: one node holds the boxes of four children, tested together by a
+//! 4-lane slab test (SSE on x86-64 through glam's `Vec4`; Wald, Benthin & Boulos 2008;
+//! Embree's BVH4). The walk itself — nearest child first, the others on a fixed-capacity
+//! stack — is the wide BVH's ([`crate::wide_bvh`]); the packet kernel is
+//! [`crate::bvh4_packet`].
 
 use glam::{BVec4A, Vec3A, Vec4, Vec4Swizzles};
 
