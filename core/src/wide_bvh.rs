@@ -187,7 +187,7 @@ impl<N: WideSlab, const C: usize> TreeWalk<WideBvhView<'_, N>> for WideBvhTraver
 /// The closest hit of `ray` through a wide BVH.
 ///
 /// The host's loop: the same walk as [`WideBvhTraversal::step`] (the same node test,
-/// [`descend`] and [`pop_next`]), with its registers held in locals rather than in a
+/// `descend` and `pop_next`), with its registers held in locals rather than in a
 /// walk record, so that they stay in machine registers across nodes.
 #[inline(always)]
 pub fn trace_wide_bvh<N: WideSlab, const C: usize, I: Intersector, P: MemoryProbe>(
