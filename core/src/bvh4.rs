@@ -124,11 +124,6 @@ impl WideSlab for Bvh4Node {
         let (t, mask) = slab4(r, self, t0, t1);
         (t.to_array(), mask)
     }
-
-    #[inline(always)]
-    fn link(&self, k: usize) -> (u32, u32) {
-        (self.child[k & 3], self.count[k & 3])
-    }
 }
 
 /// One ray's walk through the 4-wide BVH.

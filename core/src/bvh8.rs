@@ -112,11 +112,6 @@ impl WideSlab for Bvh8Node {
     fn slab(&self, r: &NodeRay, t0: f32, t1: f32) -> ([f32; 8], u32) {
         slab8(r, self, t0, t1)
     }
-
-    #[inline(always)]
-    fn link(&self, k: usize) -> (u32, u32) {
-        (self.child[k & 7], self.count[k & 7])
-    }
 }
 
 /// One ray's walk through the 8-wide BVH.

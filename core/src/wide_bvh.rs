@@ -38,8 +38,6 @@ pub trait WideSlab: WideNode {
     fn ray(ray: &Ray) -> Self::Ray;
     /// The node test.
     fn slab(&self, r: &Self::Ray, t0: f32, t1: f32) -> (Self::Dist, u32);
-    /// Child (node index or first list entry) and leaf count of slot `k`.
-    fn link(&self, k: usize) -> (u32, u32);
 }
 
 /// The traversal registers of one ray in a wide BVH: the entry to visit next, a

@@ -347,21 +347,6 @@ pub struct BuiltWideBvh<N> {
     pub depth: u32,
 }
 
-/// A built 4-wide BVH.
-pub type BuiltBvh4 = BuiltWideBvh<raypipe_core::image::Bvh4Node>;
-/// A built 8-wide BVH.
-pub type BuiltBvh8 = BuiltWideBvh<raypipe_core::image::Bvh8Node>;
-
-/// Collapses a binary BVH into a 4-wide one (see [`collapse_wide`]).
-pub fn collapse_to_bvh4(bvh: &BuiltBvh) -> BuiltBvh4 {
-    collapse_wide(bvh)
-}
-
-/// Collapses a binary BVH into an 8-wide one (see [`collapse_wide`]).
-pub fn collapse_to_bvh8(bvh: &BuiltBvh) -> BuiltBvh8 {
-    collapse_wide(bvh)
-}
-
 /// Collapses a binary BVH into a wide one: each wide node takes the (up to `WIDTH`)
 /// descendants reached by repeatedly opening the largest inner child (Wald et al. 2008).
 pub fn collapse_wide<N: WideNode>(bvh: &BuiltBvh) -> BuiltWideBvh<N> {

@@ -8,11 +8,11 @@ use raypipe_core::image::{
     FORMAT_VERSION, MAGIC, SECTION_ALIGN,
 };
 
-use raypipe_core::image::WaldTriangle;
+use raypipe_core::image::{WaldTriangle, WideNode};
 use raypipe_core::Vec3;
 
 use crate::aligned::AlignedBytes;
-use crate::bvh_builder::{BuiltBvh, BuiltBvh4, BuiltBvh8};
+use crate::bvh_builder::{BuiltBvh, BuiltWideBvh};
 use crate::grid_builder::BuiltGrid;
 use crate::kd_builder::BuiltKd;
 use crate::mesh::Mesh;
@@ -108,18 +108,10 @@ impl ImageWriter {
         self
     }
 
-    /// Adds a 4-wide BVH.
-    pub fn bvh4(&mut self, bvh: &BuiltBvh4) -> &mut Self {
-        self.accel = AccelKind::Bvh4 as u32;
-        self.add(SectionKind::Bvh4Nodes, &bvh.nodes);
-        self.add(SectionKind::PrimLists, &bvh.prims);
-        self
-    }
-
-    /// Adds an 8-wide BVH.
-    pub fn bvh8(&mut self, bvh: &BuiltBvh8) -> &mut Self {
-        self.accel = AccelKind::Bvh8 as u32;
-        self.add(SectionKind::Bvh8Nodes, &bvh.nodes);
+    /// Adds a wide (4- or 8-wide) BVH, in its width's section.
+    pub fn wide_bvh<N: WideNode>(&mut self, bvh: &BuiltWideBvh<N>) -> &mut Self {
+        self.accel = N::ACCEL as u32;
+        self.add(N::SECTION, &bvh.nodes);
         self.add(SectionKind::PrimLists, &bvh.prims);
         self
     }

@@ -6,13 +6,13 @@ use std::time::Instant;
 
 use anyhow::{anyhow, bail, Result};
 use glam::Vec3;
-use raypipe_core::image::{CameraRecord, LightRecord, MAGIC};
+use raypipe_core::image::{Bvh4Node, Bvh8Node, CameraRecord, LightRecord, WideNode, MAGIC};
 use raypipe_core::{NoProbe, Ray, RayCounters, SceneView, Watertight};
 
 use crate::tracer::trace;
 
 use crate::aligned::AlignedBytes;
-use crate::bvh_builder::{build_bvh, collapse_to_bvh4, collapse_to_bvh8, BvhParams};
+use crate::bvh_builder::{build_bvh, collapse_wide, BvhParams};
 use crate::camera_file::CameraSpec;
 use crate::default_scene;
 use crate::grid_builder::{build_grid, GridResolution};
@@ -286,6 +286,13 @@ fn default_lights(mesh: &Mesh, camera: &CameraRecord) -> Vec<LightRecord> {
     lights
 }
 
+/// Builds the binary BVH, collapses it into nodes of `N`'s width and adds it to the image.
+fn build_wide<N: WideNode>(mesh: &Mesh, params: &BvhParams, report: &mut BuildReport, writer: &mut ImageWriter) {
+    let bvh = collapse_wide::<N>(&build_bvh(mesh, params));
+    report.tree(bvh.nodes.len(), std::mem::size_of::<N>(), bvh.depth, bvh.prims.len());
+    writer.wide_bvh(&bvh);
+}
+
 /// Builds a scene image from a mesh.
 pub fn build(
     name: String,
@@ -338,16 +345,8 @@ pub fn build(
             report.tree(bvh.nodes.len(), 32, bvh.depth, bvh.prims.len());
             writer.bvh(&bvh);
         }
-        Accel::Bvh4 => {
-            let bvh = collapse_to_bvh4(&build_bvh(&mesh, &opts.bvh));
-            report.tree(bvh.nodes.len(), 128, bvh.depth, bvh.prims.len());
-            writer.bvh4(&bvh);
-        }
-        Accel::Bvh8 => {
-            let bvh = collapse_to_bvh8(&build_bvh(&mesh, &opts.bvh));
-            report.tree(bvh.nodes.len(), 256, bvh.depth, bvh.prims.len());
-            writer.bvh8(&bvh);
-        }
+        Accel::Bvh4 => build_wide::<Bvh4Node>(&mesh, &opts.bvh, &mut report, &mut writer),
+        Accel::Bvh8 => build_wide::<Bvh8Node>(&mesh, &opts.bvh, &mut report, &mut writer),
         Accel::None => {}
     }
     report.grid_seconds = start.elapsed().as_secs_f64();

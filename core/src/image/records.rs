@@ -2,6 +2,8 @@
 
 use bytemuck::{Pod, Zeroable};
 
+use super::header::{AccelKind, SectionKind};
+
 /// The null value: an empty grid cell, and the terminator of a primitive list
 /// (Purcell 2002, Figure 4).
 pub const NULL_INDEX: u32 = u32::MAX;
@@ -325,23 +327,32 @@ impl Bvh8Node {
     };
 }
 
-/// A wide BVH node's slot `k` as `(lower corner, upper corner, child, count)`: what the
-/// image validation and the builder's statistics read, whatever the node's width.
+/// A wide BVH node, whatever its width: its slots as `(lower corner, upper corner, child,
+/// count)` for the image validation and the builder, its child links for the walk, and
+/// where an image keeps such nodes.
 pub trait WideNode: Pod {
     /// Slots per node.
     const WIDTH: usize;
+    /// The structure kind of an image holding these nodes.
+    const ACCEL: AccelKind;
+    /// The section holding them.
+    const SECTION: SectionKind;
     /// A node with every slot empty.
     fn empty() -> &'static Self;
     /// Slot `k` (`k < WIDTH`).
     fn slot(&self, k: usize) -> ([f32; 3], [f32; 3], u32, u32);
     /// Sets slot `k`.
     fn set_slot(&mut self, k: usize, lo: [f32; 3], hi: [f32; 3], child: u32, count: u32);
+    /// Child (node index or first list entry) and leaf count of slot `k`.
+    fn link(&self, k: usize) -> (u32, u32);
 }
 
 macro_rules! wide_node {
-    ($t:ty, $w:expr) => {
+    ($t:ty, $w:expr, $accel:expr, $section:expr) => {
         impl WideNode for $t {
             const WIDTH: usize = $w;
+            const ACCEL: AccelKind = $accel;
+            const SECTION: SectionKind = $section;
             #[inline]
             fn empty() -> &'static Self {
                 &<$t>::EMPTY
@@ -364,11 +375,15 @@ macro_rules! wide_node {
                 self.child[k] = child;
                 self.count[k] = count;
             }
+            #[inline(always)]
+            fn link(&self, k: usize) -> (u32, u32) {
+                (self.child[k % $w], self.count[k % $w])
+            }
         }
     };
 }
-wide_node!(Bvh4Node, 4);
-wide_node!(Bvh8Node, 8);
+wide_node!(Bvh4Node, 4, AccelKind::Bvh4, SectionKind::Bvh4Nodes);
+wide_node!(Bvh8Node, 8, AccelKind::Bvh8, SectionKind::Bvh8Nodes);
 
 /// Wald's precomputed triangle for the projection test (Wald 2004, §7.1; Wald &
 /// Slusallek 2001): 37 bytes of data padded to 48 so that triangles never straddle a

@@ -671,8 +671,8 @@ impl<'a> SceneView<'a> {
             AccelKind::Grid => grid = Some(Self::validate_grid(s, nt, bmin, bmax)?),
             AccelKind::Bvh => bvh = Some(Self::validate_bvh(s, nt)?),
             AccelKind::KdTree => kd = Some(Self::validate_kd(s, nt, bmin, bmax)?),
-            AccelKind::Bvh4 => bvh4 = Some(Self::validate_wide(s, SectionKind::Bvh4Nodes, nt)?),
-            AccelKind::Bvh8 => bvh8 = Some(Self::validate_wide(s, SectionKind::Bvh8Nodes, nt)?),
+            AccelKind::Bvh4 => bvh4 = Some(Self::validate_wide(s, nt)?),
+            AccelKind::Bvh8 => bvh8 = Some(Self::validate_wide(s, nt)?),
         }
 
         // Shading data: optional, but when present it must match the geometry.
@@ -936,11 +936,8 @@ impl<'a> SceneView<'a> {
         })
     }
 
-    fn validate_wide<N: WideNode>(
-        s: &Sections<'a>,
-        section: SectionKind,
-        nt: u32,
-    ) -> Result<WideBvhView<'a, N>, SceneError> {
+    fn validate_wide<N: WideNode>(s: &Sections<'a>, nt: u32) -> Result<WideBvhView<'a, N>, SceneError> {
+        let section = N::SECTION;
         let nodes: &[N] = s.required(section)?;
         let prims = Self::prim_list(s, nt)?;
         let np = prims.len() as u64;
