@@ -58,16 +58,7 @@ impl Leaf {
                 if k >= count {
                     return None;
                 }
-                let pos = first.wrapping_add(k);
-                if let Some(bvh) = scene.bvh4() {
-                    Some(bvh.prim(pos, probe))
-                } else if let Some(bvh) = scene.bvh8() {
-                    Some(bvh.prim(pos, probe))
-                } else if let Some(bvh) = scene.bvh() {
-                    Some(bvh.prim(pos, probe))
-                } else {
-                    scene.kdtree().map(|kd| kd.prim(pos, probe))
-                }
+                Some(scene.leaf_prim(first.wrapping_add(k), probe))
             }
             Leaf::All { count } => (k < count).then_some(k),
         }

@@ -462,6 +462,8 @@ pub struct SceneView<'a> {
     bvh4: Option<Bvh4View<'a>>,
     bvh8: Option<Bvh8View<'a>>,
     kd: Option<KdTreeView<'a>>,
+    // Every tree keeps its leaves' triangle ids here (validated with the tree).
+    prim_lists: &'a [u32],
     shading: &'a [ShadingVertex],
     wald: &'a [WaldTriangle],
     tri_materials: &'a [u32],
@@ -478,6 +480,7 @@ pub struct SceneView<'a> {
     materials_addr: u32,
     texels_addr: u32,
     lights_addr: u32,
+    prim_lists_addr: u32,
     wald_addr: u32,
 }
 
@@ -775,6 +778,7 @@ impl<'a> SceneView<'a> {
             bvh4,
             bvh8,
             kd,
+            prim_lists: s.slice(K::PrimLists)?,
             shading,
             wald,
             tri_materials,
@@ -792,6 +796,7 @@ impl<'a> SceneView<'a> {
             texels_addr: s.addr(K::Texels),
             lights_addr: s.addr(K::Lights),
             wald_addr: s.addr(K::WaldTriangles),
+            prim_lists_addr: s.addr(K::PrimLists),
         })
     }
 
@@ -1074,6 +1079,14 @@ impl<'a> SceneView<'a> {
         let i = t.first.wrapping_add(y.wrapping_mul(t.width)).wrapping_add(x);
         probe.read(DataClass::Shading, self.texels_addr.wrapping_add(i.wrapping_mul(4)), 4);
         self.texels.get(i as usize).copied().unwrap_or(0).to_le_bytes()
+    }
+
+    /// Reads PRIM_LISTS entry `pos` of a tree leaf (kd-tree, BVH, 4- or 8-wide BVH: all
+    /// keep their leaves' triangle ids in that one section).
+    #[inline]
+    pub fn leaf_prim<P: MemoryProbe>(&self, pos: u32, probe: &mut P) -> u32 {
+        probe.read(DataClass::PrimLists, self.prim_lists_addr.wrapping_add(pos.wrapping_mul(4)), 4);
+        self.prim_lists.get(pos as usize).copied().unwrap_or(0)
     }
 
     /// Reads triangle `prim` and its three vertex positions (intersection data).
