@@ -5,6 +5,7 @@ use anyhow::{bail, Result};
 use rayon::prelude::*;
 use raypipe_core::{Intersector, NoProbe, Ray, RayCounters, SceneView, Vec3};
 
+use crate::isa::with_avx2;
 use crate::npy::{Array2, HitRecord};
 use crate::render::in_pool;
 use raypipe_core::packet::{PacketCounters, RayPacket};
@@ -67,32 +68,15 @@ fn record(hit: Option<raypipe_core::Hit>) -> HitRecord {
 
 /// Traces `rays` one by one into `out`, with the CPU's widest SIMD instructions.
 fn trace_singles<I: Intersector>(scene: &SceneView<'_>, out: &mut [HitRecord], rays: &[Ray]) {
-    #[cfg(target_arch = "x86_64")]
-    if std::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU has the features the function is compiled for (checked above).
-        unsafe { trace_singles_avx2::<I>(scene, out, rays) };
-        return;
-    }
-    trace_singles_with::<I>(scene, out, rays)
-}
-
-/// [`trace_singles_with`] compiled for AVX2: the 8-wide BVH's node test becomes one
-/// register per plane (measured with paired runs, 1024² primary rays: 2–7% faster 8-wide
-/// BVH single rays than the SSE2 build; the 4-wide BVH within ±6%, either way). The
-/// kernels give the same bits either way: they use no fused multiply-add, and Rust
-/// never contracts `a * b + c` on its own.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx,avx2,bmi1,bmi2,lzcnt,popcnt")]
-unsafe fn trace_singles_avx2<I: Intersector>(scene: &SceneView<'_>, out: &mut [HitRecord], rays: &[Ray]) {
-    trace_singles_with::<I>(scene, out, rays)
-}
-
-#[inline(always)]
-fn trace_singles_with<I: Intersector>(scene: &SceneView<'_>, out: &mut [HitRecord], rays: &[Ray]) {
-    let mut c = RayCounters::default();
-    for (o, r) in out.iter_mut().zip(rays) {
-        *o = record(trace::<I, _>(scene, r, &mut NoProbe, &mut c));
-    }
+    with_avx2(
+        #[inline(always)]
+        || {
+            let mut c = RayCounters::default();
+            for (o, r) in out.iter_mut().zip(rays) {
+                *o = record(trace::<I, _>(scene, r, &mut NoProbe, &mut c));
+            }
+        },
+    )
 }
 
 /// Chunks of `CHUNK` rays per task; with `N > 1`, runs of `N` consecutive rays are traced

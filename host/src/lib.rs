@@ -14,6 +14,7 @@ pub mod cli;
 pub mod default_scene;
 pub mod grid_builder;
 pub mod image_writer;
+pub mod isa;
 pub mod kd_builder;
 pub mod mesh;
 pub mod npy;

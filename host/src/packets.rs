@@ -6,6 +6,7 @@ use raypipe_core::camera::EyeRays;
 use raypipe_core::packet::{PacketCounters, RayPacket};
 use raypipe_core::{Hit, Intersector, NoProbe, Ray, RayCounters, SceneView, Vec3};
 
+use crate::isa::with_avx2;
 use crate::tracer::{has_packet_kernel, trace, trace_packet};
 
 /// How rays are grouped.
@@ -89,15 +90,10 @@ pub fn trace_tile<I: Intersector>(
     // rays only to trace them one at a time measured 2.4x slower on Sponza).
     let size = if has_packet_kernel(scene) { size } else { PacketSize::Single };
     match size {
-        PacketSize::Single => {
-            #[cfg(target_arch = "x86_64")]
-            if std::is_x86_feature_detected!("avx2") {
-                // SAFETY: the CPU has the features the function is compiled for.
-                unsafe { singles_avx2::<I>(scene, eye, bounds, tile, counters, f) };
-                return;
-            }
-            singles::<I>(scene, eye, bounds, tile, counters, f)
-        }
+        PacketSize::Single => with_avx2(
+            #[inline(always)]
+            || singles::<I>(scene, eye, bounds, tile, counters, f),
+        ),
         PacketSize::P4 => blocks::<I, 4>(scene, eye, bounds, tile, 2, packet_counters, f),
         PacketSize::P16 => blocks::<I, 16>(scene, eye, bounds, tile, 4, packet_counters, f),
         PacketSize::P64 => blocks::<I, 64>(scene, eye, bounds, tile, 8, packet_counters, f),
@@ -125,20 +121,6 @@ fn singles<I: Intersector>(
             }
         }
     }
-}
-
-/// [`singles`] compiled for AVX2 (see [`crate::batch`]'s `trace_singles_avx2`).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx,avx2,bmi1,bmi2,lzcnt,popcnt")]
-unsafe fn singles_avx2<I: Intersector>(
-    scene: &SceneView<'_>,
-    eye: &EyeRays,
-    bounds: (Vec3, Vec3),
-    tile: (u32, u32, u32, u32),
-    counters: &mut RayCounters,
-    f: &mut impl FnMut(u32, u32, Option<Ray>, Option<Hit>),
-) {
-    singles::<I>(scene, eye, bounds, tile, counters, f)
 }
 
 fn blocks<I: Intersector, const N: usize>(

@@ -1,0 +1,26 @@
+//! The instruction set the host's hot loops run with, chosen at run time: the kernels in
+//! core are written over plain arrays and SIMD types, and a loop compiled for AVX2 turns
+//! the 8-wide BVH's node test into one register per plane. The kernels give the same bits
+//! either way: they use no fused multiply-add, and Rust never contracts `a * b + c`.
+
+/// Runs `f`, compiled for AVX2 where the CPU has it (`f` is inlined into the AVX2
+/// build), else as built (SSE2 on x86-64).
+///
+/// Measured with paired runs on 1024² primary rays: 8-wide BVH single rays 2–7% faster
+/// than in the SSE2 build, 4-wide BVH single rays within ±6%, and the 4-wide BVH's
+/// packet kernel 9% slower (so packets do not come through here).
+#[inline(always)]
+pub fn with_avx2<R>(f: impl FnOnce() -> R) -> R {
+    #[cfg(target_arch = "x86_64")]
+    if std::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has the features `avx2` is compiled for (checked above).
+        return unsafe { avx2(f) };
+    }
+    f()
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx,avx2,bmi1,bmi2,lzcnt,popcnt")]
+unsafe fn avx2<R>(f: impl FnOnce() -> R) -> R {
+    f()
+}
