@@ -49,9 +49,7 @@ pub fn trace_batch(
     packet: PacketSize,
     threads: Option<usize>,
 ) -> Result<Vec<HitRecord>> {
-    // A structure without a packet kernel traces its rays one by one (see `trace_tile`).
-    let packet = if crate::tracer::has_packet_kernel(scene) { packet } else { PacketSize::Single };
-    with_intersector!(kind, I => match packet {
+    with_intersector!(kind, I => match packet.usable_for(scene) {
         PacketSize::Single => trace_with::<I, 1>(scene, rays, threads),
         PacketSize::P4 => trace_with::<I, 4>(scene, rays, threads),
         PacketSize::P16 => trace_with::<I, 16>(scene, rays, threads),
