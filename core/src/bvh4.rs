@@ -23,15 +23,15 @@ use crate::wide_bvh::{stack_capacity, trace_wide_bvh, WideBvhTraversal, WideSlab
 #[derive(Clone, Copy, Debug)]
 pub struct NodeRay {
     /// Origin, one axis splatted per register.
-    pub org: [Vec4; 3],
+    pub(crate) org: [Vec4; 3],
     /// Reciprocal direction, one axis splatted per register.
-    pub inv: [Vec4; 3],
+    pub(crate) inv: [Vec4; 3],
     /// Per axis, the node row (min x, y, z, then max x, y, z) of the near plane.
-    pub near: [usize; 3],
+    pub(crate) near: [usize; 3],
     /// Per axis, the node row of the far plane.
-    pub far: [usize; 3],
+    pub(crate) far: [usize; 3],
     /// The scalar slab constants (and the zero-direction axes).
-    pub rb: RayBox,
+    pub(crate) rb: RayBox,
 }
 
 impl NodeRay {
@@ -128,26 +128,6 @@ impl WideSlab for Bvh4Node {
 
 /// One ray's walk through the 4-wide BVH.
 pub type Bvh4Traversal = WideBvhTraversal<Bvh4Node, { stack_capacity(4) }>;
-
-/// The slots set in `mask`, ordered by entry distance `t` (insertion sort: at most four),
-/// and how many there are.
-#[inline(always)]
-pub fn nearest_first(mask: u32, t: &[f32; 4]) -> ([usize; 4], usize) {
-    let mut order = [0usize; 4];
-    let mut m = 0;
-    for k in 0..4 {
-        if mask & (1 << k) != 0 {
-            let mut j = m;
-            while j > 0 && t[order[j - 1]] > t[k] {
-                order[j] = order[j - 1];
-                j -= 1;
-            }
-            order[j] = k;
-            m += 1;
-        }
-    }
-    (order, m)
-}
 
 /// The closest hit of `ray` through the 4-wide BVH (see [`trace_wide_bvh`]).
 #[inline(always)]

@@ -3,7 +3,7 @@
 //! exactly the rays that enter its box, in groups of four lanes (SIMD registers) for the
 //! box test and, where the intersector has a four-ray form, for the triangles too.
 
-use crate::bvh4::{nearest_first, slab4_exact};
+use crate::bvh4::slab4_exact;
 use glam::{BVec4A, Vec3A, Vec4};
 
 use crate::aabb::SLAB_GROWTH;
@@ -160,6 +160,26 @@ impl Groups {
         let act = GROUP_LANES[((mask >> (4 * g)) & 0xF) as usize];
         self.group_end[g] = Vec4::select(act, self.ends[g], Vec4::NEG_INFINITY).max_element();
     }
+}
+
+/// The slots set in `mask`, ordered by entry distance `t` (insertion sort: at most four),
+/// and how many there are.
+#[inline(always)]
+fn nearest_first(mask: u32, t: &[f32; 4]) -> ([usize; 4], usize) {
+    let mut order = [0usize; 4];
+    let mut m = 0;
+    for k in 0..4 {
+        if mask & (1 << k) != 0 {
+            let mut j = m;
+            while j > 0 && t[order[j - 1]] > t[k] {
+                order[j] = order[j - 1];
+                j -= 1;
+            }
+            order[j] = k;
+            m += 1;
+        }
+    }
+    (order, m)
 }
 
 /// Traces all active rays of `packet`; `hits[i]` receives ray `i`'s closest hit.
