@@ -229,6 +229,27 @@ fn corrupt_image(base: &AlignedBytes, edit: impl FnOnce(&mut [u8])) -> SceneErro
     SceneView::parse(&b).expect_err("corruption must be rejected")
 }
 
+/// A wide BVH's root (nodes of `width` slots: six rows of boxes, then children, then
+/// counts) with slot 0's child index back to the root, a leaf range past the list, and a
+/// NaN plane: each rejected. Returns the intact image.
+fn wide_root_corruptions(accel: Accel, section: SectionKind, width: usize) -> AlignedBytes {
+    let img = cornell_with(accel);
+    let (_, nodes) = entry_pos(&img, section);
+    let root = nodes.offset as usize;
+    let (child, count) = (root + 24 * width, root + 28 * width);
+    let tree = |e: SceneError| matches!(e, SceneError::BadTree { section: s, .. } if s == section);
+    assert!(tree(corrupt_image(&img, |b| {
+        put_u32(b, child, 0);
+        put_u32(b, count, 0)
+    })));
+    assert!(tree(corrupt_image(&img, |b| {
+        put_u32(b, child, 1_000_000);
+        put_u32(b, count, 3)
+    })));
+    assert!(tree(corrupt_image(&img, |b| b[root..root + 4].copy_from_slice(&f32::NAN.to_le_bytes()))));
+    img
+}
+
 #[test]
 fn tree_corruptions() {
     // BVH: node 0 is inner; point its children back at itself, past the end, or make a
@@ -258,35 +279,12 @@ fn tree_corruptions() {
         put_u32(b, root + 4, 1 << 20)
     })));
 
-    let bvh4 = cornell_with(Accel::Bvh4);
-    let (_, nodes) = entry_pos(&bvh4, SectionKind::Bvh4Nodes);
-    let root = nodes.offset as usize;
-    let tree = |e: SceneError| matches!(e, SceneError::BadTree { section: SectionKind::Bvh4Nodes, .. });
-    // Slot 0's child index (offset 96) back to the root, a leaf range past the list.
-    assert!(tree(corrupt_image(&bvh4, |b| {
-        put_u32(b, root + 96, 0);
-        put_u32(b, root + 112, 0)
-    })));
-    assert!(tree(corrupt_image(&bvh4, |b| {
-        put_u32(b, root + 96, 1_000_000);
-        put_u32(b, root + 112, 3)
-    })));
-    assert!(tree(corrupt_image(&bvh4, |b| b[root..root + 4].copy_from_slice(&f32::NAN.to_le_bytes()))));
-    let bvh8 = cornell_with(Accel::Bvh8);
+    let bvh4 = wide_root_corruptions(Accel::Bvh4, SectionKind::Bvh4Nodes, 4);
+    let bvh8 = wide_root_corruptions(Accel::Bvh8, SectionKind::Bvh8Nodes, 8);
     let (_, nodes) = entry_pos(&bvh8, SectionKind::Bvh8Nodes);
     let root = nodes.offset as usize;
     let tree = |e: SceneError| matches!(e, SceneError::BadTree { section: SectionKind::Bvh8Nodes, .. });
-    // Slot 0's child index (offset 192) back to the root, a leaf range past the list, a
-    // NaN plane, and an empty slot (child null) whose box is not inverted.
-    assert!(tree(corrupt_image(&bvh8, |b| {
-        put_u32(b, root + 192, 0);
-        put_u32(b, root + 224, 0)
-    })));
-    assert!(tree(corrupt_image(&bvh8, |b| {
-        put_u32(b, root + 192, 1_000_000);
-        put_u32(b, root + 224, 3)
-    })));
-    assert!(tree(corrupt_image(&bvh8, |b| b[root..root + 4].copy_from_slice(&f32::NAN.to_le_bytes()))));
+    // An empty slot (child null) whose box is not inverted.
     assert!(tree(corrupt_image(&bvh8, |b| {
         put_u32(b, root + 192, u32::MAX);
         put_u32(b, root + 224, 0)
