@@ -4,7 +4,7 @@
 //! stack — is the wide BVH's ([`crate::wide_bvh`]); the packet kernel is
 //! [`crate::bvh4_packet`].
 
-use glam::{BVec4A, Vec3A, Vec4, Vec4Swizzles};
+use glam::{BVec4A, Vec4};
 
 use crate::aabb::SLAB_GROWTH;
 use crate::counters::RayCounters;
@@ -14,42 +14,8 @@ use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::ray_box::RayBox;
 use crate::triangle::Intersector;
+pub use crate::wide_bvh::NodeRay;
 use crate::wide_bvh::{stack_capacity, trace_wide_bvh, WideBvhTraversal, WideSlab};
-
-/// The ray as the 4-wide node test reads it: origin and reciprocal direction splatted over four
-/// lanes, and per axis which of a box's two planes is entered first (the ray's octant).
-/// Each axis then costs one subtraction and one product per plane and no min/max (the
-/// sign trick of Williams et al. 2005, as in Embree).
-#[derive(Clone, Copy, Debug)]
-pub struct NodeRay {
-    /// Origin, one axis splatted per register.
-    pub(crate) org: [Vec4; 3],
-    /// Reciprocal direction, one axis splatted per register.
-    pub(crate) inv: [Vec4; 3],
-    /// Per axis, the node row (min x, y, z, then max x, y, z) of the near plane.
-    pub(crate) near: [usize; 3],
-    /// Per axis, the node row of the far plane.
-    pub(crate) far: [usize; 3],
-    /// The scalar slab constants (and the zero-direction axes).
-    pub(crate) rb: RayBox,
-}
-
-impl NodeRay {
-    /// Precomputes the splats and the octant.
-    #[inline]
-    pub fn new(ray: &Ray) -> NodeRay {
-        let rb = RayBox::new(ray);
-        let neg = rb.inv.cmplt(Vec3A::ZERO).bitmask() as usize;
-        let (o, inv) = (Vec4::from((rb.origin, 0.0)), Vec4::from((rb.inv, 0.0)));
-        NodeRay {
-            org: [o.xxxx(), o.yyyy(), o.zzzz()],
-            inv: [inv.xxxx(), inv.yyyy(), inv.zzzz()],
-            near: core::array::from_fn(|a| a + 3 * ((neg >> a) & 1)),
-            far: core::array::from_fn(|a| a + 3 * (!(neg >> a) & 1)),
-            rb,
-        }
-    }
-}
 
 /// Entry distances of the ray into the four child boxes of `n`, within `[t0, t1]`, and
 /// the bit mask of those it hits (empty slots, whose boxes are inverted, never).
@@ -111,13 +77,7 @@ pub fn slab4_exact(rb: &RayBox, n: &Bvh4Node, t0: f32, t1: f32) -> (Vec4, u32) {
 }
 
 impl WideSlab for Bvh4Node {
-    type Ray = NodeRay;
     type Dist = [f32; 4];
-
-    #[inline(always)]
-    fn ray(ray: &Ray) -> NodeRay {
-        NodeRay::new(ray)
-    }
 
     #[inline(always)]
     fn slab(&self, r: &NodeRay, t0: f32, t1: f32) -> ([f32; 4], u32) {

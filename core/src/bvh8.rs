@@ -5,7 +5,6 @@
 //! BVH (Embree's BVH8). The walk itself is the wide BVH's ([`crate::wide_bvh`]).
 
 use crate::aabb::SLAB_GROWTH;
-use crate::bvh4::NodeRay;
 use crate::counters::RayCounters;
 use crate::hit::Hit;
 use crate::image::{Bvh8Node, Bvh8View, SceneView};
@@ -13,7 +12,7 @@ use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::ray_box::RayBox;
 use crate::triangle::Intersector;
-use crate::wide_bvh::{stack_capacity, trace_wide_bvh, WideBvhTraversal, WideSlab};
+use crate::wide_bvh::{stack_capacity, trace_wide_bvh, NodeRay, WideBvhTraversal, WideSlab};
 
 /// `max` as the SIMD instruction computes it (the second operand when either is NaN),
 /// written so that the compiler emits exactly that instruction.
@@ -100,13 +99,7 @@ pub fn slab8_exact(r: &RayBox, n: &Bvh8Node, t0: f32, t1: f32) -> ([f32; 8], u32
 }
 
 impl WideSlab for Bvh8Node {
-    type Ray = NodeRay;
     type Dist = [f32; 8];
-
-    #[inline(always)]
-    fn ray(ray: &Ray) -> NodeRay {
-        NodeRay::new(ray)
-    }
 
     #[inline(always)]
     fn slab(&self, r: &NodeRay, t0: f32, t1: f32) -> ([f32; 8], u32) {

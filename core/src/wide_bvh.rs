@@ -5,13 +5,17 @@
 //! are stack entries like nodes, so a leaf is intersected only when it is the nearest
 //! thing left to visit.
 
+use core::marker::PhantomData;
 use core::ops::Index;
+
+use glam::{Vec3A, Vec4, Vec4Swizzles};
 
 use crate::counters::RayCounters;
 use crate::hit::Hit;
 use crate::image::{SceneView, WideBvhView, WideNode, MAX_TREE_DEPTH};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
+use crate::ray_box::RayBox;
 use crate::tree_step::{test_leaf, TreeEvent, TreeWalk};
 use crate::triangle::Intersector;
 
@@ -26,18 +30,49 @@ pub const fn stack_capacity(width: usize) -> usize {
 /// 8-wide one's (the hardware model keeps a walk per ray in flight).
 type Stack<const C: usize> = heapless::Vec<(u32, u32, f32), C>;
 
+/// The ray as the wide node tests read it: origin and reciprocal direction splatted over
+/// four lanes (for the 4-lane test), and per axis which of a box's two planes is entered first (the ray's octant).
+/// Each axis then costs one subtraction and one product per plane and no min/max (the
+/// sign trick of Williams et al. 2005, as in Embree).
+#[derive(Clone, Copy, Debug)]
+pub struct NodeRay {
+    /// Origin, one axis splatted per register.
+    pub(crate) org: [Vec4; 3],
+    /// Reciprocal direction, one axis splatted per register.
+    pub(crate) inv: [Vec4; 3],
+    /// Per axis, the node row (min x, y, z, then max x, y, z) of the near plane.
+    pub(crate) near: [usize; 3],
+    /// Per axis, the node row of the far plane.
+    pub(crate) far: [usize; 3],
+    /// The scalar slab constants (and the zero-direction axes).
+    pub(crate) rb: RayBox,
+}
+
+impl NodeRay {
+    /// Precomputes the splats and the octant.
+    #[inline]
+    pub fn new(ray: &Ray) -> NodeRay {
+        let rb = RayBox::new(ray);
+        let neg = rb.inv.cmplt(Vec3A::ZERO).bitmask() as usize;
+        let (o, inv) = (Vec4::from((rb.origin, 0.0)), Vec4::from((rb.inv, 0.0)));
+        NodeRay {
+            org: [o.xxxx(), o.yyyy(), o.zzzz()],
+            inv: [inv.xxxx(), inv.yyyy(), inv.zzzz()],
+            near: core::array::from_fn(|a| a + 3 * ((neg >> a) & 1)),
+            far: core::array::from_fn(|a| a + 3 * (!(neg >> a) & 1)),
+            rb,
+        }
+    }
+}
+
 /// A wide node's slab test: the entry distances of the ray into each child box within
 /// `[t0, t1]`, and the bit mask of the children it hits (never an empty slot). It must
 /// never reject a box the ray touches (see [`crate::ray_box`]).
 pub trait WideSlab: WideNode {
-    /// The ray's constants as the node test reads them, computed once per ray.
-    type Ray: Copy + core::fmt::Debug;
     /// Entry distances, one per slot.
     type Dist: Copy + Index<usize, Output = f32>;
-    /// Computes the ray's constants.
-    fn ray(ray: &Ray) -> Self::Ray;
     /// The node test.
-    fn slab(&self, r: &Self::Ray, t0: f32, t1: f32) -> (Self::Dist, u32);
+    fn slab(&self, r: &NodeRay, t0: f32, t1: f32) -> (Self::Dist, u32);
 }
 
 /// The traversal registers of one ray in a wide BVH: the entry to visit next, a
@@ -45,7 +80,7 @@ pub trait WideSlab: WideNode {
 /// the best hit so far. One [`WideBvhTraversal::step`] reads one node.
 #[derive(Clone, Debug)]
 pub struct WideBvhTraversal<N: WideSlab, const C: usize> {
-    ray: N::Ray,
+    ray: NodeRay,
     t_min: f32,
     // The best hit's distance (or the ray's end): boxes entered beyond it are skipped.
     t_end: f32,
@@ -55,6 +90,8 @@ pub struct WideBvhTraversal<N: WideSlab, const C: usize> {
     done: bool,
     /// Closest hit so far.
     pub best: Option<Hit>,
+    // The node type: the stack capacity `C` is sized for its width.
+    node: PhantomData<fn() -> N>,
 }
 
 impl<N: WideSlab, const C: usize> WideBvhTraversal<N, C> {
@@ -62,13 +99,14 @@ impl<N: WideSlab, const C: usize> WideBvhTraversal<N, C> {
     #[inline]
     pub fn new(ray: &Ray) -> WideBvhTraversal<N, C> {
         WideBvhTraversal {
-            ray: N::ray(ray),
+            ray: NodeRay::new(ray),
             t_min: ray.t_min,
             t_end: ray.t_max,
             current: (0, 0),
             stack: heapless::Vec::new(),
             done: !ray.is_valid(),
             best: None,
+            node: PhantomData,
         }
     }
 
@@ -198,7 +236,7 @@ pub fn trace_wide_bvh<N: WideSlab, const C: usize, I: Intersector, P: MemoryProb
     if !ray.is_valid() {
         return None;
     }
-    let r = N::ray(ray);
+    let r = NodeRay::new(ray);
     let mut prep = None;
     let mut best = None;
     let mut t_end = ray.t_max;
