@@ -55,8 +55,9 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("mesh", help="OBJ (or .obj.gz) file")
     ap.add_argument("--size", default="1024x1024")
-    ap.add_argument("--accel", default="bvh4,bvh8",
-                    help="raypipe structures for single rays (comma-separated): grid, kd, bvh, bvh4, bvh8")
+    ap.add_argument("--accel", default="bvh4,bvh8,bvh4+blocks,bvh8+blocks",
+                    help="raypipe structures for single rays (comma-separated): grid, kd, bvh, bvh4, bvh8; "
+                         "'+blocks' builds the wide BVHs with leaf triangle blocks (--triangles blocks)")
     ap.add_argument("--packet-accel", default="bvh4",
                     help="raypipe structure for packets (bvh4 has the 8x8 frustum kernel; bvh8 has none)")
     ap.add_argument("--packet", default="64", help="raypipe packet size for the packet figure: 4, 16 or 64")
@@ -77,7 +78,9 @@ def main():
         images = {}
         for accel in set(singles) | {a.packet_accel}:
             images[accel] = os.path.join(tmp, f"scene-{accel}.rpsi")
-            raypipe(a.raypipe, "build", a.mesh, "-o", images[accel], "--accel", accel)
+            structure, _, layout = accel.partition("+")
+            layout_args = ["--triangles", layout] if layout else []
+            raypipe(a.raypipe, "build", a.mesh, "-o", images[accel], "--accel", structure, *layout_args)
         # (label, image, packet size)
         modes = [(f"{s} single rays", images[s], "1") for s in singles]
         modes.append((f"{a.packet_accel} packets of {a.packet}", images[a.packet_accel], a.packet))

@@ -48,6 +48,7 @@ pub mod hit;
 pub mod image;
 pub mod kdtree;
 pub mod kdtree_packet;
+pub mod leaf_blocks;
 pub mod lockstep;
 pub mod moller_trumbore;
 pub mod occlusion;

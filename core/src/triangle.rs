@@ -1,7 +1,7 @@
 //! The ray–triangle intersection interface and the one place a candidate hit is accepted.
 
 use crate::hit::{keep_closest, Hit};
-use crate::image::SceneView;
+use crate::image::{SceneView, TriBlock4};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 
@@ -41,6 +41,16 @@ pub trait Intersector {
     /// with `intersect` (by default all four).
     #[inline(always)]
     fn intersect_rays4(_rays: &Self::Prepared4, _tri: &Self::Triangle) -> Rays4Result {
+        Rays4Result { redo: 0xF, ..Rays4Result::default() }
+    }
+    /// True if this test has a one-ray, four-triangle form
+    /// ([`Intersector::intersect_block4`]); only then do walks read TRI_BLOCKS.
+    const BLOCKS: bool = false;
+    /// One ray against the four triangles of a block (one per lane): lane by lane the
+    /// bits of [`Intersector::intersect`] on that lane's vertices, except for the lanes in
+    /// `redo`, which the caller tests with `intersect` (by default all four).
+    #[inline(always)]
+    fn intersect_block4(_prep: &Self::Prepared, _block: &TriBlock4) -> Rays4Result {
         Rays4Result { redo: 0xF, ..Rays4Result::default() }
     }
 }

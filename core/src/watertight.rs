@@ -8,7 +8,7 @@ use core::ops::{Add, Mul, Sub};
 
 use glam::{Vec3, Vec4};
 
-use crate::image::SceneView;
+use crate::image::{SceneView, TriBlock4};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::triangle::{Intersector, Rays4Result};
@@ -57,23 +57,27 @@ impl Intersector for Watertight {
     /// left to the scalar test (its double-precision recomputation).
     #[inline(always)]
     fn intersect_rays4(r: &ShearedRays4, v: &[Vec3; 3]) -> Rays4Result {
-        let kz = r.k[2];
-        // Vertex coordinates relative to each ray's origin, per axis.
-        let rel = |p: Vec3| -> [Vec4; 3] { core::array::from_fn(|a| Vec4::splat(p[a]) - r.org[a]) };
-        let (a, b, c) = (rel(v[0]), rel(v[1]), rel(v[2]));
-        let (_, [eu, ev, ew]) = shear_edges(a, b, c, r.k, r.sx, r.sy);
-        let zero = Vec4::ZERO;
-        let redo = (eu.cmpeq(zero) | ev.cmpeq(zero) | ew.cmpeq(zero)).bitmask();
-        let neg = eu.cmplt(zero) | ev.cmplt(zero) | ew.cmplt(zero);
-        let pos = eu.cmpgt(zero) | ev.cmpgt(zero) | ew.cmpgt(zero);
-        let det = eu + ev + ew;
-        let hit = (!(neg & pos) & det.cmpne(zero)).bitmask() & !redo;
-        if hit == 0 {
-            return Rays4Result { redo, ..Rays4Result::default() };
-        }
-        let t_scaled = scaled_distance([eu, ev, ew], [a[kz], b[kz], c[kz]], r.sz);
-        let inv = Vec4::ONE / det;
-        Rays4Result { t: (t_scaled * inv).to_array(), u: (ev * inv).to_array(), v: (ew * inv).to_array(), hit, redo }
+        // Vertex coordinates relative to each ray's origin, read in the rays' axis order
+        // (x, y, z of the sheared frame) so that no register array is indexed by axis.
+        let rel = |p: Vec3| -> [Vec4; 3] {
+            let p = p.to_array();
+            r.k.map(|a| Vec4::splat(p[a]) - r.org[a])
+        };
+        lanes(rel(v[0]), rel(v[1]), rel(v[2]), [0, 1, 2], [r.sx, r.sy, r.sz])
+    }
+
+    const BLOCKS: bool = true;
+
+    /// [`Watertight::intersect`] with four triangles in SIMD lanes and the ray in all
+    /// four: per lane the same operations in the same order as the one-triangle test.
+    #[inline(always)]
+    fn intersect_block4(s: &ShearedRay, block: &TriBlock4) -> Rays4Result {
+        let org = s.org.to_array();
+        let k = [s.kx as usize % 3, s.ky as usize % 3, s.kz as usize % 3];
+        // Vertex coordinates relative to the ray's origin, read in the ray's axis order
+        // (x, y, z of the sheared frame) so that no register array is indexed by axis.
+        let rel = |i: usize| -> [Vec4; 3] { k.map(|a| Vec4::from_array(block.v[i][a]) - Vec4::splat(org[a])) };
+        lanes(rel(0), rel(1), rel(2), [0, 1, 2], [s.sx, s.sy, s.sz].map(Vec4::splat))
     }
 
     #[inline(always)]
@@ -169,6 +173,28 @@ fn edges<T: Copy + Sub<Output = T> + Mul<Output = T>>([ax, ay, bx, by, cx, cy]: 
 #[inline(always)]
 fn scaled_distance<T: Copy + Add<Output = T> + Mul<Output = T>>(e: [T; 3], z: [T; 3], sz: T) -> T {
     e[0] * (sz * z[0]) + e[1] * (sz * z[1]) + e[2] * (sz * z[2])
+}
+
+/// The four-lane test (four rays, or four triangles) on vertices `a`, `b`, `c` already
+/// relative to the ray origins, per axis: lane by lane [`Watertight::intersect`]'s
+/// operations, with the lanes whose edge function is exactly zero left in `redo` for
+/// its double-precision recomputation.
+#[inline(always)]
+fn lanes(a: [Vec4; 3], b: [Vec4; 3], c: [Vec4; 3], k: [usize; 3], [sx, sy, sz]: [Vec4; 3]) -> Rays4Result {
+    let kz = k[2];
+    let (_, [eu, ev, ew]) = shear_edges(a, b, c, k, sx, sy);
+    let zero = Vec4::ZERO;
+    let redo = (eu.cmpeq(zero) | ev.cmpeq(zero) | ew.cmpeq(zero)).bitmask();
+    let neg = eu.cmplt(zero) | ev.cmplt(zero) | ew.cmplt(zero);
+    let pos = eu.cmpgt(zero) | ev.cmpgt(zero) | ew.cmpgt(zero);
+    let det = eu + ev + ew;
+    let hit = (!(neg & pos) & det.cmpne(zero)).bitmask() & !redo;
+    if hit == 0 {
+        return Rays4Result { redo, ..Rays4Result::default() };
+    }
+    let t_scaled = scaled_distance([eu, ev, ew], [a[kz], b[kz], c[kz]], sz);
+    let inv = Vec4::ONE / det;
+    Rays4Result { t: (t_scaled * inv).to_array(), u: (ev * inv).to_array(), v: (ew * inv).to_array(), hit, redo }
 }
 
 /// Four rays' shear constants as SIMD lanes (rays with one axis permutation).

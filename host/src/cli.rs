@@ -512,15 +512,23 @@ fn structure_summary(view: &raypipe_core::SceneView<'_>) -> String {
     if let Some(g) = view.grid() {
         format!("grid {}x{}x{}", g.dims[0], g.dims[1], g.dims[2])
     } else if let Some(b) = view.bvh4() {
-        format!("BVH4 {} nodes", b.node_count())
+        format!("BVH4 {} nodes{}", b.node_count(), blocks_note(view))
     } else if let Some(b) = view.bvh8() {
-        format!("BVH8 {} nodes", b.node_count())
+        format!("BVH8 {} nodes{}", b.node_count(), blocks_note(view))
     } else if let Some(b) = view.bvh() {
         format!("BVH {} nodes", b.node_count())
     } else if let Some(k) = view.kdtree() {
         format!("kd {} nodes", k.node_count())
     } else {
         "none".to_string()
+    }
+}
+
+fn blocks_note(view: &raypipe_core::SceneView<'_>) -> &'static str {
+    if view.has_tri_blocks() {
+        ", leaf blocks"
+    } else {
+        ""
     }
 }
 

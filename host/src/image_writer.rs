@@ -8,7 +8,7 @@ use raypipe_core::image::{
     FORMAT_VERSION, MAGIC, SECTION_ALIGN,
 };
 
-use raypipe_core::image::{WaldTriangle, WideNode};
+use raypipe_core::image::{TriBlock4, WaldTriangle, WideNode};
 use raypipe_core::Vec3;
 
 use crate::aligned::AlignedBytes;
@@ -26,6 +26,18 @@ pub struct ImageWriter {
     sections: Vec<(SectionKind, Vec<u8>, u32)>,
 }
 
+/// The vertex indices written for triangle `t`. A zero-area triangle is written with
+/// three equal indices: every intersection kernel then computes exactly zero area and
+/// never reports a hit, whereas three distinct collinear vertices can give a "hit" made
+/// of rounding noise, at a distance no structure can be conservative about.
+fn stored(mesh: &Mesh, t: [u32; 3]) -> [u32; 3] {
+    if mesh.is_degenerate(t) {
+        [t[0]; 3]
+    } else {
+        t
+    }
+}
+
 impl ImageWriter {
     /// Starts an image for `mesh`: geometry and shading sections.
     pub fn new(mesh: &Mesh) -> ImageWriter {
@@ -36,15 +48,7 @@ impl ImageWriter {
             sections: Vec::new(),
         };
         let positions: Vec<Position> = mesh.positions.iter().map(|&p| Position(p)).collect();
-        // A zero-area triangle is written with three equal indices: every intersection
-        // kernel then computes exactly zero area and never reports a hit, whereas three
-        // distinct collinear vertices can give a "hit" made of rounding noise, at a
-        // distance no structure can be conservative about.
-        let triangles: Vec<TriangleRecord> = mesh
-            .triangles
-            .iter()
-            .map(|&t| if mesh.is_degenerate(t) { TriangleRecord([t[0]; 3]) } else { TriangleRecord(t) })
-            .collect();
+        let triangles: Vec<TriangleRecord> = mesh.triangles.iter().map(|&t| TriangleRecord(stored(mesh, t))).collect();
         w.add(SectionKind::Positions, &positions);
         w.add(SectionKind::Triangles, &triangles);
         if !mesh.shading.is_empty() {
@@ -113,6 +117,29 @@ impl ImageWriter {
         self.accel = N::ACCEL as u32;
         self.add(N::SECTION, &bvh.nodes);
         self.add(SectionKind::PrimLists, &bvh.prims);
+        self
+    }
+
+    /// Adds copies of the vertices of the triangles in `prims` (the trees' PRIM_LISTS) in
+    /// blocks of four SIMD lanes; lanes past the end repeat the last triangle.
+    pub fn tri_blocks(&mut self, mesh: &Mesh, prims: &[u32]) -> &mut Self {
+        let blocks: Vec<TriBlock4> = prims
+            .chunks(4)
+            .map(|chunk| {
+                let mut b = TriBlock4 { v: [[[0.0; 4]; 3]; 3] };
+                for lane in 0..4 {
+                    let prim = chunk[lane.min(chunk.len() - 1)];
+                    let tri = stored(mesh, mesh.triangles[prim as usize]);
+                    for (i, &vi) in tri.iter().enumerate() {
+                        for a in 0..3 {
+                            b.v[i][a][lane] = mesh.positions[vi as usize][a];
+                        }
+                    }
+                }
+                b
+            })
+            .collect();
+        self.add(SectionKind::TriBlocks, &blocks);
         self
     }
 

@@ -8,12 +8,18 @@ use std::path::{Path, PathBuf};
 use raypipe::grid_builder::GridResolution;
 use raypipe::mesh::Mesh;
 use raypipe::render::Frame;
-use raypipe::scene::{self, Accel, BuildOptions, Scene};
+use raypipe::scene::{self, Accel, BuildOptions, Scene, TriangleLayout};
 
-/// Builds a scene image with Wald's precomputed triangles as well.
-pub fn build_soup_wald(positions: Vec<[f32; 3]>, triangles: Vec<[u32; 3]>, accel: Accel) -> Scene {
+/// Builds a scene image with a triangle layout besides the indexed one (Wald's
+/// precomputed triangles, or leaf blocks).
+pub fn build_soup_layout(
+    positions: Vec<[f32; 3]>,
+    triangles: Vec<[u32; 3]>,
+    accel: Accel,
+    layout: TriangleLayout,
+) -> Scene {
     let mesh = Mesh { positions, triangles, ..Default::default() };
-    let opts = BuildOptions { accel, triangles: raypipe::scene::TriangleLayout::Wald, ..Default::default() };
+    let opts = BuildOptions { accel, triangles: layout, ..Default::default() };
     scene::build("soup".into(), mesh, Vec::new(), Default::default(), &opts).expect("soup builds")
 }
 

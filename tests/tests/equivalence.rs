@@ -4,14 +4,16 @@
 
 use proptest::prelude::*;
 use raypipe::scene::Accel;
+use raypipe::scene::TriangleLayout;
 use raypipe::tracer::trace;
 use raypipe_core::brute_force::trace_brute_force;
+use raypipe_core::image::TriBlock4;
 use raypipe_core::walk::trace_walk;
 use raypipe_core::Vec3;
 use raypipe_core::{
     Hit, Intersector, MollerTrumbore, NoProbe, Ray, RayCounters, SceneView, WaldProjection, Watertight,
 };
-use raypipe_tests::{build_soup, build_soup_wald};
+use raypipe_tests::{build_soup, build_soup_layout};
 
 /// Coordinates: mostly from a coarse lattice (so triangles share vertices and edges, lie
 /// in common planes and on cell boundaries), sometimes arbitrary.
@@ -178,7 +180,11 @@ proptest! {
         let bvh = build_soup(soup.positions.clone(), soup.triangles.clone(), Accel::Bvh, 1);
         let bvh4 = build_soup(soup.positions.clone(), soup.triangles.clone(), Accel::Bvh4, 1);
         let bvh8 = build_soup(soup.positions.clone(), soup.triangles.clone(), Accel::Bvh8, 1);
-        for scene in [&grid, &kd, &bvh, &bvh4, &bvh8] {
+        // Leaf triangles in blocks of four, tested four at a time by single rays.
+        let blocks = |accel| build_soup_layout(soup.positions.clone(), soup.triangles.clone(), accel, TriangleLayout::Blocks);
+        let (bvh4_blocks, bvh8_blocks) = (blocks(Accel::Bvh4), blocks(Accel::Bvh8));
+        prop_assert!(bvh8_blocks.view().unwrap().has_tri_blocks());
+        for scene in [&grid, &kd, &bvh, &bvh4, &bvh8, &bvh4_blocks, &bvh8_blocks] {
             let view = scene.view().expect("valid image");
             for (kind, range) in &rays {
                 // Rays on cell boundaries are placed with the grid's geometry.
@@ -223,8 +229,13 @@ fn no_leak_through_shared_edges_of_a_closed_cube() {
     let p: Vec<[f32; 3]> = (0..8).map(|i| [(i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32]).collect();
     let quads = [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]];
     let tris: Vec<[u32; 3]> = quads.iter().flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]).collect();
-    for accel in [Accel::Grid, Accel::Kd, Accel::Bvh, Accel::Bvh4, Accel::Bvh8] {
-        let scene = build_soup(p.clone(), tris.clone(), accel, 3);
+    let mut scenes: Vec<_> = [Accel::Grid, Accel::Kd, Accel::Bvh, Accel::Bvh4, Accel::Bvh8]
+        .map(|a| build_soup(p.clone(), tris.clone(), a, 3))
+        .into();
+    scenes.extend(
+        [Accel::Bvh4, Accel::Bvh8].map(|a| build_soup_layout(p.clone(), tris.clone(), a, TriangleLayout::Blocks)),
+    );
+    for scene in &scenes {
         let view = scene.view().unwrap();
         let mut n = 0;
         // Rays from outside through points on the diagonals (shared edges) and corners.
@@ -343,9 +354,13 @@ proptest! {
         look in point(),
         random in prop::collection::vec(ray_kind(), 64),
         accel in prop_oneof![Just(Accel::Grid), Just(Accel::Kd), Just(Accel::Bvh), Just(Accel::Bvh4), Just(Accel::Bvh8), Just(Accel::None)],
+        layout in prop_oneof![Just(TriangleLayout::Indexed), Just(TriangleLayout::Blocks)],
     ) {
         use raypipe_core::camera::{Camera, EyeRays};
-        let scene = build_soup(soup.positions.clone(), soup.triangles.clone(), accel, 3);
+        let scene = match layout {
+            TriangleLayout::Blocks => build_soup_layout(soup.positions.clone(), soup.triangles.clone(), accel, layout),
+            _ => build_soup(soup.positions.clone(), soup.triangles.clone(), accel, 3),
+        };
         let view = scene.view().unwrap();
         let grid = build_soup(soup.positions.clone(), soup.triangles.clone(), Accel::Grid, 3);
         let gview = grid.view().unwrap();
@@ -372,7 +387,7 @@ proptest! {
         rays in prop::collection::vec(ray_kind(), 32),
         accel in prop_oneof![Just(Accel::Grid), Just(Accel::Kd), Just(Accel::Bvh), Just(Accel::Bvh4), Just(Accel::Bvh8)],
     ) {
-        let stored = build_soup_wald(soup.positions.clone(), soup.triangles.clone(), accel);
+        let stored = build_soup_layout(soup.positions.clone(), soup.triangles.clone(), accel, TriangleLayout::Wald);
         let sview = stored.view().unwrap();
         prop_assert!(sview.has_wald_triangles());
         let plain = build_soup(soup.positions.clone(), soup.triangles.clone(), Accel::None, 1);
@@ -408,8 +423,11 @@ proptest! {
         let scaled = Soup { positions: positions.clone(), triangles: soup.triangles.clone(), flat_axis: soup.flat_axis };
         let grid = build_soup(positions.clone(), soup.triangles.clone(), Accel::Grid, 3);
         let gview = grid.view().unwrap();
-        for accel in [Accel::Grid, Accel::Kd, Accel::Bvh, Accel::Bvh4, Accel::Bvh8] {
-            let scene = build_soup(positions.clone(), soup.triangles.clone(), accel, 3);
+        let blocks = [Accel::Bvh4, Accel::Bvh8]
+            .map(|a| build_soup_layout(positions.clone(), soup.triangles.clone(), a, TriangleLayout::Blocks));
+        let structures = [Accel::Grid, Accel::Kd, Accel::Bvh, Accel::Bvh4, Accel::Bvh8]
+            .map(|a| build_soup(positions.clone(), soup.triangles.clone(), a, 3));
+        for scene in structures.iter().chain(&blocks) {
             let view = scene.view().unwrap();
             for k in &rays {
                 let ray = match k {
@@ -430,10 +448,14 @@ proptest! {
     /// the tangent case where only a consistent kernel keeps structures in agreement.
     #[test]
     fn rays_in_a_triangles_plane(soup in soup(), picks in prop::collection::vec((any::<prop::sample::Index>(), 0u8..3, -0.5f32..1.5), 24)) {
-        let scenes: Vec<_> = [Accel::Grid, Accel::Kd, Accel::Bvh, Accel::Bvh4, Accel::Bvh8]
+        let mut scenes: Vec<_> = [Accel::Grid, Accel::Kd, Accel::Bvh, Accel::Bvh4, Accel::Bvh8]
             .into_iter()
             .map(|a| build_soup(soup.positions.clone(), soup.triangles.clone(), a, 3))
             .collect();
+        scenes.extend(
+            [Accel::Bvh4, Accel::Bvh8]
+                .map(|a| build_soup_layout(soup.positions.clone(), soup.triangles.clone(), a, TriangleLayout::Blocks)),
+        );
         for (i, edge, s) in &picks {
             let t = soup.triangles[i.index(soup.triangles.len())];
             let v = t.map(|k| Vec3::from(soup.positions[k as usize]));
@@ -522,6 +544,50 @@ proptest! {
             }
             let lane = (r.hit & (1 << k) != 0).then_some((r.t[k], r.u[k], r.v[k]));
             prop_assert_eq!(hit_bits(lane), hit_bits(Watertight::intersect(&preps[i], &v)), "lane {}", k);
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 400, ..ProptestConfig::default() })]
+
+    /// The watertight test's four-triangle form (leaf blocks) gives, lane by lane, the
+    /// bits of the one-triangle test, or hands the lane back (`redo`) where an edge
+    /// function is exactly zero. Triangles on a lattice, rays aimed at their vertices,
+    /// edges and centroids.
+    #[test]
+    fn four_triangle_watertight_test_matches_the_one_triangle_test(
+        tris in [[point(), point(), point()], [point(), point(), point()], [point(), point(), point()], [point(), point(), point()]],
+        origin in point(),
+        aim in (0usize..4, 0u8..7),
+    ) {
+        let v = tris.map(|t| t.map(Vec3::from));
+        let o = Vec3::from(origin);
+        let (lane, kind) = aim;
+        let t = v[lane];
+        let target = match kind {
+            0..=2 => t[kind as usize],
+            3..=5 => (t[kind as usize - 3] + t[(kind as usize - 2) % 3]) * 0.5,
+            _ => (t[0] + t[1] + t[2]) / 3.0,
+        };
+        let ray = Ray::new(o, target - o);
+        prop_assume!(ray.is_valid());
+        let prep = Watertight::prepare(&ray);
+        let mut block = TriBlock4 { v: [[[0.0; 4]; 3]; 3] };
+        for (k, tri) in v.iter().enumerate() {
+            for (i, p) in tri.iter().enumerate() {
+                for a in 0..3 {
+                    block.v[i][a][k] = p[a];
+                }
+            }
+        }
+        let r = Watertight::intersect_block4(&prep, &block);
+        for (k, tri) in v.iter().enumerate() {
+            if r.redo & (1 << k) != 0 {
+                continue;
+            }
+            let got = (r.hit & (1 << k) != 0).then_some((r.t[k], r.u[k], r.v[k]));
+            prop_assert_eq!(hit_bits(got), hit_bits(Watertight::intersect(&prep, tri)), "lane {}", k);
         }
     }
 }

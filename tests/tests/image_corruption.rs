@@ -3,11 +3,11 @@
 
 use proptest::prelude::*;
 use raypipe::aligned::AlignedBytes;
-use raypipe::scene::{self, Accel, BuildOptions};
+use raypipe::scene::{self, Accel, BuildOptions, TriangleLayout};
 use raypipe::tracer::trace;
 use raypipe_core::image::{SectionEntry, SectionKind, NULL_INDEX};
 use raypipe_core::{NoProbe, Ray, RayCounters, SceneError, SceneView, Vec3, Watertight};
-use raypipe_tests::{build_soup, reseal};
+use raypipe_tests::{build_soup_layout, reseal};
 
 fn cornell() -> AlignedBytes {
     scene::load_default(&BuildOptions::default()).unwrap().image
@@ -177,12 +177,12 @@ fn every_error_prints_one_line() {
     }
 }
 
-fn soup_image(accel: Accel) -> AlignedBytes {
-    build_soup(
+fn soup_image(accel: Accel, layout: TriangleLayout) -> AlignedBytes {
+    build_soup_layout(
         vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
         vec![[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]],
         accel,
-        3,
+        layout,
     )
     .image
 }
@@ -197,8 +197,9 @@ proptest! {
         edits in prop::collection::vec((any::<prop::sample::Index>(), any::<u8>()), 1..6),
         cut in any::<Option<prop::sample::Index>>(),
         accel in prop_oneof![Just(Accel::Grid), Just(Accel::Kd), Just(Accel::Bvh), Just(Accel::Bvh4), Just(Accel::Bvh8)],
+        layout in prop_oneof![Just(TriangleLayout::Indexed), Just(TriangleLayout::Wald), Just(TriangleLayout::Blocks)],
     ) {
-        let mut b = soup_image(accel);
+        let mut b = soup_image(accel, layout);
         for (i, v) in &edits {
             let at = i.index(b.len());
             b[at] = *v;
@@ -292,5 +293,31 @@ fn tree_corruptions() {
     // Every structure's image is otherwise valid and traceable.
     for img in [&bvh, &kd, &bvh4, &bvh8] {
         assert!(SceneView::parse(img).is_ok());
+    }
+}
+
+/// TRI_BLOCKS copies the leaf triangles' vertices: a copy that disagrees with POSITIONS,
+/// or a block count that does not cover PRIM_LISTS, is rejected (single rays would
+/// otherwise see another scene than packets and the hardware model).
+#[test]
+fn stale_triangle_blocks_are_rejected() {
+    for accel in [Accel::Bvh4, Accel::Bvh8] {
+        let opts = BuildOptions { accel, triangles: TriangleLayout::Blocks, ..Default::default() };
+        let img = scene::load_default(&opts).unwrap().image;
+        assert!(SceneView::parse(&img).unwrap().has_tri_blocks());
+        let (pos, blocks) = entry_pos(&img, SectionKind::TriBlocks);
+        let first = blocks.offset as usize;
+        // Lane 0's first vertex x moved.
+        let stale = corrupt_image(&img, |b| {
+            let x = f32::from_le_bytes(b[first..first + 4].try_into().unwrap());
+            b[first..first + 4].copy_from_slice(&(x + 1.0).to_le_bytes())
+        });
+        assert!(matches!(stale, SceneError::StaleCopy { section: SectionKind::TriBlocks, record: 0 }), "{stale}");
+        // One block fewer than the lists need (size and count shrunk together).
+        let short = corrupt_image(&img, |b| {
+            put_u32(b, pos + 8, blocks.size - 144);
+            put_u32(b, pos + 12, blocks.count - 1)
+        });
+        assert!(matches!(short, SceneError::CountMismatch { section: SectionKind::TriBlocks, .. }), "{short}");
     }
 }

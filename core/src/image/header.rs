@@ -142,11 +142,16 @@ pub enum SectionKind {
     Texels = 16,
     /// 8-wide BVH nodes, [`crate::image::Bvh8Node`], 256 bytes each; node 0 is the root.
     Bvh8Nodes = 17,
+    /// Copies of the vertices of the trees' leaf triangles in blocks of four SIMD lanes,
+    /// [`crate::image::TriBlock4`], 144 bytes each: block `j` holds the triangles of
+    /// PRIM_LISTS entries `4j` to `4j + 3` (optional; single rays test a leaf's
+    /// triangles four at a time from it).
+    TriBlocks = 18,
 }
 
 impl SectionKind {
     /// Every kind, in table order.
-    pub const ALL: [SectionKind; 17] = [
+    pub const ALL: [SectionKind; 18] = [
         SectionKind::Positions,
         SectionKind::Triangles,
         SectionKind::Grid,
@@ -164,6 +169,7 @@ impl SectionKind {
         SectionKind::Textures,
         SectionKind::Texels,
         SectionKind::Bvh8Nodes,
+        SectionKind::TriBlocks,
     ];
 
     /// Decodes a section-table kind.
@@ -183,6 +189,7 @@ impl SectionKind {
             SectionKind::Bvh4Nodes => 128,
             SectionKind::Bvh8Nodes => 256,
             SectionKind::WaldTriangles => 48,
+            SectionKind::TriBlocks => 144,
         }
     }
 
@@ -206,6 +213,7 @@ impl SectionKind {
             SectionKind::WaldTriangles => "WALD_TRIANGLES",
             SectionKind::Textures => "TEXTURES",
             SectionKind::Texels => "TEXELS",
+            SectionKind::TriBlocks => "TRI_BLOCKS",
         }
     }
 }

@@ -16,7 +16,7 @@ pub use embed::Aligned64;
 pub use header::{AccelKind, Header, SectionEntry, SectionKind, FORMAT_VERSION, MAGIC};
 pub use records::{
     Bvh4Node, Bvh8Node, BvhNode, CameraRecord, GridRecord, KdNode, LightRecord, MaterialRecord, Position,
-    ShadingVertex, TextureRecord, TriangleRecord, WaldTriangle, WideNode, NULL_INDEX,
+    ShadingVertex, TextureRecord, TriBlock4, TriangleRecord, WaldTriangle, WideNode, NULL_INDEX,
 };
 pub use view::{
     Bvh4View, Bvh8View, BvhView, GridView, KdTreeView, SceneError, SceneView, WideBvhView, IMAGE_ALIGN, MAX_TREE_DEPTH,

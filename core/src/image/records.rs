@@ -424,6 +424,19 @@ pub struct WaldTriangle {
 const _: () = assert!(core::mem::size_of::<WaldTriangle>() == 48);
 const _: () = assert!(core::mem::align_of::<WaldTriangle>() == 4);
 
+/// Four triangles' vertices as SIMD lanes, 144 bytes: `v[i][axis]` holds coordinate
+/// `axis` of vertex `i` of the four triangles, one per lane, so that one ray is tested
+/// against four triangles with no gather (Embree's `Triangle4` leaves). The vertices are
+/// copies of POSITIONS, in the order of PRIM_LISTS: no index is followed to reach them.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct TriBlock4 {
+    /// `v[vertex][axis][lane]`.
+    pub v: [[[f32; 4]; 3]; 3],
+}
+const _: () = assert!(core::mem::size_of::<TriBlock4>() == 144);
+const _: () = assert!(core::mem::align_of::<TriBlock4>() == 4);
+
 /// A diffuse texture, 16 bytes: its size, where its texels start in TEXELS (row-major,
 /// the top row first), and how coordinates outside `[0, 1]` wrap.
 #[repr(C)]

@@ -9,7 +9,7 @@ use super::crc32::Crc32;
 use super::header::{AccelKind, Header, SectionEntry, SectionKind, CHECKSUM_OFFSET, FORMAT_VERSION, MAGIC};
 use super::records::{
     Bvh4Node, Bvh8Node, BvhNode, CameraRecord, GridRecord, KdNode, LightRecord, MaterialRecord, Position,
-    ShadingVertex, TextureRecord, TriangleRecord, WaldTriangle, WideNode, NULL_INDEX,
+    ShadingVertex, TextureRecord, TriBlock4, TriangleRecord, WaldTriangle, WideNode, NULL_INDEX,
 };
 use crate::probe::{DataClass, MemoryProbe};
 
@@ -140,6 +140,13 @@ pub enum SceneError {
         /// The texture.
         texture: u32,
     },
+    /// A section that copies other data (TRI_BLOCKS copies vertices) disagrees with it.
+    StaleCopy {
+        /// Which section.
+        section: SectionKind,
+        /// The record.
+        record: u32,
+    },
     /// A tree node is malformed: a child not after its parent, a node referenced twice or
     /// never, a tree deeper than [`MAX_TREE_DEPTH`], a leaf range outside PRIM_LISTS, or
     /// a NaN box or split.
@@ -171,6 +178,11 @@ impl fmt::Display for SceneError {
                 "scene image is corrupted: checksum 0x{stored:08x} stored, 0x{computed:08x} computed"
             ),
             UnknownSection(v) => write!(f, "scene image has unknown section kind {v}"),
+            StaleCopy { section, record } => write!(
+                f,
+                "section {} record {record} does not match the data it copies",
+                section.name()
+            ),
             BadTexture { texture } => write!(f, "scene image texture {texture} has an impossible size, texel range or wrap mode"),
             DuplicateSection(s) => write!(f, "scene image has section {} twice", s.name()),
             MissingSection(s) => write!(f, "scene image lacks required section {}", s.name()),
@@ -466,6 +478,7 @@ pub struct SceneView<'a> {
     prim_lists: &'a [u32],
     shading: &'a [ShadingVertex],
     wald: &'a [WaldTriangle],
+    tri_blocks: &'a [TriBlock4],
     tri_materials: &'a [u32],
     materials: &'a [MaterialRecord],
     textures: &'a [TextureRecord],
@@ -482,6 +495,7 @@ pub struct SceneView<'a> {
     lights_addr: u32,
     prim_lists_addr: u32,
     wald_addr: u32,
+    tri_blocks_addr: u32,
 }
 
 struct Sections<'a> {
@@ -740,6 +754,9 @@ impl<'a> SceneView<'a> {
                 return Err(SceneError::NonFinite { section: K::WaldTriangles, record: i as u32 });
             }
         }
+        let prim_lists: &[u32] = s.slice(K::PrimLists)?;
+        let tri_blocks: &[TriBlock4] = s.slice(K::TriBlocks)?;
+        Self::validate_tri_blocks(tri_blocks, prim_lists, triangles, positions)?;
         let lights: &[LightRecord] = s.slice(K::Lights)?;
         let area_lights = lights.iter().filter(|l| l.kind == LightRecord::AREA).count() as u32;
         for (i, l) in lights.iter().enumerate() {
@@ -778,9 +795,10 @@ impl<'a> SceneView<'a> {
             bvh4,
             bvh8,
             kd,
-            prim_lists: s.slice(K::PrimLists)?,
+            prim_lists,
             shading,
             wald,
+            tri_blocks,
             tri_materials,
             materials,
             textures,
@@ -796,8 +814,44 @@ impl<'a> SceneView<'a> {
             texels_addr: s.addr(K::Texels),
             lights_addr: s.addr(K::Lights),
             wald_addr: s.addr(K::WaldTriangles),
+            tri_blocks_addr: s.addr(K::TriBlocks),
             prim_lists_addr: s.addr(K::PrimLists),
         })
+    }
+
+    /// TRI_BLOCKS, when present, covers PRIM_LISTS in blocks of four and holds exactly
+    /// the vertices of the triangles listed there: a leaf tested from its blocks then
+    /// gives the bits it gives tested through the lists (lanes past the lists' end are
+    /// never tested).
+    fn validate_tri_blocks(
+        blocks: &[TriBlock4],
+        prims: &[u32],
+        triangles: &[TriangleRecord],
+        positions: &[Position],
+    ) -> Result<(), SceneError> {
+        use SectionKind as K;
+        if blocks.is_empty() {
+            return Ok(());
+        }
+        let expected = prims.len().div_ceil(4) as u32;
+        if blocks.len() as u32 != expected {
+            return Err(SceneError::CountMismatch { section: K::TriBlocks, expected, found: blocks.len() as u32 });
+        }
+        for (e, &prim) in prims.iter().enumerate() {
+            let (record, lane) = ((e / 4) as u32, e % 4);
+            let stale = SceneError::StaleCopy { section: K::TriBlocks, record };
+            let block = blocks.get(e / 4).ok_or(stale)?;
+            // A list terminator (grid lists): no triangle to copy.
+            let Some(tri) = triangles.get(prim as usize) else { continue };
+            let same = (0..3).all(|i| {
+                let p = positions.get(tri.0[i] as usize).map_or([f32::NAN; 3], |p| p.0);
+                (0..3).all(|a| block.v[i][a][lane].to_bits() == p[a].to_bits())
+            });
+            if !same {
+                return Err(stale);
+            }
+        }
+        Ok(())
     }
 
     fn validate_grid(s: &Sections<'a>, nt: u32, bmin: Vec3, bmax: Vec3) -> Result<GridView<'a>, SceneError> {
@@ -1111,6 +1165,19 @@ impl<'a> SceneView<'a> {
         }
         probe.read(DataClass::Triangles, self.wald_addr.wrapping_add(prim.wrapping_mul(48)), 48);
         self.wald.get(prim as usize).copied()
+    }
+
+    /// Reads block `block` of TRI_BLOCKS (the triangles of PRIM_LISTS entries
+    /// `4·block` to `4·block + 3`), if the image has that section and the block.
+    #[inline(always)]
+    pub fn tri_block<P: MemoryProbe>(&self, block: u32, probe: &mut P) -> Option<&'a TriBlock4> {
+        probe.read(DataClass::Triangles, self.tri_blocks_addr.wrapping_add(block.wrapping_mul(144)), 144);
+        self.tri_blocks.get(block as usize)
+    }
+
+    /// True if the image stores its leaf triangles in blocks of four (TRI_BLOCKS).
+    pub fn has_tri_blocks(&self) -> bool {
+        !self.tri_blocks.is_empty()
     }
 
     /// True if the image stores Wald's precomputed triangles.
