@@ -144,7 +144,8 @@ pub struct StructureArgs {
     /// Target grid cells per triangle when --grid-min-dim is not given.
     #[arg(long, value_name = "F", default_value_t = DEFAULT_CELLS_PER_TRIANGLE)]
     pub grid_density: f64,
-    /// Triangle layout: indexed vertices, or also Wald's 48-byte precomputed triangles.
+    /// Triangle layout: indexed vertices, or also Wald's 48-byte precomputed triangles, or
+    /// also leaf blocks of four triangles (bvh4, bvh8; fastest for single rays).
     #[arg(long, value_enum, default_value_t = TriangleLayout::Indexed)]
     pub triangles: TriangleLayout,
     /// kd-tree SAH: cost of a traversal step (pbrt: 1).
@@ -445,7 +446,8 @@ pub struct BenchArgs {
     /// Grid cells along the shortest axis (default: derived from the triangle count).
     #[arg(long, value_name = "N")]
     pub grid_min_dim: Option<u32>,
-    /// Triangle layout: indexed vertices, or also Wald's 48-byte precomputed triangles.
+    /// Triangle layout: indexed vertices, or also Wald's 48-byte precomputed triangles, or
+    /// also leaf blocks of four triangles (bvh4, bvh8; fastest for single rays).
     #[arg(long, value_enum, default_value_t = TriangleLayout::Indexed)]
     pub triangles: TriangleLayout,
     /// Ray–triangle intersection test (default: wald for an image with Wald triangles,

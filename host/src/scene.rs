@@ -49,8 +49,9 @@ pub enum TriangleLayout {
     /// Also Wald's 48-byte precomputed projection triangles, for `--intersector wald`.
     Wald,
     /// Also the leaf triangles' vertices in blocks of four SIMD lanes (144 bytes per four
-    /// list entries, leaves aligned to blocks): single rays through a 4- or 8-wide BVH
-    /// test four triangles at a time with the watertight test.
+    /// list entries, leaves aligned to blocks and priced by blocks): single rays through a
+    /// 4- or 8-wide BVH test four triangles at a time with the watertight test. The
+    /// larger leaves slow packets down, which test each triangle ray group by ray group.
     Blocks,
 }
 

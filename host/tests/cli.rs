@@ -305,6 +305,22 @@ fn trace_a_ray_batch_with_every_structure_and_packet_size() {
             }
         }
     }
+    // Images with leaf triangle blocks (the wide BVHs' single rays read them) give the
+    // same hits; a structure without wide leaves keeps indexed triangles and says so.
+    let reference = reference.unwrap();
+    for accel in ["bvh4", "bvh8"] {
+        let o = raypipe(d, &["build", obj, "--accel", accel, "--triangles", "blocks", "-o", "blocks.rpsi"]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let o = raypipe(d, &["trace", "blocks.rpsi", "--rays", "rays.npy", "--hits", "hits.npy", "--packet", "1"]);
+        assert!(String::from_utf8_lossy(&o.stdout).contains("leaf blocks"), "{}", stderr(&o));
+        let hits = read_hits(&d.join("hits.npy"));
+        assert!(
+            reference.iter().zip(&hits).all(|(a, b)| a.0.to_bits() == b.0.to_bits() && a.3 == b.3),
+            "{accel} blocks"
+        );
+    }
+    let o = raypipe(d, &["build", obj, "--accel", "grid", "--triangles", "blocks", "-o", "grid.rpsi"]);
+    assert!(o.status.success() && stderr(&o).contains("--triangles blocks applies to"), "{}", stderr(&o));
     // A ray above the blocks, straight down +z (N × 6 form), hits the back wall at z = 559.2.
     write_npy(&d.join("one.npy"), &[1, 6], &[100.0, 450.0, -800.0, 0.0, 0.0, 1.0], "<f4");
     assert!(raypipe(d, &["trace", obj, "--rays", "one.npy", "--hits", "one_hits.npy"]).status.success());
