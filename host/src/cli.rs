@@ -788,7 +788,7 @@ fn cmd_bench(a: BenchArgs) -> Result<()> {
         a.size.0, a.size.1, a.runs
     );
     println!(
-        "{:<24} {:>8} {:<22} {:>8} {:>8} {:<7} {:>10} {:>10} {:>8} {:>6}",
+        "{:<24} {:>8} {:<30} {:>8} {:>8} {:<7} {:>10} {:>10} {:>8} {:>6}",
         "scene", "tris", "structure", "build s", "B/tri", "packet", "Mrays/s 1t", "Mrays/s", "threads", "SIMD"
     );
     for t in targets {
@@ -843,7 +843,7 @@ fn cmd_bench(a: BenchArgs) -> Result<()> {
                     format!("{:.0}%", 100.0 * r.simd_efficiency)
                 };
                 println!(
-                    "{:<24} {:>8} {:<22} {:>8.3} {:>8.1} {:<7} {:>10.2} {:>10.2} {:>8} {:>6}",
+                    "{:<24} {:>8} {:<30} {:>8.3} {:>8.1} {:<7} {:>10.2} {:>10.2} {:>8} {:>6}",
                     name,
                     view.triangle_count(),
                     structure_summary(&view),
