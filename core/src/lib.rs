@@ -12,6 +12,7 @@
 //! * [`grid`]: uniform-grid traversal over Purcell's Figure 4 layout;
 //! * [`bvh`] and [`kdtree`]: tree traversal with a fixed-capacity stack;
 //! * [`watertight`] and [`moller_trumbore`]: ray–triangle intersection;
+//! * [`leaf_blocks`]: a leaf's triangles four at a time (optional TRI_BLOCKS);
 //! * [`brute_force`]: the reference tracer every structure must agree with;
 //! * [`shade`]: Lambert shading with one point light plus ambient;
 //! * [`ray_record`], [`occlusion`], [`whitted`], [`path`] and [`shader`]: weighted ray
@@ -26,6 +27,8 @@
 //! ```
 #![no_std]
 #![deny(missing_docs)]
+// Safe code throughout, except the 8-wide node test's AVX form (`bvh8::slab8_avx`),
+// which runs only once the host has reported AVX ([`cpu::assume_avx`]).
 #![deny(unsafe_code)]
 
 #[cfg(target_endian = "big")]
@@ -41,6 +44,7 @@ pub mod bvh_packet;
 pub mod camera;
 pub mod color;
 pub mod counters;
+pub mod cpu;
 pub mod dda;
 pub mod grid;
 pub mod grid_packet;

@@ -13,8 +13,12 @@
 pub fn with_avx2<R>(f: impl FnOnce() -> R) -> R {
     #[cfg(target_arch = "x86_64")]
     if std::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU has the features `avx2` is compiled for (checked above).
-        return unsafe { avx2(f) };
+        // SAFETY: the CPU has AVX (implied by AVX2), as `assume_avx` requires, and the
+        // features `avx2` is compiled for (checked above).
+        return unsafe {
+            raypipe_core::cpu::assume_avx();
+            avx2(f)
+        };
     }
     f()
 }
