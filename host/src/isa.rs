@@ -13,14 +13,22 @@
 pub fn with_avx2<R>(f: impl FnOnce() -> R) -> R {
     #[cfg(target_arch = "x86_64")]
     if std::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU has AVX (implied by AVX2), as `assume_avx` requires, and the
-        // features `avx2` is compiled for (checked above).
-        return unsafe {
-            raypipe_core::cpu::assume_avx();
-            avx2(f)
-        };
+        report_cpu();
+        // SAFETY: the CPU has the features `avx2` is compiled for (checked above).
+        return unsafe { avx2(f) };
     }
     f()
+}
+
+/// Tells core which optional instruction sets the CPU has (a `no_std` library cannot
+/// ask): with AVX, the 8-wide BVH's node test and the packets' leaf entry test run as
+/// AVX intrinsics. Cheap (the detection is cached); the tracing drivers call it first.
+pub fn report_cpu() {
+    #[cfg(target_arch = "x86_64")]
+    if std::is_x86_feature_detected!("avx") {
+        // SAFETY: the CPU has AVX (checked above), as `assume_avx` requires.
+        unsafe { raypipe_core::cpu::assume_avx() }
+    }
 }
 
 #[cfg(target_arch = "x86_64")]

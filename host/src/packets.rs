@@ -97,6 +97,7 @@ pub fn trace_tile<I: Intersector>(
     packet_counters: &mut PacketCounters,
     f: &mut impl FnMut(u32, u32, Option<Ray>, Option<Hit>),
 ) {
+    crate::isa::report_cpu();
     match size.usable_for(scene) {
         PacketSize::Single => with_avx2(
             #[inline(always)]
