@@ -71,7 +71,7 @@ pub fn slab8(r: &NodeRay, n: &Bvh8Node, t0: f32, t1: f32) -> ([f32; 8], u32) {
 /// [`slab8`] in AVX intrinsics, lane for lane the same operations (`vmaxps`/`vminps`
 /// are what `max`/`min` above emulate): one register per plane and one move-mask, which
 /// the portable form cannot get from the compiler. Measured with paired runs on 1024²
-/// primary rays, single rays through the 8-wide BVH with leaf blocks: 7–12% faster than
+/// primary rays, single rays through the 8-wide BVH: 5–13% faster than
 /// the portable form compiled for AVX2.
 ///
 /// # Safety

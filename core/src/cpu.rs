@@ -1,6 +1,6 @@
 //! The optional instruction sets the CPU has, as the host reports them: a `no_std`
 //! library cannot ask the operating system, so the host detects them and says so once
-//! (`raypipe`'s `isa::with_avx2`). Until then, and on other architectures, every kernel
+//! (`raypipe`'s `isa::report_cpu`). Until then, and on other architectures, every kernel
 //! runs its portable form. Either form gives the same bits.
 
 #[cfg(target_arch = "x86_64")]
