@@ -276,8 +276,8 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
             };
             c.active_lanes += enter.count_ones() as u64;
             if enter != 0 {
-                preps.prepare(packet, mask, enter);
-                test_leaf::<I, P, N>(scene, bvh, packet, &preps, enter, index, count, hits, probe);
+                preps.prepare(packet, &q, mask, enter);
+                test_leaf::<I, P, N>(scene, bvh, packet, &mut preps, enter, index, count, hits, probe);
                 c.tri_tests += count as u64 * enter.count_ones() as u64;
                 let mut touched = 0u64;
                 for i in Lanes(enter) {
@@ -399,25 +399,39 @@ struct Preps<I: Intersector, const N: usize> {
     four: [Option<I::Prepared4>; GROUPS],
     // Groups whose constants are computed.
     ready: u32,
+    // Lanes whose one-ray constants are computed (groups with a four-ray form compute
+    // them only for the lanes that need them: redone lanes, lone rays).
+    one_ready: u64,
 }
 
 impl<I: Intersector, const N: usize> Preps<I, N> {
     fn new() -> Self {
-        Preps { one: [I::Prepared::default(); N], four: [None; GROUPS], ready: 0 }
+        Preps { one: [I::Prepared::default(); N], four: [None; GROUPS], ready: 0, one_ready: 0 }
     }
 
     /// Makes the constants of every group with a lane in `enter` ready.
     #[inline(always)]
-    fn prepare(&mut self, packet: &RayPacket<N>, mask: u64, enter: u64) {
+    fn prepare(&mut self, packet: &RayPacket<N>, q: &Groups, mask: u64, enter: u64) {
         for g in Lanes(groups_of(enter) & !(self.ready as u64)) {
             let m4 = (mask >> (4 * g)) & 0xF;
-            for i in Lanes(m4 << (4 * g)) {
-                if let Some(p) = self.one.get_mut(i) {
-                    *p = I::prepare(&packet.ray(i));
-                }
-            }
-            // Inactive lanes borrow an active lane's constants (their results are unused).
+            self.ready |= 1 << g;
+            // Inactive lanes borrow an active lane's ray (their results are unused).
             let any = 4 * g + m4.trailing_zeros() as usize;
+            let act = GROUP_LANES[m4 as usize];
+            let pick = |v: Vec4, a: &[f32; N]| Vec4::select(act, v, Vec4::splat(a.get(any).copied().unwrap_or(0.0)));
+            let lanes =
+                |a: &[f32; N]| Vec4::from_array(core::array::from_fn(|k| a.get(4 * g + k).copied().unwrap_or(0.0)));
+            let org = [pick(q.org[0][g], &packet.ox), pick(q.org[1][g], &packet.oy), pick(q.org[2][g], &packet.oz)];
+            let dir = [&packet.dx, &packet.dy, &packet.dz].map(|d| pick(lanes(d), d));
+            if let Some(four) = I::prepare_rays4(org, dir) {
+                if let Some(f) = self.four.get_mut(g) {
+                    *f = Some(four);
+                }
+                continue;
+            }
+            for i in Lanes(m4 << (4 * g)) {
+                self.one(packet, i);
+            }
             let lane = |k: usize| {
                 let i = if m4 & (1 << k) != 0 { 4 * g + k } else { any };
                 &self.one[i.min(N - 1)]
@@ -425,8 +439,18 @@ impl<I: Intersector, const N: usize> Preps<I, N> {
             if let Some(f) = self.four.get_mut(g) {
                 *f = I::gather_rays4([lane(0), lane(1), lane(2), lane(3)]);
             }
-            self.ready |= 1 << g;
         }
+    }
+
+    /// Ray `i`'s one-ray constants, computed the first time they are asked for.
+    #[inline(always)]
+    fn one(&mut self, packet: &RayPacket<N>, i: usize) -> &I::Prepared {
+        let i = i.min(N - 1);
+        if self.one_ready & (1 << i) == 0 {
+            self.one[i] = I::prepare(&packet.ray(i));
+            self.one_ready |= 1 << i;
+        }
+        &self.one[i]
     }
 }
 
@@ -449,7 +473,7 @@ fn test_leaf<I: Intersector, P: MemoryProbe, const N: usize>(
     scene: &SceneView<'_>,
     bvh: &Bvh4View<'_>,
     packet: &RayPacket<N>,
-    preps: &Preps<I, N>,
+    preps: &mut Preps<I, N>,
     enter: u64,
     first: u32,
     count: u32,
@@ -470,7 +494,7 @@ fn test_leaf<I: Intersector, P: MemoryProbe, const N: usize>(
                         let i = (4 * g + k).min(N - 1);
                         let ray = packet.ray(i);
                         if r.redo & (1 << k) != 0 {
-                            test_triangle::<I>(&preps.one[i], &ray, &verts, prim, &mut hits[i]);
+                            test_triangle::<I>(preps.one(packet, i), &ray, &verts, prim, &mut hits[i]);
                         } else if let Some(hit) = in_range(&ray, Some((r.t[k], r.u[k], r.v[k])), prim) {
                             keep_closest(&mut hits[i], hit);
                         }
@@ -479,7 +503,7 @@ fn test_leaf<I: Intersector, P: MemoryProbe, const N: usize>(
                 _ => {
                     for i in Lanes(m4 << (4 * g)) {
                         let i = i.min(N - 1);
-                        test_triangle::<I>(&preps.one[i], &packet.ray(i), &verts, prim, &mut hits[i]);
+                        test_triangle::<I>(preps.one(packet, i), &packet.ray(i), &verts, prim, &mut hits[i]);
                     }
                 }
             }

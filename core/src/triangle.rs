@@ -1,6 +1,8 @@
 //! The ray–triangle intersection interface and the one place a candidate hit is accepted.
 
 use crate::hit::{keep_closest, Hit};
+use glam::Vec4;
+
 use crate::image::{SceneView, TriBlock4};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
@@ -34,6 +36,14 @@ pub trait Intersector {
     /// share one.
     #[inline(always)]
     fn gather_rays4(_preps: [&Self::Prepared; 4]) -> Option<Self::Prepared4> {
+        None
+    }
+    /// Four rays' constants computed directly in SIMD lanes from their origins and
+    /// directions (one register per axis), lane by lane the bits [`Intersector::prepare`]
+    /// and [`Intersector::gather_rays4`] give; `None` where that pair would (rays that
+    /// cannot share one form) or where the test has no such form (the default).
+    #[inline(always)]
+    fn prepare_rays4(_org: [Vec4; 3], _dir: [Vec4; 3]) -> Option<Self::Prepared4> {
         None
     }
     /// One triangle against four rays at once: lane by lane the bits of

@@ -52,6 +52,35 @@ impl Intersector for Watertight {
         })
     }
 
+    /// [`Watertight::prepare`] for four rays at once: the same axis choice (the largest
+    /// direction component, ties to the lower axis) and the same divisions, per lane.
+    #[inline(always)]
+    fn prepare_rays4(org: [Vec4; 3], dir: [Vec4; 3]) -> Option<ShearedRays4> {
+        let [ax, ay, az] = dir.map(Vec4::abs);
+        let x_major = ax.cmpge(ay) & ax.cmpge(az);
+        let y_major = !x_major & ay.cmpge(az);
+        let kz = match (x_major.bitmask(), y_major.bitmask()) {
+            (0xF, _) => 0,
+            (0, 0xF) => 1,
+            (0, 0) => 2,
+            _ => return None,
+        };
+        let (mut kx, mut ky) = ((kz + 1) % 3, (kz + 2) % 3);
+        // Swap to preserve the winding of the triangle: all four rays alike, or none.
+        match dir[kz].cmplt(Vec4::ZERO).bitmask() {
+            0xF => core::mem::swap(&mut kx, &mut ky),
+            0 => {}
+            _ => return None,
+        }
+        Some(ShearedRays4 {
+            org,
+            sx: dir[kx] / dir[kz],
+            sy: dir[ky] / dir[kz],
+            sz: Vec4::ONE / dir[kz],
+            k: [kx, ky, kz],
+        })
+    }
+
     /// [`Watertight::intersect`] with the four rays in SIMD lanes: per lane the same
     /// operations in the same order. A lane with an edge function of exactly zero is
     /// left to the scalar test (its double-precision recomputation).
@@ -205,4 +234,78 @@ pub struct ShearedRays4 {
     sy: Vec4,
     sz: Vec4,
     k: [usize; 3],
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A small deterministic generator (no dependencies in core).
+    struct Lcg(u64);
+    impl Lcg {
+        fn next(&mut self) -> u64 {
+            self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            self.0 >> 33
+        }
+        /// Mostly small lattice values, so that components tie in magnitude, are zero
+        /// or differ only in sign.
+        fn coord(&mut self) -> f32 {
+            match self.next() % 4 {
+                0 => (self.next() % 5) as f32 - 2.0,
+                _ => (self.next() % 2001) as f32 / 1000.0 - 1.0,
+            }
+        }
+    }
+
+    fn bits(v: Vec4) -> [u32; 4] {
+        v.to_array().map(f32::to_bits)
+    }
+
+    /// The four-ray constants computed in SIMD lanes are, bit for bit, those of the
+    /// one-ray constants gathered, and missing exactly when the gather refuses.
+    #[test]
+    fn four_ray_constants_match_the_one_ray_constants_gathered() {
+        let mut g = Lcg(5);
+        let (mut same, mut refused) = (0, 0);
+        for case in 0..20_000 {
+            let mut dir = || {
+                let d = Vec3::new(g.coord(), g.coord(), g.coord());
+                if d == Vec3::ZERO {
+                    Vec3::X
+                } else {
+                    d
+                }
+            };
+            // Every other case: one direction for all four rays (negated in the last lane
+            // every fourth case), as in a coherent packet.
+            let shared = dir();
+            let dirs: [Vec3; 4] = core::array::from_fn(|k| match (case % 4, k) {
+                (0, 3) => -shared,
+                (0 | 2, _) => shared,
+                _ => dir(),
+            });
+            let rays = dirs.map(|d| Ray::new(Vec3::new(g.coord(), g.coord(), g.coord()), d));
+            let one = rays.map(|r| Watertight::prepare(&r));
+            let gathered = Watertight::gather_rays4([&one[0], &one[1], &one[2], &one[3]]);
+            let lanes = |f: fn(&Ray) -> Vec3| -> [Vec4; 3] {
+                let v = rays.map(|r| f(&r));
+                core::array::from_fn(|a| Vec4::new(v[0][a], v[1][a], v[2][a], v[3][a]))
+            };
+            let direct = Watertight::prepare_rays4(lanes(|r| r.origin), lanes(|r| r.dir));
+            match (gathered, direct) {
+                (None, None) => refused += 1,
+                (Some(a), Some(b)) => {
+                    assert_eq!(a.k, b.k, "case {case}");
+                    for (x, y) in
+                        [(a.sx, b.sx), (a.sy, b.sy), (a.sz, b.sz)].into_iter().chain(a.org.into_iter().zip(b.org))
+                    {
+                        assert_eq!(bits(x), bits(y), "case {case}");
+                    }
+                    same += 1;
+                }
+                _ => panic!("case {case}: gathered {gathered:?}, direct {direct:?}"),
+            }
+        }
+        assert!(same > 5000 && refused > 5000, "{same} alike, {refused} refused");
+    }
 }
