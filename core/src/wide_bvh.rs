@@ -47,8 +47,6 @@ pub struct NodeRay {
     pub(crate) far: [usize; 3],
     /// The scalar slab constants (and the zero-direction axes).
     pub(crate) rb: RayBox,
-    /// The CPU has AVX ([`crate::cpu`]), read once per ray.
-    pub(crate) avx: bool,
 }
 
 impl NodeRay {
@@ -64,7 +62,6 @@ impl NodeRay {
             near: core::array::from_fn(|a| a + 3 * ((neg >> a) & 1)),
             far: core::array::from_fn(|a| a + 3 * (!(neg >> a) & 1)),
             rb,
-            avx: crate::cpu::has_avx(),
         }
     }
 }
