@@ -13,7 +13,6 @@
 pub fn with_avx2<R>(f: impl FnOnce() -> R) -> R {
     #[cfg(target_arch = "x86_64")]
     if std::is_x86_feature_detected!("avx2") {
-        report_cpu();
         // SAFETY: the CPU has the features `avx2` is compiled for (checked above).
         return unsafe { avx2(f) };
     }
