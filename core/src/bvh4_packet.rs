@@ -392,15 +392,15 @@ unsafe fn leaf_entries_avx(q: &Groups, groups: usize, mask: u64, leaf_box: &[f32
 }
 
 /// The rays' intersection constants, computed for a group of four lanes the first time
-/// one of its rays enters a leaf (most rays of a frame never do), one by one and as four
-/// SIMD lanes for the intersector's four-ray form.
+/// one of its rays enters a leaf (most rays of a frame never do), as four SIMD lanes for
+/// the intersector's four-ray form; one ray's own constants only when it is tested alone.
 struct Preps<I: Intersector, const N: usize> {
     one: [I::Prepared; N],
     four: [Option<I::Prepared4>; GROUPS],
     // Groups whose constants are computed.
     ready: u32,
-    // Lanes whose one-ray constants are computed (groups with a four-ray form compute
-    // them only for the lanes that need them: redone lanes, lone rays).
+    // Lanes whose one-ray constants are computed: only lanes tested one by one (redone
+    // lanes, lone rays, groups without a four-ray form) need them.
     one_ready: u64,
 }
 
@@ -423,21 +423,8 @@ impl<I: Intersector, const N: usize> Preps<I, N> {
                 |a: &[f32; N]| Vec4::from_array(core::array::from_fn(|k| a.get(4 * g + k).copied().unwrap_or(0.0)));
             let org = [pick(q.org[0][g], &packet.ox), pick(q.org[1][g], &packet.oy), pick(q.org[2][g], &packet.oz)];
             let dir = [&packet.dx, &packet.dy, &packet.dz].map(|d| pick(lanes(d), d));
-            if let Some(four) = I::prepare_rays4(org, dir) {
-                if let Some(f) = self.four.get_mut(g) {
-                    *f = Some(four);
-                }
-                continue;
-            }
-            for i in Lanes(m4 << (4 * g)) {
-                self.one(packet, i);
-            }
-            let lane = |k: usize| {
-                let i = if m4 & (1 << k) != 0 { 4 * g + k } else { any };
-                &self.one[i.min(N - 1)]
-            };
             if let Some(f) = self.four.get_mut(g) {
-                *f = I::gather_rays4([lane(0), lane(1), lane(2), lane(3)]);
+                *f = I::prepare_rays4(org, dir);
             }
         }
     }

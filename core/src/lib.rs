@@ -86,4 +86,4 @@ pub use probe::{DataClass, MemoryProbe, NoProbe};
 pub use ray::Ray;
 pub use triangle::{Intersector, MollerTrumbore, WaldProjection, Watertight};
 
-pub use glam::Vec3;
+pub use glam::{Vec3, Vec4};

@@ -31,17 +31,10 @@ pub trait Intersector {
     fn intersect(prep: &Self::Prepared, tri: &Self::Triangle) -> Option<(f32, f32, f32)>;
     /// Four rays' constants as SIMD lanes, for [`Intersector::intersect_rays4`].
     type Prepared4: Copy;
-    /// Gathers four prepared rays into SIMD lanes, or `None` when this test has no
-    /// four-ray form (the default: packets then test ray by ray) or the four rays cannot
-    /// share one.
-    #[inline(always)]
-    fn gather_rays4(_preps: [&Self::Prepared; 4]) -> Option<Self::Prepared4> {
-        None
-    }
-    /// Four rays' constants computed directly in SIMD lanes from their origins and
-    /// directions (one register per axis), lane by lane the bits [`Intersector::prepare`]
-    /// and [`Intersector::gather_rays4`] give; `None` where that pair would (rays that
-    /// cannot share one form) or where the test has no such form (the default).
+    /// Four rays' constants in SIMD lanes, computed from their origins and directions
+    /// (one register per axis): lane by lane the bits [`Intersector::prepare`] gives.
+    /// `None` where the four rays cannot share one form, or where the test has no
+    /// four-ray form (the default: packets then test ray by ray).
     #[inline(always)]
     fn prepare_rays4(_org: [Vec4; 3], _dir: [Vec4; 3]) -> Option<Self::Prepared4> {
         None

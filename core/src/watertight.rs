@@ -36,22 +36,6 @@ impl Intersector for Watertight {
     const NAME: &'static str = "watertight";
     type Prepared4 = ShearedRays4;
 
-    #[inline(always)]
-    fn gather_rays4(r: [&ShearedRay; 4]) -> Option<ShearedRays4> {
-        let k = (r[0].kx, r[0].ky, r[0].kz);
-        if r.iter().any(|s| (s.kx, s.ky, s.kz) != k) {
-            return None;
-        }
-        let lanes = |f: fn(&ShearedRay) -> f32| Vec4::new(f(r[0]), f(r[1]), f(r[2]), f(r[3]));
-        Some(ShearedRays4 {
-            org: [lanes(|s| s.org.x), lanes(|s| s.org.y), lanes(|s| s.org.z)],
-            sx: lanes(|s| s.sx),
-            sy: lanes(|s| s.sy),
-            sz: lanes(|s| s.sz),
-            k: [k.0 as usize % 3, k.1 as usize % 3, k.2 as usize % 3],
-        })
-    }
-
     /// [`Watertight::prepare`] for four rays at once: the same axis choice (the largest
     /// direction component, ties to the lower axis) and the same divisions, per lane.
     #[inline(always)]
@@ -257,6 +241,23 @@ mod tests {
         }
     }
 
+    /// The four rays' one-ray constants in SIMD lanes, or `None` unless they share one
+    /// axis order.
+    fn gather(r: [&ShearedRay; 4]) -> Option<ShearedRays4> {
+        let k = (r[0].kx, r[0].ky, r[0].kz);
+        if r.iter().any(|s| (s.kx, s.ky, s.kz) != k) {
+            return None;
+        }
+        let lanes = |f: fn(&ShearedRay) -> f32| Vec4::new(f(r[0]), f(r[1]), f(r[2]), f(r[3]));
+        Some(ShearedRays4 {
+            org: [lanes(|s| s.org.x), lanes(|s| s.org.y), lanes(|s| s.org.z)],
+            sx: lanes(|s| s.sx),
+            sy: lanes(|s| s.sy),
+            sz: lanes(|s| s.sz),
+            k: [k.0 as usize % 3, k.1 as usize % 3, k.2 as usize % 3],
+        })
+    }
+
     fn bits(v: Vec4) -> [u32; 4] {
         v.to_array().map(f32::to_bits)
     }
@@ -286,7 +287,7 @@ mod tests {
             });
             let rays = dirs.map(|d| Ray::new(Vec3::new(g.coord(), g.coord(), g.coord()), d));
             let one = rays.map(|r| Watertight::prepare(&r));
-            let gathered = Watertight::gather_rays4([&one[0], &one[1], &one[2], &one[3]]);
+            let gathered = gather([&one[0], &one[1], &one[2], &one[3]]);
             let lanes = |f: fn(&Ray) -> Vec3| -> [Vec4; 3] {
                 let v = rays.map(|r| f(&r));
                 core::array::from_fn(|a| Vec4::new(v[0][a], v[1][a], v[2][a], v[3][a]))

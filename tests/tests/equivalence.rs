@@ -10,6 +10,7 @@ use raypipe_core::brute_force::trace_brute_force;
 use raypipe_core::image::TriBlock4;
 use raypipe_core::walk::trace_walk;
 use raypipe_core::Vec3;
+use raypipe_core::Vec4;
 use raypipe_core::{
     Hit, Intersector, MollerTrumbore, NoProbe, Ray, RayCounters, SceneView, WaldProjection, Watertight,
 };
@@ -529,13 +530,21 @@ proptest! {
         let rays: Vec<Ray> = aims.iter().map(|&a| Ray::new(o, target(a) - o)).filter(|r| r.is_valid()).collect();
         prop_assume!(!rays.is_empty());
         let preps: Vec<_> = rays.iter().map(Watertight::prepare).collect();
+        // Four rays' constants in SIMD lanes, from their origins and directions.
+        let four_of = |l: [usize; 4]| {
+            let axes = |f: fn(&Ray) -> Vec3| -> [Vec4; 3] {
+                let p = l.map(|i| f(&rays[i]));
+                core::array::from_fn(|a| Vec4::new(p[0][a], p[1][a], p[2][a], p[3][a]))
+            };
+            Watertight::prepare_rays4(axes(|r| r.origin), axes(|r| r.dir))
+        };
         // Lanes must share one axis order: a lane that does not repeats the first ray.
         let lane = |k: usize| {
-            let p = &preps[k.min(preps.len() - 1)];
-            if Watertight::gather_rays4([&preps[0], p, p, p]).is_some() { k.min(preps.len() - 1) } else { 0 }
+            let i = k.min(preps.len() - 1);
+            if four_of([0, i, i, i]).is_some() { i } else { 0 }
         };
         let lanes = [lane(0), lane(1), lane(2), lane(3)];
-        let four = Watertight::gather_rays4(lanes.map(|k| &preps[k]));
+        let four = four_of(lanes);
         prop_assert!(four.is_some());
         let r = Watertight::intersect_rays4(&four.unwrap(), &v);
         for (k, &i) in lanes.iter().enumerate() {
