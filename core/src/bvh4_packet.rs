@@ -503,19 +503,8 @@ mod tests {
     use super::*;
     use crate::image::WideNode;
     use crate::ray::Ray;
+    use crate::test_lcg::Lcg;
     use glam::Vec3;
-
-    /// A small deterministic generator (no dependencies in core).
-    struct Lcg(u64);
-    impl Lcg {
-        fn unit(&mut self) -> f32 {
-            self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (self.0 >> 40) as f32 / (1u64 << 24) as f32
-        }
-        fn range(&mut self, lo: f32, hi: f32) -> f32 {
-            lo + (hi - lo) * self.unit()
-        }
-    }
 
     /// The AVX form of the leaf entry test lets exactly the portable form's rays in, for
     /// leaves the packet's frustum reaches (as in the walk): packets of every size and

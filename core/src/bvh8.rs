@@ -170,19 +170,8 @@ mod tests {
     use super::*;
     use crate::bvh4::slab4;
     use crate::image::{Bvh4Node, WideNode};
+    use crate::test_lcg::Lcg;
     use glam::Vec3;
-
-    /// A small deterministic generator (no dependencies in core).
-    struct Lcg(u64);
-    impl Lcg {
-        fn unit(&mut self) -> f32 {
-            self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (self.0 >> 40) as f32 / (1u64 << 24) as f32
-        }
-        fn range(&mut self, lo: f32, hi: f32) -> f32 {
-            lo + (hi - lo) * self.unit()
-        }
-    }
 
     /// The 8-lane test, in its portable and its AVX form, gives slot for slot the 4-lane
     /// test's verdict and entry distance (bit for bit), for rays of every octant, rays

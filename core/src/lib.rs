@@ -69,6 +69,8 @@ pub mod shade;
 pub mod shader;
 pub mod specular;
 pub mod surface;
+#[cfg(test)]
+mod test_lcg;
 pub mod texture;
 pub mod tree_step;
 pub mod triangle;

@@ -223,21 +223,14 @@ pub struct ShearedRays4 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::test_lcg::Lcg;
 
-    /// A small deterministic generator (no dependencies in core).
-    struct Lcg(u64);
-    impl Lcg {
-        fn next(&mut self) -> u64 {
-            self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            self.0 >> 33
-        }
-        /// Mostly small lattice values, so that components tie in magnitude, are zero
-        /// or differ only in sign.
-        fn coord(&mut self) -> f32 {
-            match self.next() % 4 {
-                0 => (self.next() % 5) as f32 - 2.0,
-                _ => (self.next() % 2001) as f32 / 1000.0 - 1.0,
-            }
+    /// Mostly small lattice values, so that components tie in magnitude, are zero or
+    /// differ only in sign.
+    fn coord(g: &mut Lcg) -> f32 {
+        match (g.next() >> 33) % 4 {
+            0 => ((g.next() >> 33) % 5) as f32 - 2.0,
+            _ => ((g.next() >> 33) % 2001) as f32 / 1000.0 - 1.0,
         }
     }
 
@@ -270,7 +263,7 @@ mod tests {
         let (mut same, mut refused) = (0, 0);
         for case in 0..20_000 {
             let mut dir = || {
-                let d = Vec3::new(g.coord(), g.coord(), g.coord());
+                let d = Vec3::new(coord(&mut g), coord(&mut g), coord(&mut g));
                 if d == Vec3::ZERO {
                     Vec3::X
                 } else {
@@ -285,7 +278,7 @@ mod tests {
                 (0 | 2, _) => shared,
                 _ => dir(),
             });
-            let rays = dirs.map(|d| Ray::new(Vec3::new(g.coord(), g.coord(), g.coord()), d));
+            let rays = dirs.map(|d| Ray::new(Vec3::new(coord(&mut g), coord(&mut g), coord(&mut g)), d));
             let one = rays.map(|r| Watertight::prepare(&r));
             let gathered = gather([&one[0], &one[1], &one[2], &one[3]]);
             let lanes = |f: fn(&Ray) -> Vec3| -> [Vec4; 3] {

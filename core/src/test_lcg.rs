@@ -1,0 +1,23 @@
+//! The deterministic generator of core's unit tests (core has no dependencies to draw
+//! one from): Knuth's MMIX linear congruential generator, the same cases on every run.
+
+/// The generator; its state is public so a test can use it as raw random bits.
+pub(crate) struct Lcg(pub u64);
+
+impl Lcg {
+    /// The next state.
+    pub fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        self.0
+    }
+
+    /// A uniform number in `[0, 1)` (24 bits).
+    pub fn unit(&mut self) -> f32 {
+        (self.next() >> 40) as f32 / (1u64 << 24) as f32
+    }
+
+    /// A uniform number in `[lo, hi)`.
+    pub fn range(&mut self, lo: f32, hi: f32) -> f32 {
+        lo + (hi - lo) * self.unit()
+    }
+}
