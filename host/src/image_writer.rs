@@ -124,10 +124,10 @@ impl ImageWriter {
     /// blocks of four SIMD lanes; lanes past the end repeat the last triangle.
     pub fn tri_blocks(&mut self, mesh: &Mesh, prims: &[u32]) -> &mut Self {
         let blocks: Vec<TriBlock4> = prims
-            .chunks(4)
+            .chunks(TriBlock4::LANES)
             .map(|chunk| {
                 let mut b = TriBlock4 { v: [[[0.0; 4]; 3]; 3] };
-                for lane in 0..4 {
+                for lane in 0..TriBlock4::LANES {
                     let prim = chunk[lane.min(chunk.len() - 1)];
                     let tri = stored(mesh, mesh.triangles[prim as usize]);
                     for (i, &vi) in tri.iter().enumerate() {

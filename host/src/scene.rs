@@ -294,16 +294,16 @@ fn default_lights(mesh: &Mesh, camera: &CameraRecord) -> Vec<LightRecord> {
 /// Builds the binary BVH, collapses it into nodes of `N`'s width and adds it to the image.
 fn build_wide<N: WideNode>(mesh: &Mesh, opts: &BuildOptions, report: &mut BuildReport, writer: &mut ImageWriter) {
     let blocks = opts.triangles == TriangleLayout::Blocks;
-    let params = BvhParams { leaf_block: if blocks { 4 } else { 1 }, ..opts.bvh };
+    let params = BvhParams { leaf_block: if blocks { TriBlock4::LANES } else { 1 }, ..opts.bvh };
     let mut bvh = collapse_wide::<N>(&build_bvh(mesh, &params));
     if blocks {
-        align_leaves(&mut bvh, 4);
+        align_leaves(&mut bvh, TriBlock4::LANES);
     }
     report.tree(bvh.nodes.len(), std::mem::size_of::<N>(), bvh.depth, bvh.prims.len());
     writer.wide_bvh(&bvh);
     if blocks {
         writer.tri_blocks(mesh, &bvh.prims);
-        report.structure_bytes += std::mem::size_of::<TriBlock4>() * bvh.prims.len().div_ceil(4);
+        report.structure_bytes += std::mem::size_of::<TriBlock4>() * bvh.prims.len().div_ceil(TriBlock4::LANES);
     }
 }
 

@@ -437,6 +437,11 @@ pub struct TriBlock4 {
 const _: () = assert!(core::mem::size_of::<TriBlock4>() == 144);
 const _: () = assert!(core::mem::align_of::<TriBlock4>() == 4);
 
+impl TriBlock4 {
+    /// Triangles per block (PRIM_LISTS entries per record).
+    pub const LANES: usize = 4;
+}
+
 /// A diffuse texture, 16 bytes: its size, where its texels start in TEXELS (row-major,
 /// the top row first), and how coordinates outside `[0, 1]` wrap.
 #[repr(C)]

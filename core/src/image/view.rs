@@ -833,14 +833,15 @@ impl<'a> SceneView<'a> {
         if blocks.is_empty() {
             return Ok(());
         }
-        let expected = prims.len().div_ceil(4) as u32;
+        const LANES: usize = TriBlock4::LANES;
+        let expected = prims.len().div_ceil(LANES) as u32;
         if blocks.len() as u32 != expected {
             return Err(SceneError::CountMismatch { section: K::TriBlocks, expected, found: blocks.len() as u32 });
         }
         for (e, &prim) in prims.iter().enumerate() {
-            let (record, lane) = ((e / 4) as u32, e % 4);
-            let stale = SceneError::StaleCopy { section: K::TriBlocks, record };
-            let block = blocks.get(e / 4).ok_or(stale)?;
+            let (record, lane) = (e / LANES, e % LANES);
+            let stale = SceneError::StaleCopy { section: K::TriBlocks, record: record as u32 };
+            let block = blocks.get(record).ok_or(stale)?;
             // A list terminator (grid lists): no triangle to copy.
             let Some(tri) = triangles.get(prim as usize) else { continue };
             let same = (0..3).all(|i| {
@@ -1171,7 +1172,8 @@ impl<'a> SceneView<'a> {
     /// `4·block` to `4·block + 3`), if the image has that section and the block.
     #[inline(always)]
     pub fn tri_block<P: MemoryProbe>(&self, block: u32, probe: &mut P) -> Option<&'a TriBlock4> {
-        probe.read(DataClass::Triangles, self.tri_blocks_addr.wrapping_add(block.wrapping_mul(144)), 144);
+        const SIZE: u32 = core::mem::size_of::<TriBlock4>() as u32;
+        probe.read(DataClass::Triangles, self.tri_blocks_addr.wrapping_add(block.wrapping_mul(SIZE)), SIZE);
         self.tri_blocks.get(block as usize)
     }
 
