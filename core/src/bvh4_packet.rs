@@ -125,6 +125,7 @@ struct Groups {
 }
 
 impl Groups {
+    #[inline(always)]
     fn new<const N: usize>(p: &RayPacket<N>, groups: usize, mask: u64) -> Groups {
         let lanes = |a: &[f32; N], g: usize| match a.get(4 * g..4 * g + 4) {
             // One load; only a packet of fewer than four rays takes the other arm.
@@ -395,8 +396,14 @@ unsafe fn leaf_entries_avx(q: &Groups, groups: usize, mask: u64, leaf_box: &[f32
 /// one of its rays enters a leaf (most rays of a frame never do), as four SIMD lanes for
 /// the intersector's four-ray form; one ray's own constants only when it is tested alone.
 struct Preps<I: Intersector, const N: usize> {
-    one: [I::Prepared; N],
-    four: [Option<I::Prepared4>; GROUPS],
+    // Computed constants in the order they were asked for, and per lane (group) the
+    // index of its entry: nothing is written for lanes that never need constants (the
+    // arrays of every lane's record, initialised per packet, cost packets that miss
+    // the scene a tenth of their time).
+    one: heapless::Vec<I::Prepared, N>,
+    one_slot: [u8; N],
+    four: heapless::Vec<Option<I::Prepared4>, GROUPS>,
+    four_slot: [u8; GROUPS],
     // Groups whose constants are computed.
     ready: u32,
     // Lanes whose one-ray constants are computed: only lanes tested one by one (redone
@@ -405,8 +412,25 @@ struct Preps<I: Intersector, const N: usize> {
 }
 
 impl<I: Intersector, const N: usize> Preps<I, N> {
+    #[inline(always)]
     fn new() -> Self {
-        Preps { one: [I::Prepared::default(); N], four: [None; GROUPS], ready: 0, one_ready: 0 }
+        Preps {
+            one: heapless::Vec::new(),
+            one_slot: [0; N],
+            four: heapless::Vec::new(),
+            four_slot: [0; GROUPS],
+            ready: 0,
+            one_ready: 0,
+        }
+    }
+
+    /// Group `g`'s four-ray constants, if ready and the intersector has them.
+    #[inline(always)]
+    fn four(&self, g: usize) -> Option<I::Prepared4> {
+        if self.ready & (1 << (g % GROUPS)) == 0 {
+            return None;
+        }
+        self.four.get(self.four_slot[g % GROUPS] as usize).copied().flatten()
     }
 
     /// Makes the constants of every group with a lane in `enter` ready.
@@ -423,21 +447,29 @@ impl<I: Intersector, const N: usize> Preps<I, N> {
                 |a: &[f32; N]| Vec4::from_array(core::array::from_fn(|k| a.get(4 * g + k).copied().unwrap_or(0.0)));
             let org = [pick(q.org[0][g], &packet.ox), pick(q.org[1][g], &packet.oy), pick(q.org[2][g], &packet.oz)];
             let dir = [&packet.dx, &packet.dy, &packet.dz].map(|d| pick(lanes(d), d));
-            if let Some(f) = self.four.get_mut(g) {
-                *f = I::prepare_rays4(org, dir);
+            if let Some(slot) = self.four_slot.get_mut(g) {
+                *slot = self.four.len() as u8;
+                // Cannot be full: one entry per group.
+                let _ = self.four.push(I::prepare_rays4(org, dir));
             }
         }
     }
 
     /// Ray `i`'s one-ray constants, computed the first time they are asked for.
     #[inline(always)]
-    fn one(&mut self, packet: &RayPacket<N>, i: usize) -> &I::Prepared {
+    fn one(&mut self, packet: &RayPacket<N>, i: usize) -> I::Prepared {
         let i = i.min(N - 1);
         if self.one_ready & (1 << i) == 0 {
-            self.one[i] = I::prepare(&packet.ray(i));
+            self.one_slot[i] = self.one.len() as u8;
+            // Cannot be full: one entry per lane.
+            let _ = self.one.push(I::prepare(&packet.ray(i)));
             self.one_ready |= 1 << i;
         }
-        &self.one[i]
+        // Always present (pushed above); the fallback keeps the kernel free of panics.
+        match self.one.get(self.one_slot[i] as usize) {
+            Some(p) => *p,
+            None => I::prepare(&packet.ray(i)),
+        }
     }
 }
 
@@ -473,7 +505,7 @@ fn test_leaf<I: Intersector, P: MemoryProbe, const N: usize>(
         let verts = I::fetch(scene, prim, probe);
         for g in Lanes(groups) {
             let m4 = (enter >> (4 * g)) & 0xF;
-            let four = preps.four.get(g).copied().flatten();
+            let four = preps.four(g);
             match four {
                 Some(rays) if m4.count_ones() >= 2 => {
                     let r = I::intersect_rays4(&rays, &verts);
@@ -481,7 +513,7 @@ fn test_leaf<I: Intersector, P: MemoryProbe, const N: usize>(
                         let i = (4 * g + k).min(N - 1);
                         let ray = packet.ray(i);
                         if r.redo & (1 << k) != 0 {
-                            test_triangle::<I>(preps.one(packet, i), &ray, &verts, prim, &mut hits[i]);
+                            test_triangle::<I>(&preps.one(packet, i), &ray, &verts, prim, &mut hits[i]);
                         } else if let Some(hit) = in_range(&ray, Some((r.t[k], r.u[k], r.v[k])), prim) {
                             keep_closest(&mut hits[i], hit);
                         }
@@ -490,7 +522,7 @@ fn test_leaf<I: Intersector, P: MemoryProbe, const N: usize>(
                 _ => {
                     for i in Lanes(m4 << (4 * g)) {
                         let i = i.min(N - 1);
-                        test_triangle::<I>(preps.one(packet, i), &packet.ray(i), &verts, prim, &mut hits[i]);
+                        test_triangle::<I>(&preps.one(packet, i), &packet.ray(i), &verts, prim, &mut hits[i]);
                     }
                 }
             }

@@ -29,6 +29,18 @@ impl Ray {
         self.origin + self.dir * t
     }
 
+    /// Origin and direction x, as a packet's transpose reads them.
+    #[inline(always)]
+    pub(crate) fn head(&self) -> [f32; 4] {
+        [self.origin.x, self.origin.y, self.origin.z, self.dir.x]
+    }
+
+    /// Direction y and z, and the interval.
+    #[inline(always)]
+    pub(crate) fn tail(&self) -> [f32; 4] {
+        [self.dir.y, self.dir.z, self.t_min, self.t_max]
+    }
+
     /// True when every component is finite (or `t_max` is `+inf`) and the direction is
     /// not zero; kernels return "miss" for any other ray rather than misbehave.
     #[inline]
