@@ -11,7 +11,7 @@ use crate::render::in_pool;
 use raypipe_core::packet::{PacketCounters, RayPacket};
 
 use crate::packets::PacketSize;
-use crate::tracer::{trace, trace_packet, IntersectorKind};
+use crate::tracer::{trace_each, trace_packet, IntersectorKind};
 use crate::with_intersector;
 
 /// Rays traced as one unit of work.
@@ -69,10 +69,14 @@ fn trace_singles<I: Intersector>(scene: &SceneView<'_>, out: &mut [HitRecord], r
     with_avx2(
         #[inline(always)]
         || {
-            let mut c = RayCounters::default();
-            for (o, r) in out.iter_mut().zip(rays) {
-                *o = record(trace::<I, _>(scene, r, &mut NoProbe, &mut c));
-            }
+            let n = out.len().min(rays.len());
+            let ray = |i: usize| rays.get(i);
+            let mut hit = |i: usize, _: Option<&Ray>, h| {
+                if let Some(o) = out.get_mut(i) {
+                    *o = record(h);
+                }
+            };
+            trace_each::<I, _, _>(scene, n, ray, &mut NoProbe, &mut RayCounters::default(), &mut hit);
         },
     )
 }

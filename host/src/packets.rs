@@ -7,7 +7,7 @@ use raypipe_core::packet::{PacketCounters, RayPacket};
 use raypipe_core::{Hit, Intersector, NoProbe, Ray, RayCounters, SceneView, Vec3};
 
 use crate::isa::with_avx2;
-use crate::tracer::{has_packet_kernel, trace, trace_packet};
+use crate::tracer::{has_packet_kernel, trace_each, trace_packet};
 
 /// How rays are grouped.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
@@ -119,17 +119,19 @@ fn singles<I: Intersector>(
     counters: &mut RayCounters,
     f: &mut impl FnMut(u32, u32, Option<Ray>, Option<Hit>),
 ) {
-    for y in y0..y1 {
-        for x in x0..x1 {
-            match eye.ray_in_scene(x, y, lo, hi) {
-                Some(ray) => {
-                    let hit = trace::<I, _>(scene, &ray, &mut NoProbe, counters);
-                    f(x, y, Some(ray), hit);
-                }
-                None => f(x, y, None, None),
-            }
-        }
-    }
+    // Pixels in rows, `i` counting from the tile's corner.
+    let w = x1.saturating_sub(x0);
+    let n = (w * y1.saturating_sub(y0)) as usize;
+    let w = w.max(1);
+    let pixel = |i: usize| (x0 + i as u32 % w, y0 + i as u32 / w);
+    let ray = |i: usize| {
+        let (x, y) = pixel(i);
+        eye.ray_in_scene(x, y, lo, hi)
+    };
+    trace_each::<I, _, _>(scene, n, ray, &mut NoProbe, counters, |i, ray, hit| {
+        let (x, y) = pixel(i);
+        f(x, y, ray, hit)
+    });
 }
 
 fn blocks<I: Intersector, const N: usize>(
