@@ -30,6 +30,9 @@ struct Frustum {
     ilo: [Vec4; 3],
     ihi: [Vec4; 3],
     t_min: f32,
+    // All origins are one point (a pinhole camera's primary rays): half of the interval
+    // products coincide, and the node test skips them.
+    one_origin: bool,
 }
 
 impl Frustum {
@@ -51,9 +54,12 @@ impl Frustum {
             }
             t_min = t_min.min(Vec4::select(act, q.t_min[g], inf));
         }
+        let (olo, ohi) = (olo.map(|v| Vec4::splat(v.min_element())), ohi.map(|v| Vec4::splat(v.max_element())));
+        let one_origin = (0..3).all(|a| olo[a].x.to_bits() == ohi[a].x.to_bits());
         Some(Frustum {
-            olo: olo.map(|v| Vec4::splat(v.min_element())),
-            ohi: ohi.map(|v| Vec4::splat(v.max_element())),
+            olo,
+            ohi,
+            one_origin,
             ilo: ilo.map(|v| Vec4::splat(v.min_element())),
             ihi: ihi.map(|v| Vec4::splat(v.max_element())),
             t_min: t_min.min_element(),
@@ -70,14 +76,22 @@ impl Frustum {
         for (a, (lo, hi)) in planes.into_iter().enumerate() {
             let (il, ih, ol, oh) = (self.ilo[a], self.ihi[a], self.olo[a], self.ohi[a]);
             let (lo, hi) = (Vec4::from_array(lo), Vec4::from_array(hi));
-            let p = [(lo - oh) * il, (lo - oh) * ih, (lo - ol) * il, (lo - ol) * ih];
-            let q = [(hi - oh) * il, (hi - oh) * ih, (hi - ol) * il, (hi - ol) * ih];
-            let mut mn = p[0];
-            let mut mx = p[0];
-            for v in p.iter().chain(q.iter()) {
-                mn = mn.min(*v);
-                mx = mx.max(*v);
-            }
+            let (mn, mx) = if self.one_origin {
+                // `ol == oh`: the products below with `ol` equal those with `oh`, so the
+                // extremes of these four are the extremes of all eight.
+                let p = [(lo - oh) * il, (lo - oh) * ih, (hi - oh) * il, (hi - oh) * ih];
+                (p[0].min(p[1]).min(p[2].min(p[3])), p[0].max(p[1]).max(p[2].max(p[3])))
+            } else {
+                let p = [(lo - oh) * il, (lo - oh) * ih, (lo - ol) * il, (lo - ol) * ih];
+                let q = [(hi - oh) * il, (hi - oh) * ih, (hi - ol) * il, (hi - ol) * ih];
+                let mut mn = p[0];
+                let mut mx = p[0];
+                for v in p.iter().chain(q.iter()) {
+                    mn = mn.min(*v);
+                    mx = mx.max(*v);
+                }
+                (mn, mx)
+            };
             near = near.max(mn);
             far = far.min(mx * SLAB_GROWTH);
         }
