@@ -66,6 +66,12 @@ impl Frustum {
         })
     }
 
+    /// The packet's one origin, if all its rays start at one point.
+    #[inline(always)]
+    fn origin(&self) -> Option<[f32; 3]> {
+        self.one_origin.then(|| [self.olo[0].x, self.olo[1].x, self.olo[2].x])
+    }
+
     /// Lower bound of the entry distance into each child box, and which boxes some ray
     /// may hit before `t_end` (the largest best-hit distance of the packet).
     #[inline(always)]
@@ -287,7 +293,7 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
                     }
                     enter
                 }
-                Cull::Frustum(_) => leaf_entries(&q, groups, mask, &leaf_box, leaf_t),
+                Cull::Frustum(f) => leaf_entries(&q, groups, mask, &leaf_box, leaf_t, f.origin()),
             };
             c.active_lanes += enter.count_ones() as u64;
             if enter != 0 {
@@ -327,23 +333,41 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
 
 /// The active lanes of `mask` that enter the leaf box `[lo, hi]` (`leaf_box`) before
 /// their best hit: four rays against the box at once (no zero direction components, so
-/// the plain slab test is exact here).
+/// the plain slab test is exact here). `origin`: the rays' one origin, if they share one
+/// (every active lane of `q.org` holds it), so that `lo − o` and `hi − o` are computed
+/// once per leaf rather than once per group: the same values, hence the same lanes.
 #[inline(always)]
-fn leaf_entries(q: &Groups, groups: usize, mask: u64, leaf_box: &[f32; 6], leaf_t: f32) -> u64 {
+fn leaf_entries(
+    q: &Groups,
+    groups: usize,
+    mask: u64,
+    leaf_box: &[f32; 6],
+    leaf_t: f32,
+    origin: Option<[f32; 3]>,
+) -> u64 {
     #[cfg(target_arch = "x86_64")]
     if crate::cpu::has_avx() {
         // SAFETY: the host has reported AVX (`cpu::assume_avx`).
         #[allow(unsafe_code)]
-        return unsafe { leaf_entries_avx(q, groups, mask, leaf_box) };
+        return unsafe { leaf_entries_avx(q, groups, mask, leaf_box, origin) };
     }
-    leaf_entries_portable(q, groups, mask, leaf_box, leaf_t)
+    leaf_entries_portable(q, groups, mask, leaf_box, leaf_t, origin)
 }
 
 /// [`leaf_entries`] over glam's four-lane registers, group by group.
 #[inline(always)]
-fn leaf_entries_portable(q: &Groups, groups: usize, mask: u64, leaf_box: &[f32; 6], leaf_t: f32) -> u64 {
+fn leaf_entries_portable(
+    q: &Groups,
+    groups: usize,
+    mask: u64,
+    leaf_box: &[f32; 6],
+    leaf_t: f32,
+    origin: Option<[f32; 3]>,
+) -> u64 {
     let lo = [Vec4::splat(leaf_box[0]), Vec4::splat(leaf_box[1]), Vec4::splat(leaf_box[2])];
     let hi = [Vec4::splat(leaf_box[3]), Vec4::splat(leaf_box[4]), Vec4::splat(leaf_box[5])];
+    let offsets: Option<[(Vec4, Vec4); 3]> = origin
+        .map(|o| core::array::from_fn(|a| (Vec4::splat(leaf_box[a] - o[a]), Vec4::splat(leaf_box[3 + a] - o[a]))));
     let mut enter = 0u64;
     for g in 0..groups.min(GROUPS) {
         let m4 = (mask >> (4 * g)) & 0xF;
@@ -355,8 +379,11 @@ fn leaf_entries_portable(q: &Groups, groups: usize, mask: u64, leaf_box: &[f32; 
         let mut tn = q.t_min[g];
         let mut tf = q.ends[g];
         for a in 0..3 {
-            let p = (lo[a] - q.org[a][g]) * q.inv[a][g];
-            let r = (hi[a] - q.org[a][g]) * q.inv[a][g];
+            let (dl, dh) = match offsets {
+                Some(d) => d[a],
+                None => (lo[a] - q.org[a][g], hi[a] - q.org[a][g]),
+            };
+            let (p, r) = (dl * q.inv[a][g], dh * q.inv[a][g]);
             tn = tn.max(p.min(r));
             tf = tf.min(p.max(r) * SLAB_GROWTH);
         }
@@ -377,10 +404,13 @@ fn leaf_entries_portable(q: &Groups, groups: usize, mask: u64, leaf_box: &[f32; 
 #[cfg(target_arch = "x86_64")]
 #[allow(unsafe_code)]
 #[target_feature(enable = "avx")]
-unsafe fn leaf_entries_avx(q: &Groups, groups: usize, mask: u64, leaf_box: &[f32; 6]) -> u64 {
+unsafe fn leaf_entries_avx(q: &Groups, groups: usize, mask: u64, leaf_box: &[f32; 6], origin: Option<[f32; 3]>) -> u64 {
     use core::arch::x86_64::*;
     let lo = [_mm256_set1_ps(leaf_box[0]), _mm256_set1_ps(leaf_box[1]), _mm256_set1_ps(leaf_box[2])];
     let hi = [_mm256_set1_ps(leaf_box[3]), _mm256_set1_ps(leaf_box[4]), _mm256_set1_ps(leaf_box[5])];
+    let offsets: Option<[(__m256, __m256); 3]> = origin.map(|o| {
+        core::array::from_fn(|a| (_mm256_set1_ps(leaf_box[a] - o[a]), _mm256_set1_ps(leaf_box[3 + a] - o[a])))
+    });
     let growth = _mm256_set1_ps(SLAB_GROWTH);
     let mut enter = 0u64;
     for pair in 0..groups.div_ceil(2).min(GROUPS / 2) {
@@ -394,9 +424,15 @@ unsafe fn leaf_entries_avx(q: &Groups, groups: usize, mask: u64, leaf_box: &[f32
         let mut tn = lanes(&q.t_min);
         let mut tf = lanes(&q.ends);
         for a in 0..3 {
-            let (o, inv) = (lanes(&q.org[a]), lanes(&q.inv[a]));
-            let p = _mm256_mul_ps(_mm256_sub_ps(lo[a], o), inv);
-            let r = _mm256_mul_ps(_mm256_sub_ps(hi[a], o), inv);
+            let inv = lanes(&q.inv[a]);
+            let (dl, dh) = match offsets {
+                Some(d) => d[a],
+                None => {
+                    let o = lanes(&q.org[a]);
+                    (_mm256_sub_ps(lo[a], o), _mm256_sub_ps(hi[a], o))
+                }
+            };
+            let (p, r) = (_mm256_mul_ps(dl, inv), _mm256_mul_ps(dh, inv));
             tn = _mm256_max_ps(tn, _mm256_min_ps(p, r));
             tf = _mm256_min_ps(tf, _mm256_mul_ps(_mm256_max_ps(p, r), growth));
         }
@@ -566,9 +602,12 @@ mod tests {
         let (mut checked, mut entered) = (0, 0);
         for case in 0..3000 {
             let eye = Vec3::new(g.range(-3.0, 3.0), g.range(-3.0, 3.0), -6.0);
+            // Every third case, each ray from its own point near the eye.
+            let shared = case % 3 != 2;
             let rays: [Ray; 64] = core::array::from_fn(|_| {
                 let target = Vec3::new(g.range(-2.0, 2.0), g.range(-2.0, 2.0), g.range(-1.0, 1.0));
-                let mut ray = Ray::new(eye, target - eye);
+                let start = if shared { eye } else { eye + Vec3::new(g.range(-0.1, 0.1), g.range(-0.1, 0.1), 0.0) };
+                let mut ray = Ray::new(start, target - start);
                 if g.unit() < 0.3 {
                     ray.t_max = g.range(1.0, 8.0);
                 }
@@ -596,13 +635,19 @@ mod tests {
                 continue;
             }
             let leaf_t = tn.x;
-            let portable = leaf_entries_portable(&q, groups, mask, &leaf_box, leaf_t);
+            let portable = leaf_entries_portable(&q, groups, mask, &leaf_box, leaf_t, None);
+            // The one-origin forms, where the rays share one (the lanes' own origins
+            // otherwise), let exactly the same rays in.
+            let origin = frustum.origin();
+            assert_eq!(origin.is_some(), shared && mask != 0, "case {case}");
+            let one = leaf_entries_portable(&q, groups, mask, &leaf_box, leaf_t, origin);
+            assert_eq!(one, portable, "case {case}");
             #[cfg(target_arch = "x86_64")]
             #[allow(unsafe_code)]
             // SAFETY: this CPU has AVX (checked above).
-            let avx = unsafe { leaf_entries_avx(&q, groups, mask, &leaf_box) };
+            let avx = unsafe { [None, origin].map(|o| leaf_entries_avx(&q, groups, mask, &leaf_box, o)) };
             #[cfg(target_arch = "x86_64")]
-            assert_eq!(avx, portable, "case {case}");
+            assert_eq!(avx, [portable; 2], "case {case}");
             assert_eq!(portable & !mask, 0, "case {case}: an inactive lane entered");
             checked += 1;
             entered += (portable != 0) as u32;
