@@ -45,7 +45,19 @@ impl Frustum {
         let (inf, ninf) = (Vec4::INFINITY, Vec4::NEG_INFINITY);
         let (mut olo, mut ohi, mut ilo, mut ihi, mut t_min) = ([inf; 3], [ninf; 3], [inf; 3], [ninf; 3], inf);
         for g in 0..groups.min(GROUPS) {
-            let act = GROUP_LANES[((mask >> (4 * g)) & 0xF) as usize];
+            let m4 = ((mask >> (4 * g)) & 0xF) as usize;
+            if m4 == 0xF {
+                // All four lanes active (most groups): no lane to mask out.
+                for a in 0..3 {
+                    olo[a] = olo[a].min(q.org[a][g]);
+                    ohi[a] = ohi[a].max(q.org[a][g]);
+                    ilo[a] = ilo[a].min(q.inv[a][g]);
+                    ihi[a] = ihi[a].max(q.inv[a][g]);
+                }
+                t_min = t_min.min(q.t_min[g]);
+                continue;
+            }
+            let act = GROUP_LANES[m4];
             for a in 0..3 {
                 olo[a] = olo[a].min(Vec4::select(act, q.org[a][g], inf));
                 ohi[a] = ohi[a].max(Vec4::select(act, q.org[a][g], ninf));
