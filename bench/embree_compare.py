@@ -45,10 +45,16 @@ def embree_scene(tris, origins, dirs):
     return scene
 
 
-def embree_run(scene, origins, dirs):
-    t = time.perf_counter()
-    res = scene.run(origins, dirs, output=1)
-    return res, time.perf_counter() - t
+def embree_run(scene, origins, dirs, runs=3):
+    """The median time of `runs` traces, as `raypipe trace --runs 3` reports its own:
+    both sides of a round are the median of three, so that a transient slowdown of the
+    machine weighs the same on each."""
+    times = []
+    for _ in range(runs):
+        t = time.perf_counter()
+        res = scene.run(origins, dirs, output=1)
+        times.append(time.perf_counter() - t)
+    return res, statistics.median(times)
 
 
 def main():
@@ -91,8 +97,8 @@ def main():
         scene = embree_scene(tris, origins, dirs)
         # Interleaved rounds (raypipe single, raypipe packets, Embree), so that all three
         # see the same machine: medians over the rounds, ratios of the medians. Each
-        # raypipe round is itself the median of 3 runs in one process (warm, as Embree's
-        # scene is).
+        # round of each side is itself the median of 3 runs (raypipe's in one process,
+        # warm, as Embree's scene is).
         secs = {label: [] for label, _, _ in modes}
         secs["embree"] = []
         for _ in range(a.runs):
