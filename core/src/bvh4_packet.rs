@@ -504,9 +504,19 @@ impl<I: Intersector, const N: usize> Preps<I, N> {
             // Inactive lanes borrow an active lane's ray (their results are unused).
             let any = 4 * g + m4.trailing_zeros() as usize;
             let act = GROUP_LANES[m4 as usize];
-            let pick = |v: Vec4, a: &[f32; N]| Vec4::select(act, v, Vec4::splat(a.get(any).copied().unwrap_or(0.0)));
-            let lanes =
-                |a: &[f32; N]| Vec4::from_array(core::array::from_fn(|k| a.get(4 * g + k).copied().unwrap_or(0.0)));
+            // A group with all four lanes active (most of them) takes its registers as
+            // they are, with one load each.
+            let pick = |v: Vec4, a: &[f32; N]| {
+                if m4 == 0xF {
+                    v
+                } else {
+                    Vec4::select(act, v, Vec4::splat(a.get(any).copied().unwrap_or(0.0)))
+                }
+            };
+            let lanes = |a: &[f32; N]| match a.get(4 * g..4 * g + 4) {
+                Some(l) => Vec4::from_slice(l),
+                None => Vec4::from_array(core::array::from_fn(|k| a.get(4 * g + k).copied().unwrap_or(0.0))),
+            };
             let org = [pick(q.org[0][g], &packet.ox), pick(q.org[1][g], &packet.oy), pick(q.org[2][g], &packet.oz)];
             let dir = [&packet.dx, &packet.dy, &packet.dz].map(|d| pick(lanes(d), d));
             if let Some(slot) = self.four_slot.get_mut(g) {
