@@ -26,8 +26,10 @@ pub fn slab4(r: &NodeRay, n: &Bvh4Node, t0: f32, t1: f32) -> (Vec4, u32) {
     }
     // The node's planes as rows: min x, y, z, then max x, y, z (then children, counts).
     let rows: &[[f32; 4]; 8] = bytemuck::cast_ref(n);
-    let near = |a: usize| (Vec4::from_array(rows[r.near[a] & 7]) - r.org[a]) * r.inv[a];
-    let far = |a: usize| (Vec4::from_array(rows[r.far[a] & 7]) - r.org[a]) * r.inv[a];
+    // Origin and reciprocal direction splatted per axis (loop-invariant in a walk).
+    let (o, inv) = (r.rb.origin.to_array().map(Vec4::splat), r.rb.inv.to_array().map(Vec4::splat));
+    let near = |a: usize| (Vec4::from_array(rows[r.near[a] & 7]) - o[a]) * inv[a];
+    let far = |a: usize| (Vec4::from_array(rows[r.far[a] & 7]) - o[a]) * inv[a];
     // The product is monotone in the plane, so these are the min and max of the two
     // planes' distances for a valid box; an inverted (empty) slot gets near > far on
     // every axis and fails the comparison.
