@@ -78,7 +78,7 @@ impl Intersector for Watertight {
             let p = [p.x, p.y, p.z, 0.0];
             [0, 1, 2].map(|i| Vec4::splat(p[r.k[i] & 3]) - r.org[i])
         };
-        lanes(rel(v[0]), rel(v[1]), rel(v[2]), [0, 1, 2], [r.sx, r.sy, r.sz])
+        lanes(rel(v[0]), rel(v[1]), rel(v[2]), [r.sx, r.sy, r.sz])
     }
 
     const BLOCKS: bool = true;
@@ -92,7 +92,7 @@ impl Intersector for Watertight {
         // Vertex coordinates relative to the ray's origin, read in the ray's axis order
         // (x, y, z of the sheared frame) so that no register array is indexed by axis.
         let rel = |i: usize| -> [Vec4; 3] { k.map(|a| Vec4::from_array(block.v[i][a]) - Vec4::splat(org[a])) };
-        lanes(rel(0), rel(1), rel(2), [0, 1, 2], [s.sx, s.sy, s.sz].map(Vec4::splat))
+        lanes(rel(0), rel(1), rel(2), [s.sx, s.sy, s.sz].map(Vec4::splat))
     }
 
     #[inline(always)]
@@ -191,13 +191,13 @@ fn scaled_distance<T: Copy + Add<Output = T> + Mul<Output = T>>(e: [T; 3], z: [T
 }
 
 /// The four-lane test (four rays, or four triangles) on vertices `a`, `b`, `c` already
-/// relative to the ray origins, per axis: lane by lane [`Watertight::intersect`]'s
-/// operations, with the lanes whose edge function is exactly zero left in `redo` for
-/// its double-precision recomputation.
+/// relative to the ray origins and in the rays' axis order (x, y, z of the sheared
+/// frame): lane by lane [`Watertight::intersect`]'s operations, with the lanes whose
+/// edge function is exactly zero left in `redo` for its double-precision recomputation.
 #[inline(always)]
-fn lanes(a: [Vec4; 3], b: [Vec4; 3], c: [Vec4; 3], k: [usize; 3], [sx, sy, sz]: [Vec4; 3]) -> Rays4Result {
-    let kz = k[2];
-    let (_, [eu, ev, ew]) = shear_edges(a, b, c, k, sx, sy);
+fn lanes(a: [Vec4; 3], b: [Vec4; 3], c: [Vec4; 3], [sx, sy, sz]: [Vec4; 3]) -> Rays4Result {
+    let kz = 2;
+    let (_, [eu, ev, ew]) = shear_edges(a, b, c, [0, 1, kz], sx, sy);
     let zero = Vec4::ZERO;
     let redo = (eu.cmpeq(zero) | ev.cmpeq(zero) | ew.cmpeq(zero)).bitmask();
     let neg = eu.cmplt(zero) | ev.cmplt(zero) | ew.cmplt(zero);
