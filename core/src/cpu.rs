@@ -9,7 +9,8 @@ use core::sync::atomic::{AtomicBool, Ordering};
 #[cfg(target_arch = "x86_64")]
 static AVX: AtomicBool = AtomicBool::new(false);
 
-/// Records that the CPU has AVX, so that the 8-wide BVH's node test may use it.
+/// Records that the CPU has AVX, so that the 8-wide BVH's node test and the packets'
+/// leaf entry test may use it.
 ///
 /// # Safety
 ///

@@ -27,8 +27,9 @@
 //! ```
 #![no_std]
 #![deny(missing_docs)]
-// Safe code throughout, except the 8-wide node test's AVX form (`bvh8::slab8_avx`),
-// which runs only once the host has reported AVX ([`cpu::assume_avx`]).
+// Safe code throughout, except the AVX forms of the 8-wide node test
+// (`bvh8::slab8_avx`) and of the packets' leaf entry test (`bvh4_packet::leaf_entries_avx`),
+// which run only once the host has reported AVX ([`cpu::assume_avx`]).
 #![deny(unsafe_code)]
 
 #[cfg(target_endian = "big")]

@@ -35,9 +35,8 @@ type Stack<const C: usize> = heapless::Vec<(u32, u32, f32), C>;
 /// box's two planes is entered first (the ray's octant). Each axis then costs one
 /// subtraction and one product per plane and no min/max (the sign trick of Williams et
 /// al. 2005, as in Embree). The node tests splat the origin and reciprocal direction
-/// themselves: in a walk the compiler hoists that out of the loop, and a record holding
-/// the splats cost every ray a sixth of its instructions where rays are short (the
-/// bunny's).
+/// themselves (the compiler hoists that out of a walk's loop), so the record stays small:
+/// the hardware model keeps one per ray in flight.
 #[derive(Clone, Copy, Debug)]
 pub struct NodeRay {
     /// Per axis, the node row (min x, y, z, then max x, y, z) of the near plane.
@@ -54,7 +53,6 @@ impl NodeRay {
     pub fn new(ray: &Ray) -> NodeRay {
         let rb = RayBox::new(ray);
         let neg = rb.inv.cmplt(Vec3A::ZERO).bitmask() as usize;
-        // Written out: `array::from_fn` here cost 40 instructions per ray.
         let (x, y, z) = (3 * (neg & 1), 3 * ((neg >> 1) & 1), 3 * ((neg >> 2) & 1));
         NodeRay { near: [x, 1 + y, 2 + z], far: [3 - x, 4 - y, 5 - z], rb }
     }
