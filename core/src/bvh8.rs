@@ -224,7 +224,7 @@ mod tests {
             });
             // The portable form, and the AVX form where this CPU has AVX.
             for avx in [false, true] {
-                if avx && !cpu_has_avx() {
+                if avx && !crate::cpu::detected_avx() {
                     continue;
                 }
                 // (`slab8` sends rays with a zero direction component to the exact test.)
@@ -248,14 +248,6 @@ mod tests {
                 assert_eq!(m8 >> used, 0, "case {case} avx {avx}: an empty slot was hit");
             }
         }
-    }
-
-    fn cpu_has_avx() -> bool {
-        extern crate std;
-        #[cfg(target_arch = "x86_64")]
-        return std::is_x86_feature_detected!("avx");
-        #[cfg(not(target_arch = "x86_64"))]
-        false
     }
 
     #[test]

@@ -29,3 +29,14 @@ pub fn has_avx() -> bool {
     #[cfg(not(target_arch = "x86_64"))]
     false
 }
+
+/// Whether this CPU has AVX, asked of the operating system: for the unit tests that
+/// compare the AVX forms with the portable ones (core itself cannot ask, see above).
+#[cfg(test)]
+pub(crate) fn detected_avx() -> bool {
+    extern crate std;
+    #[cfg(target_arch = "x86_64")]
+    return std::is_x86_feature_detected!("avx");
+    #[cfg(not(target_arch = "x86_64"))]
+    false
+}
