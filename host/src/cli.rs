@@ -169,6 +169,10 @@ pub struct StructureArgs {
     /// BVH: cut triangles longer than this fraction of the scene into pieces (0: never).
     #[arg(long, value_name = "F", default_value_t = BvhParams::default().presplit_extent)]
     pub bvh_presplit: f64,
+    /// BVH: try spatial splits where an object split's children overlap by more than
+    /// this fraction of the scene's surface area (Stich et al. 2009; 0: never).
+    #[arg(long, value_name = "F", default_value_t = BvhParams::default().spatial_alpha)]
+    pub bvh_spatial_alpha: f64,
 }
 
 impl StructureArgs {
@@ -201,6 +205,7 @@ impl StructureArgs {
                 traversal_cost: self.bvh_traversal_cost,
                 max_leaf: self.bvh_max_leaf.max(1),
                 presplit_extent: self.bvh_presplit.max(0.0),
+                spatial_alpha: self.bvh_spatial_alpha.max(0.0),
                 ..BvhParams::default()
             },
         }
