@@ -12,7 +12,7 @@ use crate::hit::Hit;
 use crate::image::{Bvh4Node, Bvh4View, SceneView, MAX_TREE_DEPTH, NULL_INDEX};
 use crate::packet::{Lanes, PacketCounters, PacketHits, RayPacket, MAX_PACKET};
 use crate::probe::MemoryProbe;
-use crate::ray_box::{recip4, RayBox};
+use crate::ray_box::{recip, recip4, RayBox};
 use crate::triangle::{in_range, test_triangle, Intersector};
 
 const STACK: usize = 3 * MAX_TREE_DEPTH as usize + 4;
@@ -78,6 +78,33 @@ impl Frustum {
         })
     }
 
+    /// The frustum of a packet whose `N` lanes are all active, straight from its arrays
+    /// (no per-lane reciprocals): `None` unless each axis's directions all have one sign.
+    /// Then `1/d` falls as `d` grows and rounding keeps that order, so the reciprocals'
+    /// extremes are the reciprocals of the directions' extremes: the same bounds, bit for
+    /// bit, as [`Frustum::new`] takes from every lane's reciprocal. With the largest end
+    /// of the packet's rays. Packets whose rays all miss the scene then never compute the
+    /// per-lane reciprocals (most of them, for an object in the middle of the view).
+    fn from_full_packet<const N: usize>(p: &RayPacket<N>) -> Option<(Frustum, f32)> {
+        let o = [extremes(&p.ox), extremes(&p.oy), extremes(&p.oz)];
+        let (t_min, _) = extremes(&p.t_min);
+        let (_, t_end) = extremes(&p.t_max);
+        let mut ilo = [Vec4::ZERO; 3];
+        let mut ihi = [Vec4::ZERO; 3];
+        for (a, d) in [&p.dx, &p.dy, &p.dz].into_iter().enumerate() {
+            let (lo, hi) = extremes(d);
+            // Also rules out zero components (and NaN, which no valid ray has).
+            if !(lo > 0.0 || hi < 0.0) {
+                return None;
+            }
+            ilo[a] = Vec4::splat(recip(hi));
+            ihi[a] = Vec4::splat(recip(lo));
+        }
+        let (olo, ohi) = (o.map(|(lo, _)| Vec4::splat(lo)), o.map(|(_, hi)| Vec4::splat(hi)));
+        let one_origin = o.iter().all(|&(lo, hi)| lo.to_bits() == hi.to_bits());
+        Some((Frustum { olo, ohi, ilo, ihi, t_min, one_origin }, t_end))
+    }
+
     /// The packet's one origin, if all its rays start at one point.
     #[inline(always)]
     fn origin(&self) -> Option<[f32; 3]> {
@@ -117,6 +144,24 @@ impl Frustum {
         let valid = (0..4).fold(0u32, |m, k| m | (((n.child[k] != NULL_INDEX) as u32) << k));
         (near, near.cmple(far).bitmask() & valid)
     }
+}
+
+/// The smallest and largest of `N` lanes, four at a time.
+#[inline(always)]
+fn extremes<const N: usize>(a: &[f32; N]) -> (f32, f32) {
+    let mut quads = a.chunks_exact(4);
+    let (mut lo, mut hi) = (Vec4::INFINITY, Vec4::NEG_INFINITY);
+    for q in &mut quads {
+        let v = Vec4::from_slice(q);
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    let (mut lo, mut hi) = (lo.min_element(), hi.max_element());
+    for &x in quads.remainder() {
+        lo = lo.min(x);
+        hi = hi.max(x);
+    }
+    (lo, hi)
 }
 
 /// How the packet culls boxes: by its frustum, or ray by ray with each ray's exact box
@@ -237,13 +282,22 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
         return;
     }
     let groups = N.div_ceil(4);
-    let mut q = Groups::new(packet, groups, mask);
-    let cull: Cull<N> = match Frustum::new(&q, groups, mask) {
-        Some(f) => Cull::Frustum(f),
-        None => Cull::Exact(core::array::from_fn(|i| RayBox::new(&packet.ray(i)))),
+    let full = N <= 64 && mask == u64::MAX >> (64 - N.clamp(1, 64));
+    // The lanes in SIMD registers with their reciprocals: computed when the first leaf
+    // needs them, if the frustum can do without (see `Frustum::from_full_packet`).
+    let mut lanes: Option<Groups> = None;
+    // `t_end`: how far any ray of the packet still looks.
+    let (cull, mut t_end): (Cull<N>, f32) = match full.then(|| Frustum::from_full_packet(packet)).flatten() {
+        Some((f, t_end)) => (Cull::Frustum(f), t_end),
+        None => {
+            let q = lanes.insert(Groups::new(packet, groups, mask));
+            let t_end = q.group_end.iter().take(groups).fold(f32::NEG_INFINITY, |m, &e| m.max(e));
+            match Frustum::new(q, groups, mask) {
+                Some(f) => (Cull::Frustum(f), t_end),
+                None => (Cull::Exact(core::array::from_fn(|i| RayBox::new(&packet.ray(i)))), t_end),
+            }
+        }
     };
-    // How far any ray of the packet still looks.
-    let mut t_end = q.group_end.iter().take(groups).fold(f32::NEG_INFINITY, |m, &e| m.max(e));
     // The watertight constants are computed the first time a ray enters a leaf: most
     // rays of a frame never do.
     let mut preps = Preps::<I, N>::new();
@@ -292,6 +346,7 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
                 continue;
             }
         } else {
+            let q = lanes.get_or_insert_with(|| Groups::new(packet, groups, mask));
             let enter = match &cull {
                 Cull::Exact(boxes) => {
                     let lo = Vec3A::new(leaf_box[0], leaf_box[1], leaf_box[2]);
@@ -305,11 +360,11 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
                     }
                     enter
                 }
-                Cull::Frustum(f) => leaf_entries(&q, groups, mask, &leaf_box, leaf_t, f.origin()),
+                Cull::Frustum(f) => leaf_entries(q, groups, mask, &leaf_box, leaf_t, f.origin()),
             };
             c.active_lanes += enter.count_ones() as u64;
             if enter != 0 {
-                preps.prepare(packet, &q, mask, enter);
+                preps.prepare(packet, q, mask, enter);
                 test_leaf::<I, P, N>(scene, bvh, packet, &mut preps, enter, index, count, hits, probe);
                 c.tri_tests += count as u64 * enter.count_ones() as u64;
                 let mut touched = 0u64;
@@ -672,5 +727,71 @@ mod tests {
             entered += (portable != 0) as u32;
         }
         assert!(checked > 1500 && entered > 500, "{checked} leaves checked, {entered} entered");
+    }
+
+    /// A full packet's frustum taken from its arrays has exactly the bounds of the one
+    /// taken from every lane's reciprocal (so it culls the same boxes), and there is none
+    /// when an axis's directions change sign or one is zero.
+    #[test]
+    fn a_full_packets_frustum_from_its_arrays_equals_the_frustum_of_its_lanes() {
+        let mut g = Lcg(5);
+        let (mut direct, mut declined) = (0, 0);
+        for case in 0..2000 {
+            let eye = Vec3::new(g.range(-3.0, 3.0), g.range(-3.0, 3.0), g.range(-6.0, 6.0));
+            let shared = case % 2 == 0;
+            // A small patch of directions (a tile of primary rays), sometimes straddling
+            // an axis, sometimes with a zero component.
+            let centre = Vec3::new(g.range(-1.0, 1.0), g.range(-1.0, 1.0), g.range(-1.0, 1.0));
+            let spread = [0.01, 0.2, 2.0][case % 3];
+            let rays: [Ray; 64] = core::array::from_fn(|i| {
+                let mut d = centre + Vec3::new(g.range(-spread, spread), g.range(-spread, spread), 0.1);
+                if case % 11 == 3 && i == 7 {
+                    d.x = 0.0;
+                }
+                let start = if shared { eye } else { eye + Vec3::new(g.range(-0.1, 0.1), 0.0, g.range(-0.1, 0.1)) };
+                let mut ray = Ray::new(start, d);
+                ray.t_min = g.range(0.0, 0.01);
+                ray.t_max = if g.unit() < 0.3 { g.range(1.0, 8.0) } else { f32::INFINITY };
+                ray
+            });
+            let n: usize = [4, 16, 64][case % 3];
+            let mut packet = RayPacket::<64>::new();
+            packet.fill(&rays[..n]);
+            let mask = u64::MAX >> (64 - n);
+            assert_eq!(packet.active & mask, mask);
+            let q = Groups::new(&packet, n.div_ceil(4), mask);
+            // The arrays' lanes beyond `n` hold no rays: a packet of `n` lanes.
+            let fit = |a: &[f32; 64]| -> [f32; 64] { core::array::from_fn(|i| a[i.min(n - 1)]) };
+            let mut p = packet;
+            for a in [&mut p.ox, &mut p.oy, &mut p.oz, &mut p.dx, &mut p.dy, &mut p.dz, &mut p.t_min, &mut p.t_max] {
+                *a = fit(a);
+            }
+            let sign_change = [&p.dx, &p.dy, &p.dz].iter().any(|d| {
+                let (lo, hi) = extremes(d);
+                !(lo > 0.0 || hi < 0.0)
+            });
+            match (Frustum::from_full_packet(&p), Frustum::new(&q, n.div_ceil(4), mask)) {
+                (Some((f, t_end)), Some(lanes)) => {
+                    let bits = |v: &[Vec4; 3]| v.map(|x| x.to_array().map(f32::to_bits));
+                    assert_eq!(bits(&f.olo), bits(&lanes.olo), "case {case}");
+                    assert_eq!(bits(&f.ohi), bits(&lanes.ohi), "case {case}");
+                    assert_eq!(bits(&f.ilo), bits(&lanes.ilo), "case {case}");
+                    assert_eq!(bits(&f.ihi), bits(&lanes.ihi), "case {case}");
+                    assert_eq!(f.t_min.to_bits(), lanes.t_min.to_bits(), "case {case}");
+                    assert_eq!(f.one_origin, lanes.one_origin, "case {case}");
+                    assert_eq!(f.one_origin, shared, "case {case}");
+                    let group_end = q.group_end.iter().take(n.div_ceil(4)).fold(f32::NEG_INFINITY, |m, &e| m.max(e));
+                    assert_eq!(t_end, group_end, "case {case}");
+                    assert!(!sign_change, "case {case}");
+                    direct += 1;
+                }
+                (None, _) => {
+                    assert!(sign_change, "case {case}: declined a packet whose directions keep their signs");
+                    declined += 1;
+                }
+                (Some(_), None) => panic!("case {case}: a frustum where the lanes' test needs exact boxes"),
+            }
+        }
+        assert!(direct > 500 && declined > 200, "{direct} direct, {declined} declined");
     }
 }
