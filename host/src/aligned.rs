@@ -27,7 +27,7 @@ impl AlignedBytes {
         use std::io::Read;
         let mut f = std::fs::File::open(path)?;
         let len = f.metadata()?.len() as usize;
-        let mut lines = vec![Line([0; 64]); len.div_ceil(64)];
+        let mut lines = crate::huge_pages::filled_vec(len.div_ceil(64), Line([0; 64]));
         let buf = &mut bytemuck::cast_slice_mut::<Line, u8>(&mut lines)[..len];
         f.read_exact(buf)?;
         Ok(AlignedBytes { lines, len })

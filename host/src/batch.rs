@@ -5,6 +5,7 @@ use anyhow::{bail, Result};
 use rayon::prelude::*;
 use raypipe_core::{Intersector, NoProbe, Ray, RayCounters, SceneView, Vec3};
 
+use crate::huge_pages;
 use crate::isa::with_avx2;
 use crate::npy::{Array2, HitRecord};
 use crate::render::in_pool;
@@ -22,7 +23,7 @@ pub fn rays_from_array(a: &Array2) -> Result<Vec<Ray>> {
     if a.cols != 6 && a.cols != 8 {
         bail!("array has {} columns; expected 6 (origin, direction) or 8 (and t_min, t_max)", a.cols);
     }
-    let mut rays = Vec::with_capacity(a.rows);
+    let mut rays = huge_pages::empty_vec(a.rows);
     for (i, row) in a.data.chunks_exact(a.cols).enumerate() {
         let origin = Vec3::new(row[0], row[1], row[2]);
         let dir = Vec3::new(row[3], row[4], row[5]);
@@ -91,7 +92,7 @@ fn trace_with<I: Intersector, const N: usize>(
     crate::isa::report_cpu();
     // Each chunk writes its own slice of one preallocated output: no per-chunk vectors
     // to gather and copy afterwards.
-    let mut out = vec![record(None); rays.len()];
+    let mut out = huge_pages::filled_vec(rays.len(), record(None));
     in_pool(threads, || {
         out.par_chunks_mut(CHUNK).zip(rays.par_chunks(CHUNK)).for_each(|(out, chunk)| {
             if N == 1 {

@@ -13,6 +13,7 @@ pub mod camera_file;
 pub mod cli;
 pub mod default_scene;
 pub mod grid_builder;
+pub mod huge_pages;
 pub mod image_writer;
 pub mod isa;
 pub mod kd_builder;
