@@ -9,7 +9,7 @@
 
 use glam::DVec3;
 
-use crate::bvh_builder::{blocks, Bounds, BvhParams, Ref, Split};
+use crate::bvh_builder::{blocks, Bounds, BvhParams, Ref, Sides, Split};
 use crate::tri_clip::split_bounds;
 
 /// The boxes of the parts of a reference's triangle below and above the plane `axis =
@@ -61,27 +61,26 @@ pub(crate) fn find_spatial_split(verts: &[[DVec3; 3]], refs: &[Ref], bounds: &Bo
         // Sweep from the right, then from the left: a plane between bins k − 1 and k has
         // on its left every reference entering before k, on its right every one leaving
         // at k or after.
-        let mut right_area = vec![0.0; p.bins];
-        let mut right_count = vec![0usize; p.bins];
+        let mut right = vec![(Bounds::EMPTY, 0usize); p.bins];
         let (mut acc, mut n) = (Bounds::EMPTY, 0);
         for k in (1..p.bins).rev() {
             acc.grow(&bin_bounds[k]);
             n += exits[k];
-            right_area[k] = acc.area();
-            right_count[k] = n;
+            right[k] = (acc, n);
         }
         let (mut left, mut nl) = (Bounds::EMPTY, 0);
         for k in 1..p.bins {
             left.grow(&bin_bounds[k - 1]);
             nl += entries[k - 1];
-            let nr = right_count[k];
+            let (right_box, nr) = right[k];
             if nl == 0 || nr == 0 {
                 continue;
             }
             let cost = p.traversal_cost
-                + p.intersection_cost * (left.area() * blocks(nl, p) + right_area[k] * blocks(nr, p)) / parent_area;
+                + p.intersection_cost * (left.area() * blocks(nl, p) + right_box.area() * blocks(nr, p)) / parent_area;
             if best.is_none_or(|b| cost < b.cost) {
-                best = Some(Split { axis, pos: plane(k), cost, overlap: 0.0, spatial: true });
+                let spatial = Some(Sides { left: (left, nl), right: (right_box, nr) });
+                best = Some(Split { axis, pos: plane(k), cost, overlap: 0.0, spatial });
             }
         }
     }
@@ -90,16 +89,26 @@ pub(crate) fn find_spatial_split(verts: &[[DVec3; 3]], refs: &[Ref], bounds: &Bo
 
 /// Divides references at the plane `axis = pos`: a reference wholly on one side goes
 /// there, one that straddles it becomes two, each with the box of its triangle's part
-/// on its side (one new reference taken from `spare`). A reference whose triangle has a
-/// part on one side only goes there with that part's box; with no spare left, a straddling
-/// one goes whole to the side of its centroid.
+/// on its side (one new reference taken from `spare`) — unless keeping it whole on one
+/// side costs less by the SAH ("reference unsplitting", section 4.3: the child's box
+/// grows to hold it, the other child tests one triangle fewer), or no spare is left (it
+/// goes whole to the side of its centroid). A reference whose triangle has a part on
+/// one side only goes there with that part's box. `sides`: the children as binned.
 pub(crate) fn split_references(
     verts: &[[DVec3; 3]],
     refs: Vec<Ref>,
     axis: usize,
     pos: f64,
+    sides: &Sides,
+    p: &BvhParams,
     spare: &mut usize,
 ) -> (Vec<Ref>, Vec<Ref>) {
+    let ((left_box, nl), (right_box, nr)) = (sides.left, sides.right);
+    let (al, ar) = (left_box.area(), right_box.area());
+    let cost = |a_left: f64, n_left: usize, a_right: f64, n_right: usize| {
+        a_left * blocks(n_left, p) + a_right * blocks(n_right, p)
+    };
+    let split_cost = cost(al, nl, ar, nr);
     let (mut left, mut right) = (Vec::with_capacity(refs.len()), Vec::with_capacity(refs.len()));
     for r in refs {
         if r.b.hi[axis] <= pos {
@@ -109,7 +118,18 @@ pub(crate) fn split_references(
         } else {
             let (l, h) = split_box(&verts[r.tri as usize], &r.b, axis, pos);
             let (l, h) = ((!l.is_empty()).then_some(l), (!h.is_empty()).then_some(h));
+            let whole = |side: &Bounds| {
+                let mut b = *side;
+                b.grow(&r.b);
+                b.area()
+            };
             match (l, h) {
+                (Some(_), Some(_)) if cost(whole(&left_box), nl, ar, nr.saturating_sub(1)) <= split_cost => {
+                    left.push(r)
+                }
+                (Some(_), Some(_)) if cost(al, nl.saturating_sub(1), whole(&right_box), nr) <= split_cost => {
+                    right.push(r)
+                }
                 (Some(l), Some(h)) if *spare > 0 => {
                     *spare -= 1;
                     left.push(Ref { b: l, tri: r.tri });
