@@ -108,6 +108,10 @@ def main():
                 secs[label].append(float(re.search(r"in ([0-9.]+) s", out).group(1)))
             res, t = embree_run(scene, origins, dirs)
             secs["embree"].append(t)
+        # Each round's raypipe/Embree ratio, both sides measured back to back: on a
+        # machine whose speed drifts over minutes this pairing cancels the drift that a
+        # ratio of medians keeps.
+        paired = {label: sorted(e / r for r, e in zip(secs[label], secs["embree"])) for label, _, _ in modes}
         secs = {k: statistics.median(v) for k, v in secs.items()}
         em_secs = secs["embree"]
         hits = np.load(f"{hits_p}0")
@@ -135,7 +139,9 @@ def main():
     print(f"embree      {'rtcIntersect1':<22} {em:8.2f} Mrays/s")
     for label, _, _ in modes:
         r = n / secs[label] / 1e6
-        print(f"raypipe     {label:<22} {r:8.2f} Mrays/s   ratio {r / em:.2f}")
+        p = paired[label]
+        print(f"raypipe     {label:<22} {r:8.2f} Mrays/s   ratio {r / em:.2f}   "
+              f"(per round: median {statistics.median(p):.2f}, range {p[0]:.2f}-{p[-1]:.2f})")
     print(f"agreement   {100.0 * agree.mean():.4f}% ({differ} rays differ: "
           f"{int((e_hit != r_hit).sum())} hit/miss, {int((e_hit & r_hit & ~same_prim & ~close_t).sum())} other triangle)")
     return 0 if agree.mean() >= 0.9999 else 1
