@@ -377,38 +377,83 @@ pub struct BuiltWideBvh<N> {
     pub depth: u32,
 }
 
-/// Collapses a binary BVH into a wide one: each wide node takes the (up to `WIDTH`)
-/// descendants reached by repeatedly opening the largest inner child (Wald et al. 2008).
-pub fn collapse_wide<N: WideNode>(bvh: &BuiltBvh) -> BuiltWideBvh<N> {
+/// Collapses a binary BVH into a wide one, choosing which binary nodes become wide nodes
+/// by the SAH (Ylitie, Karras & Laine 2017, "Efficient incoherent ray traversal on GPUs
+/// through compressed wide BVHs", section 3.1): bottom-up, the least cost of each binary
+/// subtree spread over 1 to `WIDTH` slots of its parent, where a subtree in one slot is a
+/// leaf (a binary leaf) or a wide node of its own (its children's subtrees spread over
+/// its `WIDTH` slots). A wide node costs its area times the traversal cost, a leaf its
+/// area times its blocks' intersection cost.
+pub fn collapse_wide<N: WideNode>(bvh: &BuiltBvh, params: &BvhParams) -> BuiltWideBvh<N> {
+    const MAX: usize = 8;
+    let w = N::WIDTH.min(MAX);
     let area = |n: &BvhNode| {
-        let e = [n.max[0] - n.min[0], n.max[1] - n.min[1], n.max[2] - n.min[2]];
+        let e = [0, 1, 2].map(|a| f64::from(n.max[a]) - f64::from(n.min[a]));
         e[0] * e[1] + e[1] * e[2] + e[2] * e[0]
     };
+    let nodes = &bvh.nodes;
+    // cost[k][i - 1]: the least cost of node k's subtree in i slots; spread[k][i - 1]: how
+    // (0: in i − 1 slots, or as one slot for i = 1; j: j slots to the left child's
+    // subtree, i − j to the right's); own[k]: the left child's share of a wide node of k.
+    let mut cost = vec![[0.0f64; MAX]; nodes.len()];
+    let mut spread = vec![[0u8; MAX]; nodes.len()];
+    let mut own = vec![0u8; nodes.len()];
+    // Children come after their parent: a backward sweep meets them first.
+    for k in (0..nodes.len()).rev() {
+        let n = &nodes[k];
+        if n.count > 0 {
+            cost[k] = [area(n) * params.intersection_cost * blocks(n.count as usize, params); MAX];
+            continue;
+        }
+        let (l, r) = (n.first as usize, n.first as usize + 1);
+        let (Some(cl), Some(cr)) = (cost.get(l).copied(), cost.get(r).copied()) else { continue };
+        // The children's subtrees sharing i slots.
+        let mut share = [(f64::INFINITY, 0u8); MAX];
+        for i in 2..=w {
+            for j in 1..i {
+                let c = cl[j - 1] + cr[i - j - 1];
+                if c < share[i - 1].0 {
+                    share[i - 1] = (c, j as u8);
+                }
+            }
+        }
+        own[k] = share[w - 1].1;
+        cost[k][0] = area(n) * params.traversal_cost + share[w - 1].0;
+        for i in 2..=w {
+            (cost[k][i - 1], spread[k][i - 1]) =
+                if share[i - 1].0 < cost[k][i - 2] { share[i - 1] } else { (cost[k][i - 2], 0) };
+        }
+    }
+    // The binary nodes that fill `i` slots for node k's subtree.
+    fn slots(nodes: &[BvhNode], spread: &[[u8; 8]], k: usize, i: usize, out: &mut Vec<usize>) {
+        let j = spread[k][i - 1] as usize;
+        if i == 1 || nodes[k].count > 0 {
+            out.push(k);
+        } else if j == 0 {
+            slots(nodes, spread, k, i - 1, out);
+        } else {
+            let l = nodes[k].first as usize;
+            slots(nodes, spread, l, j, out);
+            slots(nodes, spread, l + 1, i - j, out);
+        }
+    }
     let mut out = BuiltWideBvh { nodes: vec![*N::empty()], prims: bvh.prims.clone(), depth: 1 };
-    // (binary node whose children fill wide node `target`, depth)
+    // (binary node whose subtree fills wide node `target`, depth)
     let mut todo = vec![(0usize, 0usize, 1u32)];
     while let Some((src, target, depth)) = todo.pop() {
         out.depth = out.depth.max(depth);
-        let root = &bvh.nodes[src];
-        let mut slots: Vec<usize> = if root.count > 0 {
-            vec![src] // a leaf root becomes a single leaf slot
+        let root = &nodes[src];
+        let mut filled = Vec::with_capacity(w);
+        if root.count > 0 {
+            filled.push(src); // a leaf root becomes a single leaf slot
         } else {
-            vec![root.first as usize, root.first as usize + 1]
-        };
-        while slots.len() < N::WIDTH {
-            let open = slots
-                .iter()
-                .enumerate()
-                .filter(|(_, &s)| bvh.nodes[s].count == 0)
-                .max_by(|a, b| area(&bvh.nodes[*a.1]).total_cmp(&area(&bvh.nodes[*b.1])));
-            let Some((k, &s)) = open else { break };
-            let f = bvh.nodes[s].first as usize;
-            slots[k] = f;
-            slots.push(f + 1);
+            let (l, j) = (root.first as usize, own[src] as usize);
+            slots(nodes, &spread, l, j, &mut filled);
+            slots(nodes, &spread, l + 1, w - j, &mut filled);
         }
         let mut node = *N::empty();
-        for (k, &s) in slots.iter().enumerate() {
-            let n = &bvh.nodes[s];
+        for (k, &s) in filled.iter().enumerate() {
+            let n = &nodes[s];
             if n.count > 0 {
                 node.set_slot(k, n.min, n.max, n.first, n.count);
             } else {
@@ -529,11 +574,125 @@ mod tests {
         }
     }
 
+    /// Random small triangles in a unit cube.
+    fn scatter(n: u32, seed: u64) -> Mesh {
+        let mut x = seed;
+        let mut next = move || {
+            x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (x >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let mut positions = Vec::new();
+        for _ in 0..n {
+            let c = [next(), next(), next()];
+            for _ in 0..3 {
+                positions.push([c[0] + 0.05 * next(), c[1] + 0.05 * next(), c[2] + 0.05 * next()]);
+            }
+        }
+        let triangles = (0..n).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
+        Mesh { positions, triangles, ..Default::default() }
+    }
+
+    /// The SAH cost of a wide BVH as the collapse prices it: each wide node its box's
+    /// area times the traversal cost, each leaf its box's area times its blocks.
+    fn wide_cost<N: WideNode>(bvh: &BuiltWideBvh<N>, p: &BvhParams) -> f64 {
+        let area = |lo: [f32; 3], hi: [f32; 3]| {
+            let e = [0, 1, 2].map(|a| f64::from(hi[a]) - f64::from(lo[a]));
+            e[0] * e[1] + e[1] * e[2] + e[2] * e[0]
+        };
+        let mut cost = 0.0;
+        for (i, node) in bvh.nodes.iter().enumerate() {
+            let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+            for k in 0..N::WIDTH {
+                let (l, h, _, count) = node.slot(k);
+                if l[0] > h[0] {
+                    continue; // empty slot
+                }
+                for a in 0..3 {
+                    (lo[a], hi[a]) = (lo[a].min(l[a]), hi[a].max(h[a]));
+                }
+                if count > 0 {
+                    cost += area(l, h) * p.intersection_cost * blocks(count as usize, p);
+                }
+            }
+            // The root's own test is the same for any collapse.
+            if i > 0 {
+                cost += area(lo, hi) * p.traversal_cost;
+            }
+        }
+        cost
+    }
+
+    /// The greedy collapse (Wald et al. 2008): open the largest inner child until the
+    /// node is full. The reference the SAH collapse must never lose to.
+    fn greedy<N: WideNode>(bvh: &BuiltBvh) -> BuiltWideBvh<N> {
+        let area = |n: &BvhNode| {
+            let e = [0, 1, 2].map(|a| n.max[a] - n.min[a]);
+            e[0] * e[1] + e[1] * e[2] + e[2] * e[0]
+        };
+        let mut out = BuiltWideBvh { nodes: vec![*N::empty()], prims: bvh.prims.clone(), depth: 1 };
+        let mut todo = vec![(0usize, 0usize)];
+        while let Some((src, target)) = todo.pop() {
+            let root = &bvh.nodes[src];
+            let mut slots = if root.count > 0 { vec![src] } else { vec![root.first as usize, root.first as usize + 1] };
+            while slots.len() < N::WIDTH {
+                let open = slots
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, &s)| bvh.nodes[s].count == 0)
+                    .max_by(|a, b| area(&bvh.nodes[*a.1]).total_cmp(&area(&bvh.nodes[*b.1])));
+                let Some((k, &s)) = open else { break };
+                let f = bvh.nodes[s].first as usize;
+                slots[k] = f;
+                slots.push(f + 1);
+            }
+            let mut node = *N::empty();
+            for (k, &s) in slots.iter().enumerate() {
+                let n = &bvh.nodes[s];
+                if n.count > 0 {
+                    node.set_slot(k, n.min, n.max, n.first, n.count);
+                } else {
+                    out.nodes.push(*N::empty());
+                    node.set_slot(k, n.min, n.max, out.nodes.len() as u32 - 1, 0);
+                    todo.push((s, out.nodes.len() - 1));
+                }
+            }
+            out.nodes[target] = node;
+        }
+        out
+    }
+
+    #[test]
+    fn the_sah_collapse_keeps_the_leaves_and_never_costs_more_than_the_greedy_one() {
+        for (seed, n) in [(1, 1), (2, 7), (3, 200), (4, 3000)] {
+            let mesh = scatter(n, seed);
+            for leaf_block in [1, 4] {
+                let params = BvhParams { leaf_block, ..BvhParams::default() };
+                let binary = build_bvh(&mesh, &params);
+                let mut binary_leaves: Vec<(u32, u32)> =
+                    binary.nodes.iter().filter(|n| n.count > 0).map(|n| (n.first, n.count)).collect();
+                binary_leaves.sort_unstable();
+                let wide = collapse_wide::<Bvh8Node>(&binary, &params);
+                let mut wide_leaves = leaves(&wide);
+                wide_leaves.sort_unstable();
+                assert_eq!(wide_leaves, binary_leaves, "seed {seed}");
+                let (sah, reference) = (wide_cost(&wide, &params), wide_cost(&greedy::<Bvh8Node>(&binary), &params));
+                assert!(sah <= reference * (1.0 + 1e-9), "seed {seed}: {sah} > greedy {reference}");
+                if n >= 200 {
+                    assert!(sah < reference, "seed {seed}: no better than greedy");
+                }
+                let wide4 = collapse_wide::<raypipe_core::image::Bvh4Node>(&binary, &params);
+                let mut leaves4 = leaves(&wide4);
+                leaves4.sort_unstable();
+                assert_eq!(leaves4, binary_leaves, "seed {seed}");
+            }
+        }
+    }
+
     #[test]
     fn aligned_leaves_start_on_blocks_and_keep_their_triangles() {
         let mesh = strip(300);
         let params = BvhParams { leaf_block: 4, ..BvhParams::default() };
-        let mut bvh = collapse_wide::<Bvh8Node>(&build_bvh(&mesh, &params));
+        let mut bvh = collapse_wide::<Bvh8Node>(&build_bvh(&mesh, &params), &params);
         let before: Vec<Vec<u32>> =
             leaves(&bvh).iter().map(|&(f, c)| bvh.prims[f as usize..(f + c) as usize].to_vec()).collect();
         align_leaves(&mut bvh, 4);

@@ -295,7 +295,7 @@ fn default_lights(mesh: &Mesh, camera: &CameraRecord) -> Vec<LightRecord> {
 fn build_wide<N: WideNode>(mesh: &Mesh, opts: &BuildOptions, report: &mut BuildReport, writer: &mut ImageWriter) {
     let blocks = opts.triangles == TriangleLayout::Blocks;
     let params = BvhParams { leaf_block: if blocks { TriBlock4::LANES } else { 1 }, ..opts.bvh };
-    let mut bvh = collapse_wide::<N>(&build_bvh(mesh, &params));
+    let mut bvh = collapse_wide::<N>(&build_bvh(mesh, &params), &params);
     if blocks {
         align_leaves(&mut bvh, TriBlock4::LANES);
     }
