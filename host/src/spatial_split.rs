@@ -137,6 +137,7 @@ pub(crate) fn split_references(
                 }
                 (Some(l), None) => left.push(Ref { b: l, tri: r.tri }),
                 (None, Some(h)) => right.push(Ref { b: h, tri: r.tri }),
+                _ if r.centroid()[axis] < pos => left.push(r),
                 _ => right.push(r),
             }
         }
