@@ -85,8 +85,18 @@ impl Bounds {
         2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
     }
 
+    /// A node's f32 box.
+    fn of_box(lo: [f32; 3], hi: [f32; 3]) -> Bounds {
+        Bounds { lo: DVec3::from(lo.map(f64::from)), hi: DVec3::from(hi.map(f64::from)) }
+    }
+
     pub(crate) fn is_empty(&self) -> bool {
         self.lo.cmpgt(self.hi).any()
+    }
+
+    /// The axes along which the box has a positive extent: `(axis, lo, hi)`.
+    pub(crate) fn extended_axes(&self) -> impl Iterator<Item = (usize, f64, f64)> + '_ {
+        (0..3).filter(|&a| self.hi[a] > self.lo[a]).map(|a| (a, self.lo[a], self.hi[a]))
     }
 
     fn intersection(&self, o: &Bounds) -> Bounds {
@@ -166,7 +176,7 @@ pub fn build_bvh(mesh: &Mesh, params: &BvhParams) -> BuiltBvh {
                 (Some(o), Some(s)) if s.cost < o.cost => Some(s),
                 (o, _) => o,
             }
-            .filter(|s| s.cost < params.intersection_cost * blocks(count, params) || count > params.max_leaf)
+            .filter(|s| s.cost < leaf_cost(count, params) || count > params.max_leaf)
         };
         let (left, right) = match split {
             Some(Split { axis, pos, spatial: Some(sides), .. }) => {
@@ -203,9 +213,21 @@ pub fn build_bvh(mesh: &Mesh, params: &BvhParams) -> BuiltBvh {
     out
 }
 
-/// A leaf's cost in triangle tests: its blocks of `leaf_block` triangles.
-pub(crate) fn blocks(n: usize, p: &BvhParams) -> f64 {
-    n.div_ceil(p.leaf_block.max(1)) as f64
+/// A leaf's cost: its blocks of `leaf_block` triangles, each one intersection.
+pub(crate) fn leaf_cost(n: usize, p: &BvhParams) -> f64 {
+    p.intersection_cost * n.div_ceil(p.leaf_block.max(1)) as f64
+}
+
+/// The SAH cost of splitting a node of surface area `parent_area` into children of
+/// `(area, references)` `left` and `right`: one traversal step, then each child's leaf
+/// cost weighted by the chance a ray through the parent enters it.
+pub(crate) fn split_cost(p: &BvhParams, parent_area: f64, left: (f64, usize), right: (f64, usize)) -> f64 {
+    p.traversal_cost + children_cost(p, left, right) / parent_area
+}
+
+/// The area-weighted leaf costs of two children `(area, references)`.
+pub(crate) fn children_cost(p: &BvhParams, (al, nl): (f64, usize), (ar, nr): (f64, usize)) -> f64 {
+    al * leaf_cost(nl, p) + ar * leaf_cost(nr, p)
 }
 
 /// The build references: one box per triangle, or per piece of a large triangle cut by
@@ -303,11 +325,7 @@ fn find_split(refs: &[Ref], bounds: &Bounds, cbounds: &Bounds, p: &BvhParams) ->
     let n = refs.len();
     let parent_area = bounds.area().max(f64::MIN_POSITIVE);
     let mut best: Option<Split> = None;
-    for axis in 0..3 {
-        let (lo, hi) = (cbounds.lo[axis], cbounds.hi[axis]);
-        if hi <= lo || hi.is_nan() || lo.is_nan() {
-            continue;
-        }
+    for (axis, lo, hi) in cbounds.extended_axes() {
         let scale = p.bins as f64 / (hi - lo);
         let mut bin_bounds = vec![Bounds::EMPTY; p.bins];
         let mut bin_count = vec![0usize; p.bins];
@@ -333,8 +351,7 @@ fn find_split(refs: &[Ref], bounds: &Bounds, cbounds: &Bounds, p: &BvhParams) ->
                 continue;
             }
             let right = &right_bounds[k];
-            let cost = p.traversal_cost
-                + p.intersection_cost * (left.area() * blocks(nl, p) + right.area() * blocks(nr, p)) / parent_area;
+            let cost = split_cost(p, parent_area, (left.area(), nl), (right.area(), nr));
             if best.is_none_or(|b| cost < b.cost) {
                 let overlap = left.intersection(right).area();
                 best = Some(Split { axis, pos: lo + k as f64 / scale, cost, overlap, spatial: None });
@@ -387,10 +404,7 @@ pub struct BuiltWideBvh<N> {
 pub fn collapse_wide<N: WideNode>(bvh: &BuiltBvh, params: &BvhParams) -> BuiltWideBvh<N> {
     const MAX: usize = 8;
     let w = N::WIDTH.min(MAX);
-    let area = |n: &BvhNode| {
-        let e = [0, 1, 2].map(|a| f64::from(n.max[a]) - f64::from(n.min[a]));
-        e[0] * e[1] + e[1] * e[2] + e[2] * e[0]
-    };
+    let area = |n: &BvhNode| Bounds::of_box(n.min, n.max).area();
     let nodes = &bvh.nodes;
     // cost[k][i - 1]: the least cost of node k's subtree in i slots; spread[k][i - 1]: how
     // (0: in i − 1 slots, or as one slot for i = 1; j: j slots to the left child's
@@ -402,7 +416,7 @@ pub fn collapse_wide<N: WideNode>(bvh: &BuiltBvh, params: &BvhParams) -> BuiltWi
     for k in (0..nodes.len()).rev() {
         let n = &nodes[k];
         if n.count > 0 {
-            cost[k] = [area(n) * params.intersection_cost * blocks(n.count as usize, params); MAX];
+            cost[k] = [area(n) * leaf_cost(n.count as usize, params); MAX];
             continue;
         }
         let (l, r) = (n.first as usize, n.first as usize + 1);
@@ -425,7 +439,7 @@ pub fn collapse_wide<N: WideNode>(bvh: &BuiltBvh, params: &BvhParams) -> BuiltWi
         }
     }
     // The binary nodes that fill `i` slots for node k's subtree.
-    fn slots(nodes: &[BvhNode], spread: &[[u8; 8]], k: usize, i: usize, out: &mut Vec<usize>) {
+    fn slots(nodes: &[BvhNode], spread: &[[u8; MAX]], k: usize, i: usize, out: &mut Vec<usize>) {
         let j = spread[k][i - 1] as usize;
         if i == 1 || nodes[k].count > 0 {
             out.push(k);
@@ -595,10 +609,6 @@ mod tests {
     /// The SAH cost of a wide BVH as the collapse prices it: each wide node its box's
     /// area times the traversal cost, each leaf its box's area times its blocks.
     fn wide_cost<N: WideNode>(bvh: &BuiltWideBvh<N>, p: &BvhParams) -> f64 {
-        let area = |lo: [f32; 3], hi: [f32; 3]| {
-            let e = [0, 1, 2].map(|a| f64::from(hi[a]) - f64::from(lo[a]));
-            e[0] * e[1] + e[1] * e[2] + e[2] * e[0]
-        };
         let mut cost = 0.0;
         for (i, node) in bvh.nodes.iter().enumerate() {
             let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
@@ -611,12 +621,12 @@ mod tests {
                     (lo[a], hi[a]) = (lo[a].min(l[a]), hi[a].max(h[a]));
                 }
                 if count > 0 {
-                    cost += area(l, h) * p.intersection_cost * blocks(count as usize, p);
+                    cost += Bounds::of_box(l, h).area() * leaf_cost(count as usize, p);
                 }
             }
             // The root's own test is the same for any collapse.
             if i > 0 {
-                cost += area(lo, hi) * p.traversal_cost;
+                cost += Bounds::of_box(lo, hi).area() * p.traversal_cost;
             }
         }
         cost

@@ -9,7 +9,7 @@
 
 use glam::DVec3;
 
-use crate::bvh_builder::{blocks, Bounds, BvhParams, Ref, Sides, Split};
+use crate::bvh_builder::{children_cost, split_cost, Bounds, BvhParams, Ref, Sides, Split};
 use crate::tri_clip::split_bounds;
 
 /// The boxes of the parts of a reference's triangle below and above the plane `axis =
@@ -27,11 +27,7 @@ fn split_box(v: &[DVec3; 3], b: &Bounds, axis: usize, pos: f64) -> (Bounds, Boun
 pub(crate) fn find_spatial_split(verts: &[[DVec3; 3]], refs: &[Ref], bounds: &Bounds, p: &BvhParams) -> Option<Split> {
     let parent_area = bounds.area().max(f64::MIN_POSITIVE);
     let mut best: Option<Split> = None;
-    for axis in 0..3 {
-        let (lo, hi) = (bounds.lo[axis], bounds.hi[axis]);
-        if hi <= lo || hi.is_nan() || lo.is_nan() {
-            continue;
-        }
+    for (axis, lo, hi) in bounds.extended_axes() {
         let width = (hi - lo) / p.bins as f64;
         let plane = |k: usize| if k == p.bins { hi } else { lo + k as f64 * width };
         let bin_of = |x: f64| (((x - lo) / width) as usize).min(p.bins - 1);
@@ -76,8 +72,7 @@ pub(crate) fn find_spatial_split(verts: &[[DVec3; 3]], refs: &[Ref], bounds: &Bo
             if nl == 0 || nr == 0 {
                 continue;
             }
-            let cost = p.traversal_cost
-                + p.intersection_cost * (left.area() * blocks(nl, p) + right_box.area() * blocks(nr, p)) / parent_area;
+            let cost = split_cost(p, parent_area, (left.area(), nl), (right_box.area(), nr));
             if best.is_none_or(|b| cost < b.cost) {
                 let spatial = Some(Sides { left: (left, nl), right: (right_box, nr) });
                 best = Some(Split { axis, pos: plane(k), cost, overlap: 0.0, spatial });
@@ -106,7 +101,7 @@ pub(crate) fn split_references(
     let ((left_box, nl), (right_box, nr)) = (sides.left, sides.right);
     let (al, ar) = (left_box.area(), right_box.area());
     let cost = |a_left: f64, n_left: usize, a_right: f64, n_right: usize| {
-        a_left * blocks(n_left, p) + a_right * blocks(n_right, p)
+        children_cost(p, (a_left, n_left), (a_right, n_right))
     };
     let split_cost = cost(al, nl, ar, nr);
     let (mut left, mut right) = (Vec::with_capacity(refs.len()), Vec::with_capacity(refs.len()));
