@@ -232,6 +232,13 @@ impl Groups {
         q
     }
 
+    /// The largest end of the first `groups` groups' active lanes: how far any ray of
+    /// the packet still looks.
+    #[inline(always)]
+    fn largest_end(&self, groups: usize) -> f32 {
+        self.group_end.iter().take(groups).fold(f32::NEG_INFINITY, |m, &e| m.max(e))
+    }
+
     /// Recomputes group `g`'s largest end.
     #[inline(always)]
     fn update_end(&mut self, g: usize, mask: u64) {
@@ -291,7 +298,7 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
         Some((f, t_end)) => (Cull::Frustum(f), t_end),
         None => {
             let q = lanes.insert(Groups::new(packet, groups, mask));
-            let t_end = q.group_end.iter().take(groups).fold(f32::NEG_INFINITY, |m, &e| m.max(e));
+            let t_end = q.largest_end(groups);
             match Frustum::new(q, groups, mask) {
                 Some(f) => (Cull::Frustum(f), t_end),
                 None => (Cull::Exact(core::array::from_fn(|i| RayBox::new(&packet.ray(i)))), t_end),
@@ -380,7 +387,7 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
                         q.update_end(g, mask);
                     }
                 }
-                t_end = q.group_end.iter().take(groups).fold(f32::NEG_INFINITY, |m, &e| m.max(e));
+                t_end = q.largest_end(groups);
             }
         }
         // Pop the next entry whose entry bound is not beyond every ray's best hit.
@@ -780,8 +787,7 @@ mod tests {
                     assert_eq!(f.t_min.to_bits(), lanes.t_min.to_bits(), "case {case}");
                     assert_eq!(f.one_origin, lanes.one_origin, "case {case}");
                     assert_eq!(f.one_origin, shared, "case {case}");
-                    let group_end = q.group_end.iter().take(n.div_ceil(4)).fold(f32::NEG_INFINITY, |m, &e| m.max(e));
-                    assert_eq!(t_end, group_end, "case {case}");
+                    assert_eq!(t_end, q.largest_end(n.div_ceil(4)), "case {case}");
                     assert!(!sign_change, "case {case}");
                     direct += 1;
                 }
