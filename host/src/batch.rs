@@ -8,6 +8,7 @@ use raypipe_core::{Intersector, NoProbe, Ray, RayCounters, SceneView, Vec3};
 use crate::huge_pages;
 use crate::isa::with_avx2;
 use crate::npy::{Array2, HitRecord};
+use crate::prefetch::prefetch;
 use crate::render::in_pool;
 use raypipe_core::packet::{PacketCounters, RayPacket};
 
@@ -17,6 +18,9 @@ use crate::with_intersector;
 
 /// Rays traced as one unit of work.
 const CHUNK: usize = 4096;
+/// How many rays ahead a single-ray trace asks for its ray records (512 bytes; 4, 8, 32
+/// and 64 measured alike on Sponza, 1.10–1.20x against none).
+const SINGLE_PREFETCH_AHEAD: usize = 16;
 
 /// Converts an (N, 6) or (N, 8) array into rays, rejecting rows no ray can be made of.
 pub fn rays_from_array(a: &Array2) -> Result<Vec<Ray>> {
@@ -71,7 +75,10 @@ fn trace_singles<I: Intersector>(scene: &SceneView<'_>, out: &mut [HitRecord], r
         #[inline(always)]
         || {
             let n = out.len().min(rays.len());
-            let ray = |i: usize| rays.get(i);
+            let ray = |i: usize| {
+                prefetch(rays.get(i + SINGLE_PREFETCH_AHEAD));
+                rays.get(i)
+            };
             let mut hit = |i: usize, _: Option<&Ray>, h| {
                 if let Some(o) = out.get_mut(i) {
                     *o = record(h);
