@@ -99,10 +99,8 @@ unsafe fn slab8_avx(r: &NodeRay, n: &Bvh8Node, t0: f32, t1: f32) -> ([f32; 8], u
     let tf = _mm256_min_ps(_mm256_min_ps(dist(far[0], 0), dist(far[1], 1)), dist(far[2], 2));
     let tf = _mm256_min_ps(_mm256_mul_ps(tf, _mm256_set1_ps(SLAB_GROWTH)), _mm256_set1_ps(t1));
     let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u32;
-    let mut out = [0.0f32; 8];
-    // SAFETY: `out` holds eight f32, and `storeu` needs no alignment.
-    unsafe { _mm256_storeu_ps(out.as_mut_ptr(), tn) };
-    (out, mask)
+    // A value cast (no store here): the caller's one copy in memory is the only one.
+    (bytemuck::cast::<__m256, [f32; 8]>(tn), mask)
 }
 
 /// The bits of eight lanes' outcomes (bit `k` for lane `k`, from bytes of 0 or 1).

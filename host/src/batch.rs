@@ -2,11 +2,12 @@
 //! chunks (the result does not depend on the thread count).
 
 use anyhow::{bail, Result};
+use std::mem::MaybeUninit;
+
 use rayon::prelude::*;
 use raypipe_core::{Intersector, NoProbe, Ray, RayCounters, SceneView, Vec3};
 
 use crate::huge_pages;
-use crate::isa::with_avx2;
 use crate::npy::{Array2, HitRecord};
 use crate::prefetch::prefetch;
 use crate::render::in_pool;
@@ -69,24 +70,20 @@ fn record(hit: Option<raypipe_core::Hit>) -> HitRecord {
     }
 }
 
-/// Traces `rays` one by one into `out`, with the CPU's widest SIMD instructions.
-fn trace_singles<I: Intersector>(scene: &SceneView<'_>, out: &mut [HitRecord], rays: &[Ray]) {
-    with_avx2(
-        #[inline(always)]
-        || {
-            let n = out.len().min(rays.len());
-            let ray = |i: usize| {
-                prefetch(rays.get(i + SINGLE_PREFETCH_AHEAD));
-                rays.get(i)
-            };
-            let mut hit = |i: usize, _: Option<&Ray>, h| {
-                if let Some(o) = out.get_mut(i) {
-                    *o = record(h);
-                }
-            };
-            trace_each::<I, _, _>(scene, n, ray, &mut NoProbe, &mut RayCounters::default(), &mut hit);
-        },
-    )
+/// Traces `rays` one by one into `out`, writing every record of `out` up to the length
+/// of the shorter of the two.
+fn trace_singles<I: Intersector>(scene: &SceneView<'_>, out: &mut [MaybeUninit<HitRecord>], rays: &[Ray]) {
+    let n = out.len().min(rays.len());
+    let ray = |i: usize| {
+        prefetch(rays.get(i + SINGLE_PREFETCH_AHEAD));
+        rays.get(i)
+    };
+    let hit = |i: usize, _: Option<&Ray>, h| {
+        if let Some(o) = out.get_mut(i) {
+            o.write(record(h));
+        }
+    };
+    trace_each::<I, _, _>(scene, n, ray, &mut NoProbe, &mut RayCounters::default(), hit);
 }
 
 /// Chunks of `CHUNK` rays per task; with `N > 1`, runs of `N` consecutive rays are traced
@@ -98,10 +95,13 @@ fn trace_with<I: Intersector, const N: usize>(
 ) -> Result<Vec<HitRecord>> {
     crate::isa::report_cpu();
     // Each chunk writes its own slice of one preallocated output: no per-chunk vectors
-    // to gather and copy afterwards.
-    let mut out = huge_pages::filled_vec(rays.len(), record(None));
+    // to gather and copy afterwards. The output is not filled beforehand: that pass
+    // wrote all 16 bytes per ray once more (to memory, for large batches) before the
+    // trace wrote them again.
+    let n = rays.len();
+    let mut out = huge_pages::empty_vec::<HitRecord>(n);
     in_pool(threads, || {
-        out.par_chunks_mut(CHUNK).zip(rays.par_chunks(CHUNK)).for_each(|(out, chunk)| {
+        out.spare_capacity_mut()[..n].par_chunks_mut(CHUNK).zip(rays.par_chunks(CHUNK)).for_each(|(out, chunk)| {
             if N == 1 {
                 trace_singles::<I>(scene, out, chunk);
             } else {
@@ -113,11 +113,16 @@ fn trace_with<I: Intersector, const N: usize>(
                     packet.fill(group);
                     trace_packet::<I, _, N>(scene, &packet, &mut hits, &mut NoProbe, &mut pc);
                     for (o, h) in out.iter_mut().zip(&hits) {
-                        *o = record(*h);
+                        o.write(record(*h));
                     }
                 }
             }
         })
     })?;
+    // SAFETY: the capacity is at least `n`, and each of the first `n` records has been
+    // written: the output's chunks pair with the rays' chunks of the same lengths; a
+    // single-ray chunk hands every index below its length to `hit`, and a packet's
+    // records zip with its `N` hits, so every record of a run of at most `N` is written.
+    unsafe { out.set_len(n) };
     Ok(out)
 }

@@ -6,7 +6,6 @@ use raypipe_core::camera::EyeRays;
 use raypipe_core::packet::{PacketCounters, RayPacket};
 use raypipe_core::{Hit, Intersector, NoProbe, Ray, RayCounters, SceneView, Vec3};
 
-use crate::isa::with_avx2;
 use crate::tracer::{has_packet_kernel, trace_each, trace_packet};
 
 /// How rays are grouped.
@@ -99,10 +98,7 @@ pub fn trace_tile<I: Intersector>(
 ) {
     crate::isa::report_cpu();
     match size.usable_for(scene) {
-        PacketSize::Single => with_avx2(
-            #[inline(always)]
-            || singles::<I>(scene, eye, bounds, tile, counters, f),
-        ),
+        PacketSize::Single => singles::<I>(scene, eye, bounds, tile, counters, f),
         PacketSize::P4 => blocks::<I, 4>(scene, eye, bounds, tile, 2, packet_counters, f),
         PacketSize::P16 => blocks::<I, 16>(scene, eye, bounds, tile, 4, packet_counters, f),
         PacketSize::P64 => blocks::<I, 64>(scene, eye, bounds, tile, 8, packet_counters, f),

@@ -3,6 +3,8 @@
 
 use std::borrow::Borrow;
 
+use crate::isa::with_avx2;
+
 use raypipe_core::bvh::trace_bvh;
 use raypipe_core::bvh4::trace_bvh4;
 use raypipe_core::bvh4_packet::trace_bvh4_packet;
@@ -69,7 +71,8 @@ pub fn trace<I: Intersector, P: MemoryProbe>(
 
 /// Traces the rays `ray(i)` for `i` in `0..n` (`None`: no ray, hence no hit) and hands
 /// each ray and its closest hit to `hit(i, …)`, choosing the structure's kernel once for
-/// the whole run rather than per ray. Besides the dispatch saved, each wide BVH gets its
+/// the whole run rather than per ray, with the CPU's widest SIMD instructions
+/// ([`with_avx2`]). Besides the dispatch saved, each wide BVH gets its
 /// own loop, in which the kernel's result goes straight to `hit`: behind the per-ray
 /// dispatch, the hit record was put together in a stack slot by stores of mixed widths
 /// and read back by a wider load, which the CPU could not forward (11% of the time of
@@ -85,17 +88,24 @@ pub fn trace_each<I: Intersector, P: MemoryProbe, R: Borrow<Ray>>(
 ) {
     // `R` is `&Ray` where the rays are in memory already: a copy of the 32-byte record,
     // stored as overlapping 16-byte halves and read back, stalled the next ray's start.
+    // Each structure's loop is compiled on its own (its own `with_avx2` function), so
+    // that a change to one walk does not reshuffle the registers of another.
     macro_rules! each_ray {
         ($kernel:expr) => {
-            for i in 0..n {
-                match ray(i) {
-                    Some(r) => {
-                        let h = $kernel(r.borrow());
-                        hit(i, Some(r), h)
+            with_avx2(
+                #[inline(always)]
+                || {
+                    for i in 0..n {
+                        match ray(i) {
+                            Some(r) => {
+                                let h = $kernel(r.borrow());
+                                hit(i, Some(r), h)
+                            }
+                            None => hit(i, None, None),
+                        }
                     }
-                    None => hit(i, None, None),
-                }
-            }
+                },
+            )
         };
     }
     if let Some(bvh) = scene.bvh8() {
