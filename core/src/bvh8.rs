@@ -40,14 +40,14 @@ fn min(a: f32, b: f32) -> f32 {
 /// same arithmetic as [`crate::bvh4::slab4`], eight lanes wide.
 #[inline(always)]
 pub fn slab8(r: &NodeRay, n: &Bvh8Node, t0: f32, t1: f32) -> ([f32; 8], u32) {
-    if r.rb.zero_axes != 0 {
-        return slab8_exact(&r.rb, n, t0, t1);
-    }
     #[cfg(target_arch = "x86_64")]
-    if crate::cpu::has_avx() {
-        // SAFETY: the host has reported AVX (`cpu::assume_avx`).
+    if r.avx8 {
+        // SAFETY: `avx8` is set only where the host has reported AVX (`cpu::assume_avx`).
         #[allow(unsafe_code)]
         return unsafe { slab8_avx(r, n, t0, t1) };
+    }
+    if r.rb.zero_axes != 0 {
+        return slab8_exact(&r.rb, n, t0, t1);
     }
     // The node's planes as rows: min x, y, z, then max x, y, z (then children, counts).
     let rows: &[[f32; 8]; 8] = bytemuck::cast_ref(n);
@@ -83,15 +83,17 @@ pub fn slab8(r: &NodeRay, n: &Bvh8Node, t0: f32, t1: f32) -> ([f32; 8], u32) {
 #[inline]
 unsafe fn slab8_avx(r: &NodeRay, n: &Bvh8Node, t0: f32, t1: f32) -> ([f32; 8], u32) {
     use core::arch::x86_64::*;
-    // The node's planes as rows of eight lanes: min x, y, z, then max x, y, z.
-    let rows: &[[f32; 8]; 8] = bytemuck::cast_ref(n);
-    // SAFETY: a row is eight f32, and `loadu` needs no alignment.
-    let row = |k: usize| unsafe { _mm256_loadu_ps(rows[k & 7].as_ptr()) };
+    // The node's planes as rows of eight lanes: min x, y, z, then max x, y, z, at byte
+    // offsets 0, 32, … 160 (`NodeRay::near8`, `far8`).
+    let bytes: &[u8; 256] = bytemuck::cast_ref(n);
+    // SAFETY: `off & 0xE0` is at most 224, so the 32 bytes read lie inside the node's
+    // 256; `loadu` needs no alignment.
+    let row = |off: u32| unsafe { _mm256_loadu_ps(bytes.as_ptr().add(off as usize & 0xE0).cast::<f32>()) };
     let (o, inv) = (r.rb.origin, r.rb.inv);
     let o = [_mm256_set1_ps(o.x), _mm256_set1_ps(o.y), _mm256_set1_ps(o.z)];
     let inv = [_mm256_set1_ps(inv.x), _mm256_set1_ps(inv.y), _mm256_set1_ps(inv.z)];
-    let dist = |k: usize, a: usize| _mm256_mul_ps(_mm256_sub_ps(row(k), o[a]), inv[a]);
-    let (near, far) = (r.near, r.far);
+    let dist = |off: u32, a: usize| _mm256_mul_ps(_mm256_sub_ps(row(off), o[a]), inv[a]);
+    let (near, far) = (r.near8, r.far8);
     let tn = _mm256_max_ps(
         _mm256_max_ps(dist(near[0], 0), dist(near[1], 1)),
         _mm256_max_ps(dist(near[2], 2), _mm256_set1_ps(t0)),
