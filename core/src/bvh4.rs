@@ -28,8 +28,8 @@ pub fn slab4(r: &NodeRay, n: &Bvh4Node, t0: f32, t1: f32) -> (Vec4, u32) {
     let rows: &[[f32; 4]; 8] = bytemuck::cast_ref(n);
     // Origin and reciprocal direction splatted per axis (loop-invariant in a walk).
     let (o, inv) = (r.rb.origin.to_array().map(Vec4::splat), r.rb.inv.to_array().map(Vec4::splat));
-    let near = |a: usize| (Vec4::from_array(rows[r.near[a] & 7]) - o[a]) * inv[a];
-    let far = |a: usize| (Vec4::from_array(rows[r.far[a] & 7]) - o[a]) * inv[a];
+    let near = |a: usize| (Vec4::from_array(rows[r.rows.near[a] as usize & 7]) - o[a]) * inv[a];
+    let far = |a: usize| (Vec4::from_array(rows[r.rows.far[a] as usize & 7]) - o[a]) * inv[a];
     // The product is monotone in the plane, so these are the min and max of the two
     // planes' distances for a valid box; an inverted (empty) slot gets near > far on
     // every axis and fails the comparison.
@@ -82,9 +82,10 @@ impl WideSlab for Bvh4Node {
     type Dist = [f32; 4];
 
     #[inline(always)]
-    fn slab(&self, r: &NodeRay, t0: f32, t1: f32) -> ([f32; 4], u32) {
+    fn slab(&self, r: &NodeRay, t0: f32, t1: f32, tn: &mut [f32; 4]) -> u32 {
         let (t, mask) = slab4(r, self, t0, t1);
-        (t.to_array(), mask)
+        *tn = t.to_array();
+        mask
     }
 }
 

@@ -40,21 +40,33 @@ fn min(a: f32, b: f32) -> f32 {
 /// same arithmetic as [`crate::bvh4::slab4`], eight lanes wide.
 #[inline(always)]
 pub fn slab8(r: &NodeRay, n: &Bvh8Node, t0: f32, t1: f32) -> ([f32; 8], u32) {
+    let mut tn = [0.0f32; 8];
+    let mask = slab8_into(r, n, t0, t1, &mut tn);
+    (tn, mask)
+}
+
+/// [`slab8`] writing the entry distances to `tn`: each form of the test stores them
+/// there once (returned by value, they went through a stack slot, then were copied).
+#[inline(always)]
+pub fn slab8_into(r: &NodeRay, n: &Bvh8Node, t0: f32, t1: f32, tn: &mut [f32; 8]) -> u32 {
     #[cfg(target_arch = "x86_64")]
     if r.avx8 {
         // SAFETY: `avx8` is set only where the host has reported AVX (`cpu::assume_avx`).
         #[allow(unsafe_code)]
-        return unsafe { slab8_avx(r, n, t0, t1) };
+        return unsafe { slab8_avx(r, n, t0, t1, tn) };
     }
     if r.rb.zero_axes != 0 {
-        return slab8_exact(&r.rb, n, t0, t1);
+        let (t, mask) = slab8_exact(&r.rb, n, t0, t1);
+        *tn = t;
+        return mask;
     }
     // The node's planes as rows: min x, y, z, then max x, y, z (then children, counts).
     let rows: &[[f32; 8]; 8] = bytemuck::cast_ref(n);
     let (o, inv) = (r.rb.origin.to_array(), r.rb.inv.to_array());
-    let (nx, ny, nz) = (&rows[r.near[0] & 7], &rows[r.near[1] & 7], &rows[r.near[2] & 7]);
-    let (fx, fy, fz) = (&rows[r.far[0] & 7], &rows[r.far[1] & 7], &rows[r.far[2] & 7]);
-    let mut tn = [0.0f32; 8];
+    let (nx, ny, nz) =
+        (&rows[r.rows.near[0] as usize & 7], &rows[r.rows.near[1] as usize & 7], &rows[r.rows.near[2] as usize & 7]);
+    let (fx, fy, fz) =
+        (&rows[r.rows.far[0] as usize & 7], &rows[r.rows.far[1] as usize & 7], &rows[r.rows.far[2] as usize & 7]);
     let mut hit = [0u8; 8];
     for k in 0..8 {
         // Monotone in the plane: these are the min and max of the two planes' distances
@@ -65,7 +77,7 @@ pub fn slab8(r: &NodeRay, n: &Bvh8Node, t0: f32, t1: f32) -> ([f32; 8], u32) {
         tn[k] = near;
         hit[k] = (near <= far) as u8;
     }
-    (tn, mask8(hit))
+    mask8(hit)
 }
 
 /// [`slab8`] in AVX intrinsics, lane for lane the same operations (`vmaxps`/`vminps`
@@ -81,7 +93,7 @@ pub fn slab8(r: &NodeRay, n: &Bvh8Node, t0: f32, t1: f32) -> ([f32; 8], u32) {
 #[allow(unsafe_code)]
 #[target_feature(enable = "avx")]
 #[inline]
-unsafe fn slab8_avx(r: &NodeRay, n: &Bvh8Node, t0: f32, t1: f32) -> ([f32; 8], u32) {
+unsafe fn slab8_avx(r: &NodeRay, n: &Bvh8Node, t0: f32, t1: f32, out: &mut [f32; 8]) -> u32 {
     use core::arch::x86_64::*;
     // The node's planes as rows of eight lanes: min x, y, z, then max x, y, z, at byte
     // offsets 0, 32, … 160 (`NodeRay::near8`, `far8`).
@@ -93,7 +105,7 @@ unsafe fn slab8_avx(r: &NodeRay, n: &Bvh8Node, t0: f32, t1: f32) -> ([f32; 8], u
     let o = [_mm256_set1_ps(o.x), _mm256_set1_ps(o.y), _mm256_set1_ps(o.z)];
     let inv = [_mm256_set1_ps(inv.x), _mm256_set1_ps(inv.y), _mm256_set1_ps(inv.z)];
     let dist = |off: u32, a: usize| _mm256_mul_ps(_mm256_sub_ps(row(off), o[a]), inv[a]);
-    let (near, far) = (r.near8, r.far8);
+    let (near, far) = (r.rows.near8, r.rows.far8);
     let tn = _mm256_max_ps(
         _mm256_max_ps(dist(near[0], 0), dist(near[1], 1)),
         _mm256_max_ps(dist(near[2], 2), _mm256_set1_ps(t0)),
@@ -101,8 +113,9 @@ unsafe fn slab8_avx(r: &NodeRay, n: &Bvh8Node, t0: f32, t1: f32) -> ([f32; 8], u
     let tf = _mm256_min_ps(_mm256_min_ps(dist(far[0], 0), dist(far[1], 1)), dist(far[2], 2));
     let tf = _mm256_min_ps(_mm256_mul_ps(tf, _mm256_set1_ps(SLAB_GROWTH)), _mm256_set1_ps(t1));
     let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u32;
-    // A value cast (no store here): the caller's one copy in memory is the only one.
-    (bytemuck::cast::<__m256, [f32; 8]>(tn), mask)
+    // SAFETY: `out` holds eight f32, and `storeu` needs no alignment.
+    unsafe { _mm256_storeu_ps(out.as_mut_ptr(), tn) };
+    mask
 }
 
 /// The bits of eight lanes' outcomes (bit `k` for lane `k`, from bytes of 0 or 1).
@@ -145,8 +158,8 @@ impl WideSlab for Bvh8Node {
     type Dist = [f32; 8];
 
     #[inline(always)]
-    fn slab(&self, r: &NodeRay, t0: f32, t1: f32) -> ([f32; 8], u32) {
-        slab8(r, self, t0, t1)
+    fn slab(&self, r: &NodeRay, t0: f32, t1: f32, tn: &mut [f32; 8]) -> u32 {
+        slab8_into(r, self, t0, t1, tn)
     }
 }
 
@@ -229,11 +242,11 @@ mod tests {
                 }
                 // (`slab8` sends rays with a zero direction component to the exact test.)
                 let (t8, m8) = if avx && r.rb.zero_axes == 0 {
+                    let mut t8 = [0.0; 8];
                     // SAFETY: this CPU has AVX (checked above).
                     #[allow(unsafe_code)]
-                    unsafe {
-                        slab8_avx(&r, &wide, t0, t1)
-                    }
+                    let m8 = unsafe { slab8_avx(&r, &wide, t0, t1, &mut t8) };
+                    (t8, m8)
                 } else {
                     slab8(&r, &wide, t0, t1)
                 };

@@ -41,21 +41,50 @@ type Stack<const C: usize> = heapless::Vec<(u32, u32, f32), C>;
 /// index arithmetic and the two checks took 11 of about 90 instructions (Sponza).
 #[derive(Clone, Copy, Debug)]
 pub struct NodeRay {
-    /// Per axis, the node row (min x, y, z, then max x, y, z) of the near plane.
-    pub(crate) near: [usize; 3],
-    /// Per axis, the node row of the far plane.
-    pub(crate) far: [usize; 3],
+    /// Which rows of a node hold each axis' near and far planes.
+    pub(crate) rows: OctantRows,
     /// The scalar slab constants (and the zero-direction axes).
     pub(crate) rb: RayBox,
-    /// The near and far rows' byte offsets in an 8-wide node (32 bytes a row), for the
-    /// AVX node test: read as they are at each node, with no index arithmetic.
-    pub(crate) near8: [u32; 3],
-    /// See `near8`.
-    pub(crate) far8: [u32; 3],
     /// The 8-wide node test may take its AVX form: the CPU has AVX and no direction
     /// component is zero. Decided once per ray rather than at each node.
     pub(crate) avx8: bool,
 }
+
+/// For one octant of directions, the node rows (min x, y, z, then max x, y, z) of each
+/// axis' near and far planes, as indices and as byte offsets in an 8-wide node (32 bytes
+/// a row, read as they are by the AVX test, with no index arithmetic per node).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct OctantRows {
+    /// Per axis, the row of the near plane.
+    pub(crate) near: [u32; 3],
+    /// Per axis, the row of the far plane.
+    pub(crate) far: [u32; 3],
+    /// `near` in bytes in an 8-wide node.
+    pub(crate) near8: [u32; 3],
+    /// `far` in bytes in an 8-wide node.
+    pub(crate) far8: [u32; 3],
+}
+
+/// [`OctantRows`] of the eight octants (bit `a` of the index: the direction is negative
+/// on axis `a`), so that a ray copies its row rather than computing it (that took 43
+/// instructions per ray, a tenth of a bunny ray's).
+const OCTANTS: [OctantRows; 8] = {
+    let mut table = [OctantRows { near: [0; 3], far: [0; 3], near8: [0; 3], far8: [0; 3] }; 8];
+    let mut octant = 0;
+    while octant < 8 {
+        let mut axis = 0;
+        while axis < 3 {
+            let neg = (octant >> axis) & 1;
+            let (near, far) = (axis + 3 * neg, axis + 3 * (1 - neg));
+            let t = &mut table[octant as usize];
+            (t.near[axis as usize], t.far[axis as usize]) = (near, far);
+            (t.near8[axis as usize], t.far8[axis as usize]) = (32 * near, 32 * far);
+            axis += 1;
+        }
+        octant += 1;
+    }
+    table
+};
 
 impl NodeRay {
     /// Precomputes the slab constants and the octant.
@@ -63,11 +92,8 @@ impl NodeRay {
     pub fn new(ray: &Ray) -> NodeRay {
         let rb = RayBox::new(ray);
         let neg = rb.inv.cmplt(Vec3A::ZERO).bitmask() as usize;
-        let (x, y, z) = (3 * (neg & 1), 3 * ((neg >> 1) & 1), 3 * ((neg >> 2) & 1));
-        let (near, far) = ([x, 1 + y, 2 + z], [3 - x, 4 - y, 5 - z]);
-        let offset = |rows: [usize; 3]| rows.map(|k| 32 * k as u32);
         let avx8 = crate::cpu::has_avx() && rb.zero_axes == 0;
-        NodeRay { near, far, rb, near8: offset(near), far8: offset(far), avx8 }
+        NodeRay { rows: OCTANTS[neg & 7], rb, avx8 }
     }
 }
 
@@ -76,9 +102,9 @@ impl NodeRay {
 /// never reject a box the ray touches (see [`crate::ray_box`]).
 pub trait WideSlab: WideNode {
     /// Entry distances, one per slot.
-    type Dist: Copy + Index<usize, Output = f32>;
-    /// The node test.
-    fn slab(&self, r: &NodeRay, t0: f32, t1: f32) -> (Self::Dist, u32);
+    type Dist: Copy + Default + Index<usize, Output = f32>;
+    /// The node test: the entry distances into `tn`, the mask returned.
+    fn slab(&self, r: &NodeRay, t0: f32, t1: f32, tn: &mut Self::Dist) -> u32;
 }
 
 /// The traversal registers of one ray in a wide BVH: the entry to visit next, a
@@ -128,7 +154,8 @@ impl<N: WideSlab, const C: usize> WideBvhTraversal<N, C> {
             return TreeEvent::Leaf { first: index, count };
         }
         let node = bvh.node(index, probe);
-        let (tn, mask) = node.slab(&self.ray, self.t_min, self.t_end);
+        let mut tn = N::Dist::default();
+        let mask = node.slab(&self.ray, self.t_min, self.t_end, &mut tn);
         if mask == 0 {
             self.pop();
             return TreeEvent::Inner;
@@ -248,6 +275,7 @@ pub fn trace_wide_bvh<N: WideSlab, const C: usize, I: Intersector, P: MemoryProb
     let mut best = None;
     let mut t_end = ray.t_max;
     let mut stack = Stack::<C>::new();
+    let mut tn = N::Dist::default();
     let (mut index, mut count) = (0u32, 0u32);
     let (mut nodes, mut leaves, mut tests) = (0u32, 0u32, 0u32);
     loop {
@@ -262,7 +290,7 @@ pub fn trace_wide_bvh<N: WideSlab, const C: usize, I: Intersector, P: MemoryProb
             // (The 4-wide walk took 11% more instructions that way, so it keeps the
             // hoisted splats.)
             let nr = if N::WIDTH == 8 { core::hint::black_box(&r) } else { &r };
-            let (tn, mask) = node.slab(nr, ray.t_min, t_end);
+            let mask = node.slab(nr, ray.t_min, t_end, &mut tn);
             if mask != 0 {
                 (index, count) = descend(node, &tn, mask, &mut stack);
                 continue;
