@@ -5,7 +5,11 @@ use glam::{Vec3, Vec3A};
 /// A ray `origin + t * dir` restricted to `t_min <= t <= t_max`.
 ///
 /// The direction need not be normalised; `t` is measured in units of `dir`.
+///
+/// `repr(C)`: eight `f32` in the order origin, direction, `t_min`, `t_max`, which a
+/// packet's AVX fill loads as one 32-byte row.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
 pub struct Ray {
     /// Origin.
     pub origin: Vec3,
@@ -16,6 +20,8 @@ pub struct Ray {
     /// Largest accepted hit distance.
     pub t_max: f32,
 }
+
+const _: () = assert!(core::mem::size_of::<Ray>() == 32 && core::mem::align_of::<Ray>() == 4);
 
 impl Ray {
     /// A ray over `[0, +inf]`.
