@@ -282,15 +282,7 @@ pub fn trace_wide_bvh<N: WideSlab, const C: usize, I: Intersector, P: MemoryProb
         if count == 0 {
             nodes += 1;
             let node = bvh.node(index, probe);
-            // The 8-wide test splats the ray's origin and reciprocal direction into AVX
-            // registers; hoisted out of the loop by the compiler, the splats were spilled
-            // to the stack and reloaded at every node, and each ray's start stalled on the
-            // spill (rays that miss the bunny cost twice the 4-wide walk's). Behind
-            // `black_box` they are broadcast from the ray record at each node instead.
-            // (The 4-wide walk took 11% more instructions that way, so it keeps the
-            // hoisted splats.)
-            let nr = if N::WIDTH == 8 { core::hint::black_box(&r) } else { &r };
-            let mask = node.slab(nr, ray.t_min, t_end, &mut tn);
+            let mask = node.slab(&r, ray.t_min, t_end, &mut tn);
             if mask != 0 {
                 (index, count) = descend(node, &tn, mask, &mut stack);
                 continue;
