@@ -635,10 +635,7 @@ mod tests {
     /// The greedy collapse (Wald et al. 2008): open the largest inner child until the
     /// node is full. The reference the SAH collapse must never lose to.
     fn greedy<N: WideNode>(bvh: &BuiltBvh) -> BuiltWideBvh<N> {
-        let area = |n: &BvhNode| {
-            let e = [0, 1, 2].map(|a| n.max[a] - n.min[a]);
-            e[0] * e[1] + e[1] * e[2] + e[2] * e[0]
-        };
+        let area = |n: &BvhNode| Bounds::of_box(n.min, n.max).area();
         let mut out = BuiltWideBvh { nodes: vec![*N::empty()], prims: bvh.prims.clone(), depth: 1 };
         let mut todo = vec![(0usize, 0usize)];
         while let Some((src, target)) = todo.pop() {
