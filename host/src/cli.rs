@@ -963,15 +963,18 @@ fn cmd_trace(a: TraceArgs) -> Result<()> {
         bail!("--runs must be at least 1");
     }
     let mut times = Vec::new();
+    // One output for all runs, as a caller tracing batch after batch keeps one: only the
+    // first run pays for touching fresh pages.
     let mut hits = Vec::new();
     for _ in 0..a.runs {
         let start = Instant::now();
-        hits = crate::batch::trace_batch(
+        crate::batch::trace_batch_into(
             &view,
             &rays,
             IntersectorKind::resolve(a.run.intersector, &view),
             a.packet,
             a.run.threads,
+            &mut hits,
         )?;
         times.push(start.elapsed().as_secs_f64());
     }

@@ -323,21 +323,32 @@ fn packet_matches_single<const N: usize>(view: &SceneView<'_>, rays: &[Ray]) -> 
 }
 
 /// The host's ray-batch driver (`raypipe trace`), whose single-ray loop runs the AVX2
-/// build of the kernels where the CPU has it, returns the bits of [`trace`] ray by ray.
+/// build of the kernels where the CPU has it, returns the bits of [`trace`] ray by ray,
+/// into a fresh output and into one reused across batches (longer, and holding other
+/// records, before each).
 fn batch_matches_single(view: &SceneView<'_>, rays: &[Ray]) -> Result<(), TestCaseError> {
-    use raypipe::batch::trace_batch;
+    use raypipe::batch::{trace_batch, trace_batch_into};
+    use raypipe::npy::HitRecord;
     use raypipe::packets::PacketSize;
     use raypipe::tracer::IntersectorKind;
+    let stale = HitRecord { t: 1.0, u: 0.25, v: 0.5, prim: 7 };
+    let mut reused = vec![stale; rays.len() + 3];
     for packet in [PacketSize::Single, PacketSize::P64] {
-        let hits = trace_batch(view, rays, IntersectorKind::Watertight, packet, Some(1)).unwrap();
-        for (r, h) in rays.iter().zip(&hits) {
+        let fresh = trace_batch(view, rays, IntersectorKind::Watertight, packet, Some(1)).unwrap();
+        trace_batch_into(view, rays, IntersectorKind::Watertight, packet, Some(1), &mut reused).unwrap();
+        prop_assert_eq!(fresh.len(), rays.len());
+        prop_assert_eq!(reused.len(), rays.len());
+        for ((r, h), h2) in rays.iter().zip(&fresh).zip(&reused) {
             let single = trace::<Watertight, _>(view, r, &mut NoProbe, &mut RayCounters::default());
             let want = single.map_or((f32::INFINITY.to_bits(), 0, 0, -1), |s| {
                 (s.t.to_bits(), s.u.to_bits(), s.v.to_bits(), s.prim as i32)
             });
             let got = (h.t.to_bits(), h.u.to_bits(), h.v.to_bits(), h.prim);
             prop_assert_eq!(got, want, "{:?} batch for {:?}", packet, r);
+            let got = (h2.t.to_bits(), h2.u.to_bits(), h2.v.to_bits(), h2.prim);
+            prop_assert_eq!(got, want, "{:?} batch into a reused output for {:?}", packet, r);
         }
+        reused.push(stale);
     }
     Ok(())
 }
