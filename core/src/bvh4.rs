@@ -6,7 +6,6 @@
 
 use glam::{BVec4A, Vec4};
 
-use crate::aabb::SLAB_GROWTH;
 use crate::counters::RayCounters;
 use crate::hit::Hit;
 use crate::image::{Bvh4Node, Bvh4View, SceneView};
@@ -28,13 +27,14 @@ pub fn slab4(r: &NodeRay, n: &Bvh4Node, t0: f32, t1: f32) -> (Vec4, u32) {
     let rows: &[[f32; 4]; 8] = bytemuck::cast_ref(n);
     // Origin and reciprocal direction splatted per axis (loop-invariant in a walk).
     let (o, inv) = (r.rb.origin.to_array().map(Vec4::splat), r.rb.inv.to_array().map(Vec4::splat));
+    let inv_far = r.rb.inv_far.to_array().map(Vec4::splat);
     let near = |a: usize| (Vec4::from_array(rows[r.rows.near[a] as usize & 7]) - o[a]) * inv[a];
-    let far = |a: usize| (Vec4::from_array(rows[r.rows.far[a] as usize & 7]) - o[a]) * inv[a];
+    let far = |a: usize| (Vec4::from_array(rows[r.rows.far[a] as usize & 7]) - o[a]) * inv_far[a];
     // The product is monotone in the plane, so these are the min and max of the two
     // planes' distances for a valid box; an inverted (empty) slot gets near > far on
     // every axis and fails the comparison.
     let tn = near(0).max(near(1)).max(near(2).max(Vec4::splat(t0)));
-    let tf = (far(0).min(far(1)).min(far(2)) * SLAB_GROWTH).min(Vec4::splat(t1));
+    let tf = far(0).min(far(1)).min(far(2).min(Vec4::splat(t1)));
     (tn, tn.cmple(tf).bitmask())
 }
 
@@ -42,18 +42,17 @@ pub fn slab4(r: &NodeRay, n: &Bvh4Node, t0: f32, t1: f32) -> (Vec4, u32) {
 /// tested as "origin inside the slab", see [`RayBox`]).
 #[inline(always)]
 pub fn slab4_exact(rb: &RayBox, n: &Bvh4Node, t0: f32, t1: f32) -> (Vec4, u32) {
-    let (o, inv) = (rb.origin, rb.inv);
-    let ax = (Vec4::from_array(n.min_x) - o.x) * inv.x;
-    let bx = (Vec4::from_array(n.max_x) - o.x) * inv.x;
-    let ay = (Vec4::from_array(n.min_y) - o.y) * inv.y;
-    let by = (Vec4::from_array(n.max_y) - o.y) * inv.y;
-    let az = (Vec4::from_array(n.min_z) - o.z) * inv.z;
-    let bz = (Vec4::from_array(n.max_z) - o.z) * inv.z;
+    let (o, inv, inv_far) = (rb.origin, rb.inv, rb.inv_far);
+    // Per axis, the two planes' distances with the plain and with the far reciprocal.
+    let planes = |lo: [f32; 4], hi: [f32; 4], o: f32, inv: f32, inv_far: f32| {
+        let (dl, dh) = (Vec4::from_array(lo) - o, Vec4::from_array(hi) - o);
+        ((dl * inv).min(dh * inv), (dl * inv_far).max(dh * inv_far))
+    };
     // For a valid box the near plane's distance is the smaller; an empty slot's inverted
     // box becomes an interval too, so empty slots are masked by the sign test below.
-    let (mut nx, mut fx) = (ax.min(bx), ax.max(bx));
-    let (mut ny, mut fy) = (ay.min(by), ay.max(by));
-    let (mut nz, mut fz) = (az.min(bz), az.max(bz));
+    let (mut nx, mut fx) = planes(n.min_x, n.max_x, o.x, inv.x, inv_far.x);
+    let (mut ny, mut fy) = planes(n.min_y, n.max_y, o.y, inv.y, inv_far.y);
+    let (mut nz, mut fz) = planes(n.min_z, n.max_z, o.z, inv.z, inv_far.z);
     let mut inside = BVec4A::splat(true);
     if rb.zero_axes != 0 {
         // A direction component of zero: inside the slab or never (see `RayBox`).
@@ -72,7 +71,7 @@ pub fn slab4_exact(rb: &RayBox, n: &Bvh4Node, t0: f32, t1: f32) -> (Vec4, u32) {
         }
     }
     let tn = nx.max(ny).max(nz.max(Vec4::splat(t0)));
-    let tf = (fx.min(fy).min(fz) * SLAB_GROWTH).min(Vec4::splat(t1));
+    let tf = fx.min(fy).min(fz.min(Vec4::splat(t1)));
     // Inverted (empty) slots: min > max on x.
     let real = Vec4::from_array(n.min_x).cmple(Vec4::from_array(n.max_x));
     (tn, (tn.cmple(tf) & inside & real).bitmask())

@@ -62,7 +62,7 @@ pub fn slab8_into(r: &NodeRay, n: &Bvh8Node, t0: f32, t1: f32, tn: &mut [f32; 8]
     }
     // The node's planes as rows: min x, y, z, then max x, y, z (then children, counts).
     let rows: &[[f32; 8]; 8] = bytemuck::cast_ref(n);
-    let (o, inv) = (r.rb.origin.to_array(), r.rb.inv.to_array());
+    let (o, inv, inv_far) = (r.rb.origin.to_array(), r.rb.inv.to_array(), r.rb.inv_far.to_array());
     let (nx, ny, nz) =
         (&rows[r.rows.near[0] as usize & 7], &rows[r.rows.near[1] as usize & 7], &rows[r.rows.near[2] as usize & 7]);
     let (fx, fy, fz) =
@@ -72,8 +72,8 @@ pub fn slab8_into(r: &NodeRay, n: &Bvh8Node, t0: f32, t1: f32, tn: &mut [f32; 8]
         // Monotone in the plane: these are the min and max of the two planes' distances
         // for a valid box; an inverted (empty) slot gets near > far and fails.
         let near = max(max((nx[k] - o[0]) * inv[0], (ny[k] - o[1]) * inv[1]), max((nz[k] - o[2]) * inv[2], t0));
-        let far = min(min((fx[k] - o[0]) * inv[0], (fy[k] - o[1]) * inv[1]), (fz[k] - o[2]) * inv[2]);
-        let far = min(far * SLAB_GROWTH, t1);
+        let far =
+            min(min((fx[k] - o[0]) * inv_far[0], (fy[k] - o[1]) * inv_far[1]), min((fz[k] - o[2]) * inv_far[2], t1));
         tn[k] = near;
         hit[k] = (near <= far) as u8;
     }
@@ -101,17 +101,22 @@ unsafe fn slab8_avx(r: &NodeRay, n: &Bvh8Node, t0: f32, t1: f32, out: &mut [f32;
     // SAFETY: `off & 0xE0` is at most 224, so the 32 bytes read lie inside the node's
     // 256; `loadu` needs no alignment.
     let row = |off: u32| unsafe { _mm256_loadu_ps(bytes.as_ptr().add(off as usize & 0xE0).cast::<f32>()) };
-    let (o, inv) = (r.rb.origin, r.rb.inv);
-    let o = [_mm256_set1_ps(o.x), _mm256_set1_ps(o.y), _mm256_set1_ps(o.z)];
-    let inv = [_mm256_set1_ps(inv.x), _mm256_set1_ps(inv.y), _mm256_set1_ps(inv.z)];
-    let dist = |off: u32, a: usize| _mm256_mul_ps(_mm256_sub_ps(row(off), o[a]), inv[a]);
+    let splat = |v: glam::Vec3A| [_mm256_set1_ps(v.x), _mm256_set1_ps(v.y), _mm256_set1_ps(v.z)];
+    let (o, inv) = (splat(r.rb.origin), splat(r.rb.inv));
+    // `inv_far`'s bits, as one product per axis from the splats already loaded (three
+    // more loads per node measured no faster).
+    let growth = _mm256_set1_ps(SLAB_GROWTH);
+    let inv_far = inv.map(|v| _mm256_mul_ps(v, growth));
+    let dist = |off: u32, a: usize, inv: &[__m256; 3]| _mm256_mul_ps(_mm256_sub_ps(row(off), o[a]), inv[a]);
     let (near, far) = (r.rows.near8, r.rows.far8);
     let tn = _mm256_max_ps(
-        _mm256_max_ps(dist(near[0], 0), dist(near[1], 1)),
-        _mm256_max_ps(dist(near[2], 2), _mm256_set1_ps(t0)),
+        _mm256_max_ps(dist(near[0], 0, &inv), dist(near[1], 1, &inv)),
+        _mm256_max_ps(dist(near[2], 2, &inv), _mm256_set1_ps(t0)),
     );
-    let tf = _mm256_min_ps(_mm256_min_ps(dist(far[0], 0), dist(far[1], 1)), dist(far[2], 2));
-    let tf = _mm256_min_ps(_mm256_mul_ps(tf, _mm256_set1_ps(SLAB_GROWTH)), _mm256_set1_ps(t1));
+    let tf = _mm256_min_ps(
+        _mm256_min_ps(dist(far[0], 0, &inv_far), dist(far[1], 1, &inv_far)),
+        _mm256_min_ps(dist(far[2], 2, &inv_far), _mm256_set1_ps(t1)),
+    );
     let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u32;
     // SAFETY: `out` holds eight f32, and `storeu` needs no alignment.
     unsafe { _mm256_storeu_ps(out.as_mut_ptr(), tn) };
@@ -130,7 +135,7 @@ fn mask8(hit: [u8; 8]) -> u32 {
 /// tested as "origin inside the slab", see [`crate::ray_box::RayBox`]).
 #[inline(never)]
 pub fn slab8_exact(r: &RayBox, n: &Bvh8Node, t0: f32, t1: f32) -> ([f32; 8], u32) {
-    let (o, inv, zero) = (r.origin.to_array(), r.inv.to_array(), r.zero_axes);
+    let (o, inv, inv_far, zero) = (r.origin.to_array(), r.inv.to_array(), r.inv_far.to_array(), r.zero_axes);
     let lo = [&n.min_x, &n.min_y, &n.min_z];
     let hi = [&n.max_x, &n.max_y, &n.max_z];
     let mut tn = [0.0f32; 8];
@@ -141,12 +146,12 @@ pub fn slab8_exact(r: &RayBox, n: &Bvh8Node, t0: f32, t1: f32) -> ([f32; 8], u32
             if zero & (1 << a) != 0 {
                 inside &= o[a] >= lo[a][k] && o[a] <= hi[a][k];
             } else {
-                let (p, q) = ((lo[a][k] - o[a]) * inv[a], (hi[a][k] - o[a]) * inv[a]);
-                near = max(min(p, q), near);
-                far = min(max(p, q), far);
+                let (dl, dh) = (lo[a][k] - o[a], hi[a][k] - o[a]);
+                near = max(min(dl * inv[a], dh * inv[a]), near);
+                far = min(max(dl * inv_far[a], dh * inv_far[a]), far);
             }
         }
-        let far = min(far * SLAB_GROWTH, t1);
+        let far = min(far, t1);
         tn[k] = near;
         // Inverted (empty) slots: min > max on x.
         hit[k] = (near <= far && inside && lo[0][k] <= hi[0][k]) as u8;
