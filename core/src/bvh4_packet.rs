@@ -4,7 +4,7 @@
 //! box test and, where the intersector has a four-ray form, for the triangles too.
 
 use crate::bvh4::slab4_exact;
-use glam::{BVec4A, Vec3A, Vec4};
+use glam::{BVec4A, Vec3, Vec3A, Vec4};
 
 use crate::aabb::SLAB_GROWTH;
 use crate::hit::keep_closest;
@@ -13,7 +13,7 @@ use crate::image::{Bvh4Node, Bvh4View, SceneView, MAX_TREE_DEPTH, NULL_INDEX};
 use crate::packet::{Lanes, PacketCounters, PacketHits, RayPacket, MAX_PACKET};
 use crate::probe::MemoryProbe;
 use crate::ray_box::{recip, recip4, RayBox};
-use crate::triangle::{in_range, test_triangle, Intersector};
+use crate::triangle::{in_range, test_triangle, Intersector, SharedTri};
 
 const STACK: usize = 3 * MAX_TREE_DEPTH as usize + 4;
 
@@ -372,7 +372,15 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
             c.active_lanes += enter.count_ones() as u64;
             if enter != 0 {
                 preps.prepare(packet, q, mask, enter);
-                test_leaf::<I, P, N>(scene, bvh, packet, &mut preps, enter, index, count, hits, probe);
+                let shared = match &cull {
+                    Cull::Frustum(f) => f.origin().map(Vec3::from).is_some_and(|o| {
+                        test_leaf_shared::<I, P, N>(scene, bvh, packet, &mut preps, enter, index, count, o, hits, probe)
+                    }),
+                    Cull::Exact(_) => false,
+                };
+                if !shared {
+                    test_leaf::<I, P, N>(scene, bvh, packet, &mut preps, enter, index, count, hits, probe);
+                }
                 c.tri_tests += count as u64 * enter.count_ones() as u64;
                 let mut touched = 0u64;
                 for i in Lanes(enter) {
@@ -550,11 +558,11 @@ impl<I: Intersector, const N: usize> Preps<I, N> {
 
     /// Group `g`'s four-ray constants, if ready and the intersector has them.
     #[inline(always)]
-    fn four(&self, g: usize) -> Option<I::Prepared4> {
+    fn four(&self, g: usize) -> Option<&I::Prepared4> {
         if self.ready & (1 << (g % GROUPS)) == 0 {
             return None;
         }
-        self.four.get(self.four_slot[g % GROUPS] as usize).copied().flatten()
+        self.four.get(self.four_slot[g % GROUPS] as usize).and_then(|p| p.as_ref())
     }
 
     /// Makes the constants of every group with a lane in `enter` ready.
@@ -642,7 +650,7 @@ fn test_leaf<I: Intersector, P: MemoryProbe, const N: usize>(
             let four = preps.four(g);
             match four {
                 Some(rays) if m4.count_ones() >= 2 => {
-                    let r = I::intersect_rays4(&rays, &verts);
+                    let r = I::intersect_rays4(rays, &verts);
                     for k in Lanes(m4 & (r.hit | r.redo) as u64) {
                         let i = (4 * g + k).min(N - 1);
                         let ray = packet.ray(i);
@@ -662,6 +670,97 @@ fn test_leaf<I: Intersector, P: MemoryProbe, const N: usize>(
             }
         }
     }
+}
+
+/// Most triangles of a leaf made ready at a time by [`test_leaf_shared`].
+const SHARED_CHUNK: usize = 8;
+
+/// [`test_leaf`] for rays of one origin `origin` (a pinhole camera's): each triangle made
+/// ready once for the origin ([`Intersector::share`]), then tested against the entering
+/// groups two at a time, eight lanes per instruction ([`Intersector::intersect_shared8`]),
+/// lone rays included. The same hits as [`test_leaf`]: the eight-ray form gives the four-
+/// and one-ray forms' bits, and a lane's closest hit does not depend on the order its
+/// triangles are tested in. Returns false, having tested nothing, where it does not apply
+/// (the test has no such form, this CPU lacks it, or the groups do not share one frame).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn test_leaf_shared<I: Intersector, P: MemoryProbe, const N: usize>(
+    scene: &SceneView<'_>,
+    bvh: &Bvh4View<'_>,
+    packet: &RayPacket<N>,
+    preps: &mut Preps<I, N>,
+    enter: u64,
+    first: u32,
+    count: u32,
+    origin: Vec3,
+    hits: &mut PacketHits<N>,
+    probe: &mut P,
+) -> bool {
+    if !I::SHARED8 {
+        return false;
+    }
+    let groups = groups_of(enter);
+    let Some(&frame_rays) = preps.four(groups.trailing_zeros() as usize) else {
+        return false;
+    };
+    let frame = I::frame4(&frame_rays);
+    for g in Lanes(groups) {
+        match preps.four(g) {
+            Some(r) if I::frame4(r) == frame => {}
+            _ => return false,
+        }
+    }
+    let mut tris = [SharedTri::default(); SHARED_CHUNK];
+    let mut verts: [Option<I::Triangle>; SHARED_CHUNK] = [None; SHARED_CHUNK];
+    let mut prims = [0u32; SHARED_CHUNK];
+    let mut done = 0u32;
+    while done < count {
+        let n = (count - done).min(SHARED_CHUNK as u32) as usize;
+        for k in 0..n {
+            let prim = bvh.prim(first.wrapping_add(done + k as u32), probe);
+            let v = I::fetch(scene, prim, probe);
+            tris[k] = I::share(&frame_rays, origin, &v);
+            (prims[k], verts[k]) = (prim, Some(v));
+        }
+        done += n as u32;
+        // The entering groups two by two (the last one, if alone, with itself).
+        let mut waiting = None;
+        let mut rest = groups;
+        while rest != 0 || waiting.is_some() {
+            let g = rest.trailing_zeros() as usize;
+            let m4 = if rest != 0 { ((enter >> (4 * g)) & 0xF) as u32 } else { 0 };
+            rest &= rest.wrapping_sub(1);
+            let (ga, gb, lanes) = match waiting.take() {
+                None if m4 != 0 => {
+                    waiting = Some((g, m4));
+                    continue;
+                }
+                None => break,
+                Some((w, mw)) if m4 != 0 => (w, g, mw | m4 << 4),
+                Some((w, mw)) => (w, w, mw),
+            };
+            let (Some(&ra), Some(&rb)) = (preps.four(ga), preps.four(gb)) else { continue };
+            let tested = I::intersect_shared8(&ra, &rb, &tris[..n], lanes, |k, o| {
+                let prim = prims.get(k).copied().unwrap_or(0);
+                for lane in Lanes(((o.hit | o.redo) & lanes) as u64) {
+                    let i = if lane < 4 { 4 * ga + lane } else { 4 * gb + lane - 4 }.min(N - 1);
+                    let ray = packet.ray(i);
+                    if o.redo & (1 << lane) != 0 {
+                        if let Some(Some(v)) = verts.get(k) {
+                            test_triangle::<I>(&preps.one(packet, i), &ray, v, prim, &mut hits[i]);
+                        }
+                    } else if let Some(hit) = in_range(&ray, Some((o.t[lane], o.u[lane], o.v[lane])), prim) {
+                        keep_closest(&mut hits[i], hit);
+                    }
+                }
+            });
+            if !tested {
+                // Only the first call can fail (the CPU does not change): nothing tested.
+                return false;
+            }
+        }
+    }
+    true
 }
 
 #[cfg(test)]

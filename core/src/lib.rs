@@ -78,6 +78,7 @@ pub mod triangle;
 pub mod wald;
 pub mod walk;
 pub mod watertight;
+pub mod watertight8;
 pub mod whitted;
 pub mod wide_bvh;
 

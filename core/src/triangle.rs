@@ -1,7 +1,7 @@
 //! The ray–triangle intersection interface and the one place a candidate hit is accepted.
 
 use crate::hit::{keep_closest, Hit};
-use glam::Vec4;
+use glam::{Vec3, Vec4};
 
 use crate::image::{SceneView, TriBlock4};
 use crate::probe::MemoryProbe;
@@ -46,6 +46,38 @@ pub trait Intersector {
     fn intersect_rays4(_rays: &Self::Prepared4, _tri: &Self::Triangle) -> Rays4Result {
         Rays4Result { redo: 0xF, ..Rays4Result::default() }
     }
+    /// True if this test has an eight-ray form on triangles made ready once for rays of
+    /// one origin ([`Intersector::share`], [`Intersector::intersect_shared8`]).
+    const SHARED8: bool = false;
+    /// Which frame four rays' constants use (for the watertight test, the axis order):
+    /// a triangle made ready by [`Intersector::share`] for rays of one frame serves every
+    /// group of rays with that frame and the same origin.
+    #[inline(always)]
+    fn frame4(_rays: &Self::Prepared4) -> u32 {
+        0
+    }
+    /// A triangle made ready for rays that have one origin `origin` (in all their lanes)
+    /// and the frame of `rays`.
+    #[inline(always)]
+    fn share(_rays: &Self::Prepared4, _origin: Vec3, _tri: &Self::Triangle) -> SharedTri {
+        SharedTri::default()
+    }
+    /// Two groups of four rays (`lo`, then `hi`, of one origin and one frame) against each
+    /// triangle of `tris` (made ready by [`Intersector::share`] for them): lane by lane
+    /// the bits of [`Intersector::intersect_rays4`], handed to `found` with the
+    /// triangle's index where some lane of `lanes` hits or is undecided (most tests hit
+    /// nothing, and then write nothing). False, having tested nothing, where this CPU or
+    /// this test has no such form.
+    #[inline(always)]
+    fn intersect_shared8(
+        _lo: &Self::Prepared4,
+        _hi: &Self::Prepared4,
+        _tris: &[SharedTri],
+        _lanes: u32,
+        _found: impl FnMut(usize, &Hits8),
+    ) -> bool {
+        false
+    }
     /// True if this test has a one-ray, four-triangle form
     /// ([`Intersector::intersect_block4`]); only then do walks read TRI_BLOCKS.
     const BLOCKS: bool = false;
@@ -56,6 +88,31 @@ pub trait Intersector {
     fn intersect_block4(_prep: &Self::Prepared, _block: &TriBlock4) -> Rays4Result {
         Rays4Result { redo: 0xF, ..Rays4Result::default() }
     }
+}
+
+/// A triangle's vertices relative to the origin of rays that share one, in their frame's
+/// axis order ([`Intersector::share`]): a packet of primary rays makes each triangle of a
+/// leaf ready once, not once per group of rays.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct SharedTri {
+    /// Per vertex, per axis of the frame.
+    pub rel: [[f32; 3]; 3],
+}
+
+/// The outcome of [`Intersector::intersect_shared8`] for one triangle: as
+/// [`Rays4Result`], for eight lanes.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Hits8 {
+    /// Distances.
+    pub t: [f32; 8],
+    /// Barycentric weight of the second vertex.
+    pub u: [f32; 8],
+    /// Barycentric weight of the third vertex.
+    pub v: [f32; 8],
+    /// Lanes with a hit (range not checked).
+    pub hit: u32,
+    /// Lanes the eight-ray form cannot decide.
+    pub redo: u32,
 }
 
 /// The outcome of [`Intersector::intersect_rays4`]: per lane `(t, u, v)` where `hit`

@@ -11,7 +11,7 @@ use glam::{Vec3, Vec4};
 use crate::image::{SceneView, TriBlock4};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
-use crate::triangle::{Intersector, Rays4Result};
+use crate::triangle::{Hits8, Intersector, Rays4Result, SharedTri};
 
 /// The watertight test (default).
 #[derive(Clone, Copy, Debug, Default)]
@@ -62,6 +62,7 @@ impl Intersector for Watertight {
             sy: dir[ky] / dir[kz],
             sz: Vec4::ONE / dir[kz],
             k: [kx, ky, kz],
+            frame: frame_of([kx, ky, kz]),
         })
     }
 
@@ -79,6 +80,46 @@ impl Intersector for Watertight {
             [0, 1, 2].map(|i| Vec4::splat(p[r.k[i] & 3]) - r.org[i])
         };
         lanes(rel(v[0]), rel(v[1]), rel(v[2]), [r.sx, r.sy, r.sz])
+    }
+
+    const SHARED8: bool = true;
+
+    #[inline(always)]
+    fn frame4(r: &ShearedRays4) -> u32 {
+        r.frame
+    }
+
+    /// `v − origin` once per triangle, in the frame's axis order: where every lane's
+    /// origin is `origin`, lane by lane the subtraction of [`Watertight::intersect_rays4`].
+    #[inline(always)]
+    fn share(r: &ShearedRays4, origin: Vec3, v: &[Vec3; 3]) -> SharedTri {
+        let rel = |p: Vec3| -> [f32; 3] {
+            let p = (p - origin).extend(0.0).to_array();
+            r.k.map(|k| p[k & 3])
+        };
+        SharedTri { rel: [rel(v[0]), rel(v[1]), rel(v[2])] }
+    }
+
+    #[inline(always)]
+    fn intersect_shared8(
+        lo: &ShearedRays4,
+        hi: &ShearedRays4,
+        tris: &[SharedTri],
+        lanes: u32,
+        found: impl FnMut(usize, &Hits8),
+    ) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if crate::cpu::has_avx() {
+            let s = [lo.sx, hi.sx, lo.sy, hi.sy, lo.sz, hi.sz];
+            // SAFETY: the host has reported AVX (`cpu::assume_avx`).
+            #[allow(unsafe_code)]
+            unsafe {
+                crate::watertight8::shared8_avx(tris, s, lanes, found)
+            };
+            return true;
+        }
+        let _ = (lo, hi, tris, lanes, found);
+        false
     }
 
     const BLOCKS: bool = true;
@@ -212,15 +253,23 @@ fn lanes(a: [Vec4; 3], b: [Vec4; 3], c: [Vec4; 3], [sx, sy, sz]: [Vec4; 3]) -> R
     Rays4Result { t: (t_scaled * inv).to_array(), u: (ev * inv).to_array(), v: (ew * inv).to_array(), hit, redo }
 }
 
+/// An axis order as one number, to compare frames.
+#[inline(always)]
+fn frame_of([kx, ky, kz]: [usize; 3]) -> u32 {
+    (kx | (ky << 2) | (kz << 4)) as u32
+}
+
 /// Four rays' shear constants as SIMD lanes (rays with one axis permutation).
 #[derive(Clone, Copy, Debug)]
 pub struct ShearedRays4 {
     // The origins in the rays' axis order `k` (x, y, z of the sheared frame).
     org: [Vec4; 3],
-    sx: Vec4,
-    sy: Vec4,
-    sz: Vec4,
+    pub(crate) sx: Vec4,
+    pub(crate) sy: Vec4,
+    pub(crate) sz: Vec4,
     k: [usize; 3],
+    // `k` as one number, to compare frames.
+    frame: u32,
 }
 
 #[cfg(test)]
@@ -252,6 +301,7 @@ mod tests {
             sy: lanes(|s| s.sy),
             sz: lanes(|s| s.sz),
             k: [k.0 as usize % 3, k.1 as usize % 3, k.2 as usize % 3],
+            frame: frame_of([k.0 as usize % 3, k.1 as usize % 3, k.2 as usize % 3]),
         })
     }
 
@@ -293,7 +343,7 @@ mod tests {
             match (gathered, direct) {
                 (None, None) => refused += 1,
                 (Some(a), Some(b)) => {
-                    assert_eq!(a.k, b.k, "case {case}");
+                    assert_eq!((a.k, a.frame), (b.k, b.frame), "case {case}");
                     for (x, y) in
                         [(a.sx, b.sx), (a.sy, b.sy), (a.sz, b.sz)].into_iter().chain(a.org.into_iter().zip(b.org))
                     {
