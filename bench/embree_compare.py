@@ -64,7 +64,7 @@ def main():
     ap.add_argument("--accel", default="bvh4,bvh8,bvh4+blocks,bvh8+blocks",
                     help="raypipe structures for single rays (comma-separated): grid, kd, bvh, bvh4, bvh8; "
                          "'+blocks' builds the wide BVHs with leaf triangle blocks (--triangles blocks)")
-    ap.add_argument("--packet-accel", default="bvh4",
+    ap.add_argument("--packet-accel", default="bvh4+blocks",
                     help="raypipe structure for packets (bvh4 has the 8x8 frustum kernel; bvh8 has none)")
     ap.add_argument("--packet", default="64", help="raypipe packet size for the packet figure: 4, 16 or 64")
     ap.add_argument("--runs", type=int, default=7, help="interleaved rounds (the median is reported)")
