@@ -232,11 +232,16 @@ impl Groups {
         q
     }
 
-    /// The largest end of the first `groups` groups' active lanes: how far any ray of
-    /// the packet still looks.
+    // `largest_end` reads the ends as four registers.
+    const _FOUR_QUADS: () = assert!(GROUPS == 16);
+
+    /// The largest end of the groups' active lanes: how far any ray of the packet still
+    /// looks. (Groups past the packet's have no active lane: their end stays −∞.)
     #[inline(always)]
-    fn largest_end(&self, groups: usize) -> f32 {
-        self.group_end.iter().take(groups).fold(f32::NEG_INFINITY, |m, &e| m.max(e))
+    fn largest_end(&self) -> f32 {
+        let e = &self.group_end;
+        let quad = |k: usize| Vec4::new(e[4 * k], e[4 * k + 1], e[4 * k + 2], e[4 * k + 3]);
+        quad(0).max(quad(1)).max(quad(2).max(quad(3))).max_element()
     }
 
     /// Recomputes group `g`'s largest end.
@@ -298,7 +303,7 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
         Some((f, t_end)) => (Cull::Frustum(f), t_end),
         None => {
             let q = lanes.insert(Groups::new(packet, groups, mask));
-            let t_end = q.largest_end(groups);
+            let t_end = q.largest_end();
             match Frustum::new(q, groups, mask) {
                 Some(f) => (Cull::Frustum(f), t_end),
                 None => (Cull::Exact(core::array::from_fn(|i| RayBox::new(&packet.ray(i)))), t_end),
@@ -382,20 +387,20 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
                     test_leaf::<I, P, N>(scene, bvh, packet, &mut preps, enter, index, count, hits, probe);
                 }
                 c.tri_tests += count as u64 * enter.count_ones() as u64;
-                let mut touched = 0u64;
-                for i in Lanes(enter) {
-                    let end = hits[i].map_or(packet.t_max[i], |h: Hit| h.t);
-                    if let Some(e) = q.ends.get_mut(i / 4) {
-                        *e = Vec4::select(GROUP_LANES[1 << (i % 4)], Vec4::splat(end), *e);
-                    }
-                    touched |= 1 << (i / 4);
-                }
-                for g in Lanes(touched) {
-                    if g < GROUPS {
+                // The ends of the groups that entered, all four lanes from their hits (the
+                // other lanes' hits are unchanged, and inactive lanes have none: their
+                // ends stay their rays' ends).
+                for g in Lanes(groups_of(enter)) {
+                    let end = |k: usize| {
+                        let i = (4 * g + k).min(N - 1);
+                        hits[i].map_or(packet.t_max[i], |h: Hit| h.t)
+                    };
+                    if let Some(e) = q.ends.get_mut(g) {
+                        *e = Vec4::new(end(0), end(1), end(2), end(3));
                         q.update_end(g, mask);
                     }
                 }
-                t_end = q.largest_end(groups);
+                t_end = q.largest_end();
             }
         }
         // Pop the next entry whose entry bound is not beyond every ray's best hit.
@@ -618,11 +623,14 @@ impl<I: Intersector, const N: usize> Preps<I, N> {
 /// Bit `g` set when some lane of group `g` (lanes `4g .. 4g + 4`) is in `lanes`.
 #[inline(always)]
 fn groups_of(lanes: u64) -> u64 {
-    let mut g = 0u64;
-    for k in 0..GROUPS {
-        g |= (((lanes >> (4 * k)) & 0xF != 0) as u64) << k;
-    }
-    g
+    // Each group's four bits folded into its lowest (bit 4g), then those gathered to bit
+    // g in halving steps: a dozen operations instead of a loop of sixteen tests.
+    let x = lanes | (lanes >> 1);
+    let x = (x | (x >> 2)) & 0x1111_1111_1111_1111;
+    let x = (x | (x >> 3)) & 0x0303_0303_0303_0303;
+    let x = (x | (x >> 6)) & 0x000F_000F_000F_000F;
+    let x = (x | (x >> 12)) & 0x0000_00FF_0000_00FF;
+    (x | (x >> 24)) & 0xFFFF
 }
 
 /// Tests the leaf's triangles (list entries `first .. first + count`) with the rays of
@@ -766,6 +774,23 @@ fn test_leaf_shared<I: Intersector, P: MemoryProbe, const N: usize>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The bit trick gives the definition's groups: bit `g` where some lane of `4g .. 4g
+    /// + 4` is set.
+    #[test]
+    fn groups_of_marks_the_groups_with_a_lane() {
+        let mut g = Lcg(3);
+        for case in 0..20_000u64 {
+            // Sparse masks too, so that groups with one lane (each of the four) occur.
+            let lanes = match case % 3 {
+                0 => g.next(),
+                1 => g.next() & g.next() & g.next(),
+                _ => 1 << (case % 64),
+            };
+            let want = (0..GROUPS).fold(0u64, |m, k| m | ((((lanes >> (4 * k)) & 0xF) != 0) as u64) << k);
+            assert_eq!(groups_of(lanes), want, "lanes {lanes:#x}");
+        }
+    }
     use crate::image::WideNode;
     use crate::ray::Ray;
     use crate::test_lcg::Lcg;
@@ -886,7 +911,7 @@ mod tests {
                     assert_eq!(f.t_min.to_bits(), lanes.t_min.to_bits(), "case {case}");
                     assert_eq!(f.one_origin, lanes.one_origin, "case {case}");
                     assert_eq!(f.one_origin, shared, "case {case}");
-                    assert_eq!(t_end, q.largest_end(n.div_ceil(4)), "case {case}");
+                    assert_eq!(t_end, q.largest_end(), "case {case}");
                     assert!(!sign_change, "case {case}");
                     direct += 1;
                 }
