@@ -1,7 +1,9 @@
 //! Packet traversal of the 4-wide BVH: the packet visits a node if any of its rays may
 //! hit one of the node's boxes, nearest child first; a leaf intersects its triangles with
 //! exactly the rays that enter its box, in groups of four lanes (SIMD registers) for the
-//! box test and, where the intersector has a four-ray form, for the triangles too.
+//! box test and, where the intersector has a four-ray form, for the triangles too. Rays
+//! of one origin (a camera's) meet each triangle made ready once for it, eight lanes at a
+//! time where the CPU has AVX ([`crate::watertight8`]).
 
 use crate::bvh4::slab4_exact;
 use glam::{BVec4A, Vec3, Vec3A, Vec4};
@@ -732,21 +734,15 @@ fn test_leaf_shared<I: Intersector, P: MemoryProbe, const N: usize>(
         }
         done += n as u32;
         // The entering groups two by two (the last one, if alone, with itself).
-        let mut waiting = None;
+        let lanes_of = |g: usize| ((enter >> (4 * g)) & 0xF) as u32;
         let mut rest = groups;
-        while rest != 0 || waiting.is_some() {
-            let g = rest.trailing_zeros() as usize;
-            let m4 = if rest != 0 { ((enter >> (4 * g)) & 0xF) as u32 } else { 0 };
+        while rest != 0 {
+            let ga = rest.trailing_zeros() as usize;
+            rest &= rest - 1;
+            let gb = if rest != 0 { rest.trailing_zeros() as usize } else { ga };
             rest &= rest.wrapping_sub(1);
-            let (ga, gb, lanes) = match waiting.take() {
-                None if m4 != 0 => {
-                    waiting = Some((g, m4));
-                    continue;
-                }
-                None => break,
-                Some((w, mw)) if m4 != 0 => (w, g, mw | m4 << 4),
-                Some((w, mw)) => (w, w, mw),
-            };
+            let lanes = lanes_of(ga) | if gb != ga { lanes_of(gb) << 4 } else { 0 };
+            // Both ready: checked above.
             let (Some(&ra), Some(&rb)) = (preps.four(ga), preps.four(gb)) else { continue };
             let tested = I::intersect_shared8(&ra, &rb, &tris[..n], lanes, |k, o| {
                 let prim = prims.get(k).copied().unwrap_or(0);
@@ -775,6 +771,11 @@ fn test_leaf_shared<I: Intersector, P: MemoryProbe, const N: usize>(
 mod tests {
     use super::*;
 
+    use crate::image::WideNode;
+    use crate::ray::Ray;
+    use crate::test_lcg::Lcg;
+    use glam::Vec3;
+
     /// The bit trick gives the definition's groups: bit `g` where some lane of `4g .. 4g
     /// + 4` is set.
     #[test]
@@ -791,10 +792,6 @@ mod tests {
             assert_eq!(groups_of(lanes), want, "lanes {lanes:#x}");
         }
     }
-    use crate::image::WideNode;
-    use crate::ray::Ray;
-    use crate::test_lcg::Lcg;
-    use glam::Vec3;
 
     /// The AVX form of the leaf entry test (where this CPU has AVX) and the one-origin
     /// forms let exactly the portable form's rays in, for leaves the packet's frustum
