@@ -2,8 +2,8 @@
 //! groups of four rays of one packet, with one origin and one axis order, against the
 //! triangles of a leaf made ready once for that origin ([`crate::triangle::SharedTri`]).
 //! Lane by lane the operations of the four-lane test in the same order, hence the same
-//! bits, with twice the lanes per instruction and the rays' constants loaded once per
-//! leaf rather than once per triangle.
+//! bits, with twice the lanes per instruction, and the rays' constants loaded once for
+//! all the triangles of a leaf rather than once per triangle.
 
 use crate::triangle::{Hits8, SharedTri};
 use glam::Vec4;
@@ -19,7 +19,7 @@ use glam::Vec4;
 #[cfg(target_arch = "x86_64")]
 #[allow(unsafe_code)]
 #[target_feature(enable = "avx")]
-pub unsafe fn shared8_avx(tris: &[SharedTri], s: [Vec4; 6], lanes: u32, mut found: impl FnMut(usize, &Hits8)) {
+pub(crate) unsafe fn shared8_avx(tris: &[SharedTri], s: [Vec4; 6], lanes: u32, mut found: impl FnMut(usize, &Hits8)) {
     use core::arch::x86_64::*;
     let sx = _mm256_set_m128(s[1].into(), s[0].into());
     let sy = _mm256_set_m128(s[3].into(), s[2].into());
