@@ -62,6 +62,13 @@ pub trait Intersector {
     fn share(_rays: &Self::Prepared4, _origin: Vec3, _tri: &Self::Triangle) -> SharedTri {
         SharedTri::default()
     }
+    /// [`Intersector::share`] for the triangle in lane `lane` of a leaf block (TRI_BLOCKS
+    /// holds copies of the vertices: the same bits, read in a row rather than through
+    /// the triangle's vertex indices).
+    #[inline(always)]
+    fn share_block(_rays: &Self::Prepared4, _origin: Vec3, _block: &TriBlock4, _lane: usize) -> SharedTri {
+        SharedTri::default()
+    }
     /// Two groups of four rays (`lo`, then `hi`, of one origin and one frame) against each
     /// triangle of `tris` (made ready by [`Intersector::share`] for them): lane by lane
     /// the bits of [`Intersector::intersect_rays4`], handed to `found` with the

@@ -101,6 +101,13 @@ impl Intersector for Watertight {
     }
 
     #[inline(always)]
+    fn share_block(r: &ShearedRays4, origin: Vec3, block: &TriBlock4, lane: usize) -> SharedTri {
+        let o = origin.to_array();
+        let rel = |i: usize| r.k.map(|k| block.v[i][k % 3][lane % 4] - o[k % 3]);
+        SharedTri { rel: [rel(0), rel(1), rel(2)] }
+    }
+
+    #[inline(always)]
     fn intersect_shared8(
         lo: &ShearedRays4,
         hi: &ShearedRays4,

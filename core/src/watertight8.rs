@@ -97,6 +97,8 @@ mod tests {
     /// Where this CPU has AVX: the eight-ray form on triangles made ready for the rays'
     /// one origin gives, lane by lane, the four-ray form's verdicts (hit and undecided
     /// lanes) and its distances and barycentrics bit for bit, for rays of every frame.
+    /// (And a triangle made ready from a leaf block is the one made ready from its
+    /// vertices.)
     #[test]
     fn eight_rays_on_shared_triangles_match_the_four_ray_test() {
         if !crate::cpu::detected_avx() {
@@ -131,6 +133,14 @@ mod tests {
                 })
             });
             let tris = verts.map(|v| Watertight::share(&lo, origin, &v));
+            // The same triangles from a leaf block (copies of their vertices in lanes).
+            let block = crate::image::TriBlock4 {
+                v: core::array::from_fn(|i| core::array::from_fn(|a| core::array::from_fn(|lane| verts[lane][i][a]))),
+            };
+            for (lane, tri) in tris.iter().enumerate().take(4) {
+                let b = Watertight::share_block(&lo, origin, &block, lane);
+                assert_eq!(b.rel.map(|p| p.map(f32::to_bits)), tri.rel.map(|p| p.map(f32::to_bits)), "case {case}");
+            }
             let mut out = [None; 5];
             let all = if case % 3 == 0 { 0x0F } else { 0xFF };
             let s = [lo.sx, hi.sx, lo.sy, hi.sy, lo.sz, hi.sz];
