@@ -15,7 +15,7 @@ use crate::image::{Bvh4Node, Bvh4View, SceneView, MAX_TREE_DEPTH, NULL_INDEX};
 use crate::packet::{Lanes, PacketCounters, PacketHits, RayPacket, MAX_PACKET};
 use crate::probe::MemoryProbe;
 use crate::ray_box::{recip, recip4, RayBox};
-use crate::triangle::{in_range, test_triangle, Intersector, SharedTri};
+use crate::triangle::{in_range, test_triangle, Intersector, LaneHits, SharedTri};
 
 const STACK: usize = 3 * MAX_TREE_DEPTH as usize + 4;
 
@@ -662,13 +662,7 @@ fn test_leaf<I: Intersector, P: MemoryProbe, const N: usize>(
                 Some(rays) if m4.count_ones() >= 2 => {
                     let r = I::intersect_rays4(rays, &verts);
                     for k in Lanes(m4 & (r.hit | r.redo) as u64) {
-                        let i = (4 * g + k).min(N - 1);
-                        let ray = packet.ray(i);
-                        if r.redo & (1 << k) != 0 {
-                            test_triangle::<I>(&preps.one(packet, i), &ray, &verts, prim, &mut hits[i]);
-                        } else if let Some(hit) = in_range(&ray, Some((r.t[k], r.u[k], r.v[k])), prim) {
-                            keep_closest(&mut hits[i], hit);
-                        }
+                        keep_lane(packet, preps, hits, &r, k, (4 * g + k).min(N - 1), prim, || verts);
                     }
                 }
                 _ => {
@@ -679,6 +673,29 @@ fn test_leaf<I: Intersector, P: MemoryProbe, const N: usize>(
                 }
             }
         }
+    }
+}
+
+/// Keeps lane `k` of a multi-lane test's outcome `r` on triangle `prim` for packet ray
+/// `i`: its hit if in the ray's range, or, where the lane was left undecided, the one-ray
+/// test's verdict on the triangle `tri()`.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn keep_lane<I: Intersector, const N: usize, const L: usize>(
+    packet: &RayPacket<N>,
+    preps: &mut Preps<I, N>,
+    hits: &mut PacketHits<N>,
+    r: &LaneHits<L>,
+    k: usize,
+    i: usize,
+    prim: u32,
+    tri: impl FnOnce() -> I::Triangle,
+) {
+    let ray = packet.ray(i);
+    if r.redo & (1 << k) != 0 {
+        test_triangle::<I>(&preps.one(packet, i), &ray, &tri(), prim, &mut hits[i]);
+    } else if let Some(hit) = in_range(&ray, Some((r.t[k], r.u[k], r.v[k])), prim) {
+        keep_closest(&mut hits[i], hit);
     }
 }
 
@@ -758,18 +775,12 @@ fn test_leaf_shared<I: Intersector, P: MemoryProbe, const N: usize>(
                 let prim = prims.get(k).copied().unwrap_or(0);
                 for lane in Lanes(((o.hit | o.redo) & lanes) as u64) {
                     let i = if lane < 4 { 4 * ga + lane } else { 4 * gb + lane - 4 }.min(N - 1);
-                    let ray = packet.ray(i);
-                    if o.redo & (1 << lane) != 0 {
-                        // Rare (an edge function exactly zero): the triangle is read here
-                        // if it came from a block.
-                        let v = match verts.get(k) {
-                            Some(Some(v)) => *v,
-                            _ => I::fetch(scene, prim, probe),
-                        };
-                        test_triangle::<I>(&preps.one(packet, i), &ray, &v, prim, &mut hits[i]);
-                    } else if let Some(hit) = in_range(&ray, Some((o.t[lane], o.u[lane], o.v[lane])), prim) {
-                        keep_closest(&mut hits[i], hit);
-                    }
+                    // An undecided lane (rare) reads the triangle here if it came from a block.
+                    let tri = || match verts.get(k) {
+                        Some(Some(v)) => *v,
+                        _ => I::fetch(scene, prim, probe),
+                    };
+                    keep_lane(packet, preps, hits, o, lane, i, prim, tri);
                 }
             });
             if !tested {

@@ -106,37 +106,34 @@ pub struct SharedTri {
     pub rel: [[f32; 3]; 3],
 }
 
-/// The outcome of [`Intersector::intersect_shared8`] for one triangle: as
-/// [`Rays4Result`], for eight lanes.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Hits8 {
+/// The outcome of a test of `L` rays (or `L` triangles) at once, one per SIMD lane: per
+/// lane `(t, u, v)` where `hit` has the lane's bit, and the lanes to test again one at a
+/// time (`redo`: an edge function exactly zero, left to the one-ray test).
+#[derive(Clone, Copy, Debug)]
+pub struct LaneHits<const L: usize> {
     /// Distances.
-    pub t: [f32; 8],
+    pub t: [f32; L],
     /// Barycentric weight of the second vertex.
-    pub u: [f32; 8],
+    pub u: [f32; L],
     /// Barycentric weight of the third vertex.
-    pub v: [f32; 8],
+    pub v: [f32; L],
     /// Lanes with a hit (range not checked).
     pub hit: u32,
-    /// Lanes the eight-ray form cannot decide.
+    /// Lanes the multi-lane form cannot decide.
     pub redo: u32,
 }
 
-/// The outcome of [`Intersector::intersect_rays4`]: per lane `(t, u, v)` where `hit`
-/// has the lane's bit, and the lanes to test again one at a time.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Rays4Result {
-    /// Distances.
-    pub t: [f32; 4],
-    /// Barycentric weight of the second vertex.
-    pub u: [f32; 4],
-    /// Barycentric weight of the third vertex.
-    pub v: [f32; 4],
-    /// Lanes with a hit (range not checked).
-    pub hit: u32,
-    /// Lanes the four-ray form cannot decide.
-    pub redo: u32,
+impl<const L: usize> Default for LaneHits<L> {
+    fn default() -> Self {
+        LaneHits { t: [0.0; L], u: [0.0; L], v: [0.0; L], hit: 0, redo: 0 }
+    }
 }
+
+/// The outcome of [`Intersector::intersect_rays4`] and [`Intersector::intersect_block4`].
+pub type Rays4Result = LaneHits<4>;
+
+/// The outcome of [`Intersector::intersect_shared8`] for one triangle.
+pub type Hits8 = LaneHits<8>;
 
 /// Tests triangle `prim` and keeps the hit if it lies in `[t_min, t_max]` and is closer
 /// under the `(t, prim)` order. Returns true if `best` changed.

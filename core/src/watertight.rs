@@ -62,7 +62,6 @@ impl Intersector for Watertight {
             sy: dir[ky] / dir[kz],
             sz: Vec4::ONE / dir[kz],
             k: [kx, ky, kz],
-            frame: frame_of([kx, ky, kz]),
         })
     }
 
@@ -86,7 +85,7 @@ impl Intersector for Watertight {
 
     #[inline(always)]
     fn frame4(r: &ShearedRays4) -> u32 {
-        r.frame
+        frame_of(r.k)
     }
 
     /// `v − origin` once per triangle, in the frame's axis order: where every lane's
@@ -275,8 +274,6 @@ pub struct ShearedRays4 {
     pub(crate) sy: Vec4,
     pub(crate) sz: Vec4,
     k: [usize; 3],
-    // `k` as one number, to compare frames.
-    frame: u32,
 }
 
 #[cfg(test)]
@@ -308,7 +305,6 @@ mod tests {
             sy: lanes(|s| s.sy),
             sz: lanes(|s| s.sz),
             k: [k.0 as usize % 3, k.1 as usize % 3, k.2 as usize % 3],
-            frame: frame_of([k.0 as usize % 3, k.1 as usize % 3, k.2 as usize % 3]),
         })
     }
 
@@ -350,7 +346,7 @@ mod tests {
             match (gathered, direct) {
                 (None, None) => refused += 1,
                 (Some(a), Some(b)) => {
-                    assert_eq!((a.k, a.frame), (b.k, b.frame), "case {case}");
+                    assert_eq!(a.k, b.k, "case {case}");
                     for (x, y) in
                         [(a.sx, b.sx), (a.sy, b.sy), (a.sz, b.sz)].into_iter().chain(a.org.into_iter().zip(b.org))
                     {
