@@ -15,7 +15,7 @@ use crate::image::{Bvh4Node, Bvh4View, SceneView, MAX_TREE_DEPTH, NULL_INDEX};
 use crate::packet::{Lanes, PacketCounters, PacketHits, RayPacket, MAX_PACKET};
 use crate::probe::MemoryProbe;
 use crate::ray_box::{recip, recip4, RayBox};
-use crate::triangle::{in_range, test_triangle, Intersector, LaneHits, SharedTri};
+use crate::triangle::{in_range, test_triangle, Intersector, LaneHits, RayPair, SharedTris};
 
 const STACK: usize = 3 * MAX_TREE_DEPTH as usize + 4;
 
@@ -378,7 +378,7 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
             };
             c.active_lanes += enter.count_ones() as u64;
             if enter != 0 {
-                preps.prepare(packet, q, mask, enter);
+                preps.fours.prepare(packet, q, mask, enter);
                 let shared = match &cull {
                     Cull::Frustum(f) => f.origin().map(Vec3::from).is_some_and(|o| {
                         test_leaf_shared::<I, P, N>(scene, bvh, packet, &mut preps, enter, index, count, o, hits, probe)
@@ -535,37 +535,38 @@ unsafe fn leaf_entries_avx(q: &Groups, groups: usize, mask: u64, leaf_box: &[f32
 /// one of its rays enters a leaf (most rays of a frame never do), as four SIMD lanes for
 /// the intersector's four-ray form; one ray's own constants only when it is tested alone.
 struct Preps<I: Intersector, const N: usize> {
-    // Computed constants in the order they were asked for, and per lane (group) the
-    // index of its entry: nothing is written for lanes that never need constants (the
-    // arrays of every lane's record, initialised per packet, cost packets that miss
-    // the scene a tenth of their time).
-    one: heapless::Vec<I::Prepared, N>,
-    one_slot: [u8; N],
-    four: heapless::Vec<Option<I::Prepared4>, GROUPS>,
-    four_slot: [u8; GROUPS],
-    // Groups whose constants are computed.
-    ready: u32,
-    // Lanes whose one-ray constants are computed: only lanes tested one by one (redone
-    // lanes, lone rays, groups without a four-ray form) need them.
-    one_ready: u64,
+    // Per group of four lanes.
+    fours: Fours<I>,
+    // Per lane: only lanes tested one by one (redone lanes, lone rays, groups without a
+    // four-ray form) need them.
+    ones: Ones<I, N>,
 }
 
 impl<I: Intersector, const N: usize> Preps<I, N> {
     #[inline(always)]
     fn new() -> Self {
         Preps {
-            one: heapless::Vec::new(),
-            one_slot: [0; N],
-            four: heapless::Vec::new(),
-            four_slot: [0; GROUPS],
-            ready: 0,
-            one_ready: 0,
+            fours: Fours { four: heapless::Vec::new(), four_slot: [0; GROUPS], ready: 0 },
+            ones: Ones { one: heapless::Vec::new(), one_slot: [0; N], one_ready: 0 },
         }
     }
+}
 
+/// The four-ray constants of the groups that have needed them. (Computed constants are
+/// kept in the order they were asked for, and per group the index of its entry: nothing
+/// is written for groups that never need constants; the arrays of every lane's record,
+/// initialised per packet, cost packets that miss the scene a tenth of their time.)
+struct Fours<I: Intersector> {
+    four: heapless::Vec<Option<I::Prepared4>, GROUPS>,
+    four_slot: [u8; GROUPS],
+    // Groups whose constants are computed.
+    ready: u32,
+}
+
+impl<I: Intersector> Fours<I> {
     /// Group `g`'s four-ray constants, if ready and the intersector has them.
     #[inline(always)]
-    fn four(&self, g: usize) -> Option<&I::Prepared4> {
+    fn get(&self, g: usize) -> Option<&I::Prepared4> {
         if self.ready & (1 << (g % GROUPS)) == 0 {
             return None;
         }
@@ -574,7 +575,7 @@ impl<I: Intersector, const N: usize> Preps<I, N> {
 
     /// Makes the constants of every group with a lane in `enter` ready.
     #[inline(always)]
-    fn prepare(&mut self, packet: &RayPacket<N>, q: &Groups, mask: u64, enter: u64) {
+    fn prepare<const N: usize>(&mut self, packet: &RayPacket<N>, q: &Groups, mask: u64, enter: u64) {
         for g in Lanes(groups_of(enter) & !(self.ready as u64)) {
             let m4 = (mask >> (4 * g)) & 0xF;
             self.ready |= 1 << g;
@@ -603,10 +604,20 @@ impl<I: Intersector, const N: usize> Preps<I, N> {
             }
         }
     }
+}
 
+/// The one-ray constants of the lanes that have needed them (as [`Fours`] keeps them).
+struct Ones<I: Intersector, const N: usize> {
+    one: heapless::Vec<I::Prepared, N>,
+    one_slot: [u8; N],
+    // Lanes whose constants are computed.
+    one_ready: u64,
+}
+
+impl<I: Intersector, const N: usize> Ones<I, N> {
     /// Ray `i`'s one-ray constants, computed the first time they are asked for.
     #[inline(always)]
-    fn one(&mut self, packet: &RayPacket<N>, i: usize) -> I::Prepared {
+    fn get(&mut self, packet: &RayPacket<N>, i: usize) -> I::Prepared {
         let i = i.min(N - 1);
         if self.one_ready & (1 << i) == 0 {
             self.one_slot[i] = self.one.len() as u8;
@@ -657,18 +668,18 @@ fn test_leaf<I: Intersector, P: MemoryProbe, const N: usize>(
         let verts = I::fetch(scene, prim, probe);
         for g in Lanes(groups) {
             let m4 = (enter >> (4 * g)) & 0xF;
-            let four = preps.four(g);
+            let four = preps.fours.get(g);
             match four {
                 Some(rays) if m4.count_ones() >= 2 => {
                     let r = I::intersect_rays4(rays, &verts);
                     for k in Lanes(m4 & (r.hit | r.redo) as u64) {
-                        keep_lane(packet, preps, hits, &r, k, (4 * g + k).min(N - 1), prim, || verts);
+                        keep_lane(packet, &mut preps.ones, hits, &r, k, (4 * g + k).min(N - 1), prim, || verts);
                     }
                 }
                 _ => {
                     for i in Lanes(m4 << (4 * g)) {
                         let i = i.min(N - 1);
-                        test_triangle::<I>(&preps.one(packet, i), &packet.ray(i), &verts, prim, &mut hits[i]);
+                        test_triangle::<I>(&preps.ones.get(packet, i), &packet.ray(i), &verts, prim, &mut hits[i]);
                     }
                 }
             }
@@ -683,7 +694,7 @@ fn test_leaf<I: Intersector, P: MemoryProbe, const N: usize>(
 #[inline(always)]
 fn keep_lane<I: Intersector, const N: usize, const L: usize>(
     packet: &RayPacket<N>,
-    preps: &mut Preps<I, N>,
+    ones: &mut Ones<I, N>,
     hits: &mut PacketHits<N>,
     r: &LaneHits<L>,
     k: usize,
@@ -693,14 +704,11 @@ fn keep_lane<I: Intersector, const N: usize, const L: usize>(
 ) {
     let ray = packet.ray(i);
     if r.redo & (1 << k) != 0 {
-        test_triangle::<I>(&preps.one(packet, i), &ray, &tri(), prim, &mut hits[i]);
+        test_triangle::<I>(&ones.get(packet, i), &ray, &tri(), prim, &mut hits[i]);
     } else if let Some(hit) = in_range(&ray, Some((r.t[k], r.u[k], r.v[k])), prim) {
         keep_closest(&mut hits[i], hit);
     }
 }
-
-/// Most triangles of a leaf made ready at a time by [`test_leaf_shared`].
-const SHARED_CHUNK: usize = 8;
 
 /// [`test_leaf`] for rays of one origin `origin` (a pinhole camera's): each triangle made
 /// ready once for the origin ([`Intersector::share`]), then tested against the entering
@@ -727,66 +735,82 @@ fn test_leaf_shared<I: Intersector, P: MemoryProbe, const N: usize>(
         return false;
     }
     let groups = groups_of(enter);
-    let Some(&frame_rays) = preps.four(groups.trailing_zeros() as usize) else {
+    let Some(&frame_rays) = preps.fours.get(groups.trailing_zeros() as usize) else {
         return false;
     };
     let frame = I::frame4(&frame_rays);
     for g in Lanes(groups) {
-        match preps.four(g) {
+        match preps.fours.get(g) {
             Some(r) if I::frame4(r) == frame => {}
             _ => return false,
         }
     }
+    // The entering groups two by two (the last one, if alone, with itself); both ready
+    // (checked above).
+    let fours = &preps.fours;
+    let mut pairs = heapless::Vec::<RayPair<'_, I::Prepared4>, { GROUPS / 2 }>::new();
+    let mut pair_groups = [(0usize, 0usize); GROUPS / 2];
+    let lanes_of = |g: usize| ((enter >> (4 * g)) & 0xF) as u32;
+    let mut rest = groups;
+    while rest != 0 {
+        let ga = rest.trailing_zeros() as usize;
+        rest &= rest - 1;
+        let gb = if rest != 0 { rest.trailing_zeros() as usize } else { ga };
+        rest &= rest.wrapping_sub(1);
+        let lanes = lanes_of(ga) | if gb != ga { lanes_of(gb) << 4 } else { 0 };
+        let (Some(lo), Some(hi)) = (fours.get(ga), fours.get(gb)) else { continue };
+        if let Some(slot) = pair_groups.get_mut(pairs.len()) {
+            *slot = (ga, gb);
+        }
+        // Cannot be full: at most `GROUPS / 2` pairs.
+        let _ = pairs.push(RayPair { lo, hi, lanes });
+    }
     let blocks = I::BLOCKS && scene.has_tri_blocks();
-    let mut tris = [SharedTri::default(); SHARED_CHUNK];
-    let mut verts: [Option<I::Triangle>; SHARED_CHUNK] = [None; SHARED_CHUNK];
-    let mut prims = [0u32; SHARED_CHUNK];
+    let mut tris = SharedTris::default();
+    let mut verts: [Option<I::Triangle>; SharedTris::SLOTS] = [None; SharedTris::SLOTS];
+    let mut prims = [0u32; SharedTris::SLOTS];
     let mut done = 0u32;
     while done < count {
-        let n = (count - done).min(SHARED_CHUNK as u32) as usize;
-        for k in 0..n {
-            let entry = first.wrapping_add(done + k as u32);
-            let prim = bvh.prim(entry, probe);
-            prims[k] = prim;
-            // From the leaf's blocks where the image has them: in a row, with no vertex
-            // indices to follow (their misses were a fifth of the bunny's packet time).
-            if let Some(block) = blocks.then(|| scene.tri_block(entry / 4, probe)).flatten() {
-                tris[k] = I::share_block(&frame_rays, origin, block, (entry % 4) as usize);
-                verts[k] = None;
+        let n = (count - done).min(SharedTris::SLOTS as u32) as usize;
+        let start = first.wrapping_add(done);
+        for (k, prim) in prims.iter_mut().take(n).enumerate() {
+            *prim = bvh.prim(start.wrapping_add(k as u32), probe);
+        }
+        // From the leaf's blocks where the image has them and the leaf starts on one (the
+        // builder aligns leaves so): in a row, with no vertex indices to follow (their
+        // misses were a fifth of the bunny's packet time), four at a time.
+        let from_blocks = blocks && start.is_multiple_of(4);
+        for half in 0..n.div_ceil(4) {
+            let block = from_blocks.then(|| scene.tri_block(start / 4 + half as u32, probe)).flatten();
+            if let Some(block) = block {
+                I::share_block(&frame_rays, origin, block, &mut tris, half);
+                verts[4 * half..(4 * half + 4).min(SharedTris::SLOTS)].fill(None);
                 continue;
             }
-            let v = I::fetch(scene, prim, probe);
-            tris[k] = I::share(&frame_rays, origin, &v);
-            verts[k] = Some(v);
+            for k in 4 * half..n.min(4 * half + 4) {
+                let v = I::fetch(scene, prims[k], probe);
+                I::share(&frame_rays, origin, &v, &mut tris, k);
+                verts[k] = Some(v);
+            }
         }
         done += n as u32;
-        // The entering groups two by two (the last one, if alone, with itself).
-        let lanes_of = |g: usize| ((enter >> (4 * g)) & 0xF) as u32;
-        let mut rest = groups;
-        while rest != 0 {
-            let ga = rest.trailing_zeros() as usize;
-            rest &= rest - 1;
-            let gb = if rest != 0 { rest.trailing_zeros() as usize } else { ga };
-            rest &= rest.wrapping_sub(1);
-            let lanes = lanes_of(ga) | if gb != ga { lanes_of(gb) << 4 } else { 0 };
-            // Both ready: checked above.
-            let (Some(&ra), Some(&rb)) = (preps.four(ga), preps.four(gb)) else { continue };
-            let tested = I::intersect_shared8(&ra, &rb, &tris[..n], lanes, |k, o| {
-                let prim = prims.get(k).copied().unwrap_or(0);
-                for lane in Lanes(((o.hit | o.redo) & lanes) as u64) {
-                    let i = if lane < 4 { 4 * ga + lane } else { 4 * gb + lane - 4 }.min(N - 1);
-                    // An undecided lane (rare) reads the triangle here if it came from a block.
-                    let tri = || match verts.get(k) {
-                        Some(Some(v)) => *v,
-                        _ => I::fetch(scene, prim, probe),
-                    };
-                    keep_lane(packet, preps, hits, o, lane, i, prim, tri);
-                }
-            });
-            if !tested {
-                // Only the first call can fail (the CPU does not change): nothing tested.
-                return false;
+        let tested = I::intersect_shared8(&pairs, &tris, n, |k, p, o| {
+            let prim = prims.get(k).copied().unwrap_or(0);
+            let (ga, gb) = pair_groups.get(p).copied().unwrap_or((0, 0));
+            let lanes = pairs.get(p).map_or(0, |p| p.lanes);
+            for lane in Lanes(((o.hit | o.redo) & lanes) as u64) {
+                let i = if lane < 4 { 4 * ga + lane } else { 4 * gb + lane - 4 }.min(N - 1);
+                // An undecided lane (rare) reads the triangle here if it came from a block.
+                let tri = || match verts.get(k) {
+                    Some(Some(v)) => *v,
+                    _ => I::fetch(scene, prim, probe),
+                };
+                keep_lane(packet, &mut preps.ones, hits, o, lane, i, prim, tri);
             }
+        });
+        if !tested {
+            // Only the first call can fail (the CPU does not change): nothing tested.
+            return false;
         }
     }
     true

@@ -56,32 +56,29 @@ pub trait Intersector {
     fn frame4(_rays: &Self::Prepared4) -> u32 {
         0
     }
-    /// A triangle made ready for rays that have one origin `origin` (in all their lanes)
-    /// and the frame of `rays`.
+    /// Makes a triangle ready for rays that have one origin `origin` (in all their lanes)
+    /// and the frame of `rays`, into slot `slot` of `into`.
     #[inline(always)]
-    fn share(_rays: &Self::Prepared4, _origin: Vec3, _tri: &Self::Triangle) -> SharedTri {
-        SharedTri::default()
-    }
-    /// [`Intersector::share`] for the triangle in lane `lane` of a leaf block (TRI_BLOCKS
-    /// holds copies of the vertices: the same bits, read in a row rather than through
-    /// the triangle's vertex indices).
+    fn share(_rays: &Self::Prepared4, _origin: Vec3, _tri: &Self::Triangle, _into: &mut SharedTris, _slot: usize) {}
+    /// [`Intersector::share`] for the four triangles of a leaf block at once, into slots
+    /// `4 · half .. 4 · half + 4` (TRI_BLOCKS holds copies of the vertices in lanes: the
+    /// same bits, read in a row rather than through vertex indices, and made ready by
+    /// four-lane operations).
     #[inline(always)]
-    fn share_block(_rays: &Self::Prepared4, _origin: Vec3, _block: &TriBlock4, _lane: usize) -> SharedTri {
-        SharedTri::default()
-    }
-    /// Two groups of four rays (`lo`, then `hi`, of one origin and one frame) against each
-    /// triangle of `tris` (made ready by [`Intersector::share`] for them): lane by lane
-    /// the bits of [`Intersector::intersect_rays4`], handed to `found` with the
-    /// triangle's index where some lane of `lanes` hits or is undecided (most tests hit
+    fn share_block(_rays: &Self::Prepared4, _origin: Vec3, _block: &TriBlock4, _into: &mut SharedTris, _half: usize) {}
+    /// Pairs of groups of four rays (`lo`, then `hi` of each, all of one origin and one
+    /// frame, with the lanes that take part) against each of the first `n` triangles of
+    /// `tris` (made ready by [`Intersector::share`] for them): lane by lane the bits of
+    /// [`Intersector::intersect_rays4`], handed to `found` with the triangle's slot and
+    /// the pair's index where some lane taking part hits or is undecided (most tests hit
     /// nothing, and then write nothing). False, having tested nothing, where this CPU or
     /// this test has no such form.
     #[inline(always)]
     fn intersect_shared8(
-        _lo: &Self::Prepared4,
-        _hi: &Self::Prepared4,
-        _tris: &[SharedTri],
-        _lanes: u32,
-        _found: impl FnMut(usize, &Hits8),
+        _pairs: &[RayPair<'_, Self::Prepared4>],
+        _tris: &SharedTris,
+        _n: usize,
+        _found: impl FnMut(usize, usize, &Hits8),
     ) -> bool {
         false
     }
@@ -97,13 +94,32 @@ pub trait Intersector {
     }
 }
 
-/// A triangle's vertices relative to the origin of rays that share one, in their frame's
-/// axis order ([`Intersector::share`]): a packet of primary rays makes each triangle of a
-/// leaf ready once, not once per group of rays.
+/// Up to [`SharedTris::SLOTS`] triangles' vertices relative to the origin of rays that
+/// share one, in their frame's axis order ([`Intersector::share`]): a packet of primary
+/// rays makes each triangle of a leaf ready once, not once per group of rays. One lane
+/// per triangle, as in a leaf block, so that a block is made ready four lanes at a time.
 #[derive(Clone, Copy, Debug, Default)]
-pub struct SharedTri {
-    /// Per vertex, per axis of the frame.
-    pub rel: [[f32; 3]; 3],
+pub struct SharedTris {
+    /// Per vertex, per axis of the frame, per slot.
+    pub rel: [[[f32; SharedTris::SLOTS]; 3]; 3],
+}
+
+impl SharedTris {
+    /// Triangles held (two leaf blocks).
+    pub const SLOTS: usize = 8;
+}
+
+/// Two groups of four rays of one packet tested together by
+/// [`Intersector::intersect_shared8`]: their constants, and the lanes that take part
+/// (bits 0–3 for `lo`, 4–7 for `hi`).
+#[derive(Clone, Copy, Debug)]
+pub struct RayPair<'a, P> {
+    /// Lanes 0–3.
+    pub lo: &'a P,
+    /// Lanes 4–7.
+    pub hi: &'a P,
+    /// The lanes taking part.
+    pub lanes: u32,
 }
 
 /// The outcome of a test of `L` rays (or `L` triangles) at once, one per SIMD lane: per

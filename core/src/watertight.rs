@@ -11,7 +11,8 @@ use glam::{Vec3, Vec4};
 use crate::image::{SceneView, TriBlock4};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
-use crate::triangle::{Hits8, Intersector, Rays4Result, SharedTri};
+use crate::triangle::{Hits8, Intersector, RayPair, Rays4Result, SharedTris};
+use crate::watertight8::SharedShear;
 
 /// The watertight test (default).
 #[derive(Clone, Copy, Debug, Default)]
@@ -91,40 +92,58 @@ impl Intersector for Watertight {
     /// `v − origin` once per triangle, in the frame's axis order: where every lane's
     /// origin is `origin`, lane by lane the subtraction of [`Watertight::intersect_rays4`].
     #[inline(always)]
-    fn share(r: &ShearedRays4, origin: Vec3, v: &[Vec3; 3]) -> SharedTri {
-        let rel = |p: Vec3| -> [f32; 3] {
-            let p = (p - origin).extend(0.0).to_array();
-            r.k.map(|k| p[k & 3])
-        };
-        SharedTri { rel: [rel(v[0]), rel(v[1]), rel(v[2])] }
+    fn share(r: &ShearedRays4, origin: Vec3, v: &[Vec3; 3], into: &mut SharedTris, slot: usize) {
+        let o = origin.to_array();
+        for (rel, p) in into.rel.iter_mut().zip(v) {
+            let p = p.to_array();
+            for (axis, &k) in rel.iter_mut().zip(&r.k) {
+                axis[slot % SharedTris::SLOTS] = p[k % 3] - o[k % 3];
+            }
+        }
     }
 
+    /// [`Watertight::share`] for a block's four lanes at once: the same subtractions.
     #[inline(always)]
-    fn share_block(r: &ShearedRays4, origin: Vec3, block: &TriBlock4, lane: usize) -> SharedTri {
+    fn share_block(r: &ShearedRays4, origin: Vec3, block: &TriBlock4, into: &mut SharedTris, half: usize) {
         let o = origin.to_array();
-        let rel = |i: usize| r.k.map(|k| block.v[i][k % 3][lane % 4] - o[k % 3]);
-        SharedTri { rel: [rel(0), rel(1), rel(2)] }
+        let at = 4 * (half % 2);
+        for (rel, v) in into.rel.iter_mut().zip(&block.v) {
+            for (axis, &k) in rel.iter_mut().zip(&r.k) {
+                let d = Vec4::from_array(v[k % 3]) - Vec4::splat(o[k % 3]);
+                d.write_to_slice(&mut axis[at..at + 4]);
+            }
+        }
     }
 
     #[inline(always)]
     fn intersect_shared8(
-        lo: &ShearedRays4,
-        hi: &ShearedRays4,
-        tris: &[SharedTri],
-        lanes: u32,
-        found: impl FnMut(usize, &Hits8),
+        pairs: &[RayPair<'_, ShearedRays4>],
+        tris: &SharedTris,
+        n: usize,
+        found: impl FnMut(usize, usize, &Hits8),
     ) -> bool {
         #[cfg(target_arch = "x86_64")]
         if crate::cpu::has_avx() {
-            let s = [lo.sx, hi.sx, lo.sy, hi.sy, lo.sz, hi.sz];
+            // Each pair's shear constants as eight lanes, once for all the triangles.
+            let mut shear = heapless::Vec::<SharedShear, { crate::packet::MAX_PACKET / 8 }>::new();
+            for p in pairs {
+                let (lo, hi) = (p.lo, p.hi);
+                let eight = |a: Vec4, b: Vec4| {
+                    let (a, b) = (a.to_array(), b.to_array());
+                    [a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3]]
+                };
+                let s = [eight(lo.sx, hi.sx), eight(lo.sy, hi.sy), eight(lo.sz, hi.sz)];
+                // Cannot be full: a packet has at most `MAX_PACKET / 8` pairs.
+                let _ = shear.push(SharedShear { s, lanes: p.lanes });
+            }
             // SAFETY: the host has reported AVX (`cpu::assume_avx`).
             #[allow(unsafe_code)]
             unsafe {
-                crate::watertight8::shared8_avx(tris, s, lanes, found)
+                crate::watertight8::shared8_avx(tris, n.min(SharedTris::SLOTS), &shear, found)
             };
             return true;
         }
-        let _ = (lo, hi, tris, lanes, found);
+        let _ = (pairs, tris, n, found);
         false
     }
 
