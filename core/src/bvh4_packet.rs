@@ -168,11 +168,12 @@ fn extremes<const N: usize>(a: &[f32; N]) -> (f32, f32) {
 
 /// How the packet culls boxes: by its frustum, or ray by ray with each ray's exact box
 /// test when some ray has a zero direction component (see [`RayBox`]).
-// No heap in core to box the per-ray tests; the record lives on the stack for one packet.
-#[allow(clippy::large_enum_variant)]
-enum Cull<const N: usize> {
+// No heap in core to box the per-ray tests: they live on the stack for one packet, and
+// are borrowed here, so that the frustum's packets (nearly all) do not move them (a
+// copy of the whole record per packet was 2% of the bunny's packet time).
+enum Cull<'b, const N: usize> {
     Frustum(Frustum),
-    Exact([RayBox; N]),
+    Exact(&'b [RayBox; N]),
 }
 
 /// Lanes of a group of four as a SIMD mask, by the group's 4 bits of the active mask.
@@ -204,21 +205,39 @@ struct Groups {
 }
 
 impl Groups {
-    #[inline(always)]
+    /// No lanes yet: every group's end −∞.
+    const EMPTY: Groups = Groups {
+        org: [[Vec4::ZERO; GROUPS]; 3],
+        inv: [[Vec4::ZERO; GROUPS]; 3],
+        t_min: [Vec4::ZERO; GROUPS],
+        ends: [Vec4::ZERO; GROUPS],
+        group_end: [f32::NEG_INFINITY; GROUPS],
+        zero_dir: false,
+    };
+
+    /// The packet's lanes, by value (for tests).
+    #[cfg(test)]
     fn new<const N: usize>(p: &RayPacket<N>, groups: usize, mask: u64) -> Groups {
+        let mut slot = None;
+        Groups::fill(&mut slot, p, groups, mask);
+        slot.unwrap_or(Groups::EMPTY)
+    }
+
+    /// The packet's lanes written into `slot` in place (built elsewhere and moved in,
+    /// the two kilobytes were copied once more per packet: 1% of the bunny's packet time).
+    #[inline(always)]
+    fn fill<'s, const N: usize>(
+        slot: &'s mut Option<Groups>,
+        p: &RayPacket<N>,
+        groups: usize,
+        mask: u64,
+    ) -> &'s mut Groups {
         let lanes = |a: &[f32; N], g: usize| match a.get(4 * g..4 * g + 4) {
             // One load; only a packet of fewer than four rays takes the other arm.
             Some(l) => Vec4::from_slice(l),
             None => Vec4::from_array(core::array::from_fn(|k| a.get(4 * g + k).copied().unwrap_or(0.0))),
         };
-        let mut q = Groups {
-            org: [[Vec4::ZERO; GROUPS]; 3],
-            inv: [[Vec4::ZERO; GROUPS]; 3],
-            t_min: [Vec4::ZERO; GROUPS],
-            ends: [Vec4::ZERO; GROUPS],
-            group_end: [f32::NEG_INFINITY; GROUPS],
-            zero_dir: false,
-        };
+        let q = slot.insert(Groups::EMPTY);
         for g in 0..groups.min(GROUPS) {
             let act = GROUP_LANES[((mask >> (4 * g)) & 0xF) as usize];
             for (a, (o, d)) in [(&p.ox, &p.dx), (&p.oy, &p.dy), (&p.oz, &p.dz)].into_iter().enumerate() {
@@ -300,15 +319,17 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
     // The lanes in SIMD registers with their reciprocals: computed when the first leaf
     // needs them, if the frustum can do without (see `Frustum::from_full_packet`).
     let mut lanes: Option<Groups> = None;
+    // Each ray's exact box test, where the frustum cannot serve.
+    let mut boxes: Option<[RayBox; N]> = None;
     // `t_end`: how far any ray of the packet still looks.
     let (cull, mut t_end): (Cull<N>, f32) = match full.then(|| Frustum::from_full_packet(packet)).flatten() {
         Some((f, t_end)) => (Cull::Frustum(f), t_end),
         None => {
-            let q = lanes.insert(Groups::new(packet, groups, mask));
+            let q = Groups::fill(&mut lanes, packet, groups, mask);
             let t_end = q.largest_end();
             match Frustum::new(q, groups, mask) {
                 Some(f) => (Cull::Frustum(f), t_end),
-                None => (Cull::Exact(core::array::from_fn(|i| RayBox::new(&packet.ray(i)))), t_end),
+                None => (Cull::Exact(boxes.insert(core::array::from_fn(|i| RayBox::new(&packet.ray(i))))), t_end),
             }
         }
     };
@@ -360,7 +381,10 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
                 continue;
             }
         } else {
-            let q = lanes.get_or_insert_with(|| Groups::new(packet, groups, mask));
+            let q = match lanes {
+                Some(ref mut q) => q,
+                None => Groups::fill(&mut lanes, packet, groups, mask),
+            };
             let enter = match &cull {
                 Cull::Exact(boxes) => {
                     let lo = Vec3A::new(leaf_box[0], leaf_box[1], leaf_box[2]);
