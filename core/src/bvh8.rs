@@ -4,7 +4,6 @@
 //! host's AVX2 build of its loops). A ray visits fewer, wider nodes than in the 4-wide
 //! BVH (Embree's BVH8). The walk itself is the wide BVH's ([`crate::wide_bvh`]).
 
-use crate::aabb::SLAB_GROWTH;
 use crate::counters::RayCounters;
 use crate::hit::Hit;
 use crate::image::{Bvh8Node, Bvh8View, SceneView};
@@ -101,12 +100,12 @@ unsafe fn slab8_avx(r: &NodeRay, n: &Bvh8Node, t0: f32, t1: f32, out: &mut [f32;
     // SAFETY: `off & 0xE0` is at most 224, so the 32 bytes read lie inside the node's
     // 256; `loadu` needs no alignment.
     let row = |off: u32| unsafe { _mm256_loadu_ps(bytes.as_ptr().add(off as usize & 0xE0).cast::<f32>()) };
-    let splat = |v: glam::Vec3A| [_mm256_set1_ps(v.x), _mm256_set1_ps(v.y), _mm256_set1_ps(v.z)];
-    let (o, inv) = (splat(r.rb.origin), splat(r.rb.inv));
-    // `inv_far`'s bits, as one product per axis from the splats already loaded (three
-    // more loads per node measured no faster).
-    let growth = _mm256_set1_ps(SLAB_GROWTH);
-    let inv_far = inv.map(|v| _mm256_mul_ps(v, growth));
+    // The ray's lanes, splatted once per ray (`NodeRay::lanes8`); aligned loads, which
+    // the compiler folds into the operations that use them.
+    let l = &r.lanes8;
+    // SAFETY: each `Lanes8` is eight f32 aligned to 32 bytes.
+    let lane = |k: usize| unsafe { _mm256_load_ps(l[k % 9].0.as_ptr()) };
+    let (o, inv, inv_far) = ([lane(0), lane(1), lane(2)], [lane(3), lane(4), lane(5)], [lane(6), lane(7), lane(8)]);
     let dist = |off: u32, a: usize, inv: &[__m256; 3]| _mm256_mul_ps(_mm256_sub_ps(row(off), o[a]), inv[a]);
     let (near, far) = (r.rows.near8, r.rows.far8);
     let tn = _mm256_max_ps(

@@ -48,7 +48,16 @@ pub struct NodeRay {
     /// The 8-wide node test may take its AVX form: the CPU has AVX and no direction
     /// component is zero. Decided once per ray rather than at each node.
     pub(crate) avx8: bool,
+    /// For that form, the origin, `inv` and `inv_far` of [`RayBox`] as eight lanes each
+    /// (x, y, z of each), written once per ray: the node test takes them as memory
+    /// operands, where splatting them at each node took nine of its instructions.
+    pub(crate) lanes8: [Lanes8; 9],
 }
+
+/// Eight copies of one value, aligned as one AVX register.
+#[derive(Clone, Copy, Debug, Default)]
+#[repr(C, align(32))]
+pub(crate) struct Lanes8(pub(crate) [f32; 8]);
 
 /// For one octant of directions, the node rows (min x, y, z, then max x, y, z) of each
 /// axis' near and far planes, as indices and as byte offsets in an 8-wide node (32 bytes
@@ -93,7 +102,9 @@ impl NodeRay {
         let rb = RayBox::new(ray);
         let neg = rb.inv.cmplt(Vec3A::ZERO).bitmask() as usize;
         let avx8 = crate::cpu::has_avx() && rb.zero_axes == 0;
-        NodeRay { rows: OCTANTS[neg & 7], rb, avx8 }
+        let (o, inv, far) = (rb.origin, rb.inv, rb.inv_far);
+        let lanes8 = [o.x, o.y, o.z, inv.x, inv.y, inv.z, far.x, far.y, far.z].map(|v| Lanes8([v; 8]));
+        NodeRay { rows: OCTANTS[neg & 7], rb, avx8, lanes8 }
     }
 }
 
