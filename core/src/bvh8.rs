@@ -11,7 +11,7 @@ use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::ray_box::RayBox;
 use crate::triangle::Intersector;
-use crate::wide_bvh::{stack_capacity, trace_wide_bvh, NodeRay, WideBvhTraversal, WideSlab};
+use crate::wide_bvh::{stack_capacity, trace_wide_bvh, NodeRay, WideBvhTraversal, WideSlab, OCTANTS};
 
 /// `max` as the SIMD instruction computes it (the second operand when either is NaN),
 /// written so that the compiler emits exactly that instruction.
@@ -93,6 +93,43 @@ pub fn slab8_into(r: &NodeRay, n: &Bvh8Node, t0: f32, t1: f32, tn: &mut [f32; 8]
 #[target_feature(enable = "avx")]
 #[inline]
 unsafe fn slab8_avx(r: &NodeRay, n: &Bvh8Node, t0: f32, t1: f32, out: &mut [f32; 8]) -> u32 {
+    // SAFETY: the caller's (AVX).
+    unsafe { slab8_avx_rows(r, n, t0, t1, out, r.rows.near8, r.rows.far8) }
+}
+
+/// [`slab8_avx`] for a ray of octant `O` (`O < 8`): its planes' offsets are constants.
+///
+/// # Safety
+///
+/// The CPU must support AVX.
+#[cfg(target_arch = "x86_64")]
+#[allow(unsafe_code)]
+#[target_feature(enable = "avx")]
+#[inline]
+unsafe fn slab8_avx_in<const O: usize>(r: &NodeRay, n: &Bvh8Node, t0: f32, t1: f32, out: &mut [f32; 8]) -> u32 {
+    let rows = &OCTANTS[O % 8];
+    // SAFETY: the caller's (AVX).
+    unsafe { slab8_avx_rows(r, n, t0, t1, out, rows.near8, rows.far8) }
+}
+
+/// [`slab8_avx`] with the near and far planes' byte offsets given.
+///
+/// # Safety
+///
+/// The CPU must support AVX.
+#[cfg(target_arch = "x86_64")]
+#[allow(unsafe_code)]
+#[target_feature(enable = "avx")]
+#[inline]
+unsafe fn slab8_avx_rows(
+    r: &NodeRay,
+    n: &Bvh8Node,
+    t0: f32,
+    t1: f32,
+    out: &mut [f32; 8],
+    near: [u32; 3],
+    far: [u32; 3],
+) -> u32 {
     use core::arch::x86_64::*;
     // The node's planes as rows of eight lanes: min x, y, z, then max x, y, z, at byte
     // offsets 0, 32, … 160 (`NodeRay::near8`, `far8`).
@@ -107,7 +144,6 @@ unsafe fn slab8_avx(r: &NodeRay, n: &Bvh8Node, t0: f32, t1: f32, out: &mut [f32;
     let lane = |k: usize| unsafe { _mm256_load_ps(l[k % 9].0.as_ptr()) };
     let (o, inv, inv_far) = ([lane(0), lane(1), lane(2)], [lane(3), lane(4), lane(5)], [lane(6), lane(7), lane(8)]);
     let dist = |off: u32, a: usize, inv: &[__m256; 3]| _mm256_mul_ps(_mm256_sub_ps(row(off), o[a]), inv[a]);
-    let (near, far) = (r.rows.near8, r.rows.far8);
     let tn = _mm256_max_ps(
         _mm256_max_ps(dist(near[0], 0, &inv), dist(near[1], 1, &inv)),
         _mm256_max_ps(dist(near[2], 2, &inv), _mm256_set1_ps(t0)),
@@ -169,6 +205,19 @@ impl WideSlab for Bvh8Node {
         // bunny cost twice the 4-wide walk's). Behind `black_box` the ray is opaque at
         // each node, so they are broadcast from its record instead. (The 4-wide test
         // took 11% more instructions that way, so it keeps the hoisted splats.)
+        slab8_into(core::hint::black_box(r), self, t0, t1, tn)
+    }
+
+    const OCTANT_FORMS: bool = cfg!(target_arch = "x86_64");
+
+    #[inline(always)]
+    fn slab_in<const O: usize>(&self, r: &NodeRay, t0: f32, t1: f32, tn: &mut [f32; 8]) -> u32 {
+        #[cfg(target_arch = "x86_64")]
+        if r.avx8 {
+            // SAFETY: `avx8` is set only where the host has reported AVX (`cpu::assume_avx`).
+            #[allow(unsafe_code)]
+            return unsafe { slab8_avx_in::<O>(core::hint::black_box(r), self, t0, t1, tn) };
+        }
         slab8_into(core::hint::black_box(r), self, t0, t1, tn)
     }
 }
@@ -256,6 +305,25 @@ mod tests {
                     // SAFETY: this CPU has AVX (checked above).
                     #[allow(unsafe_code)]
                     let m8 = unsafe { slab8_avx(&r, &wide, t0, t1, &mut t8) };
+                    // The form for the ray's octant, with its offsets as constants: the
+                    // same bits.
+                    let mut t_in = [0.0; 8];
+                    // SAFETY: this CPU has AVX (checked above).
+                    #[allow(unsafe_code)]
+                    let m_in = unsafe {
+                        match r.octant {
+                            0 => slab8_avx_in::<0>(&r, &wide, t0, t1, &mut t_in),
+                            1 => slab8_avx_in::<1>(&r, &wide, t0, t1, &mut t_in),
+                            2 => slab8_avx_in::<2>(&r, &wide, t0, t1, &mut t_in),
+                            3 => slab8_avx_in::<3>(&r, &wide, t0, t1, &mut t_in),
+                            4 => slab8_avx_in::<4>(&r, &wide, t0, t1, &mut t_in),
+                            5 => slab8_avx_in::<5>(&r, &wide, t0, t1, &mut t_in),
+                            6 => slab8_avx_in::<6>(&r, &wide, t0, t1, &mut t_in),
+                            _ => slab8_avx_in::<7>(&r, &wide, t0, t1, &mut t_in),
+                        }
+                    };
+                    assert_eq!(m_in, m8, "case {case}: octant form's mask");
+                    assert_eq!(t_in.map(f32::to_bits), t8.map(f32::to_bits), "case {case}: octant form's distances");
                     (t8, m8)
                 } else {
                     slab8(&r, &wide, t0, t1)
