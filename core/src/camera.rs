@@ -2,7 +2,7 @@
 
 use core::fmt;
 
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 
 use crate::aabb::clip_ray;
 use crate::image::CameraRecord;
@@ -158,6 +158,25 @@ impl EyeRays {
         self.ray(x, y).dir.dot(self.forward)
     }
 
+    /// The eye rays of four pixels `(x[k], y[k])` as four SIMD lanes: their common origin
+    /// and, per axis, their directions. Lane by lane the operations of [`EyeRays::ray`] in
+    /// the same order, hence the same bits; four rays for about the cost of one (a
+    /// packet's rays were half of `raypipe bench`'s time on the bunny).
+    #[inline]
+    pub fn rays4(&self, x: [u32; 4], y: [u32; 4]) -> (Vec3, [Vec4; 3]) {
+        let xs = Vec4::from_array(x.map(|v| v as f32));
+        let ys = Vec4::from_array(y.map(|v| v as f32));
+        let sx = ((xs + 0.5) * self.inv_w) * 2.0 - 1.0;
+        let sy = Vec4::ONE - ((ys + 0.5) * self.inv_h) * 2.0;
+        let (a, b) = (sx * self.half_w, sy * self.half_h);
+        let (f, r, u) = (self.forward.to_array(), self.right.to_array(), self.up.to_array());
+        let d: [Vec4; 3] =
+            core::array::from_fn(|c| (Vec4::splat(f[c]) + Vec4::splat(r[c]) * a) + Vec4::splat(u[c]) * b);
+        // `Vec3::normalize`: the product by `1 / sqrt(dot)`, the dot summed x, y, then z.
+        let recip = Vec4::ONE / ((d[0] * d[0] + d[1] * d[1]) + d[2] * d[2]).sqrt();
+        (self.eye, d.map(|v| v * recip))
+    }
+
     /// Purcell 2002 §3.1.1: the eye-ray kernel also tests the ray against the scene's
     /// bounding box and ends a ray that misses it at once (`None`). The ray's own
     /// interval is left as it is, so traversal computes the same hits either way.
@@ -207,5 +226,26 @@ mod tests {
         assert_eq!(EyeRays::new(&Camera { look_at: cam().eye, ..cam() }), Err(CameraError::NoViewDirection));
         assert_eq!(EyeRays::new(&Camera { vfov_deg: 180.0, ..cam() }), Err(CameraError::BadFov));
         assert_eq!(EyeRays::new(&Camera { vfov_deg: f32::NAN, ..cam() }), Err(CameraError::NonFinite));
+    }
+
+    /// Four eye rays at once are, lane by lane, the one-ray kernel's rays bit for bit.
+    #[test]
+    fn four_eye_rays_are_the_single_rays() {
+        let mut g = crate::test_lcg::Lcg(9);
+        for (k, c) in [cam(), Camera { width: 1024, height: 768, vfov_deg: 37.0, ..cam() }].iter().enumerate() {
+            let c = Camera { eye: c.eye + Vec3::new(0.3, -1.7, 0.25) * k as f32, ..*c };
+            let e = EyeRays::new(&c).unwrap();
+            for _ in 0..2000 {
+                let x: [u32; 4] = core::array::from_fn(|_| (g.next() >> 40) as u32 % c.width);
+                let y: [u32; 4] = core::array::from_fn(|_| (g.next() >> 40) as u32 % c.height);
+                let (origin, d) = e.rays4(x, y);
+                for lane in 0..4 {
+                    let r = e.ray(x[lane], y[lane]);
+                    assert_eq!(origin.to_array().map(f32::to_bits), r.origin.to_array().map(f32::to_bits));
+                    let got = [d[0][lane], d[1][lane], d[2][lane]].map(f32::to_bits);
+                    assert_eq!(got, r.dir.to_array().map(f32::to_bits), "pixel ({}, {})", x[lane], y[lane]);
+                }
+            }
+        }
     }
 }
