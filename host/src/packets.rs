@@ -157,16 +157,16 @@ fn blocks<I: Intersector, const N: usize>(
                 });
                 let (eye_at, dirs) = eye.rays4(pixel.map(|p| p.0), pixel.map(|p| p.1));
                 let seen = clip_rays4(eye_at, dirs, Vec4::ZERO, Vec4::INFINITY, lo, hi);
+                let mut keep = 0;
                 for (k, &(x, y)) in pixel.iter().enumerate() {
                     if x < x1 && y < y1 && seen & (1 << k) != 0 {
-                        let lane = quad as usize + k;
-                        let r = Ray::new(eye_at, Vec3::new(dirs[0][k], dirs[1][k], dirs[2][k]));
-                        packet.set(lane, &r);
-                        if let Some(slot) = rays.get_mut(lane) {
-                            *slot = Some(r);
+                        keep |= 1 << k;
+                        if let Some(slot) = rays.get_mut(quad as usize + k) {
+                            *slot = Some(Ray::new(eye_at, Vec3::new(dirs[0][k], dirs[1][k], dirs[2][k])));
                         }
                     }
                 }
+                packet.set4(quad as usize, eye_at, dirs, 0.0, f32::INFINITY, keep);
             }
             trace_packet::<I, _, N>(scene, &packet, &mut hits, &mut NoProbe, counters);
             for ((&(i, j), ray), hit) in offsets.iter().zip(&rays).zip(&hits).take((side * side) as usize) {
