@@ -121,9 +121,20 @@ fn singles<I: Intersector>(
     let n = (w * y1.saturating_sub(y0)) as usize;
     let w = w.max(1);
     let pixel = |i: usize| (x0 + i as u32 % w, y0 + i as u32 / w);
+    // The rays made four at a time (`EyeRays::rays4`, `clip_rays4`: the same rays and
+    // verdicts as `ray_in_scene` one by one), handed out one by one.
+    let mut quad = (usize::MAX, [None; 4]);
     let ray = |i: usize| {
-        let (x, y) = pixel(i);
-        eye.ray_in_scene(x, y, lo, hi)
+        if quad.0 != i / 4 {
+            let at: [(u32, u32); 4] = core::array::from_fn(|k| pixel(i / 4 * 4 + k));
+            let (eye_at, dirs) = eye.rays4(at.map(|p| p.0), at.map(|p| p.1));
+            let seen = clip_rays4(eye_at, dirs, Vec4::ZERO, Vec4::INFINITY, lo, hi);
+            let rays = core::array::from_fn(|k| {
+                (seen & (1 << k) != 0).then(|| Ray::new(eye_at, Vec3::new(dirs[0][k], dirs[1][k], dirs[2][k])))
+            });
+            quad = (i / 4, rays);
+        }
+        quad.1[i % 4]
     };
     trace_each::<I, _, _>(scene, n, ray, &mut NoProbe, counters, |i, ray, hit| {
         let (x, y) = pixel(i);
