@@ -4,7 +4,7 @@ use core::fmt;
 
 use glam::{Vec3, Vec4};
 
-use crate::aabb::clip_ray;
+use crate::aabb::{clip_ray, clip_rays4};
 use crate::image::CameraRecord;
 use crate::ray::Ray;
 
@@ -175,6 +175,21 @@ impl EyeRays {
         // `Vec3::normalize`: the product by `1 / sqrt(dot)`, the dot summed x, y, then z.
         let recip = Vec4::ONE / ((d[0] * d[0] + d[1] * d[1]) + d[2] * d[2]).sqrt();
         (self.eye, d.map(|v| v * recip))
+    }
+
+    /// [`EyeRays::ray_in_scene`] for four pixels: [`EyeRays::rays4`], and bit `k` set
+    /// where pixel `k`'s ray meets the scene's bounding box (its ray is then `Some`).
+    #[inline]
+    pub fn rays4_in_scene(
+        &self,
+        x: [u32; 4],
+        y: [u32; 4],
+        bounds_min: Vec3,
+        bounds_max: Vec3,
+    ) -> (Vec3, [Vec4; 3], u32) {
+        let (origin, dirs) = self.rays4(x, y);
+        let seen = clip_rays4(origin, dirs, Vec4::ZERO, Vec4::INFINITY, bounds_min, bounds_max);
+        (origin, dirs, seen)
     }
 
     /// Purcell 2002 §3.1.1: the eye-ray kernel also tests the ray against the scene's

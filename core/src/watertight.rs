@@ -127,14 +127,8 @@ impl Intersector for Watertight {
             // Each pair's shear constants as eight lanes, once for all the triangles.
             let mut shear = heapless::Vec::<SharedShear, { crate::packet::MAX_PACKET / 8 }>::new();
             for p in pairs {
-                let (lo, hi) = (p.lo, p.hi);
-                let eight = |a: Vec4, b: Vec4| {
-                    let (a, b) = (a.to_array(), b.to_array());
-                    [a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3]]
-                };
-                let s = [eight(lo.sx, hi.sx), eight(lo.sy, hi.sy), eight(lo.sz, hi.sz)];
                 // Cannot be full: a packet has at most `MAX_PACKET / 8` pairs.
-                let _ = shear.push(SharedShear { s, lanes: p.lanes });
+                let _ = shear.push(SharedShear::pair(p.lo, p.hi, p.lanes));
             }
             // SAFETY: the host has reported AVX (`cpu::assume_avx`).
             #[allow(unsafe_code)]

@@ -6,6 +6,8 @@
 //! once for all the pairs of groups that entered its leaf.
 
 use crate::triangle::{Hits8, SharedTris};
+use crate::watertight::ShearedRays4;
+use glam::Vec4;
 
 /// Two groups of four rays' shear constants as eight lanes (sx, sy, sz: lanes 0–3 the
 /// first group's, 4–7 the second's), and the lanes that take part.
@@ -13,6 +15,17 @@ use crate::triangle::{Hits8, SharedTris};
 pub(crate) struct SharedShear {
     pub(crate) s: [[f32; 8]; 3],
     pub(crate) lanes: u32,
+}
+
+impl SharedShear {
+    /// The constants of groups `lo` (lanes 0–3) and `hi` (lanes 4–7), with `lanes`.
+    pub(crate) fn pair(lo: &ShearedRays4, hi: &ShearedRays4, lanes: u32) -> SharedShear {
+        let eight = |a: Vec4, b: Vec4| {
+            let (a, b) = (a.to_array(), b.to_array());
+            [a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3]]
+        };
+        SharedShear { s: [eight(lo.sx, hi.sx), eight(lo.sy, hi.sy), eight(lo.sz, hi.sz)], lanes }
+    }
 }
 
 /// Per triangle of the first `n` of `tris`, and per pair of ray groups of `pairs`, the
@@ -104,7 +117,7 @@ mod tests {
     use crate::test_lcg::Lcg;
     use crate::triangle::Intersector;
     use crate::watertight::Watertight;
-    use glam::{Vec3, Vec4};
+    use glam::Vec3;
 
     /// Small lattice values, so that edge functions are often exactly zero (lanes the
     /// test leaves to the scalar form) and triangles are often hit.
@@ -169,14 +182,7 @@ mod tests {
             // Some triangles, each pair with some of its lanes.
             let n = 1 + case % SharedTris::SLOTS;
             let lanes = [[0xFF, 0x0F], [0xF0, 0x5A], [0x01, 0xFF]][case % 3];
-            let eight = |a: Vec4, b: Vec4| {
-                let (a, b) = (a.to_array(), b.to_array());
-                [a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3]]
-            };
-            let pairs = [0, 1].map(|p| {
-                let (lo, hi) = (&groups[2 * p], &groups[2 * p + 1]);
-                SharedShear { s: [eight(lo.sx, hi.sx), eight(lo.sy, hi.sy), eight(lo.sz, hi.sz)], lanes: lanes[p] }
-            });
+            let pairs = [0, 1].map(|p| SharedShear::pair(&groups[2 * p], &groups[2 * p + 1], lanes[p]));
             let mut out = [[None; 2]; SharedTris::SLOTS];
             // SAFETY: this CPU has AVX (checked above).
             #[allow(unsafe_code)]

@@ -2,7 +2,6 @@
 //! each traced as one packet in lock-step (or pixel by pixel for single rays). Every
 //! pixel gets the same hit either way.
 
-use raypipe_core::aabb::clip_rays4;
 use raypipe_core::camera::EyeRays;
 use raypipe_core::packet::{PacketCounters, RayPacket};
 use raypipe_core::{Hit, Intersector, NoProbe, Ray, RayCounters, SceneView, Vec3, Vec4};
@@ -127,11 +126,8 @@ fn singles<I: Intersector>(
     let ray = |i: usize| {
         if quad.0 != i / 4 {
             let at: [(u32, u32); 4] = core::array::from_fn(|k| pixel(i / 4 * 4 + k));
-            let (eye_at, dirs) = eye.rays4(at.map(|p| p.0), at.map(|p| p.1));
-            let seen = clip_rays4(eye_at, dirs, Vec4::ZERO, Vec4::INFINITY, lo, hi);
-            let rays = core::array::from_fn(|k| {
-                (seen & (1 << k) != 0).then(|| Ray::new(eye_at, Vec3::new(dirs[0][k], dirs[1][k], dirs[2][k])))
-            });
+            let (eye_at, dirs, seen) = eye.rays4_in_scene(at.map(|p| p.0), at.map(|p| p.1), lo, hi);
+            let rays = core::array::from_fn(|k| (seen & (1 << k) != 0).then(|| lane_ray(eye_at, &dirs, k)));
             quad = (i / 4, rays);
         }
         quad.1[i % 4]
@@ -166,14 +162,13 @@ fn blocks<I: Intersector, const N: usize>(
                     let (i, j) = offsets[(quad as usize + k) % N];
                     (bx + i, by + j)
                 });
-                let (eye_at, dirs) = eye.rays4(pixel.map(|p| p.0), pixel.map(|p| p.1));
-                let seen = clip_rays4(eye_at, dirs, Vec4::ZERO, Vec4::INFINITY, lo, hi);
+                let (eye_at, dirs, seen) = eye.rays4_in_scene(pixel.map(|p| p.0), pixel.map(|p| p.1), lo, hi);
                 let mut keep = 0;
                 for (k, &(x, y)) in pixel.iter().enumerate() {
                     if x < x1 && y < y1 && seen & (1 << k) != 0 {
                         keep |= 1 << k;
                         if let Some(slot) = rays.get_mut(quad as usize + k) {
-                            *slot = Some(Ray::new(eye_at, Vec3::new(dirs[0][k], dirs[1][k], dirs[2][k])));
+                            *slot = Some(lane_ray(eye_at, &dirs, k));
                         }
                     }
                 }
@@ -188,6 +183,12 @@ fn blocks<I: Intersector, const N: usize>(
             }
         }
     }
+}
+
+/// Lane `k`'s ray of four rays from `origin` (directions `dirs`, one lane per ray).
+#[inline(always)]
+fn lane_ray(origin: Vec3, dirs: &[Vec4; 3], k: usize) -> Ray {
+    Ray::new(origin, Vec3::new(dirs[0][k % 4], dirs[1][k % 4], dirs[2][k % 4]))
 }
 
 /// The pixel `(i, j)` of lane `lane` in a square block of side `side`: Z-order (Morton)
