@@ -199,12 +199,13 @@ impl WideSlab for Bvh8Node {
 
     #[inline(always)]
     fn slab(&self, r: &NodeRay, t0: f32, t1: f32, tn: &mut [f32; 8]) -> u32 {
-        // The AVX test splats the ray's origin and reciprocal direction; hoisted out of a
-        // walk's loop by the compiler, the splats were spilled to the stack and reloaded
-        // at every node, and each ray's start stalled on the spill (rays that miss the
-        // bunny cost twice the 4-wide walk's). Behind `black_box` the ray is opaque at
-        // each node, so they are broadcast from its record instead. (The 4-wide test
-        // took 11% more instructions that way, so it keeps the hoisted splats.)
+        // The AVX test reads the ray's splatted lanes (`NodeRay::lanes8`); hoisted out of
+        // a walk's loop by the compiler, such registers were spilled to the stack and
+        // reloaded at every node, and each ray's start stalled on the spill (rays that
+        // miss the bunny cost twice the 4-wide walk's; without `black_box` in the
+        // per-octant walks, bunny 0.93x). Behind `black_box` the ray is opaque at each
+        // node, so they are read from its record instead. (The 4-wide test took 11% more
+        // instructions that way, so it keeps the hoisted splats.)
         slab8_into(core::hint::black_box(r), self, t0, t1, tn)
     }
 
