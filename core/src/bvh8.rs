@@ -312,7 +312,7 @@ mod tests {
                     // SAFETY: this CPU has AVX (checked above).
                     #[allow(unsafe_code)]
                     let m_in = unsafe {
-                        match r.octant {
+                        match r.octant() {
                             0 => slab8_avx_in::<0>(&r, &wide, t0, t1, &mut t_in),
                             1 => slab8_avx_in::<1>(&r, &wide, t0, t1, &mut t_in),
                             2 => slab8_avx_in::<2>(&r, &wide, t0, t1, &mut t_in),

@@ -52,8 +52,6 @@ pub struct NodeRay {
     /// (x, y, z of each), written once per ray: the node test takes them as memory
     /// operands, where splatting them at each node took nine of its instructions.
     pub(crate) lanes8: [Lanes8; 9],
-    /// The ray's octant (bit `a`: the direction is negative on axis `a`).
-    pub(crate) octant: u8,
 }
 
 /// Eight copies of one value, aligned as one AVX register.
@@ -106,7 +104,14 @@ impl NodeRay {
         let avx8 = crate::cpu::has_avx() && rb.zero_axes == 0;
         let (o, inv, far) = (rb.origin, rb.inv, rb.inv_far);
         let lanes8 = [o.x, o.y, o.z, inv.x, inv.y, inv.z, far.x, far.y, far.z].map(|v| Lanes8([v; 8]));
-        NodeRay { rows: OCTANTS[neg & 7], rb, avx8, lanes8, octant: (neg & 7) as u8 }
+        NodeRay { rows: OCTANTS[neg & 7], rb, avx8, lanes8 }
+    }
+
+    /// The ray's octant (bit `a`: the direction is negative on axis `a`), the index of
+    /// its [`OCTANTS`] entry.
+    #[inline]
+    pub(crate) fn octant(&self) -> usize {
+        self.rb.inv.cmplt(Vec3A::ZERO).bitmask() as usize & 7
     }
 }
 
@@ -296,7 +301,7 @@ pub fn trace_wide_bvh<N: WideSlab, const C: usize, I: Intersector, P: MemoryProb
     // them took 12 of a node's 62 instructions on Sponza). Coherent rays keep to one or
     // two of the eight walks.
     if N::OCTANT_FORMS && r.avx8 {
-        return match r.octant & 7 {
+        return match r.octant() {
             0 => walk::<N, C, I, P, 0>(scene, bvh, ray, &r, probe, counters),
             1 => walk::<N, C, I, P, 1>(scene, bvh, ray, &r, probe, counters),
             2 => walk::<N, C, I, P, 2>(scene, bvh, ray, &r, probe, counters),
