@@ -4,9 +4,9 @@ use core::fmt;
 
 use glam::{Vec3, Vec4};
 
-use crate::aabb::{clip_ray, clip_rays4};
 use crate::image::CameraRecord;
 use crate::ray::Ray;
+use crate::traverse::aabb::{clip_ray, clip_rays4};
 
 /// A pinhole camera: where it is, what it looks at, which way is up, and the image size.
 #[derive(Clone, Copy, Debug, PartialEq)]

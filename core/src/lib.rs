@@ -5,19 +5,20 @@
 //! ([`SceneView::parse`]), validated once; after that no kernel can index out of bounds
 //! or panic.
 //!
-//! The kernels are steps over plain data (see `../shared/DESIGN.md`):
+//! The kernels are steps over plain data (see `../shared/DESIGN.md`), grouped by
+//! Purcell's pipeline stages (generate → traverse → intersect → shade):
 //!
-//! * [`camera`]: pinhole eye rays and Purcell's scene-bounding-box test;
-//! * [`dda`]: the 3D-DDA of Amanatides & Woo, one voxel per step;
-//! * [`grid`]: uniform-grid traversal over Purcell's Figure 4 layout;
-//! * [`bvh`] and [`kdtree`]: tree traversal with a fixed-capacity stack;
-//! * [`watertight`] and [`moller_trumbore`]: ray–triangle intersection;
-//! * [`leaf_blocks`]: a leaf's triangles four at a time (optional TRI_BLOCKS);
-//! * [`brute_force`]: the reference tracer every structure must agree with;
-//! * [`shade`]: Lambert shading with one point light plus ambient;
-//! * [`ray_record`], [`occlusion`], [`whitted`], [`path`] and [`shader`]: weighted ray
-//!   records, the any-hit query of shadow rays, and Whitted's and the path tracer's
-//!   shaders as stream kernels that emit rays ([`rng`]: counter-based random numbers).
+//! * [`camera`]: pinhole eye rays and Purcell's scene-bounding-box test (generate);
+//! * [`traverse`]: the 3D-DDA over Purcell's Figure 4 grid, the kd-tree and the BVHs as
+//!   step kernels with fixed-capacity stacks, the robust ray/box tests, the any-hit query
+//!   of shadow rays and the brute-force reference every structure must agree with;
+//! * [`intersect`]: the ray–triangle interface and its watertight, Möller–Trumbore and
+//!   Wald tests, and leaf triangle blocks;
+//! * [`packet`]: ray packets, the lock-step driver and each structure's packet traversal;
+//! * [`shade`]: Lambert shading, weighted ray records, Whitted's and the path tracer's
+//!   shaders as stream kernels that emit rays, counter-based random numbers;
+//! * at the root, the scene image ([`image`]) and the plain records: [`ray`], [`hit`],
+//!   [`probe`] (the one access path of scene reads) and [`counters`].
 //!
 //! ```
 //! use raypipe_core::{SceneView, SceneError};
@@ -35,59 +36,26 @@
 #[cfg(target_endian = "big")]
 compile_error!("raypipe-core reads little-endian scene images in place and needs a little-endian target");
 
-pub mod aabb;
-pub mod brute_force;
-pub mod bvh;
-pub mod bvh4;
-pub mod bvh4_packet;
-pub mod bvh8;
-pub mod bvh_packet;
 pub mod camera;
-pub mod color;
 pub mod counters;
 pub mod cpu;
-pub mod dda;
-pub mod grid;
-pub mod grid_packet;
 pub mod hit;
 pub mod image;
-pub mod kdtree;
-pub mod kdtree_packet;
-pub mod leaf_blocks;
-pub mod lockstep;
-pub mod moller_trumbore;
-pub mod occlusion;
+pub mod intersect;
 pub mod packet;
-pub mod path;
 pub mod probe;
-pub mod radiance_sum;
-pub mod raster;
 pub mod ray;
-pub mod ray_box;
-pub mod ray_record;
-pub mod rng;
 pub mod shade;
-pub mod shader;
-pub mod specular;
-pub mod surface;
 #[cfg(test)]
 mod test_lcg;
-pub mod texture;
-pub mod tree_step;
-pub mod triangle;
-pub mod wald;
-pub mod walk;
-pub mod watertight;
-pub mod watertight8;
-pub mod whitted;
-pub mod wide_bvh;
+pub mod traverse;
 
 pub use camera::{Camera, CameraError};
 pub use counters::RayCounters;
 pub use hit::Hit;
 pub use image::{SceneError, SceneView};
+pub use intersect::triangle::{Intersector, MollerTrumbore, WaldProjection, Watertight};
 pub use probe::{DataClass, MemoryProbe, NoProbe};
 pub use ray::Ray;
-pub use triangle::{Intersector, MollerTrumbore, WaldProjection, Watertight};
 
 pub use glam::{Vec3, Vec4};

@@ -743,7 +743,7 @@ fn cmd_stats(a: StatsArgs) -> Result<()> {
         let cast = stats::algorithm_costs(&view, &cam, &RenderOptions { algo: Algorithm::Cast, ..algo_opts })?;
         let c = stats::algorithm_costs(&view, &cam, &algo_opts)?;
         let px = c.pixels.max(1) as f64;
-        let kinds: Vec<String> = raypipe_core::ray_record::RayKind::ALL
+        let kinds: Vec<String> = raypipe_core::shade::ray_record::RayKind::ALL
             .iter()
             .map(|k| format!("{} {:.2}", k.name(), c.rays[*k as usize] as f64 / px))
             .collect();
@@ -867,7 +867,7 @@ fn cmd_bench(a: BenchArgs) -> Result<()> {
                 a.algo.apply(&mut opts)?;
                 let r = bench::algorithm_rays(&view, &cam, &opts, a.runs, a.threads)?;
                 let px = cam.width as f64 * cam.height as f64;
-                let kinds: Vec<String> = raypipe_core::ray_record::RayKind::ALL
+                let kinds: Vec<String> = raypipe_core::shade::ray_record::RayKind::ALL
                     .iter()
                     .filter(|k| r.rays[**k as usize] > 0)
                     .map(|k| format!("{} {:.2}", k.name(), r.rays[*k as usize] as f64 / px))

@@ -1,9 +1,9 @@
 //! The shadow caster's G-buffer (Purcell 2002 §3.1.4): storage for the frame, filled by
-//! core's rasterizer kernel (`raypipe_core::raster`) triangle by triangle.
+//! core's rasterizer kernel (`raypipe_core::shade::raster`) triangle by triangle.
 
 use raypipe_core::camera::EyeRays;
 use raypipe_core::image::NULL_INDEX;
-use raypipe_core::raster::{self, rasterize_triangle, GBufferMut};
+use raypipe_core::shade::raster::{self, rasterize_triangle, GBufferMut};
 use raypipe_core::{NoProbe, SceneView};
 
 /// Nearest triangle per pixel.
@@ -48,7 +48,7 @@ pub fn rasterize(scene: &SceneView<'_>, eye: &EyeRays) -> GBuffer {
 }
 
 /// The primary ray of pixel `(x, y)` and the hit the G-buffer gives it (core's
-/// [`raypipe_core::raster::gbuffer_hit`]).
+/// [`raypipe_core::shade::raster::gbuffer_hit`]).
 pub fn gbuffer_hit<I: raypipe_core::Intersector>(
     scene: &SceneView<'_>,
     eye: &EyeRays,

@@ -8,10 +8,10 @@
 
 use std::collections::VecDeque;
 
-use raypipe_core::occlusion::occluded;
-use raypipe_core::radiance_sum::RadianceSum;
-use raypipe_core::ray_record::{RayKind, RayRecord};
-use raypipe_core::shader::Shader;
+use raypipe_core::shade::radiance_sum::RadianceSum;
+use raypipe_core::shade::ray_record::{RayKind, RayRecord};
+use raypipe_core::shade::shader::Shader;
+use raypipe_core::traverse::occlusion::occluded;
 use raypipe_core::{Hit, Intersector, MemoryProbe, Ray, RayCounters, SceneView, Vec3};
 
 use crate::tracer::trace;

@@ -6,18 +6,18 @@ use anyhow::{anyhow, Result};
 use glam::Vec3;
 use rayon::prelude::*;
 use raypipe_core::camera::{Camera, EyeRays};
-use raypipe_core::color::rgb8;
 use raypipe_core::image::CameraRecord;
 use raypipe_core::packet::PacketCounters;
-use raypipe_core::shade::shade;
+use raypipe_core::shade::color::rgb8;
+use raypipe_core::shade::lambert::shade;
 use raypipe_core::{Intersector, NoProbe, Ray, RayCounters, SceneView};
 
 use crate::packets::{trace_tile, PacketSize};
 use crate::raster::{gbuffer_hit, rasterize};
 use crate::ray_stream::{shade_tile, StreamCounts, TileGeometry};
-use raypipe_core::path::PathOptions;
-use raypipe_core::shader::Shader;
-use raypipe_core::whitted::WhittedOptions;
+use raypipe_core::shade::path::PathOptions;
+use raypipe_core::shade::shader::Shader;
+use raypipe_core::shade::whitted::WhittedOptions;
 
 use crate::progress;
 use crate::tracer::IntersectorKind;

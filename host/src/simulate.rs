@@ -6,7 +6,7 @@ use std::path::Path;
 
 use anyhow::{anyhow, Result};
 use raypipe_core::image::CameraRecord;
-use raypipe_core::shader::Shader;
+use raypipe_core::shade::shader::Shader;
 use raypipe_core::SceneView;
 use raypipe_hw::{HwConfig, Report, Simulator};
 

@@ -17,8 +17,8 @@ use crate::render::{eye_rays, in_pool, tiles, Algorithm, RenderOptions};
 use crate::tracer::trace;
 use crate::with_intersector;
 use raypipe_core::image::NULL_INDEX;
-use raypipe_core::ray_record::RayKind;
-use raypipe_core::shade::shade;
+use raypipe_core::shade::lambert::shade;
+use raypipe_core::shade::ray_record::RayKind;
 use raypipe_core::NoProbe;
 
 /// Totals and maxima over all primary rays of a view.

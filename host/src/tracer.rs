@@ -5,17 +5,19 @@ use std::borrow::Borrow;
 
 use crate::isa::with_avx2;
 
-use raypipe_core::bvh::trace_bvh;
-use raypipe_core::bvh4::trace_bvh4;
-use raypipe_core::bvh4_packet::trace_bvh4_packet;
-use raypipe_core::bvh8::trace_bvh8;
-use raypipe_core::bvh_packet::trace_bvh_packet;
-use raypipe_core::grid::trace_grid;
-use raypipe_core::grid_packet::trace_grid_packet;
-use raypipe_core::kdtree::trace_kdtree;
-use raypipe_core::kdtree_packet::trace_kdtree_packet;
+use raypipe_core::packet::bvh::trace_bvh_packet;
+use raypipe_core::packet::bvh4::trace_bvh4_packet;
+use raypipe_core::packet::grid::trace_grid_packet;
+use raypipe_core::packet::kdtree::trace_kdtree_packet;
 use raypipe_core::packet::{PacketCounters, PacketHits, RayPacket};
-use raypipe_core::{brute_force::trace_brute_force, Hit, Intersector, MemoryProbe, Ray, RayCounters, SceneView};
+use raypipe_core::traverse::bvh::trace_bvh;
+use raypipe_core::traverse::bvh4::trace_bvh4;
+use raypipe_core::traverse::bvh8::trace_bvh8;
+use raypipe_core::traverse::grid::trace_grid;
+use raypipe_core::traverse::kdtree::trace_kdtree;
+use raypipe_core::{
+    traverse::brute_force::trace_brute_force, Hit, Intersector, MemoryProbe, Ray, RayCounters, SceneView,
+};
 
 /// Which ray–triangle test to use.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]

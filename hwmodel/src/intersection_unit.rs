@@ -8,7 +8,7 @@
 
 use std::marker::PhantomData;
 
-use raypipe_core::triangle::Intersector;
+use raypipe_core::intersect::triangle::Intersector;
 use raypipe_core::{DataClass, SceneView};
 
 use crate::config::HwConfig;

@@ -2,7 +2,7 @@
 //! mask), boxed so that a FIFO slot is a pointer, as a hardware FIFO of packet tags into
 //! a packet register file would be.
 
-use raypipe_core::walk::Leaf;
+use raypipe_core::traverse::walk::Leaf;
 use raypipe_core::{Hit, Ray};
 
 use crate::config::MAX_PACKET;

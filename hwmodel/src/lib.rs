@@ -10,7 +10,7 @@
 //! order cannot change any result.
 //!
 //! The model computes with raypipe-core's kernels — the structures' step kernels through
-//! `raypipe_core::walk::Walk`, the intersection and shading kernels — and observes their
+//! `raypipe_core::traverse::walk::Walk`, the intersection and shading kernels — and observes their
 //! reads through `MemoryProbe`, so its image is the host's image bit for bit; it adds
 //! cycles, stalls, occupancy and traffic ([`report`]). Parameters live in one
 //! [`config::HwConfig`].

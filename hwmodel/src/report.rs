@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 
 use serde::Serialize;
 
-use raypipe_core::ray_record::RayKind;
+use raypipe_core::shade::ray_record::RayKind;
 
 use crate::cache::CacheStats;
 use crate::config::HwConfig;

@@ -10,11 +10,11 @@
 use std::collections::{HashMap, VecDeque};
 
 use raypipe_core::camera::EyeRays;
-use raypipe_core::color::rgb8;
-use raypipe_core::radiance_sum::RadianceSum;
-use raypipe_core::ray_record::{RayKind, RayRecord};
-use raypipe_core::shade::shade;
-use raypipe_core::shader::Shader;
+use raypipe_core::shade::color::rgb8;
+use raypipe_core::shade::lambert::shade;
+use raypipe_core::shade::radiance_sum::RadianceSum;
+use raypipe_core::shade::ray_record::{RayKind, RayRecord};
+use raypipe_core::shade::shader::Shader;
 use raypipe_core::{SceneView, Vec3};
 
 use crate::config::HwConfig;

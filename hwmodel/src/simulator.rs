@@ -4,8 +4,8 @@
 //! `watchdog_cycles` and names every unit's state and every FIFO's occupancy.
 
 use raypipe_core::camera::EyeRays;
-use raypipe_core::shader::Shader;
-use raypipe_core::triangle::Intersector;
+use raypipe_core::intersect::triangle::Intersector;
+use raypipe_core::shade::shader::Shader;
 use raypipe_core::{SceneView, Vec3};
 
 use crate::config::HwConfig;

@@ -9,7 +9,7 @@
 //! Ports: `rays` in (from ray generation), `leaves` out and `results` in (to and from
 //! the intersection unit), `hits` out (to shading), and a memory port with a node cache.
 
-use raypipe_core::walk::{Leaf, Walk, WalkEvent};
+use raypipe_core::traverse::walk::{Leaf, Walk, WalkEvent};
 use raypipe_core::{Ray, SceneView};
 
 use crate::config::HwConfig;

@@ -6,9 +6,9 @@
 #![no_std]
 #![no_main]
 
-use raypipe_core::brute_force::trace_brute_force;
+use raypipe_core::traverse::brute_force::trace_brute_force;
 use raypipe_core::camera::{Camera, EyeRays};
-use raypipe_core::grid::trace_grid;
+use raypipe_core::traverse::grid::trace_grid;
 use raypipe_core::{NoProbe, RayCounters, SceneView, Watertight};
 
 static SCENE: &[u8] = raypipe_core::include_scene!("../../fixtures/tetra.rpsi");

@@ -6,9 +6,9 @@ use proptest::prelude::*;
 use raypipe::scene::Accel;
 use raypipe::scene::TriangleLayout;
 use raypipe::tracer::trace;
-use raypipe_core::brute_force::trace_brute_force;
 use raypipe_core::image::TriBlock4;
-use raypipe_core::walk::trace_walk;
+use raypipe_core::traverse::brute_force::trace_brute_force;
+use raypipe_core::traverse::walk::trace_walk;
 use raypipe_core::Vec3;
 use raypipe_core::Vec4;
 use raypipe_core::{

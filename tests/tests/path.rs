@@ -10,8 +10,8 @@ use raypipe::render::{render, Algorithm, Frame, RenderOptions};
 use raypipe::scene::{self, Accel, BuildOptions};
 use raypipe::tracer::trace;
 use raypipe_core::image::CameraRecord;
-use raypipe_core::path::{shade_path, PathOptions};
-use raypipe_core::ray_record::{RayKind, RayRecord};
+use raypipe_core::shade::path::{shade_path, PathOptions};
+use raypipe_core::shade::ray_record::{RayKind, RayRecord};
 use raypipe_core::{NoProbe, Ray, RayCounters, Vec3, Watertight};
 use raypipe_tests::{check_golden, root};
 
@@ -89,7 +89,7 @@ fn path_traced_image_is_golden_and_the_same_for_every_structure_packet_and_threa
 fn area_light_samples_are_never_blocked_by_the_emitter_itself() {
     use raypipe::mesh::Mesh;
     use raypipe_core::image::MaterialRecord;
-    use raypipe_core::occlusion::occluded;
+    use raypipe_core::traverse::occlusion::occluded;
     let positions = vec![
         [-2.0, 0.0, -2.0],
         [2.0, 0.0, -2.0],

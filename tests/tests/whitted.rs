@@ -13,10 +13,10 @@ use raypipe::render::{render, Algorithm, Frame, RenderOptions};
 use raypipe::scene::{self, Accel, BuildOptions, Scene};
 use raypipe::tracer::trace;
 use raypipe_core::image::{CameraRecord, LightRecord, MaterialRecord};
-use raypipe_core::occlusion::occluded;
-use raypipe_core::ray_record::{RayKind, RayRecord};
-use raypipe_core::specular::reflect;
-use raypipe_core::whitted::{shade_whitted, WhittedOptions};
+use raypipe_core::shade::ray_record::{RayKind, RayRecord};
+use raypipe_core::shade::specular::reflect;
+use raypipe_core::shade::whitted::{shade_whitted, WhittedOptions};
+use raypipe_core::traverse::occlusion::occluded;
 use raypipe_core::{NoProbe, Ray, RayCounters, SceneView, Vec3, Watertight};
 use raypipe_tests::{build_soup, check_golden, root};
 

@@ -389,21 +389,21 @@ impl<'a> KdTreeView<'a> {
     }
 }
 
-impl crate::tree_step::PrimLists for BvhView<'_> {
+impl crate::traverse::tree_step::PrimLists for BvhView<'_> {
     #[inline(always)]
     fn prim<P: MemoryProbe>(&self, pos: u32, probe: &mut P) -> u32 {
         BvhView::prim(self, pos, probe)
     }
 }
 
-impl<N: WideNode> crate::tree_step::PrimLists for WideBvhView<'_, N> {
+impl<N: WideNode> crate::traverse::tree_step::PrimLists for WideBvhView<'_, N> {
     #[inline(always)]
     fn prim<P: MemoryProbe>(&self, pos: u32, probe: &mut P) -> u32 {
         WideBvhView::prim(self, pos, probe)
     }
 }
 
-impl crate::tree_step::PrimLists for KdTreeView<'_> {
+impl crate::traverse::tree_step::PrimLists for KdTreeView<'_> {
     #[inline(always)]
     fn prim<P: MemoryProbe>(&self, pos: u32, probe: &mut P) -> u32 {
         KdTreeView::prim(self, pos, probe)

@@ -1,0 +1,164 @@
+//! Path tracing as a stream kernel (Kajiya 1986; Purcell 2002 §3.1.4 and Fig. 3): at each
+//! hit the shader adds what it can at once (emission seen along a camera or specular
+//! path), estimates direct light by next-event estimation — one shadow ray per point
+//! light, weighted by its Lambert term — and continues the path with a cosine-weighted
+//! diffuse bounce (whose weight is just the diffuse colour: cosine and density cancel)
+//! and, for mirrors and glass, the specular bounce, until the configured number of
+//! bounces. Random numbers come from [`crate::shade::rng`]: pixel, sample and bounce, so the
+//! image does not depend on the order rays are traced in.
+//!
+//! Emissive triangles are area lights: next-event estimation samples a point on each
+//! (or on one chosen at random when there are many), so a diffuse bounce that reaches
+//! one adds nothing, or its light would be counted twice; the point light that stands
+//! in for them in the other algorithms is not used. Ambient light records are ignored:
+//! the bounces replace them.
+
+use glam::Vec3;
+
+use crate::hit::Hit;
+use crate::image::{LightRecord, SceneView};
+use crate::probe::MemoryProbe;
+use crate::shade::ray_record::{RayKind, RayRecord};
+use crate::shade::rng::uniform;
+use crate::shade::specular::specular_rays;
+use crate::shade::surface::Surface;
+
+/// Above this many emitting triangles, one chosen at random is sampled per hit.
+pub const MAX_AREA_SAMPLES: u32 = 8;
+
+/// Settings of the path tracer.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PathOptions {
+    /// Bounces after the first hit (Purcell used 2).
+    pub bounces: u8,
+    /// Samples per pixel.
+    pub samples: u32,
+    /// End paths at random after the first bounce, reweighting the survivors (unbiased,
+    /// but a surviving path's weight can grow).
+    pub roulette: bool,
+    /// Radiance of rays that hit nothing.
+    pub background: Vec3,
+}
+
+/// A direction around unit `n` with density `cos θ / π` from two uniform numbers.
+pub fn cosine_direction(n: Vec3, u1: f32, u2: f32) -> Vec3 {
+    let r = libm::sqrtf(u1);
+    let phi = 2.0 * core::f32::consts::PI * u2;
+    let (x, y, z) = (r * libm::cosf(phi), r * libm::sinf(phi), libm::sqrtf((1.0 - u1).max(0.0)));
+    let helper = if n.x.abs() > 0.9 { Vec3::Y } else { Vec3::X };
+    let t = helper.cross(n).normalize_or_zero();
+    let b = n.cross(t);
+    t * x + b * y + n * z
+}
+
+/// Shades the end of `rec`: returns the radiance added now (times the record's weight)
+/// and passes new records to `emit`.
+pub fn shade_path<P: MemoryProbe>(
+    scene: &SceneView<'_>,
+    rec: &RayRecord,
+    hit: Option<Hit>,
+    opts: &PathOptions,
+    probe: &mut P,
+    emit: &mut impl FnMut(RayRecord),
+) -> Vec3 {
+    let Some(hit) = hit else { return rec.weight * opts.background };
+    let s = Surface::at(scene, &rec.ray, &hit, probe);
+    let m = s.material;
+    let n = s.normal;
+    let areas = scene.area_light_count();
+    let mut now = Vec3::ZERO;
+    // Emission seen along a camera or specular path; after a diffuse bounce only when no
+    // area light samples the emitters already.
+    if rec.kind != RayKind::Path || areas == 0 {
+        now += rec.weight * Vec3::from(m.emission);
+    }
+    if n == Vec3::ZERO {
+        return now;
+    }
+    let diffuse = s.diffuse();
+    // Next-event estimation: point lights, and points sampled on the emitting triangles.
+    let depth = rec.depth as u32;
+    let u = |dim: u32| uniform(rec.pixel, rec.sample, depth, dim);
+    if diffuse.max_element() > 0.0 {
+        // Many emitters: one, chosen at random, stands for all of them.
+        let chosen = if areas > MAX_AREA_SAMPLES { Some((u(5) * areas as f32) as u32 % areas) } else { None };
+        let area_scale = if chosen.is_some() { areas as f32 } else { 1.0 };
+        let mut area_index = 0u32;
+        for i in 0..scene.light_count() {
+            let l = scene.light(i, probe);
+            match l.kind {
+                LightRecord::POINT => {
+                    if let Some(shadow) = s.point_light_shadow(rec, &l, diffuse) {
+                        emit(shadow);
+                    }
+                }
+                LightRecord::AREA => {
+                    let k = area_index;
+                    area_index += 1;
+                    if chosen.is_some_and(|c| c != k) {
+                        continue;
+                    }
+                    let [a, b, c] = scene.triangle(l.triangle, probe);
+                    let (r1, r2) = (libm::sqrtf(u(6 + 2 * k)), u(7 + 2 * k));
+                    let q = a * (1.0 - r1) + b * (r1 * (1.0 - r2)) + c * (r1 * r2);
+                    let e = (b - a).cross(c - a);
+                    let to = q - s.point;
+                    let d2 = to.length_squared();
+                    let dir = to.normalize_or_zero();
+                    // Radiance Ke toward the side the triangle faces (its winding), area
+                    // |e|/2, Lambert BRDF kd/π.
+                    let cos_l = -e.normalize_or_zero().dot(dir);
+                    let g = n.dot(dir).max(0.0) * cos_l.max(0.0) * 0.5 * e.length() / (core::f32::consts::PI * d2);
+                    let weight = rec.weight * diffuse * Vec3::from(l.color) * (g * area_scale);
+                    if weight.max_element() > 0.0 && weight.is_finite() {
+                        // The sample lies on its triangle: stop just short of it.
+                        emit(rec.child(s.ray_toward(q, 1.0 - 1e-4), weight, RayKind::Shadow, rec.depth));
+                    }
+                }
+                _ => {}
+            }
+        }
+    }
+    if rec.depth >= opts.bounces {
+        return now;
+    }
+    let mut bounce = |dir: Vec3, weight: Vec3, kind: RayKind| {
+        if weight.max_element() > 0.0 && dir != Vec3::ZERO && weight.is_finite() {
+            emit(rec.child(s.ray_along(dir), weight, kind, rec.depth + 1));
+        }
+    };
+    // The diffuse bounce.
+    if diffuse.max_element() > 0.0 {
+        let mut weight = rec.weight * diffuse;
+        let survive = if opts.roulette && rec.depth >= 1 { diffuse.max_element().clamp(0.05, 0.95) } else { 1.0 };
+        if u(2) < survive {
+            weight /= survive;
+            bounce(cosine_direction(n, u(0), u(1)), weight, RayKind::Path);
+        }
+    }
+    // Mirrors and glass, as in Whitted's shader.
+    let d = rec.ray.dir.normalize_or_zero();
+    specular_rays(&m, d, n, s.entering, |dir, factor, kind| bounce(dir, rec.weight * factor, kind));
+    now
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cosine_directions_stay_in_the_hemisphere_and_follow_the_cosine() {
+        for n in [Vec3::Z, Vec3::new(1.0, 2.0, -0.5).normalize(), Vec3::X, -Vec3::Y] {
+            let mut mean_cos = 0.0;
+            let k = 4096;
+            for i in 0..k {
+                let d = cosine_direction(n, uniform(i, 0, 0, 0), uniform(i, 0, 0, 1));
+                assert!((d.length() - 1.0).abs() < 1e-4);
+                assert!(d.dot(n) >= -1e-6);
+                mean_cos += d.dot(n) / k as f32;
+            }
+            // E[cos θ] under the cosine density is 2/3.
+            assert!((mean_cos - 2.0 / 3.0).abs() < 0.02, "{mean_cos}");
+        }
+    }
+}

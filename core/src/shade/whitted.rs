@@ -1,0 +1,68 @@
+//! Whitted ray tracing as a stream kernel (Whitted 1980; Purcell 2002 §3.1.4 and Fig. 3):
+//! the shader consumes the hit of a primary, reflected or refracted ray and, instead of
+//! recursing, returns the radiance it can add at once (emission, ambient light) and emits
+//! weighted ray records — one shadow ray per point light, whose weight is that light's
+//! Lambert contribution and is added only if nothing blocks it, a mirror ray and a
+//! refracted ray (Fresnel, total internal reflection) while the depth allows.
+//!
+//! Mirrors and glass follow the MTL illumination models ([`crate::shade::specular`]); the
+//! diffuse part keeps the fraction `d` of a dissolved material.
+
+use glam::Vec3;
+
+use crate::hit::Hit;
+use crate::image::{LightRecord, SceneView};
+use crate::probe::MemoryProbe;
+use crate::shade::ray_record::RayRecord;
+use crate::shade::specular::specular_rays;
+use crate::shade::surface::Surface;
+
+/// Settings of the Whitted shader.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WhittedOptions {
+    /// Largest number of reflection/refraction bounces.
+    pub max_depth: u8,
+    /// Radiance of rays that hit nothing.
+    pub background: Vec3,
+}
+
+/// Shades the end of `rec`: returns the radiance added now (already times the record's
+/// weight) and passes new records to `emit`.
+pub fn shade_whitted<P: MemoryProbe>(
+    scene: &SceneView<'_>,
+    rec: &RayRecord,
+    hit: Option<Hit>,
+    opts: &WhittedOptions,
+    probe: &mut P,
+    emit: &mut impl FnMut(RayRecord),
+) -> Vec3 {
+    let Some(hit) = hit else { return rec.weight * opts.background };
+    let s = Surface::at(scene, &rec.ray, &hit, probe);
+    let m = s.material;
+    let diffuse = s.diffuse();
+    let mut now = Vec3::from(m.emission);
+    let n = s.normal;
+    for i in 0..scene.light_count() {
+        let l = scene.light(i, probe);
+        let color = Vec3::from(l.color);
+        if l.kind == LightRecord::AMBIENT {
+            now += diffuse * color;
+            continue;
+        }
+        if !l.is_point() {
+            continue;
+        }
+        if let Some(shadow) = s.point_light_shadow(rec, &l, diffuse) {
+            emit(shadow);
+        }
+    }
+    if rec.depth < opts.max_depth && n != Vec3::ZERO {
+        let d = rec.ray.dir.normalize_or_zero();
+        specular_rays(&m, d, n, s.entering, |dir, factor, kind| {
+            if factor.max_element() > 0.0 && dir != Vec3::ZERO {
+                emit(rec.child(s.ray_along(dir), rec.weight * factor, kind, rec.depth + 1));
+            }
+        });
+    }
+    rec.weight * now
+}

@@ -1,0 +1,42 @@
+//! The any-hit query of shadow rays: is anything in the way within `[t_min, t_max]`?
+//! The walk is the structure's own step kernel ([`crate::traverse::walk::Walk`]), and it stops at
+//! the first triangle hit in range — no closest-hit ordering is needed, so a shadow ray
+//! usually ends long before a closest-hit query would (Purcell 2002 §3.1.4).
+
+use crate::counters::RayCounters;
+use crate::image::SceneView;
+use crate::intersect::triangle::Intersector;
+use crate::probe::MemoryProbe;
+use crate::ray::Ray;
+use crate::traverse::walk::{Walk, WalkEvent};
+
+/// True if some triangle is hit by `ray` within its interval. Exactly the closest-hit
+/// query's "is there a hit", found sooner. `counters` receives the steps (nodes or
+/// voxels), leaves and triangle tests it took.
+pub fn occluded<I: Intersector, P: MemoryProbe>(
+    scene: &SceneView<'_>,
+    ray: &Ray,
+    probe: &mut P,
+    counters: &mut RayCounters,
+) -> bool {
+    if !ray.is_valid() {
+        return false;
+    }
+    let prep = I::prepare(ray);
+    let mut walk = Walk::start(scene, ray);
+    loop {
+        match walk.step(scene, ray, probe) {
+            WalkEvent::Inner => counters.nodes += 1,
+            WalkEvent::Leaf(leaf) => {
+                counters.leaves += 1;
+                let mut hit = None;
+                counters.tri_tests += leaf.test::<I, P>(scene, &prep, ray, true, &mut hit, probe);
+                if hit.is_some() {
+                    return true;
+                }
+                walk.finish_leaf();
+            }
+            WalkEvent::Done => return false,
+        }
+    }
+}

@@ -1,0 +1,261 @@
+//! One ray's walk through whichever structure the scene image holds, one step at a time:
+//! the interface a hardware traversal unit drives (DESIGN.md, "kernels are steps over
+//! plain data"). Each [`Walk::step`] reads one node or voxel and reports an event; at a
+//! [`Leaf`] the intersection side reads the leaf's triangle ids with [`Leaf::entry`],
+//! tests them into [`Walk::best_mut`], and calls [`Walk::finish_leaf`]. The walks are the
+//! structures' own step kernels (grid, kd-tree, BVH, 4- and 8-wide BVH), so a driver of `Walk`
+//! finds exactly the host's hit.
+
+use crate::hit::Hit;
+use crate::image::{SceneView, NULL_INDEX};
+use crate::intersect::triangle::{in_range, test_triangle, Intersector};
+use crate::probe::MemoryProbe;
+use crate::ray::Ray;
+use crate::traverse::bvh::BvhTraversal;
+use crate::traverse::bvh4::Bvh4Traversal;
+use crate::traverse::bvh8::Bvh8Traversal;
+use crate::traverse::dda::Voxel;
+use crate::traverse::grid::{GridEvent, GridTraversal};
+use crate::traverse::kdtree::KdTraversal;
+use crate::traverse::tree_step::TreeEvent;
+
+/// Where a leaf's triangle ids are.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Leaf {
+    /// A grid cell's null-terminated list starting at PRIM_LISTS entry `start`.
+    List {
+        /// First list entry.
+        start: u32,
+    },
+    /// A tree leaf: PRIM_LISTS entries `first .. first + count`.
+    Range {
+        /// First list entry.
+        first: u32,
+        /// Number of triangles.
+        count: u32,
+    },
+    /// No structure: triangles `0 .. count` themselves (the brute-force reference).
+    All {
+        /// Number of triangles.
+        count: u32,
+    },
+}
+
+impl Leaf {
+    /// The `k`-th triangle id of the leaf, or `None` past its end. A grid list's
+    /// terminator is a real read, as on the host.
+    #[inline]
+    pub fn entry<P: MemoryProbe>(&self, scene: &SceneView<'_>, k: u32, probe: &mut P) -> Option<u32> {
+        match *self {
+            Leaf::List { start } => {
+                let grid = scene.grid()?;
+                match grid.list_entry(start.wrapping_add(k), probe) {
+                    NULL_INDEX => None,
+                    prim => Some(prim),
+                }
+            }
+            Leaf::Range { first, count } => {
+                if k >= count {
+                    return None;
+                }
+                Some(scene.leaf_prim(first.wrapping_add(k), probe))
+            }
+            Leaf::All { count } => (k < count).then_some(k),
+        }
+    }
+}
+
+impl Leaf {
+    /// The leaf kernel: tests the leaf's triangles against `ray` into `best` — every one
+    /// for a closest-hit query, only up to the first hit in range for an any-hit query
+    /// (shadow rays). Returns how many it tested.
+    #[inline]
+    pub fn test<I: Intersector, P: MemoryProbe>(
+        &self,
+        scene: &SceneView<'_>,
+        prep: &I::Prepared,
+        ray: &Ray,
+        any_hit: bool,
+        best: &mut Option<Hit>,
+        probe: &mut P,
+    ) -> u32 {
+        let mut k = 0;
+        while let Some(prim) = self.entry(scene, k, probe) {
+            let verts = I::fetch(scene, prim, probe);
+            k += 1;
+            if any_hit {
+                if let Some(hit) = in_range(ray, I::intersect(prep, &verts), prim) {
+                    *best = Some(hit);
+                    break;
+                }
+            } else {
+                test_triangle::<I>(prep, ray, &verts, prim, best);
+            }
+        }
+        k
+    }
+}
+
+/// What one walk step produced.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum WalkEvent {
+    /// A node or an empty voxel was read; step again.
+    Inner,
+    /// A leaf (or a full voxel): test its triangles, then [`Walk::finish_leaf`].
+    Leaf(Leaf),
+    /// The walk is over; [`Walk::best`] is the ray's hit.
+    Done,
+}
+
+/// The traversal registers of one ray, for the structure the scene holds.
+// The 4-wide BVH's stack makes its variant the largest; core has no heap to box it in,
+// and a walk is a fixed-size register file anyway.
+#[allow(clippy::large_enum_variant)]
+#[derive(Clone, Debug)]
+pub enum Walk {
+    /// Uniform grid: the DDA registers and the voxel whose list is being tested.
+    Grid(GridTraversal, Option<Voxel>),
+    /// kd-tree.
+    Kd(KdTraversal),
+    /// Binary BVH.
+    Bvh(BvhTraversal),
+    /// 4-wide BVH.
+    Bvh4(Bvh4Traversal),
+    /// 8-wide BVH.
+    Bvh8(Bvh8Traversal),
+    /// No structure: one leaf of every triangle.
+    All {
+        /// The single leaf was handed out.
+        visited: bool,
+        /// Closest hit so far.
+        best: Option<Hit>,
+    },
+}
+
+impl Walk {
+    /// Starts `ray` in the scene's structure. (An eye ray's bounding-box test comes
+    /// before this, in the ray generator.)
+    pub fn start(scene: &SceneView<'_>, ray: &Ray) -> Walk {
+        if let Some(grid) = scene.grid() {
+            Walk::Grid(GridTraversal::new(grid, ray), None)
+        } else if scene.bvh4().is_some() {
+            Walk::Bvh4(Bvh4Traversal::new(ray))
+        } else if scene.bvh8().is_some() {
+            Walk::Bvh8(Bvh8Traversal::new(ray))
+        } else if scene.bvh().is_some() {
+            Walk::Bvh(BvhTraversal::new(ray))
+        } else if let Some(kd) = scene.kdtree() {
+            Walk::Kd(KdTraversal::new(kd, ray))
+        } else {
+            Walk::All { visited: !ray.is_valid(), best: None }
+        }
+    }
+
+    /// One step: reads one node (or voxel) of the structure.
+    #[inline]
+    pub fn step<P: MemoryProbe>(&mut self, scene: &SceneView<'_>, ray: &Ray, probe: &mut P) -> WalkEvent {
+        let tree = |e: TreeEvent| match e {
+            TreeEvent::Inner => WalkEvent::Inner,
+            TreeEvent::Leaf { first, count } => WalkEvent::Leaf(Leaf::Range { first, count }),
+            TreeEvent::Done => WalkEvent::Done,
+        };
+        match self {
+            Walk::Grid(trav, voxel) => {
+                let Some(grid) = scene.grid() else { return WalkEvent::Done };
+                match trav.step(grid, probe) {
+                    GridEvent::Done => WalkEvent::Done,
+                    GridEvent::Empty(v) => {
+                        trav.finish_voxel(&v);
+                        WalkEvent::Inner
+                    }
+                    GridEvent::Cell { voxel: v, list } => {
+                        *voxel = Some(v);
+                        WalkEvent::Leaf(Leaf::List { start: list })
+                    }
+                }
+            }
+            Walk::Kd(trav) => match scene.kdtree() {
+                Some(kd) => tree(trav.step(kd, ray, probe)),
+                None => WalkEvent::Done,
+            },
+            Walk::Bvh(trav) => match scene.bvh() {
+                Some(bvh) => tree(trav.step(bvh, probe)),
+                None => WalkEvent::Done,
+            },
+            Walk::Bvh4(trav) => match scene.bvh4() {
+                Some(bvh) => tree(trav.step(bvh, probe)),
+                None => WalkEvent::Done,
+            },
+            Walk::Bvh8(trav) => match scene.bvh8() {
+                Some(bvh) => tree(trav.step(bvh, probe)),
+                None => WalkEvent::Done,
+            },
+            Walk::All { visited, .. } => {
+                if *visited {
+                    WalkEvent::Done
+                } else {
+                    *visited = true;
+                    WalkEvent::Leaf(Leaf::All { count: scene.triangle_count() })
+                }
+            }
+        }
+    }
+
+    /// After a leaf's triangles were tested into [`Walk::best_mut`].
+    #[inline]
+    pub fn finish_leaf(&mut self) {
+        match self {
+            Walk::Grid(trav, voxel) => {
+                if let Some(v) = voxel.take() {
+                    trav.finish_voxel(&v);
+                }
+            }
+            Walk::Kd(trav) => trav.finish_leaf(),
+            Walk::Bvh(trav) => trav.finish_leaf(),
+            Walk::Bvh4(trav) => trav.finish_leaf(),
+            Walk::Bvh8(trav) => trav.finish_leaf(),
+            Walk::All { .. } => {}
+        }
+    }
+
+    /// The closest hit so far.
+    pub fn best(&self) -> Option<Hit> {
+        match self {
+            Walk::Grid(trav, _) => trav.best,
+            Walk::Kd(trav) => trav.best,
+            Walk::Bvh(trav) => trav.best,
+            Walk::Bvh4(trav) => trav.best,
+            Walk::Bvh8(trav) => trav.best,
+            Walk::All { best, .. } => *best,
+        }
+    }
+
+    /// The closest hit so far, for the intersection kernel to update.
+    pub fn best_mut(&mut self) -> &mut Option<Hit> {
+        match self {
+            Walk::Grid(trav, _) => &mut trav.best,
+            Walk::Kd(trav) => &mut trav.best,
+            Walk::Bvh(trav) => &mut trav.best,
+            Walk::Bvh4(trav) => &mut trav.best,
+            Walk::Bvh8(trav) => &mut trav.best,
+            Walk::All { best, .. } => best,
+        }
+    }
+}
+
+/// Traces `ray` by driving its [`Walk`] to the end: what the hardware model does, in one
+/// loop (tests compare it with the structures' own tracers).
+pub fn trace_walk<I: Intersector, P: MemoryProbe>(scene: &SceneView<'_>, ray: &Ray, probe: &mut P) -> Option<Hit> {
+    let prep = I::prepare(ray);
+    let mut walk = Walk::start(scene, ray);
+    loop {
+        match walk.step(scene, ray, probe) {
+            WalkEvent::Inner => {}
+            WalkEvent::Leaf(leaf) => {
+                leaf.test::<I, P>(scene, &prep, ray, false, walk.best_mut(), probe);
+                walk.finish_leaf();
+            }
+            WalkEvent::Done => return walk.best(),
+        }
+    }
+}
