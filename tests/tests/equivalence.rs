@@ -299,6 +299,7 @@ proptest! {
 /// Traces every ray both alone and in a packet of `N`, and demands identical hits.
 fn packet_matches_single<const N: usize>(view: &SceneView<'_>, rays: &[Ray]) -> Result<(), TestCaseError> {
     use raypipe::tracer::trace_packet;
+    use raypipe_core::packet::step::trace_packet_steps;
     use raypipe_core::packet::{PacketCounters, RayPacket};
     for chunk in rays.chunks(N) {
         let mut packet = RayPacket::<N>::new();
@@ -318,6 +319,20 @@ fn packet_matches_single<const N: usize>(view: &SceneView<'_>, rays: &[Ray]) -> 
             prop_assert!(same, "packet of {N}, lane {i}: {:?} != single {:?} for {r:?}", hits[i], single);
         }
         prop_assert!(pc.active_lanes <= pc.visits * N as u64);
+        // SaarCOR's shared packet walk, one node per step, as the hardware model drives it.
+        let mut rays_n = [Ray { origin: Vec3::ZERO, dir: Vec3::X, t_min: 0.0, t_max: 0.0 }; N];
+        rays_n[..chunk.len()].copy_from_slice(chunk);
+        let mut stepped = [None; N];
+        trace_packet_steps::<Watertight, _, N>(view, &rays_n, packet.active, &mut stepped, &mut NoProbe);
+        for (i, r) in chunk.iter().enumerate() {
+            let single = trace::<Watertight, _>(view, r, &mut NoProbe, &mut RayCounters::default());
+            let same = match (stepped[i], single) {
+                (None, None) => true,
+                (Some(a), Some(b)) => a.bits_eq(&b),
+                _ => false,
+            };
+            prop_assert!(same, "packet steps of {N}, lane {i}: {:?} != single {:?} for {r:?}", stepped[i], single);
+        }
     }
     Ok(())
 }

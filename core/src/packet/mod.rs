@@ -6,9 +6,13 @@
 
 pub mod bvh;
 pub mod bvh4;
+pub mod bvh_step;
 pub mod grid;
 pub mod kdtree;
+pub mod kdtree_step;
 pub mod lockstep;
+pub mod step;
+pub mod wide_bvh_step;
 
 use glam::{Mat4, Vec3, Vec4};
 

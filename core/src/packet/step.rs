@@ -1,0 +1,195 @@
+//! SaarCOR's packet traversal as step kernels (Schmittler, Wald & Slusallek 2002; Wald &
+//! Slusallek 2001 §5.3, §7.3): a packet of rays shares one walk — one node per step,
+//! fetched once for the whole packet, and one fixed-capacity stack — and carries a mask
+//! of the rays that need the node it stands on. A packet descends into a child if any of
+//! its active rays needs it, with exactly those rays, so each ray still meets every leaf
+//! its single-ray walk meets (in another order, at worst) and its closest hit is the
+//! same, bit for bit.
+//!
+//! This is the interface a hardware traversal unit drives, one [`PacketStep::step`] per
+//! node: the kd-tree ([`super::kdtree_step`]), the binary BVH ([`super::bvh_step`]) and
+//! the 4- and 8-wide BVHs ([`super::wide_bvh_step`]). The uniform grid has no shared
+//! walk: its rays leave a voxel at different distances, so its packets keep per-ray
+//! lock-step (Purcell 2002 §3.2, [`super::lockstep`]).
+
+use crate::hit::Hit;
+use crate::image::SceneView;
+use crate::intersect::triangle::Intersector;
+use crate::packet::Lanes;
+use crate::probe::MemoryProbe;
+use crate::ray::Ray;
+use crate::traverse::walk::{trace_walk, Leaf};
+
+use super::bvh_step::BvhPacketTraversal;
+use super::kdtree_step::KdPacketTraversal;
+use super::wide_bvh_step::{Bvh4PacketTraversal, Bvh8PacketTraversal};
+
+/// What one packet step produced.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PacketEvent {
+    /// One inner node was read, once for the packet, and its box or plane tested by the
+    /// rays of `lanes` (the datapath's work: one ray–node test per lane).
+    Node {
+        /// The rays tested against the node.
+        lanes: u64,
+    },
+    /// The packet stands at a leaf: the rays of `lanes` test its triangles (PRIM_LISTS
+    /// entries `first .. first + count`), then [`PacketStep::finish_leaf`].
+    Leaf {
+        /// The leaf's triangles.
+        leaf: Leaf,
+        /// The rays that test them.
+        lanes: u64,
+    },
+    /// The walk is over; [`PacketStep::best`] holds each ray's hit.
+    Done,
+}
+
+/// A packet's shared walk through a tree, one node per step.
+pub trait PacketStep {
+    /// Reads one node for the whole packet and moves on, or reports the leaf it stands on.
+    fn step<P: MemoryProbe>(&mut self, scene: &SceneView<'_>, rays: &[Ray], probe: &mut P) -> PacketEvent;
+    /// After the leaf's triangles were tested into [`PacketStep::best_mut`].
+    fn finish_leaf(&mut self);
+    /// Ray `i`'s closest hit so far (`None` past the packet's size).
+    fn best(&self, i: usize) -> Option<Hit>;
+    /// Ray `i`'s closest hit so far, for the intersection kernel to update (`None` past
+    /// the packet's size).
+    fn best_mut(&mut self, i: usize) -> Option<&mut Option<Hit>>;
+}
+
+/// The shared packet walk of whichever tree the scene image holds; `None` for the grid
+/// and for an image without a structure (their packets step ray by ray).
+// The variants hold fixed-capacity stacks of different widths; core has no heap to box
+// them in, and a walk is a fixed-size register file anyway.
+#[allow(clippy::large_enum_variant)]
+#[derive(Clone, Debug)]
+pub enum PacketWalk<const N: usize> {
+    /// kd-tree.
+    Kd(KdPacketTraversal<N>),
+    /// Binary BVH.
+    Bvh(BvhPacketTraversal<N>),
+    /// 4-wide BVH.
+    Bvh4(Bvh4PacketTraversal<N>),
+    /// 8-wide BVH.
+    Bvh8(Bvh8PacketTraversal<N>),
+}
+
+impl<const N: usize> PacketWalk<N> {
+    /// Starts the rays of `active` (bits of `rays`' indices; invalid rays stay out) in
+    /// the scene's tree, or `None` if the scene has no tree.
+    pub fn start(scene: &SceneView<'_>, rays: &[Ray], active: u64) -> Option<PacketWalk<N>> {
+        if scene.grid().is_some() {
+            None
+        } else if scene.bvh4().is_some() {
+            Some(PacketWalk::Bvh4(Bvh4PacketTraversal::new(rays, active)))
+        } else if scene.bvh8().is_some() {
+            Some(PacketWalk::Bvh8(Bvh8PacketTraversal::new(rays, active)))
+        } else if scene.bvh().is_some() {
+            Some(PacketWalk::Bvh(BvhPacketTraversal::new(rays, active)))
+        } else {
+            scene.kdtree().map(|kd| PacketWalk::Kd(KdPacketTraversal::new(kd, rays, active)))
+        }
+    }
+}
+
+impl<const N: usize> PacketStep for PacketWalk<N> {
+    #[inline]
+    fn step<P: MemoryProbe>(&mut self, scene: &SceneView<'_>, rays: &[Ray], probe: &mut P) -> PacketEvent {
+        match self {
+            PacketWalk::Kd(w) => PacketStep::step(w, scene, rays, probe),
+            PacketWalk::Bvh(w) => PacketStep::step(w, scene, rays, probe),
+            PacketWalk::Bvh4(w) => PacketStep::step(w, scene, rays, probe),
+            PacketWalk::Bvh8(w) => PacketStep::step(w, scene, rays, probe),
+        }
+    }
+
+    #[inline]
+    fn finish_leaf(&mut self) {
+        match self {
+            PacketWalk::Kd(w) => PacketStep::finish_leaf(w),
+            PacketWalk::Bvh(w) => PacketStep::finish_leaf(w),
+            PacketWalk::Bvh4(w) => PacketStep::finish_leaf(w),
+            PacketWalk::Bvh8(w) => PacketStep::finish_leaf(w),
+        }
+    }
+
+    #[inline]
+    fn best(&self, i: usize) -> Option<Hit> {
+        match self {
+            PacketWalk::Kd(w) => w.best(i),
+            PacketWalk::Bvh(w) => w.best(i),
+            PacketWalk::Bvh4(w) => w.best(i),
+            PacketWalk::Bvh8(w) => w.best(i),
+        }
+    }
+
+    #[inline]
+    fn best_mut(&mut self, i: usize) -> Option<&mut Option<Hit>> {
+        match self {
+            PacketWalk::Kd(w) => w.best_mut(i),
+            PacketWalk::Bvh(w) => w.best_mut(i),
+            PacketWalk::Bvh4(w) => w.best_mut(i),
+            PacketWalk::Bvh8(w) => w.best_mut(i),
+        }
+    }
+}
+
+/// The rays of `active` traced by driving the scene's shared packet walk to the end —
+/// what the hardware model's traversal and intersection units do, in one loop (the
+/// equivalence suite compares it with single rays); `hits[i]` receives ray `i`'s closest
+/// hit. Scenes without a tree trace ray by ray ([`trace_walk`]). Returns the node steps
+/// taken (one node fetch each).
+pub fn trace_packet_steps<I: Intersector, P: MemoryProbe, const N: usize>(
+    scene: &SceneView<'_>,
+    rays: &[Ray; N],
+    active: u64,
+    hits: &mut [Option<Hit>; N],
+    probe: &mut P,
+) -> u64 {
+    *hits = [None; N];
+    let active = active & lane_mask(N);
+    let Some(mut walk) = PacketWalk::<N>::start(scene, rays, active) else {
+        for i in Lanes(active) {
+            hits[i] = trace_walk::<I, P>(scene, &rays[i], probe);
+        }
+        return 0;
+    };
+    let preps: [Option<I::Prepared>; N] =
+        core::array::from_fn(|i| (active & (1 << i) != 0).then(|| I::prepare(&rays[i])));
+    let mut steps = 0;
+    loop {
+        match walk.step(scene, rays, probe) {
+            PacketEvent::Node { .. } => steps += 1,
+            PacketEvent::Leaf { leaf, lanes } => {
+                for i in Lanes(lanes & active) {
+                    if let (Some(prep), Some(best)) = (&preps[i], walk.best_mut(i)) {
+                        leaf.test::<I, P>(scene, prep, &rays[i], false, best, probe);
+                    }
+                }
+                walk.finish_leaf();
+            }
+            PacketEvent::Done => break,
+        }
+    }
+    for (i, h) in hits.iter_mut().enumerate() {
+        *h = if active & (1 << i) != 0 { walk.best(i) } else { None };
+    }
+    steps
+}
+
+/// The mask of lanes `0 .. n` (all 64 for `n >= 64`).
+#[inline]
+pub const fn lane_mask(n: usize) -> u64 {
+    if n >= 64 {
+        u64::MAX
+    } else {
+        (1u64 << n) - 1
+    }
+}
+
+/// A packet's lanes limited to those that exist: the rays of `rays` and the packet's `N`.
+#[inline]
+pub(crate) fn existing(active: u64, rays: usize, n: usize) -> u64 {
+    active & lane_mask(rays.min(n))
+}
