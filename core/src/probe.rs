@@ -38,6 +38,11 @@ impl DataClass {
 pub trait MemoryProbe {
     /// Called once for every record a kernel reads.
     fn read(&mut self, class: DataClass, addr: u32, bytes: u32);
+    /// Marks that the reads after this point depend on data read before it (a triangle
+    /// record's vertices, a popped node's children): a hardware model issues them as a
+    /// separate round trip. Costs nothing on the host.
+    #[inline(always)]
+    fn dependent(&mut self) {}
 }
 
 /// The probe that observes nothing and costs nothing.

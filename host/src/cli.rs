@@ -663,8 +663,20 @@ fn cmd_simulate(a: SimulateArgs) -> Result<()> {
     let shader = opts.shader(raypipe_core::Vec3::from(cam.background));
     let start = Instant::now();
     let shadow_caster = opts.algo == Algorithm::Shadow;
-    let (frame, report) = simulate::simulate(&view, &cam, &cfg, kind, shader, shadow_caster, true)?;
+    let (frame, mut report) = simulate::simulate(&view, &cam, &cfg, kind, shader, shadow_caster, true)?;
     let secs = start.elapsed().as_secs_f64();
+    report.run = raypipe_hw::report::RunIdentity {
+        scene: a.scene.as_ref().map_or("built-in Cornell box".to_string(), |p| p.display().to_string()),
+        scene_hash: format!("{:016x}", raypipe_hw::report::fnv1a64(view.bytes())),
+        structure: structure_summary(&view),
+        algorithm: format!("{:?}", opts.algo).to_lowercase(),
+        intersector: kind.name().to_string(),
+        camera: format!(
+            "eye {:?} look_at {:?} up {:?} vfov {} deg, {}x{}",
+            cam.eye, cam.look_at, cam.up, cam.vfov_deg, cam.width, cam.height
+        ),
+        raypipe_version: env!("CARGO_PKG_VERSION").to_string(),
+    };
     output::write_png(&a.output, frame.width, frame.height, &frame.pixels)?;
     output::write_bytes(&a.report, report.to_json().as_bytes())?;
     println!(

@@ -365,7 +365,17 @@ fn simulate_without_arguments_matches_render_and_reports() {
     assert_eq!(decode(&dir.path().join("raypipe-sim.png")), decode(&dir.path().join("raypipe.png")));
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("report.json")).unwrap()).unwrap();
-    assert_eq!(json["schema"], "raypipe-hw-report/1");
+    assert_eq!(json["schema"], "raypipe-hw-report/2");
+    // Run identity: the scene, its image's hash, the structure and the configuration.
+    assert_eq!(json["run"]["scene"], "built-in Cornell box");
+    assert_eq!(json["run"]["scene_hash"].as_str().unwrap().len(), 16);
+    assert!(!json["run"]["structure"].as_str().unwrap().is_empty());
+    assert!(json["config"]["memory"]["model"].is_string());
+    assert!(!json["bottleneck"].as_str().unwrap().is_empty());
+    for u in json["units"].as_array().unwrap() {
+        let sum: u64 = u["stall_reasons"].as_object().unwrap().values().map(|v| v.as_u64().unwrap()).sum();
+        assert_eq!(sum, u["stall_cycles"].as_u64().unwrap(), "{}", u["name"]);
+    }
     assert!(json["cycles"].as_u64().unwrap() > 0);
     assert_eq!(json["conservation"]["rays_issued"], json["conservation"]["rays_retired"]);
     assert_eq!(json["conservation"]["bytes_requested"], json["conservation"]["bytes_delivered"]);

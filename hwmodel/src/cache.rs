@@ -1,6 +1,9 @@
 //! A set-associative cache with LRU replacement, in front of one unit's memory port.
-//! Lines remember which channel request fills them, so a read of a line still in flight
+//! Lines remember which memory request fills them, so a read of a line still in flight
 //! waits for that fill instead of asking again (an MSHR merge, counted apart from hits).
+//! Misses in flight hold one of the cache's `mshrs` MSHRs until their data arrives.
+//! Lines may be any multiple of 4 bytes (Purcell's texture cache has 48-byte lines), and
+//! the number of sets any whole number (a line's set is its number modulo the sets).
 
 use serde::Serialize;
 
@@ -33,8 +36,8 @@ pub enum Lookup {
 /// The cache's tag and replacement state (data is read from the scene image itself).
 #[derive(Clone, Debug)]
 pub struct Cache {
-    line_shift: u32,
-    set_mask: u64,
+    line_bytes: u32,
+    sets: u64,
     ways: usize,
     tags: Vec<u64>,
     last_use: Vec<u64>,
@@ -42,6 +45,10 @@ pub struct Cache {
     uses: u64,
     /// Hit latency in cycles.
     pub hit_latency: u32,
+    /// MSHRs.
+    pub mshrs: u32,
+    /// The fills in flight (memory request ids), each holding an MSHR.
+    pub outstanding: Vec<u32>,
     /// Statistics.
     pub stats: CacheStats,
 }
@@ -59,30 +66,32 @@ impl Cache {
         let ways = (cfg.ways as usize).clamp(1, lines);
         let sets = (lines / ways).max(1);
         Some(Cache {
-            line_shift: cfg.line_bytes.max(1).trailing_zeros(),
-            set_mask: sets as u64 - 1,
+            line_bytes: cfg.line_bytes.max(4),
+            sets: sets as u64,
             ways,
             tags: vec![EMPTY; sets * ways],
             last_use: vec![0; sets * ways],
             fills: vec![0; sets * ways],
             uses: 0,
             hit_latency: cfg.hit_latency,
+            mshrs: cfg.mshrs.max(1),
+            outstanding: Vec::new(),
             stats: CacheStats::default(),
         })
     }
 
     /// Line size in bytes.
     pub fn line_bytes(&self) -> u32 {
-        1 << self.line_shift
+        self.line_bytes
     }
 
     /// The line number of a byte address.
     pub fn line_of(&self, addr: u64) -> u64 {
-        addr >> self.line_shift
+        addr / self.line_bytes as u64
     }
 
     fn set(&self, line: u64) -> std::ops::Range<usize> {
-        let s = (line & self.set_mask) as usize * self.ways;
+        let s = (line % self.sets) as usize * self.ways;
         s..s + self.ways
     }
 
@@ -114,7 +123,7 @@ mod tests {
 
     #[test]
     fn lru_evicts_the_least_recently_used_way() {
-        let cfg = CacheConfig { size_bytes: 128, line_bytes: 32, ways: 2, hit_latency: 1 };
+        let cfg = CacheConfig { size_bytes: 128, line_bytes: 32, ways: 2, hit_latency: 1, ports: 1, mshrs: 1 };
         let mut c = Cache::new(&cfg).unwrap(); // 2 sets × 2 ways
         for (line, fill) in [(0, 1), (2, 2)] {
             assert_eq!(c.lookup(line), Lookup::Absent);
@@ -127,5 +136,26 @@ mod tests {
         assert_eq!(c.lookup(0), Lookup::Present { fill: 1 });
         assert_eq!(c.lookup(1), Lookup::Absent, "odd lines live in the other set");
         assert_eq!(c.line_of(100), 3);
+    }
+}
+
+#[cfg(test)]
+mod odd_lines {
+    use super::*;
+
+    #[test]
+    fn lines_of_48_bytes_and_three_sets() {
+        let cfg = CacheConfig { size_bytes: 48 * 6, line_bytes: 48, ways: 2, hit_latency: 1, ports: 1, mshrs: 1 };
+        let mut c = Cache::new(&cfg).unwrap(); // 3 sets x 2 ways
+        assert_eq!(c.line_of(47), 0);
+        assert_eq!(c.line_of(48), 1);
+        for line in [0, 3, 6] {
+            // All in set 0: the third evicts the first.
+            assert_eq!(c.lookup(line), Lookup::Absent);
+            c.install(line, line as u32);
+        }
+        assert_eq!(c.lookup(0), Lookup::Absent);
+        assert_eq!(c.lookup(6), Lookup::Present { fill: 6 });
+        assert_eq!(c.lookup(1), Lookup::Absent, "set 1 is untouched");
     }
 }

@@ -11,6 +11,15 @@ use crate::fifo::MAX_FIFO_DEPTH;
 /// Largest packet (the active mask is a `u64`).
 pub const MAX_PACKET: u32 = 64;
 
+/// Most simulator memory a configuration may ask for (a one-line error beyond).
+pub const MAX_MODELLED_BYTES: u64 = 4 << 30;
+
+/// Simulator bytes of one traversal thread's registers (rays, walks, shared stack).
+const THREAD_BYTES: u64 = 48 * 1024;
+
+/// Simulator bytes of one intersection job.
+const JOB_BYTES: u64 = 8 * 1024;
+
 /// The whole chip.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -43,6 +52,8 @@ pub struct RgsConfig {
     pub rays_per_cycle: u32,
     /// Rays shaded per cycle.
     pub shade_per_cycle: u32,
+    /// Packets being shaded at once (their shading-data reads overlap).
+    pub shade_jobs: u32,
 }
 
 /// One traversal unit.
@@ -53,8 +64,12 @@ pub struct TraversalConfig {
     pub units: u32,
     /// Packets in flight per unit.
     pub threads: u32,
-    /// Pipeline latency of one traversal step, in cycles (one step issues per cycle).
+    /// Pipeline latency of one traversal step, in cycles, from its last ray–node test
+    /// entering the datapath to its result.
     pub step_latency: u32,
+    /// Ray–node tests the traversal datapath starts per cycle: a packet step of `n`
+    /// active rays occupies it `ceil(n / lanes_per_cycle)` cycles.
+    pub lanes_per_cycle: u32,
 }
 
 /// One list & intersection unit.
@@ -63,8 +78,13 @@ pub struct TraversalConfig {
 pub struct IntersectionConfig {
     /// Pipeline latency of a ray–triangle test, in cycles.
     pub latency: u32,
-    /// Cycles between two ray–triangle tests entering the pipeline.
+    /// Cycles between two groups of ray–triangle tests entering the pipeline.
     pub initiation_interval: u32,
+    /// Ray–triangle tests per group (the datapath's width).
+    pub lanes_per_cycle: u32,
+    /// Leaf jobs in flight at once (fetching their lists and triangles, waiting for the
+    /// datapath, in the pipeline).
+    pub jobs: u32,
 }
 
 /// Depth of each kind of FIFO (entries are whole packets).
@@ -87,12 +107,17 @@ pub struct FifoConfig {
 pub struct CacheConfig {
     /// Capacity in bytes (0: no cache).
     pub size_bytes: u32,
-    /// Line size in bytes (a power of two).
+    /// Line size in bytes (a multiple of 4).
     pub line_bytes: u32,
     /// Associativity.
     pub ways: u32,
     /// Hit latency in cycles.
     pub hit_latency: u32,
+    /// Lookups per cycle (the port's width; also without a cache: requests per cycle).
+    pub ports: u32,
+    /// Misses outstanding at once (miss status holding registers); a miss without a free
+    /// MSHR waits.
+    pub mshrs: u32,
 }
 
 /// The caches: each traversal unit has a node cache, each intersection unit a cache for
@@ -111,16 +136,87 @@ pub struct CachesConfig {
     pub lists: CacheConfig,
     /// The shading unit: materials, lights, shading vertices.
     pub shading: CacheConfig,
+    /// A second-level cache shared by every unit, between their caches and the memory
+    /// (`size_bytes = 0`: none); `ports` lookups per cycle for all units together.
+    pub l2: CacheConfig,
 }
 
-/// The one memory channel behind all caches.
+/// Which memory sits behind the caches.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum MemoryModel {
+    /// Every read arrives the next cycle, without a bandwidth limit: the compute bound.
+    Perfect,
+    /// One channel: `bytes_per_cycle`, then `latency` cycles.
+    Fixed,
+    /// DRAM with channels, banks, rows and their timing ([`DramConfig`]).
+    Dram,
+}
+
+/// The memory behind all caches.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct MemoryConfig {
-    /// Cycles from a request leaving the channel to its data arriving.
+    /// `"perfect"`, `"fixed"` or `"dram"`.
+    pub model: MemoryModel,
+    /// Fixed model: cycles from a transfer's end to its data arriving.
     pub latency: u32,
-    /// Bytes the channel transfers per cycle.
+    /// Fixed model: bytes the channel transfers per cycle.
     pub bytes_per_cycle: u32,
+    /// Requests accepted but not yet started that the memory holds; a unit whose request
+    /// finds it full keeps the request and waits.
+    pub queue_depth: u32,
+    /// Fixed model: smallest transfer; a request moves a whole number of these bytes.
+    pub min_burst_bytes: u32,
+    /// The DRAM model's parameters.
+    pub dram: DramConfig,
+}
+
+/// DRAM parameters (timings in DRAM clock cycles, as a datasheet gives them).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct DramConfig {
+    /// DRAM command clock in MHz (the data rate is twice this).
+    pub clock_mhz: f64,
+    /// Independent channels (addresses interleaved by burst).
+    pub channels: u32,
+    /// Banks per channel.
+    pub banks: u32,
+    /// Bytes of one row (page) of one bank across the channel's width.
+    pub row_bytes: u32,
+    /// Data bus width per channel, in bytes.
+    pub bus_bytes: u32,
+    /// Burst length in transfers (a burst moves `bus_bytes × burst_length` bytes in
+    /// `burst_length / 2` clocks).
+    pub burst_length: u32,
+    /// `"open"`: a row stays open after an access; `"closed"`: precharged at once.
+    pub page_policy: PagePolicy,
+    /// ACTIVATE to READ/WRITE.
+    pub t_rcd: u32,
+    /// PRECHARGE to ACTIVATE.
+    pub t_rp: u32,
+    /// READ to first data (CAS latency).
+    pub t_cl: u32,
+    /// ACTIVATE to PRECHARGE, at least.
+    pub t_ras: u32,
+    /// End of write data to PRECHARGE.
+    pub t_wr: u32,
+    /// Average refresh interval.
+    pub t_refi: u32,
+    /// Refresh cycle time (every bank of the channel is busy).
+    pub t_rfc: u32,
+    /// Chip cycles through the memory controller, each way together.
+    pub controller_latency: u32,
+}
+
+/// DRAM page policy.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum PagePolicy {
+    /// Rows stay open (row hits are cheap, conflicts pay a precharge).
+    Open,
+    /// Rows are precharged after every access.
+    Closed,
 }
 
 impl Default for HwConfig {
@@ -141,19 +237,19 @@ impl Default for HwConfig {
 
 impl Default for RgsConfig {
     fn default() -> Self {
-        RgsConfig { rays_per_cycle: 4, shade_per_cycle: 4 }
+        RgsConfig { rays_per_cycle: 4, shade_per_cycle: 4, shade_jobs: 2 }
     }
 }
 
 impl Default for TraversalConfig {
     fn default() -> Self {
-        TraversalConfig { units: 4, threads: 8, step_latency: 4 }
+        TraversalConfig { units: 4, threads: 8, step_latency: 4, lanes_per_cycle: 4 }
     }
 }
 
 impl Default for IntersectionConfig {
     fn default() -> Self {
-        IntersectionConfig { latency: 20, initiation_interval: 1 }
+        IntersectionConfig { latency: 20, initiation_interval: 1, lanes_per_cycle: 1, jobs: 4 }
     }
 }
 
@@ -165,7 +261,7 @@ impl Default for FifoConfig {
 
 impl Default for CacheConfig {
     fn default() -> Self {
-        CacheConfig { size_bytes: 16 * 1024, line_bytes: 64, ways: 4, hit_latency: 1 }
+        CacheConfig { size_bytes: 16 * 1024, line_bytes: 64, ways: 4, hit_latency: 1, ports: 1, mshrs: 8 }
     }
 }
 
@@ -177,13 +273,47 @@ impl Default for CachesConfig {
             lists_share_triangle_cache: true,
             lists: CacheConfig { size_bytes: 4096, ..CacheConfig::default() },
             shading: CacheConfig::default(),
+            l2: CacheConfig { size_bytes: 0, line_bytes: 64, ways: 8, hit_latency: 10, ports: 2, mshrs: 32 },
         }
     }
 }
 
 impl Default for MemoryConfig {
     fn default() -> Self {
-        MemoryConfig { latency: 100, bytes_per_cycle: 16 }
+        MemoryConfig {
+            model: MemoryModel::Fixed,
+            latency: 100,
+            bytes_per_cycle: 16,
+            queue_depth: 16,
+            min_burst_bytes: 32,
+            dram: DramConfig::default(),
+        }
+    }
+}
+
+impl Default for DramConfig {
+    /// DDR3-1600 11-11-11 (JEDEC JESD79-3F speed bin DDR3-1600K; e.g. Micron
+    /// MT41K256M16 datasheet): 800 MHz, tRCD = tRP = CL = 13.75 ns, tRAS = 35 ns,
+    /// tWR = 15 ns, tREFI = 7.8 µs, tRFC = 260 ns (4 Gb); one 64-bit channel of 8 banks
+    /// with 8 KiB rows, BL8.
+    fn default() -> Self {
+        DramConfig {
+            clock_mhz: 800.0,
+            channels: 1,
+            banks: 8,
+            row_bytes: 8192,
+            bus_bytes: 8,
+            burst_length: 8,
+            page_policy: PagePolicy::Open,
+            t_rcd: 11,
+            t_rp: 11,
+            t_cl: 11,
+            t_ras: 28,
+            t_wr: 12,
+            t_refi: 6240,
+            t_rfc: 208,
+            controller_latency: 10,
+        }
     }
 }
 
@@ -243,38 +373,54 @@ impl HwConfig {
     /// Rejects configurations that cannot be built or cannot work, with the reason.
     pub fn validate(&self) -> Result<(), String> {
         let err = |m: String| Err(m);
-        if !(self.clock_mhz.is_finite() && self.clock_mhz > 0.0) {
-            return err(format!("clock_mhz must be a positive number (got {})", self.clock_mhz));
+        if !(self.clock_mhz.is_finite() && self.clock_mhz > 0.0 && self.clock_mhz <= 1e6) {
+            return err(format!("clock_mhz must be a positive number of at most 1e6 (got {})", self.clock_mhz));
         }
         if ![1, 4, 16, 64].contains(&self.packet_size) {
             return err(format!("packet_size must be 1, 4, 16 or 64 (got {})", self.packet_size));
         }
-        if self.packet_size > MAX_PACKET {
-            return err(format!("packet_size {} exceeds the {MAX_PACKET}-lane packet registers", self.packet_size));
-        }
         let positive = [
             ("rgs.rays_per_cycle", self.rgs.rays_per_cycle),
             ("rgs.shade_per_cycle", self.rgs.shade_per_cycle),
+            ("rgs.shade_jobs", self.rgs.shade_jobs),
             ("traversal.units", self.traversal.units),
             ("traversal.threads", self.traversal.threads),
             ("traversal.step_latency", self.traversal.step_latency),
+            ("traversal.lanes_per_cycle", self.traversal.lanes_per_cycle),
             ("intersection.latency", self.intersection.latency),
             ("intersection.initiation_interval", self.intersection.initiation_interval),
+            ("intersection.lanes_per_cycle", self.intersection.lanes_per_cycle),
+            ("intersection.jobs", self.intersection.jobs),
             ("memory.bytes_per_cycle", self.memory.bytes_per_cycle),
+            ("memory.queue_depth", self.memory.queue_depth),
+            ("memory.min_burst_bytes", self.memory.min_burst_bytes),
         ];
         for (name, v) in positive {
             if v == 0 {
                 return err(format!("{name} must be at least 1"));
             }
         }
-        if self.traversal.units > 64 {
-            return err(format!("traversal.units {} is more than the 64 the model supports", self.traversal.units));
-        }
-        if self.traversal.threads > 255 {
-            return err(format!(
-                "traversal.threads {} is more than the 255 a thread tag holds",
-                self.traversal.threads
-            ));
+        let capped = [
+            ("traversal.units", self.traversal.units, 64),
+            // A thread is a bit of the unit's 64-bit state masks.
+            ("traversal.threads", self.traversal.threads, 64),
+            ("traversal.lanes_per_cycle", self.traversal.lanes_per_cycle, 64),
+            ("intersection.lanes_per_cycle", self.intersection.lanes_per_cycle, 4096),
+            ("intersection.jobs", self.intersection.jobs, 64),
+            ("rgs.shade_jobs", self.rgs.shade_jobs, 64),
+            ("rgs.rays_per_cycle", self.rgs.rays_per_cycle, 4096),
+            ("rgs.shade_per_cycle", self.rgs.shade_per_cycle, 4096),
+            ("memory.queue_depth", self.memory.queue_depth, 4096),
+            ("memory.min_burst_bytes", self.memory.min_burst_bytes, 4096),
+            ("traversal.step_latency", self.traversal.step_latency, 1_000_000),
+            ("intersection.latency", self.intersection.latency, 1_000_000),
+            ("intersection.initiation_interval", self.intersection.initiation_interval, 1_000_000),
+            ("memory.latency", self.memory.latency, 1_000_000),
+        ];
+        for (name, v, max) in capped {
+            if v > max {
+                return err(format!("{name} {v} is more than the {max} the model supports"));
+            }
         }
         let fifos = [
             ("fifo.rays", self.fifo.rays),
@@ -290,17 +436,25 @@ impl HwConfig {
                 return err(format!("{name}: depth {depth} exceeds the {MAX_FIFO_DEPTH} entries a FIFO can hold"));
             }
         }
-        for (name, c) in [
-            ("cache.nodes", &self.cache.nodes),
-            ("cache.triangles", &self.cache.triangles),
-            ("cache.lists", &self.cache.lists),
-            ("cache.shading", &self.cache.shading),
-        ] {
-            if !c.line_bytes.is_power_of_two() || c.line_bytes < 4 {
-                return err(format!("{name}.line_bytes must be a power of two of at least 4 (got {})", c.line_bytes));
+        for (name, c) in self.caches() {
+            if c.line_bytes < 4 || c.line_bytes % 4 != 0 || c.line_bytes > 4096 {
+                return err(format!("{name}.line_bytes must be a multiple of 4 from 4 to 4096 (got {})", c.line_bytes));
+            }
+            for (key, v, max) in
+                [("ports", c.ports, 64), ("mshrs", c.mshrs, 1024), ("hit_latency", c.hit_latency, 1_000_000)]
+            {
+                if v > max {
+                    return err(format!("{name}.{key} {v} is more than the {max} the model supports"));
+                }
+            }
+            if c.ports == 0 {
+                return err(format!("{name}.ports must be at least 1"));
             }
             if c.size_bytes == 0 {
                 continue;
+            }
+            if c.mshrs == 0 {
+                return err(format!("{name}.mshrs must be at least 1"));
             }
             if c.size_bytes < c.line_bytes {
                 return err(format!("{name}: {} bytes is smaller than one {}-byte line", c.size_bytes, c.line_bytes));
@@ -309,29 +463,92 @@ impl HwConfig {
                 return err(format!("{name}.ways must be at least 1"));
             }
             let lines = c.size_bytes / c.line_bytes;
-            if c.size_bytes % c.line_bytes != 0 || lines % c.ways != 0 || !(lines / c.ways).is_power_of_two() {
+            if c.size_bytes % c.line_bytes != 0 || lines % c.ways != 0 {
                 return err(format!(
-                    "{name}: {} bytes in {}-byte lines and {} ways does not give a power-of-two number of sets",
+                    "{name}: {} bytes in {}-byte lines and {} ways does not give a whole number of sets",
                     c.size_bytes, c.line_bytes, c.ways
                 ));
             }
         }
-        // The watchdog must outlast the longest legitimate wait with nothing moving.
-        let longest = self.memory.latency as u64
-            + self.intersection.latency as u64
-            + self.traversal.step_latency as u64
-            + [&self.cache.nodes, &self.cache.triangles, &self.cache.lists, &self.cache.shading]
-                .iter()
-                .map(|c| c.hit_latency)
-                .max()
-                .unwrap_or(0) as u64;
-        if self.watchdog_cycles <= longest {
+        if self.memory.model == MemoryModel::Dram {
+            let d = &self.memory.dram;
+            if !(d.clock_mhz.is_finite() && d.clock_mhz > 0.0 && d.clock_mhz <= 1e5) {
+                return err(format!("memory.dram.clock_mhz must be a positive number (got {})", d.clock_mhz));
+            }
+            for (key, v, max) in [
+                ("channels", d.channels, 64),
+                ("banks", d.banks, 256),
+                ("bus_bytes", d.bus_bytes, 1024),
+                ("burst_length", d.burst_length, 64),
+                ("row_bytes", d.row_bytes, 1 << 20),
+            ] {
+                if v == 0 || v > max {
+                    return err(format!("memory.dram.{key} must be from 1 to {max} (got {v})"));
+                }
+            }
+            if !d.burst_length.is_multiple_of(2) {
+                return err(format!("memory.dram.burst_length must be even (got {})", d.burst_length));
+            }
+            if !d.row_bytes.is_multiple_of(d.bus_bytes * d.burst_length) {
+                return err(format!(
+                    "memory.dram.row_bytes {} is not a whole number of {}-byte bursts",
+                    d.row_bytes,
+                    d.bus_bytes * d.burst_length
+                ));
+            }
+            if d.t_refi > 0 && d.t_rfc >= d.t_refi {
+                return err(format!("memory.dram.t_rfc {} must be shorter than t_refi {}", d.t_rfc, d.t_refi));
+            }
+            for (key, v) in [
+                ("t_rcd", d.t_rcd),
+                ("t_rp", d.t_rp),
+                ("t_cl", d.t_cl),
+                ("t_ras", d.t_ras),
+                ("t_wr", d.t_wr),
+                ("t_rfc", d.t_rfc),
+                ("controller_latency", d.controller_latency),
+            ] {
+                if v > 100_000 {
+                    return err(format!("memory.dram.{key} {v} is more than the 100000 cycles the model supports"));
+                }
+            }
+        }
+        let state = self.modelled_bytes();
+        if state > MAX_MODELLED_BYTES {
             return err(format!(
-                "watchdog_cycles {} must exceed the longest wait without progress ({longest} cycles)",
-                self.watchdog_cycles
+                "the chip would need {:.1} GiB of simulator state (caches, thread registers), more than the {} GiB limit",
+                state as f64 / (1u64 << 30) as f64,
+                MAX_MODELLED_BYTES >> 30
             ));
         }
+        if self.watchdog_cycles == 0 {
+            return err("watchdog_cycles must be at least 1".to_string());
+        }
         Ok(())
+    }
+
+    /// Every cache configuration, named by its key.
+    pub fn caches(&self) -> [(&'static str, &CacheConfig); 5] {
+        [
+            ("cache.nodes", &self.cache.nodes),
+            ("cache.triangles", &self.cache.triangles),
+            ("cache.lists", &self.cache.lists),
+            ("cache.shading", &self.cache.shading),
+            ("cache.l2", &self.cache.l2),
+        ]
+    }
+
+    /// An estimate of the simulator memory the chip's state takes: cache tags, thread
+    /// and job registers.
+    pub fn modelled_bytes(&self) -> u64 {
+        let units = self.traversal.units as u64;
+        let cache = |c: &CacheConfig| (c.size_bytes as u64 / c.line_bytes.max(1) as u64) * 24;
+        let per_unit = cache(&self.cache.nodes)
+            + cache(&self.cache.triangles)
+            + if self.cache.lists_share_triangle_cache { 0 } else { cache(&self.cache.lists) }
+            + self.traversal.threads as u64 * THREAD_BYTES
+            + self.intersection.jobs as u64 * JOB_BYTES;
+        units * per_unit + cache(&self.cache.shading) + cache(&self.cache.l2)
     }
 
     /// Side of the square pixel block of a packet.
@@ -382,7 +599,25 @@ mod tests {
         c.set("packet_size=128").unwrap();
         assert!(c.validate().is_err());
         let mut c = HwConfig::default();
-        c.set("watchdog_cycles=10").unwrap();
-        assert!(c.validate().unwrap_err().contains("watchdog"));
+        c.set("traversal.threads=65").unwrap();
+        assert!(c.validate().unwrap_err().contains("traversal.threads"));
+        let mut c = HwConfig::default();
+        c.set("cache.nodes.line_bytes=48").unwrap();
+        c.set("cache.nodes.size_bytes=6144").unwrap();
+        c.validate().expect("48-byte lines (Purcell's texture cache) are fine");
+        c.set("cache.nodes.line_bytes=50").unwrap();
+        assert!(c.validate().unwrap_err().contains("multiple of 4"));
+        let mut c = HwConfig::default();
+        c.set("traversal.units=64").unwrap();
+        c.set("traversal.threads=64").unwrap();
+        for k in ["nodes", "triangles", "lists", "shading"] {
+            c.set(&format!("cache.{k}.size_bytes=1073741824")).unwrap();
+        }
+        c.set("cache.lists_share_triangle_cache=false").unwrap();
+        assert!(c.validate().unwrap_err().contains("GiB"), "64 units x 1 GiB caches");
+        let mut c = HwConfig::default();
+        c.set("memory.model=\"dram\"").unwrap();
+        c.validate().unwrap();
+        c.set("memory.model=\"hbm\"").unwrap_err();
     }
 }

@@ -1,30 +1,48 @@
 //! The list and intersection unit coupled to one traversal unit: it takes a packet
-//! standing at leaves, reads each lane's primitive list and triangles through its cache,
-//! and runs core's ray–triangle kernel for every (lane, triangle) pair through a
-//! pipelined datapath (one test enters every `initiation_interval` cycles, results leave
-//! `latency` cycles later); the packet goes back with each lane's closest hit updated.
+//! standing at leaves and runs it as stages — list fetch, triangle fetch, vertex fetch
+//! (each dependent level its own round trip through the list/triangle cache), then the
+//! test pipeline: groups of `lanes_per_cycle` ray–triangle tests enter every
+//! `initiation_interval` cycles and leave `latency` cycles later. Up to
+//! `intersection.jobs` packets are in flight at once, so one packet's memory wait
+//! overlaps another's tests. A leaf shared by several rays (a packet's shared walk) is
+//! fetched once for all of them; each triangle once per job.
 //!
 //! Ports: `leaves` in, `results` out, and a memory port with a list/triangle cache.
 
 use std::marker::PhantomData;
 
 use raypipe_core::intersect::triangle::Intersector;
+use raypipe_core::traverse::walk::{test_fetched, Leaf};
 use raypipe_core::{DataClass, SceneView};
 
 use crate::config::HwConfig;
 use crate::fifo::Fifo;
 use crate::jobs::{lanes, LeafJob, Query};
-use crate::mem_port::{MemPort, PortProbe, Wait};
+use crate::mem_port::{Fetch, FetchState, MemPort, Recorder};
+use crate::stall::Stall;
 use crate::unit_stats::{Activity, UnitStats};
 
-/// The job in the datapath.
-struct Current {
+/// Where a job stands.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Stage {
+    /// Its lists, triangles and vertices are being fetched.
+    Fetching,
+    /// Its data is there; waiting for the datapath.
+    Queued,
+    /// Its tests entered the pipeline; the last result leaves at the cycle.
+    Pipeline(u64),
+}
+
+/// A job in the unit.
+struct Job {
     job: Box<LeafJob>,
-    wait: Wait,
-    /// The cycle the last test enters the pipeline.
-    last_issue: u64,
-    /// When the results are out (known once the data's arrival is).
-    done_at: Option<u64>,
+    fetch: Fetch,
+    stage: Stage,
+    /// Ray–triangle tests the job runs.
+    tests: u64,
+    data_at: u64,
+    /// Order of arrival (oldest first to the datapath and out).
+    seq: u64,
 }
 
 /// A list and intersection unit.
@@ -34,7 +52,12 @@ pub struct IntersectionUnit<I: Intersector> {
     packet_size: u64,
     latency: u64,
     interval: u64,
-    current: Option<Current>,
+    lanes_per_cycle: u64,
+    max_jobs: usize,
+    jobs: Vec<Job>,
+    seq: u64,
+    /// Test groups enter the pipeline until this cycle (exclusive).
+    busy_until: u64,
     /// The list/triangle port.
     pub port: MemPort,
     /// Activity and SIMD lanes.
@@ -47,24 +70,30 @@ pub struct IntersectionUnit<I: Intersector> {
 impl<I: Intersector> IntersectionUnit<I> {
     /// An idle unit.
     pub fn new(id: usize, cfg: &HwConfig) -> IntersectionUnit<I> {
+        let q = cfg.memory.queue_depth;
         IntersectionUnit {
             id,
             packet_size: cfg.packet_size as u64,
             latency: cfg.intersection.latency as u64,
-            interval: cfg.intersection.initiation_interval as u64,
-            current: None,
+            interval: cfg.intersection.initiation_interval.max(1) as u64,
+            lanes_per_cycle: cfg.intersection.lanes_per_cycle.max(1) as u64,
+            max_jobs: cfg.intersection.jobs.max(1) as usize,
+            jobs: Vec::new(),
+            seq: 0,
+            busy_until: 0,
             port: {
                 let name = format!("intersection{id}");
                 let (lists, triangles) = (DataClass::PrimLists as usize, DataClass::Triangles as usize);
                 if cfg.cache.lists_share_triangle_cache {
-                    MemPort::with_caches(name.clone(), &[(name, &cfg.cache.triangles, &[lists, triangles])])
+                    MemPort::with_caches(name.clone(), &[(name, &cfg.cache.triangles, &[lists, triangles])], q)
                 } else {
                     MemPort::with_caches(
                         name.clone(),
                         &[
-                            (format!("{name}.lists"), &cfg.cache.lists, &[lists]),
                             (format!("{name}.triangles"), &cfg.cache.triangles, &[triangles]),
+                            (format!("{name}.lists"), &cfg.cache.lists, &[lists]),
                         ],
+                        q,
                     )
                 }
             },
@@ -74,31 +103,85 @@ impl<I: Intersector> IntersectionUnit<I> {
         }
     }
 
-    /// True if no job is in the datapath.
+    /// True if no job is in the unit.
     pub fn is_empty(&self) -> bool {
-        self.current.is_none()
+        self.jobs.is_empty()
     }
 
-    /// The first cycle after `now` at which time alone changes something (the last test
-    /// entered, the results are out); `None` if only FIFO traffic can.
+    /// The first cycle after `now` at which time alone changes something.
     pub fn next_wake(&self, now: u64) -> Option<u64> {
-        let c = self.current.as_ref()?;
-        let done = c.done_at.or_else(|| self.port.resolve(&c.wait).map(|r| c.last_issue.max(r) + self.latency));
-        [Some(c.last_issue + 1), done.or(Some(now + 1))].into_iter().flatten().filter(|&w| w > now).min()
+        // The datapath's end changes the unit's activity (busy to stalled) as well.
+        self.jobs
+            .iter()
+            .filter_map(|j| match j.stage {
+                Stage::Fetching => self.port.wake_of(&j.fetch, now),
+                Stage::Pipeline(done) => Some(done),
+                Stage::Queued => None,
+            })
+            .chain(Some(self.busy_until))
+            .filter(|&w| w > now)
+            .min()
     }
 
-    /// One line describing the datapath (for the watchdog).
+    /// One line describing the unit (for the watchdog).
     pub fn describe(&self) -> String {
-        match &self.current {
-            None => format!("intersection{}: idle", self.id),
-            Some(c) => format!(
-                "intersection{}: job of {} lanes, data {}, done at {}",
-                self.id,
-                lanes(c.job.lanes),
-                if self.port.resolve(&c.wait).is_some() { "scheduled" } else { "requested" },
-                c.done_at.map_or("?".to_string(), |d| d.to_string())
-            ),
+        let n = |s: fn(&Stage) -> bool| self.jobs.iter().filter(|j| s(&j.stage)).count();
+        format!(
+            "intersection{}: {} jobs fetching, {} queued, {} in the pipeline",
+            self.id,
+            n(|s| *s == Stage::Fetching),
+            n(|s| *s == Stage::Queued),
+            n(|s| matches!(s, Stage::Pipeline(_)))
+        )
+    }
+
+    /// Runs a job's kernels at once (functional first) and records its reads by level:
+    /// list entries, then each distinct triangle's record and its vertices.
+    fn accept(&mut self, scene: &SceneView<'_>, mut job: Box<LeafJob>, now: u64) -> Job {
+        let mut rec = Recorder::default();
+        // Distinct leaves and the rays at each.
+        let mut groups: Vec<(Leaf, u64)> = Vec::new();
+        for i in crate::lane_iter(job.lanes) {
+            let leaf = job.leaves[i];
+            match groups.iter_mut().find(|(l, _)| *l == leaf) {
+                Some((_, m)) => *m |= 1 << i,
+                None => groups.push((leaf, 1 << i)),
+            }
         }
+        let mut tris: Vec<(u32, I::Triangle)> = Vec::new();
+        let any_hit = job.query == Query::AnyHit;
+        let mut tests = 0u64;
+        for (leaf, mask) in groups {
+            let mut prims = Vec::new();
+            let mut k = 0;
+            loop {
+                rec.at_level(0);
+                let Some(prim) = leaf.entry(scene, k, &mut rec) else { break };
+                prims.push(prim);
+                k += 1;
+            }
+            for &prim in &prims {
+                if !tris.iter().any(|(p, _)| *p == prim) {
+                    rec.at_level(1);
+                    tris.push((prim, I::fetch(scene, prim, &mut rec)));
+                }
+            }
+            for i in crate::lane_iter(mask) {
+                let ray = job.rays[i];
+                let prep = I::prepare(&ray);
+                for &prim in &prims {
+                    let Some((_, tri)) = tris.iter().find(|(p, _)| *p == prim) else { continue };
+                    tests += 1;
+                    if test_fetched::<I>(&prep, &ray, any_hit, tri, prim, &mut job.best[i]) {
+                        break;
+                    }
+                }
+            }
+        }
+        self.tests += tests;
+        self.stats.issue(lanes(job.lanes), self.packet_size);
+        self.seq += 1;
+        Job { job, fetch: Fetch::new(rec.into_levels()), stage: Stage::Fetching, tests, data_at: now, seq: self.seq }
     }
 
     /// One cycle. Returns true if anything moved.
@@ -110,52 +193,84 @@ impl<I: Intersector> IntersectionUnit<I> {
         results: &mut Fifo<Box<LeafJob>>,
     ) -> bool {
         let mut moved = false;
-        let mut issued = false;
-        if let Some(cur) = self.current.as_mut() {
-            if cur.done_at.is_none() {
-                if let Some(arrived) = self.port.resolve(&cur.wait) {
-                    // A test can enter once its data is there; the last result leaves
-                    // `latency` cycles after the last test entered.
-                    cur.done_at = Some(cur.last_issue.max(arrived) + self.latency);
+        // The oldest job whose results are out goes back (one per cycle).
+        let done = (0..self.jobs.len())
+            .filter(|&k| matches!(self.jobs[k].stage, Stage::Pipeline(d) if d <= now))
+            .min_by_key(|&k| self.jobs[k].seq);
+        let mut output_blocked = false;
+        if let Some(k) = done {
+            if results.can_push() {
+                let j = self.jobs.remove(k);
+                let _ = results.push(j.job);
+                moved = true;
+            } else {
+                results.note_full();
+                output_blocked = true;
+            }
+        }
+        // The datapath takes the oldest job whose data is there.
+        if self.busy_until <= now {
+            let next =
+                (0..self.jobs.len()).filter(|&k| self.jobs[k].stage == Stage::Queued).min_by_key(|&k| self.jobs[k].seq);
+            if let Some(k) = next {
+                let j = &mut self.jobs[k];
+                debug_assert!(j.data_at <= now, "triangles tested before their data arrived");
+                let groups = j.tests.div_ceil(self.lanes_per_cycle).max(1);
+                self.busy_until = now + groups * self.interval;
+                j.stage = Stage::Pipeline(now + (groups - 1) * self.interval + self.latency);
+                moved = true;
+            }
+        }
+        // A new job, if there is room.
+        if self.jobs.len() < self.max_jobs {
+            if let Some(job) = leaves.pop() {
+                let j = self.accept(scene, job, now);
+                self.jobs.push(j);
+                moved = true;
+            }
+        }
+        // Fetches, oldest job first.
+        let mut order: Vec<usize> = (0..self.jobs.len()).filter(|&k| self.jobs[k].stage == Stage::Fetching).collect();
+        order.sort_by_key(|&k| self.jobs[k].seq);
+        for k in order {
+            let mut fetch = std::mem::take(&mut self.jobs[k].fetch);
+            let before = fetch.position();
+            let state = self.port.advance(&mut fetch, now);
+            moved |= fetch.position() != before;
+            let j = &mut self.jobs[k];
+            j.fetch = fetch;
+            if let FetchState::Done(at) = state {
+                if at <= now {
+                    j.data_at = at;
+                    j.stage = Stage::Queued;
                     moved = true;
                 }
             }
-            if cur.done_at.is_some_and(|d| d <= now) {
-                if let Some(c) = self.current.take() {
-                    match results.push(c.job) {
-                        Ok(()) => moved = true,
-                        Err(job) => self.current = Some(Current { job, ..c }),
-                    }
-                }
-            }
         }
-        if self.current.is_none() {
-            if let Some(mut job) = leaves.pop() {
-                let mut probe = PortProbe { port: &mut self.port, now, wait: Wait::default() };
-                let mut tests = 0u64;
-                let any_hit = job.query == Query::AnyHit;
-                for i in crate::lane_iter(job.lanes) {
-                    let ray = job.rays[i];
-                    let prep = I::prepare(&ray);
-                    let leaf = job.leaves[i];
-                    tests += leaf.test::<I, _>(scene, &prep, &ray, any_hit, &mut job.best[i], &mut probe) as u64;
-                }
-                self.tests += tests;
-                self.stats.issue(lanes(job.lanes), self.packet_size);
-                let last_issue = now + tests.saturating_sub(1) * self.interval;
-                self.current = Some(Current { job, wait: probe.wait, last_issue, done_at: None });
-                moved = true;
-                issued = true;
-            }
-        }
-        let activity = match &self.current {
-            _ if issued => Activity::Busy,
-            None => Activity::Idle,
-            // Tests still entering the pipeline.
-            Some(c) if now <= c.last_issue => Activity::Busy,
-            Some(_) => Activity::Stalled,
+        let activity = if self.busy_until > now {
+            Activity::Busy
+        } else if self.jobs.is_empty() {
+            Activity::Idle
+        } else {
+            Activity::Stalled(self.stall_reason(output_blocked))
         };
         self.stats.cycle(activity);
         moved
+    }
+
+    fn stall_reason(&self, output_blocked: bool) -> Stall {
+        let fetching = self.jobs.iter().filter(|j| j.stage == Stage::Fetching).min_by_key(|j| j.seq);
+        if let Some(j) = fetching {
+            return match j.fetch.blocked {
+                Some(b) => b,
+                None if self.port.waits_on_queue(&j.fetch) => Stall::MemoryQueue,
+                None => Stall::TriangleData,
+            };
+        }
+        if output_blocked {
+            Stall::OutputFull
+        } else {
+            Stall::PipelineLatency
+        }
     }
 }

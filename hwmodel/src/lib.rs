@@ -4,7 +4,8 @@
 //! Slusallek 2001 §7.3): a ray generation & shading unit ([`rgs`]) feeds several traversal
 //! units ([`traversal_unit`]), each coupled to a list & intersection unit
 //! ([`intersection_unit`]) through bounded FIFOs ([`fifo`]); packets step in lock-step;
-//! per-unit caches ([`cache`]) sit in front of one memory channel ([`memory_channel`])
+//! per-unit caches ([`cache`]) sit in front of the memory ([`memory`]: perfect, fixed or
+//! DRAM ([`dram`]))
 //! that accounts every byte by data class. Every unit has registered state and one
 //! `tick`; FIFOs and the channel commit at the clock edge ([`simulator`]), so the tick
 //! order cannot change any result.
@@ -18,14 +19,16 @@
 
 pub mod cache;
 pub mod config;
+pub mod dram;
 pub mod fifo;
 pub mod intersection_unit;
 pub mod jobs;
 pub mod mem_port;
-pub mod memory_channel;
+pub mod memory;
 pub mod report;
 pub mod rgs;
 pub mod simulator;
+pub mod stall;
 pub mod traffic;
 pub mod traversal_unit;
 pub mod unit_stats;

@@ -1,37 +1,172 @@
-//! A unit's memory port: its caches (one shared by all classes, or one per class, or
-//! none) and the channel requests it has issued. The
-//! kernels' scene reads arrive here through [`PortProbe`] (core's `MemoryProbe`), so the
-//! model sees every byte the kernels read; misses become line requests that the memory
-//! channel schedules at the clock edge, in a fixed order.
+//! A unit's memory port: its caches (one shared by all classes, one per class, or none),
+//! `ports` lookups per cycle, and the requests it has sent to the memory.
+//!
+//! Timing follows data. A kernel runs at once when its work is issued (functional first)
+//! and its scene reads are *recorded* ([`Recorder`], core's `MemoryProbe`), level by level:
+//! a read that depends on data read before it (a list entry's triangle, a triangle's
+//! vertices, a popped node's children — core marks them with `MemoryProbe::dependent`)
+//! starts a new level. The port then replays the reads through its caches in time
+//! ([`Fetch`]): a level's lookups start only once the previous level's data has arrived
+//! (each dependent level is its own round trip), at most `ports` lookups per cycle, a miss
+//! only with a free MSHR and room in the port's outgoing queue. The unit uses the work's
+//! result no earlier than the cycle its last level's data arrived.
+
+use std::collections::VecDeque;
 
 use raypipe_core::{DataClass, MemoryProbe};
 
 use crate::cache::{Cache, Lookup};
 use crate::config::CacheConfig;
+use crate::stall::Stall;
 use crate::traffic::CLASSES;
 
-/// A request to the memory channel.
+/// One recorded scene read.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Access {
+    /// Traffic class index.
+    pub class: usize,
+    /// Byte address in the scene image.
+    pub addr: u32,
+    /// Bytes read.
+    pub bytes: u32,
+}
+
+/// The probe a unit hands to core's kernels: it records every read into its dependent
+/// level.
+#[derive(Clone, Debug, Default)]
+pub struct Recorder {
+    /// Reads by level (level `k + 1` depends on level `k`).
+    pub levels: Vec<Vec<Access>>,
+    /// The level reads go to now.
+    pub level: usize,
+}
+
+impl Recorder {
+    /// Reads from now on go to `level` (a new independent chain starts at its level).
+    pub fn at_level(&mut self, level: usize) {
+        self.level = level;
+    }
+
+    /// Every read of every level, for statistics.
+    pub fn reads(&self) -> impl Iterator<Item = &Access> {
+        self.levels.iter().flatten()
+    }
+
+    /// The recorded reads, without empty levels.
+    pub fn into_levels(self) -> Vec<Vec<Access>> {
+        self.levels.into_iter().filter(|l| !l.is_empty()).collect()
+    }
+}
+
+impl MemoryProbe for Recorder {
+    #[inline]
+    fn read(&mut self, class: DataClass, addr: u32, bytes: u32) {
+        while self.levels.len() <= self.level {
+            self.levels.push(Vec::new());
+        }
+        self.levels[self.level].push(Access { class: class as usize, addr, bytes });
+    }
+
+    #[inline]
+    fn dependent(&mut self) {
+        self.level += 1;
+    }
+}
+
+/// A request to the memory.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Request {
     /// Request number within its port.
     pub id: u32,
+    /// Byte address (scene image; framebuffer writes use their own space).
+    pub addr: u64,
     /// Bytes to transfer.
     pub bytes: u32,
     /// Traffic class index.
     pub class: usize,
+    /// A posted write (nobody waits for it).
+    pub write: bool,
+    /// The cycle the unit made the request.
+    pub issued: u64,
 }
 
-/// Ready cycle of a request the channel has not scheduled yet.
+/// Ready cycle of a request the memory has not accepted yet.
 pub const UNSCHEDULED: u64 = u64::MAX;
 
-/// The data a piece of work waits for: requests up to `last` (the channel serves a port's
-/// requests in order, so the last one arrives last) and a fixed earliest cycle (hits).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Wait {
-    /// Earliest cycle the data can be used, from cache hits.
-    pub at: u64,
-    /// The newest channel request waited for.
-    pub last: Option<u32>,
+/// One lookup of a fetch: a cache line, or an uncached read.
+#[derive(Clone, Copy, Debug)]
+struct Lookup1 {
+    class: usize,
+    cache: Option<usize>,
+    /// Line number (cached) or byte address (uncached).
+    key: u64,
+    bytes: u32,
+}
+
+/// The reads of one piece of work (a traversal step, a leaf job, a shading job), replayed
+/// through the port level by level.
+#[derive(Clone, Debug, Default)]
+pub struct Fetch {
+    levels: Vec<Vec<Access>>,
+    level: usize,
+    lookups: Vec<Lookup1>,
+    next: usize,
+    started: bool,
+    /// Data of the current level's hits is there from this cycle.
+    at: u64,
+    /// Requests (misses and merges) of the current level.
+    waits: Vec<u32>,
+    /// Why the last cycle's lookups stopped (a port, an MSHR, the queue), if they did.
+    pub blocked: Option<Stall>,
+}
+
+/// Where a fetch stands.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FetchState {
+    /// Every level looked up; the last one's data is all there from this cycle.
+    Done(u64),
+    /// Waiting for data of the current level (arriving at the cycle, once known).
+    Waiting(Option<u64>),
+    /// Lookups left that could not be made this cycle.
+    Blocked(Stall),
+}
+
+impl Fetch {
+    /// The reads of `levels` (none: the work needs no data).
+    pub fn new(levels: Vec<Vec<Access>>) -> Fetch {
+        Fetch { levels, ..Fetch::default() }
+    }
+
+    /// How far the lookups have got (level, lookup, started): a change is progress.
+    pub fn position(&self) -> (usize, usize, bool) {
+        (self.level, self.next, self.started)
+    }
+
+    /// True if the work reads nothing.
+    pub fn is_empty(&self) -> bool {
+        self.levels.iter().all(Vec::is_empty)
+    }
+}
+
+/// Latencies seen by the requests of one class: count, sum and a log2 histogram.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct LatencyStats {
+    /// Requests.
+    pub count: u64,
+    /// Sum of their latencies (cycles from request to data).
+    pub sum: u64,
+    /// `histogram[k]`: requests with a latency below `2^k` (and at least `2^(k-1)`).
+    pub histogram: [u64; 32],
+}
+
+impl LatencyStats {
+    /// Counts one request's latency.
+    pub fn add(&mut self, cycles: u64) {
+        self.count += 1;
+        self.sum += cycles;
+        let bin = (64 - cycles.leading_zeros()).min(31) as usize;
+        self.histogram[bin] += 1;
+    }
 }
 
 /// One unit's memory interface.
@@ -43,26 +178,40 @@ pub struct MemPort {
     pub caches: Vec<(String, Cache)>,
     /// For each traffic class, the cache its reads go through (`None`: uncached).
     route: [Option<usize>; CLASSES],
+    /// Lookups per cycle.
+    ports: u32,
+    /// Lookups left this cycle.
+    budget: u32,
+    budget_cycle: u64,
+    /// Ready cycle of every request, by id.
     ready: Vec<u64>,
-    /// Requests issued this cycle, taken by the channel at the edge.
-    pub staged: Vec<Request>,
+    /// Requests made and not yet accepted by the memory (first in, first out).
+    pub staged: VecDeque<Request>,
+    /// Most requests waiting in `staged` before the port stops making new ones.
+    pub staged_limit: usize,
     /// Reads of this cycle (address, bytes), for the distinct-data count.
     pub read_log: Vec<(u32, u32)>,
-    /// Bytes requested from the channel, per class.
+    /// Bytes requested from the memory, per class.
     pub requested: [u64; CLASSES],
+    /// Bytes delivered to this port, per class.
+    pub delivered: [u64; CLASSES],
+    /// Latency of this port's read requests, per class.
+    pub latency: [LatencyStats; CLASSES],
 }
 
 impl MemPort {
     /// A port whose reads all go through one cache (`size_bytes = 0`: none).
-    pub fn new(name: String, cache: &CacheConfig) -> MemPort {
-        MemPort::with_caches(name.clone(), &[(name, cache, &[0, 1, 2, 3, 4])])
+    pub fn new(name: String, cache: &CacheConfig, staged_limit: u32) -> MemPort {
+        MemPort::with_caches(name.clone(), &[(name, cache, &[0, 1, 2, 3, 4])], staged_limit)
     }
 
     /// A port with several caches, each named and serving the listed traffic classes
-    /// (a class in no list, or whose cache has `size_bytes = 0`, is uncached).
-    pub fn with_caches(name: String, caches: &[(String, &CacheConfig, &[usize])]) -> MemPort {
+    /// (a class in no list, or whose cache has `size_bytes = 0`, is uncached). The port's
+    /// width is the first cache configuration's `ports`.
+    pub fn with_caches(name: String, caches: &[(String, &CacheConfig, &[usize])], staged_limit: u32) -> MemPort {
         let mut route = [None; CLASSES];
         let mut built = Vec::new();
+        let ports = caches.first().map_or(1, |(_, c, _)| c.ports.max(1));
         for (cache_name, cfg, classes) in caches {
             if let Some(c) = Cache::new(cfg) {
                 for &k in classes.iter() {
@@ -77,93 +226,207 @@ impl MemPort {
             name,
             caches: built,
             route,
+            ports,
+            budget: ports,
+            budget_cycle: u64::MAX,
             ready: Vec::new(),
-            staged: Vec::new(),
+            staged: VecDeque::new(),
+            staged_limit: staged_limit.max(1) as usize,
             read_log: Vec::new(),
             requested: [0; CLASSES],
+            delivered: [0; CLASSES],
+            latency: Default::default(),
         }
     }
 
-    fn request(&mut self, bytes: u32, class: usize) -> u32 {
+    fn request(&mut self, addr: u64, bytes: u32, class: usize, write: bool, now: u64) -> u32 {
         let id = self.ready.len() as u32;
         self.ready.push(UNSCHEDULED);
-        self.staged.push(Request { id, bytes, class });
+        self.staged.push_back(Request { id, addr, bytes, class, write, issued: now });
         self.requested[class] += bytes as u64;
         id
     }
 
-    /// A read of `bytes` at `addr` at cycle `now`; `wait` collects what it waits for.
-    pub fn read(&mut self, class: usize, addr: u32, bytes: u32, now: u64, wait: &mut Wait) {
-        self.read_log.push((addr, bytes));
-        let Some(c) = self.route.get(class).copied().flatten() else {
-            let id = self.request(bytes, class);
-            wait.last = wait.last.max(Some(id));
-            return;
-        };
-        let cache = &self.caches[c].1;
-        let first = cache.line_of(addr as u64);
-        let last = cache.line_of(addr as u64 + bytes.max(1) as u64 - 1);
-        let line_bytes = cache.line_bytes();
-        for line in first..=last {
-            let cache = &mut self.caches[c].1;
-            match cache.lookup(line) {
-                Lookup::Present { fill } => {
-                    if self.ready.get(fill as usize).is_some_and(|&r| r <= now) {
-                        cache.stats.hits[class] += 1;
-                        wait.at = wait.at.max(now + cache.hit_latency as u64);
-                    } else {
-                        cache.stats.merged[class] += 1;
-                        wait.last = wait.last.max(Some(fill));
+    /// A posted write (framebuffer): it costs memory bandwidth, nobody waits for it.
+    pub fn write(&mut self, class: usize, addr: u64, bytes: u32, now: u64) {
+        self.request(addr, bytes, class, true, now);
+    }
+
+    /// Called by the memory at the edge: request `id`'s data arrives at `cycle`.
+    pub fn set_ready(&mut self, r: &Request, cycle: u64) {
+        if let Some(slot) = self.ready.get_mut(r.id as usize) {
+            *slot = cycle;
+        }
+        self.delivered[r.class] += r.bytes as u64;
+        if !r.write {
+            self.latency[r.class].add(cycle.saturating_sub(r.issued));
+        }
+    }
+
+    fn ready_of(&self, id: u32) -> u64 {
+        self.ready.get(id as usize).copied().unwrap_or(UNSCHEDULED)
+    }
+
+    /// The cycle the current level's data is all there, once every request it waits for
+    /// has been accepted by the memory.
+    fn level_ready(&self, f: &Fetch) -> Option<u64> {
+        let mut at = f.at;
+        for &id in &f.waits {
+            let r = self.ready_of(id);
+            if r == UNSCHEDULED {
+                return None;
+            }
+            at = at.max(r);
+        }
+        Some(at)
+    }
+
+    fn start_level(&mut self, f: &mut Fetch) {
+        f.lookups.clear();
+        f.next = 0;
+        f.at = 0;
+        f.waits.clear();
+        let Some(level) = f.levels.get(f.level) else { return };
+        for a in level {
+            self.read_log.push((a.addr, a.bytes));
+            match self.route.get(a.class).copied().flatten() {
+                Some(c) => {
+                    let cache = &self.caches[c].1;
+                    let first = cache.line_of(a.addr as u64);
+                    let last = cache.line_of(a.addr as u64 + a.bytes.max(1) as u64 - 1);
+                    for line in first..=last {
+                        // One lookup per line, however many reads of the level share it.
+                        if !f.lookups.iter().any(|l| l.cache == Some(c) && l.key == line) {
+                            f.lookups.push(Lookup1 {
+                                class: a.class,
+                                cache: Some(c),
+                                key: line,
+                                bytes: cache.line_bytes(),
+                            });
+                        }
                     }
                 }
-                Lookup::Absent => {
-                    cache.stats.misses[class] += 1;
-                    let id = self.request(line_bytes, class);
-                    self.caches[c].1.install(line, id);
-                    wait.last = wait.last.max(Some(id));
-                }
+                None => f.lookups.push(Lookup1 { class: a.class, cache: None, key: a.addr as u64, bytes: a.bytes }),
             }
         }
     }
 
-    /// A posted write (framebuffer): it costs channel bandwidth, nobody waits for it.
-    pub fn write(&mut self, class: usize, bytes: u32) {
-        self.request(bytes, class);
+    /// MSHRs of cache `c` busy at `now` (fills not yet arrived).
+    fn mshrs_busy(&mut self, c: usize, now: u64) -> usize {
+        let ready = &self.ready;
+        let cache = &mut self.caches[c].1;
+        cache.outstanding.retain(|&id| ready.get(id as usize).is_none_or(|&r| r > now));
+        cache.outstanding.len()
     }
 
-    /// Called by the channel at the edge: request `id`'s data arrives at `cycle`.
-    pub fn set_ready(&mut self, id: u32, cycle: u64) {
-        if let Some(r) = self.ready.get_mut(id as usize) {
-            *r = cycle;
+    /// Advances `f` at cycle `now`: lookups of the current level while the port has
+    /// lookups left this cycle, then the next level once this one's data is there.
+    pub fn advance(&mut self, f: &mut Fetch, now: u64) -> FetchState {
+        if self.budget_cycle != now {
+            self.budget_cycle = now;
+            self.budget = self.ports;
+        }
+        f.blocked = None;
+        if !f.started {
+            f.started = true;
+            self.start_level(f);
+        }
+        loop {
+            if f.next >= f.lookups.len() {
+                let Some(at) = self.level_ready(f) else { return FetchState::Waiting(None) };
+                if f.level + 1 >= f.levels.len() {
+                    return FetchState::Done(at);
+                }
+                if at > now {
+                    return FetchState::Waiting(Some(at));
+                }
+                f.level += 1;
+                self.start_level(f);
+                continue;
+            }
+            if self.budget == 0 {
+                f.blocked = Some(Stall::CachePort);
+                return FetchState::Blocked(Stall::CachePort);
+            }
+            let l = f.lookups[f.next];
+            match l.cache {
+                Some(c) => {
+                    let found = self.caches[c].1.lookup(l.key);
+                    match found {
+                        Lookup::Present { fill } => {
+                            let r = self.ready_of(fill);
+                            let cache = &mut self.caches[c].1;
+                            if r <= now {
+                                cache.stats.hits[l.class] += 1;
+                                f.at = f.at.max(now + cache.hit_latency as u64);
+                            } else {
+                                cache.stats.merged[l.class] += 1;
+                                f.waits.push(fill);
+                            }
+                        }
+                        Lookup::Absent => {
+                            if self.mshrs_busy(c, now) >= self.caches[c].1.mshrs as usize {
+                                f.blocked = Some(Stall::Mshr);
+                                return FetchState::Blocked(Stall::Mshr);
+                            }
+                            if self.staged.len() >= self.staged_limit {
+                                f.blocked = Some(Stall::MemoryQueue);
+                                return FetchState::Blocked(Stall::MemoryQueue);
+                            }
+                            let line_bytes = self.caches[c].1.line_bytes() as u64;
+                            let id = self.request(l.key * line_bytes, l.bytes, l.class, false, now);
+                            let cache = &mut self.caches[c].1;
+                            cache.stats.misses[l.class] += 1;
+                            cache.install(l.key, id);
+                            cache.outstanding.push(id);
+                            f.waits.push(id);
+                        }
+                    }
+                }
+                None => {
+                    if self.staged.len() >= self.staged_limit {
+                        f.blocked = Some(Stall::MemoryQueue);
+                        return FetchState::Blocked(Stall::MemoryQueue);
+                    }
+                    let id = self.request(l.key, l.bytes, l.class, false, now);
+                    f.waits.push(id);
+                }
+            }
+            self.budget -= 1;
+            f.next += 1;
         }
     }
 
-    /// The cycle from which `wait`'s data is all there, once the channel has scheduled
-    /// every request it needs (`None` before).
-    pub fn resolve(&self, wait: &Wait) -> Option<u64> {
-        match wait.last {
-            None => Some(wait.at),
-            Some(id) => match self.ready.get(id as usize) {
-                Some(&r) if r != UNSCHEDULED => Some(wait.at.max(r)),
-                _ => None,
-            },
-        }
+    /// The earliest cycle after `now` at which a blocked or waiting fetch of this port
+    /// can move on by time alone: a fill arriving (data, or a freed MSHR).
+    pub fn next_arrival(&self, now: u64) -> Option<u64> {
+        self.caches
+            .iter()
+            .flat_map(|(_, c)| c.outstanding.iter())
+            .map(|&id| self.ready_of(id))
+            .filter(|&r| r != UNSCHEDULED && r > now)
+            .min()
     }
-}
 
-/// The probe a unit hands to core's kernels: every read goes to the port.
-pub struct PortProbe<'p> {
-    /// The unit's port.
-    pub port: &'p mut MemPort,
-    /// The current cycle.
-    pub now: u64,
-    /// What the work waits for.
-    pub wait: Wait,
-}
+    /// The cycle from which `f`'s current level's data is there, if known and later than
+    /// `now` (for the clock to skip to).
+    pub fn wake_of(&self, f: &Fetch, now: u64) -> Option<u64> {
+        if f.blocked == Some(Stall::CachePort) {
+            return Some(now + 1);
+        }
+        if f.blocked == Some(Stall::Mshr) {
+            return self.next_arrival(now);
+        }
+        self.level_ready(f).filter(|&t| t > now)
+    }
 
-impl MemoryProbe for PortProbe<'_> {
-    #[inline]
-    fn read(&mut self, class: DataClass, addr: u32, bytes: u32) {
-        self.port.read(class as usize, addr, bytes, self.now, &mut self.wait);
+    /// Requests still staged (their fetches wait on the memory queue).
+    pub fn has_staged(&self) -> bool {
+        !self.staged.is_empty()
+    }
+
+    /// True if `f` waits for a request the memory has not accepted yet.
+    pub fn waits_on_queue(&self, f: &Fetch) -> bool {
+        f.waits.iter().any(|&id| self.ready_of(id) == UNSCHEDULED)
     }
 }

@@ -10,12 +10,15 @@ use raypipe_core::shade::ray_record::RayKind;
 use crate::cache::CacheStats;
 use crate::config::HwConfig;
 use crate::fifo::FifoStats;
-use crate::memory_channel::ChannelStats;
+use crate::mem_port::LatencyStats;
+use crate::memory::ChannelStats;
+use crate::stall::Stall;
 use crate::traffic::{CLASSES, CLASS_NAMES, FRAMEBUFFER};
+use crate::traversal_unit::{TraversalStats, STATE_NAMES};
 use crate::unit_stats::UnitStats;
 
 /// Schema name and version of the JSON report.
-pub const SCHEMA: &str = "raypipe-hw-report/1";
+pub const SCHEMA: &str = "raypipe-hw-report/2";
 
 /// One unit's line of the report.
 #[derive(Clone, Debug, Serialize)]
@@ -32,6 +35,16 @@ pub struct UnitReport {
     pub issues: u64,
     /// Active lanes over lane slots of those issues.
     pub simd_efficiency: f64,
+    /// Stall cycles by reason; they sum to `stall_cycles`.
+    pub stall_reasons: BTreeMap<String, u64>,
+    /// Traversal units: node records read per packet step (1 for a packet's shared walk).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub node_reads_per_step: Option<f64>,
+    /// Traversal units: mean threads in each state over the frame.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub thread_states: Option<BTreeMap<String, f64>>,
+    /// Bytes delivered to the unit's memory port.
+    pub bytes: u64,
 }
 
 /// One FIFO's line.
@@ -87,6 +100,65 @@ pub struct MemoryReport {
     pub distinct_scene_bytes: u64,
     /// Scene bytes transferred over distinct scene bytes read (1.0 is the floor).
     pub traffic_over_compulsory: f64,
+    /// `"perfect"`, `"fixed"` or `"dram"`.
+    pub model: String,
+    /// Read latency (cycles from a unit's request to its data) per class: mean, count and
+    /// a log2 histogram (`"<N"`: requests below N cycles).
+    pub latency: BTreeMap<String, LatencyReport>,
+    /// Shared L2: hits, merges and misses (line lookups).
+    pub l2: BTreeMap<String, u64>,
+    /// DRAM: row-buffer hit rate and per-bank counters (absent for other models).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dram: Option<DramReport>,
+}
+
+/// Latencies of one data class.
+#[derive(Clone, Debug, Serialize)]
+pub struct LatencyReport {
+    /// Requests.
+    pub count: u64,
+    /// Mean cycles from request to data.
+    pub mean: f64,
+    /// Requests by latency bin.
+    pub histogram: BTreeMap<String, u64>,
+}
+
+/// The DRAM's statistics.
+#[derive(Clone, Debug, Serialize)]
+pub struct DramReport {
+    /// Bursts that found their row open.
+    pub row_hit_rate: f64,
+    /// Per bank, channel-major.
+    pub banks: Vec<crate::dram::BankStats>,
+}
+
+/// What produced a report: the scene, view, algorithm and program.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct RunIdentity {
+    /// The scene argument (a path, or the built-in default).
+    pub scene: String,
+    /// FNV-1a 64 of the scene image bytes, hex.
+    pub scene_hash: String,
+    /// Acceleration structure.
+    pub structure: String,
+    /// Shading algorithm.
+    pub algorithm: String,
+    /// Intersection test.
+    pub intersector: String,
+    /// Camera: eye, look-at, up, vertical field of view.
+    pub camera: String,
+    /// raypipe's version.
+    pub raypipe_version: String,
+}
+
+/// FNV-1a, 64 bits (a scene image's fingerprint in reports).
+pub fn fnv1a64(bytes: &[u8]) -> u64 {
+    let mut h = 0xcbf2_9ce4_8422_2325u64;
+    for &b in bytes {
+        h ^= b as u64;
+        h = h.wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    h
 }
 
 /// Checks that must hold for every run.
@@ -129,6 +201,10 @@ pub struct Report {
     pub traversal_steps: u64,
     /// Ray–triangle tests run.
     pub triangle_tests: u64,
+    /// What produced the report (set by the command line).
+    pub run: RunIdentity,
+    /// The one-line verdict: what bounds the frame.
+    pub bottleneck: String,
     /// Per unit.
     pub units: Vec<UnitReport>,
     /// Per FIFO.
@@ -151,6 +227,18 @@ pub struct Sources<'a> {
     pub cycles: u64,
     /// Units by name.
     pub units: Vec<(String, &'a UnitStats)>,
+    /// Traversal units' own counters, by unit name.
+    pub traversal: Vec<(String, &'a TraversalStats)>,
+    /// Bytes delivered per unit port, by unit name.
+    pub port_bytes: Vec<(String, u64)>,
+    /// Read latencies per class over all ports.
+    pub latency: Vec<LatencyStats>,
+    /// Memory utilization.
+    pub utilization: f64,
+    /// Bytes delivered to the ports.
+    pub delivered: u64,
+    /// The DRAM, if that is the model.
+    pub dram: Option<&'a crate::dram::Dram>,
     /// FIFOs: name, depth, counters.
     pub fifos: Vec<(String, usize, &'a FifoStats)>,
     /// Caches by port name.
@@ -188,13 +276,30 @@ impl Report {
         let units = s
             .units
             .iter()
-            .map(|(name, u)| UnitReport {
-                name: name.clone(),
-                busy_cycles: u.busy_cycles,
-                stall_cycles: u.stall_cycles,
-                idle_cycles: u.idle_cycles,
-                issues: u.issues,
-                simd_efficiency: u.simd_efficiency(),
+            .map(|(name, u)| {
+                let tr = s.traversal.iter().find(|(n, _)| n == name).map(|(_, t)| *t);
+                let ticked = (u.busy_cycles + u.stall_cycles + u.idle_cycles).max(1) as f64;
+                UnitReport {
+                    name: name.clone(),
+                    busy_cycles: u.busy_cycles,
+                    stall_cycles: u.stall_cycles,
+                    idle_cycles: u.idle_cycles,
+                    issues: u.issues,
+                    simd_efficiency: u.simd_efficiency(),
+                    stall_reasons: Stall::ALL
+                        .iter()
+                        .map(|r| (r.name().to_string(), u.stall_reasons[*r as usize]))
+                        .collect(),
+                    node_reads_per_step: tr.map(|t| ratio(t.node_reads as f64, t.steps as f64)),
+                    thread_states: tr.map(|t| {
+                        STATE_NAMES
+                            .iter()
+                            .zip(t.thread_state_cycles.iter())
+                            .map(|(n, c)| (n.to_string(), *c as f64 / ticked))
+                            .collect()
+                    }),
+                    bytes: s.port_bytes.iter().find(|(n, _)| n == name).map_or(0, |(_, b)| *b),
+                }
             })
             .collect::<Vec<_>>();
         let traversal_steps =
@@ -240,10 +345,32 @@ impl Report {
             total_bytes,
             bytes_per_ray: ratio(total_bytes as f64, rays as f64),
             requests: s.channel.requests.iter().sum(),
-            utilization: ratio(s.channel.busy_cycles as f64, cycles as f64),
+            utilization: s.utilization,
             distinct_scene_bytes: s.distinct,
             traffic_over_compulsory: ratio(scene_bytes as f64, s.distinct as f64),
+            model: format!("{:?}", s.cfg.memory.model).to_lowercase(),
+            latency: (0..CLASSES)
+                .filter(|&k| s.latency[k].count > 0)
+                .map(|k| {
+                    let l = &s.latency[k];
+                    let histogram = l
+                        .histogram
+                        .iter()
+                        .enumerate()
+                        .filter(|(_, &n)| n > 0)
+                        .map(|(b, &n)| (format!("<{}", 1u64 << b), n))
+                        .collect();
+                    let r = LatencyReport { count: l.count, mean: ratio(l.sum as f64, l.count as f64), histogram };
+                    (CLASS_NAMES[k].to_string(), r)
+                })
+                .collect(),
+            l2: [("hits", s.channel.l2[0]), ("merged", s.channel.l2[1]), ("misses", s.channel.l2[2])]
+                .into_iter()
+                .map(|(k, v)| (k.to_string(), v))
+                .collect(),
+            dram: s.dram.map(|d| DramReport { row_hit_rate: d.row_hit_rate(), banks: d.stats.clone() }),
         };
+        let bottleneck = verdict(&units, memory.utilization);
         Report {
             schema: SCHEMA,
             config: s.cfg.clone(),
@@ -255,6 +382,8 @@ impl Report {
             rays_per_second: rays as f64 / seconds,
             rays_by_kind: RayKind::ALL.iter().map(|k| (k.name().to_string(), s.rays_by_kind[*k as usize])).collect(),
             ray_stream_peak: s.stream_peak,
+            run: RunIdentity::default(),
+            bottleneck,
             traversal_steps,
             triangle_tests: s.tests,
             units,
@@ -265,7 +394,7 @@ impl Report {
                 rays_issued: s.rays.0,
                 rays_retired: s.rays.1,
                 bytes_requested: s.requested,
-                bytes_delivered: total_bytes,
+                bytes_delivered: s.delivered,
             },
         }
     }
@@ -282,6 +411,13 @@ impl Report {
             out.push_str(&s);
             out.push('\n');
         };
+        if !self.run.scene.is_empty() {
+            line(format!(
+                "run            {} ({} {}, {}), scene {}",
+                self.run.scene, self.run.structure, self.run.algorithm, self.run.intersector, self.run.scene_hash
+            ));
+        }
+        line(format!("bottleneck     {}", self.bottleneck));
         line(format!(
             "frame          {}x{}, {} rays in packets of {}, {} cycles",
             self.width, self.height, self.rays, self.config.packet_size, self.cycles
@@ -310,6 +446,13 @@ impl Report {
                 100.0 * u.idle_cycles as f64 / all,
                 100.0 * u.simd_efficiency
             ));
+            let mut reasons: Vec<(&String, &u64)> = u.stall_reasons.iter().filter(|(_, &n)| n > 0).collect();
+            reasons.sort_by(|a, b| b.1.cmp(a.1));
+            if !reasons.is_empty() {
+                let parts: Vec<String> =
+                    reasons.iter().take(3).map(|(k, n)| format!("{k} {:.1}%", 100.0 * **n as f64 / all)).collect();
+                line(format!("    stalls: {}", parts.join(", ")));
+            }
         }
         let (full, empty): (u64, u64) =
             self.fifos.iter().fold((0, 0), |(a, b), f| (a + f.stats.full_stall_cycles, b + f.stats.empty_stall_cycles));
@@ -327,7 +470,8 @@ impl Report {
         let m = &self.memory;
         let by_class: Vec<String> = m.bytes.iter().filter(|(_, &b)| b > 0).map(|(k, b)| format!("{k} {b}")).collect();
         line(format!(
-            "memory         {} bytes ({:.1} per ray; {}), {:.1}% busy",
+            "memory         {}: {} bytes ({:.1} per ray; {}), {:.1}% busy",
+            m.model,
             m.total_bytes,
             m.bytes_per_ray,
             by_class.join(", "),
@@ -338,5 +482,75 @@ impl Report {
             m.traffic_over_compulsory, m.distinct_scene_bytes
         ));
         out
+    }
+}
+
+/// The one-line verdict: the memory when it is busy most of the time, else the unit kind
+/// that works most, else what the traversal units wait for most.
+fn verdict(units: &[UnitReport], utilization: f64) -> String {
+    let kind = |prefix: &str| -> Option<(f64, f64, String, f64)> {
+        let us: Vec<&UnitReport> = units.iter().filter(|u| u.name.starts_with(prefix)).collect();
+        if us.is_empty() {
+            return None;
+        }
+        let ticked: f64 = us.iter().map(|u| (u.busy_cycles + u.stall_cycles + u.idle_cycles) as f64).sum();
+        let busy: f64 = us.iter().map(|u| u.busy_cycles as f64).sum::<f64>() / ticked.max(1.0);
+        let mut reasons: BTreeMap<String, u64> = BTreeMap::new();
+        for u in &us {
+            for (k, v) in &u.stall_reasons {
+                *reasons.entry(k.clone()).or_default() += v;
+            }
+        }
+        let (top, n) = reasons.into_iter().max_by_key(|(_, v)| *v).unwrap_or_default();
+        let mem: f64 = us
+            .iter()
+            .flat_map(|u| u.stall_reasons.iter())
+            .filter(|(k, _)| Stall::ALL.iter().any(|s| s.is_memory() && s.name() == k.as_str()))
+            .map(|(_, v)| *v as f64)
+            .sum::<f64>()
+            / ticked.max(1.0);
+        Some((busy, mem, top, n as f64 / ticked.max(1.0)))
+    };
+    let trav = kind("traversal");
+    let isect = kind("intersection");
+    let shade = kind("rgs.shade");
+    let wait = |k: &Option<(f64, f64, String, f64)>, what: &str| {
+        k.as_ref().map_or(String::new(), |(_, mem, top, share)| {
+            format!("; {what} wait on memory {:.0}% of their cycles (most: {top} {:.0}%)", 100.0 * mem, 100.0 * share)
+        })
+    };
+    if utilization >= 0.8 {
+        return format!(
+            "memory-bound: memory {:.0}% busy{}{}",
+            100.0 * utilization,
+            wait(&trav, "traversal units"),
+            wait(&isect, "intersection units")
+        );
+    }
+    let mut best = ("traversal", trav.as_ref().map_or(0.0, |k| k.0));
+    for (name, k) in [("intersection", &isect), ("shading", &shade)] {
+        let b = k.as_ref().map_or(0.0, |k| k.0);
+        if b > best.1 {
+            best = (name, b);
+        }
+    }
+    if best.1 >= 0.6 {
+        return format!("{}-bound: its datapath busy {:.0}% of cycles", best.0, 100.0 * best.1);
+    }
+    match &trav {
+        Some((busy, mem, top, share)) if *mem >= 0.3 => format!(
+            "latency-bound: memory {:.0}% busy, traversal units wait on memory {:.0}% of their cycles (most: {top} {:.0}%), busy {:.0}%",
+            100.0 * utilization,
+            100.0 * mem,
+            100.0 * share,
+            100.0 * busy
+        ),
+        Some((busy, _, top, share)) => format!(
+            "no dominant bound: traversal busy {:.0}%, most stalls {top} {:.0}%; memory {:.0}% busy",
+            100.0 * busy,
+            100.0 * share,
+            100.0 * utilization
+        ),
+        None => "no traversal units".to_string(),
     }
 }

@@ -1,8 +1,12 @@
 //! Ray generation & shading (RGS): the generator emits packets of primary rays, one
 //! square pixel block per packet in tile order, with Purcell's scene-bounds test deciding
 //! which lanes carry a ray; packets go round-robin to the traversal units' ray FIFOs.
-//! The shader takes finished packets back, runs core's shading kernel (its reads go
-//! through the shading cache) and writes the framebuffer (a posted write per packet).
+//! The generator is pipelined: a packet of `n` rays takes `n / rays_per_cycle` cycles,
+//! and the next one starts the cycle the previous one leaves.
+//! The shader takes finished packets back — up to `rgs.shade_jobs` at once — runs core's
+//! shading kernel at once (its reads are recorded and fetched through the shading cache),
+//! shades `shade_per_cycle` rays per cycle once the data has arrived, and only then
+//! writes the framebuffer (a posted write per packet) and releases the rays it emitted.
 //!
 //! Ports: `rays` out (one FIFO per traversal unit), `hits` in (one per traversal unit),
 //! and a memory port with the shading cache.
@@ -20,19 +24,39 @@ use raypipe_core::{SceneView, Vec3};
 use crate::config::HwConfig;
 use crate::fifo::Fifo;
 use crate::jobs::{lanes, HitPacket, Query, RayPacketJob, NO_RAY};
-use crate::mem_port::{MemPort, PortProbe, Wait};
+use crate::mem_port::{Fetch, FetchState, MemPort, Recorder};
+use crate::stall::Stall;
 use crate::traffic::FRAMEBUFFER;
 use crate::unit_stats::{Activity, UnitStats};
 
 /// Pixels per tile side (packets are issued tile by tile, as the host renders).
 pub const TILE: u32 = 16;
 
-/// A packet being shaded.
-struct Shading {
-    wait: Wait,
-    busy_until: u64,
-    primary: bool,
+/// Where a shading job stands.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Stage {
+    Fetching,
+    Queued,
+    Shading(u64),
 }
+
+/// A packet being shaded.
+struct ShadeJob {
+    fetch: Fetch,
+    stage: Stage,
+    data_at: u64,
+    primary: bool,
+    /// Rays to shade (cycles in the datapath: `rays / shade_per_cycle`).
+    rays: u64,
+    /// Records the shader emitted, released when the job is done.
+    emitted: Vec<RayRecord>,
+    /// Framebuffer bytes written when done, at this address.
+    write: (u64, u32),
+    seq: u64,
+}
+
+/// Framebuffer writes go to their own address space, above any scene image.
+const FRAMEBUFFER_BASE: u64 = 1 << 40;
 
 /// The ray generation & shading unit.
 pub struct Rgs {
@@ -49,7 +73,11 @@ pub struct Rgs {
     generated: Option<(Box<RayPacketJob>, u64)>,
     next_unit: usize,
     next_hits: usize,
-    shading: Option<Shading>,
+    shading: Vec<ShadeJob>,
+    shade_jobs: usize,
+    shade_seq: u64,
+    /// The shading datapath is busy until this cycle (exclusive).
+    shade_busy_until: u64,
     /// The image, row-major.
     pub framebuffer: Vec<[u8; 3]>,
     /// Each pixel's closest hit (what the equivalence tests compare with the host).
@@ -115,10 +143,13 @@ impl Rgs {
             generated: None,
             next_unit: 0,
             next_hits: 0,
-            shading: None,
+            shading: Vec::new(),
+            shade_jobs: cfg.rgs.shade_jobs.max(1) as usize,
+            shade_seq: 0,
+            shade_busy_until: 0,
             framebuffer: vec![[0; 3]; pixels],
             hits: vec![None; pixels],
-            port: MemPort::new("shading".into(), &cfg.cache.shading),
+            port: MemPort::new("shading".into(), &cfg.cache.shading, cfg.memory.queue_depth),
             gen_stats: UnitStats::default(),
             shade_stats: UnitStats::default(),
             packets_done: 0,
@@ -157,7 +188,7 @@ impl Rgs {
             && self.stream.is_empty()
             && self.in_flight.is_empty()
             && self.generated.is_none()
-            && self.shading.is_none()
+            && self.shading.is_empty()
             && self.direct.is_empty()
     }
 
@@ -173,8 +204,12 @@ impl Rgs {
     /// generated, a shaded packet is written); `None` if only FIFO traffic can.
     pub fn next_wake(&self, now: u64) -> Option<u64> {
         let generated = self.generated.as_ref().map(|(_, ready)| *ready);
-        let shaded = self.shading.as_ref().map(|s| self.port.resolve(&s.wait).map_or(now + 1, |r| r.max(s.busy_until)));
-        [generated, shaded].into_iter().flatten().filter(|&w| w > now).min()
+        let jobs = self.shading.iter().filter_map(|j| match j.stage {
+            Stage::Fetching => self.port.wake_of(&j.fetch, now),
+            Stage::Shading(done) => Some(done),
+            Stage::Queued => None,
+        });
+        jobs.chain(generated).chain(Some(self.shade_busy_until)).filter(|&w| w > now).min()
     }
 
     /// One line describing the unit (for the watchdog).
@@ -187,7 +222,7 @@ impl Rgs {
             self.packets_done,
             self.stream.len(),
             self.in_flight.len(),
-            if self.shading.is_some() { "busy" } else { "free" }
+            if self.shading.is_empty() { "free" } else { "busy" }
         )
     }
 
@@ -207,9 +242,11 @@ impl Rgs {
         hits: &mut [Fifo<Box<HitPacket>>],
     ) -> bool {
         let mut moved = false;
-        // Generator: send the packet made earlier, or make the next one.
-        let gen_activity = match self.generated.take() {
-            Some((job, ready)) if ready <= now => {
+        // Generator: send the packet made earlier once it is complete; the next one starts
+        // in the same cycle.
+        let mut gen_activity = Activity::Idle;
+        if let Some((job, ready)) = self.generated.take() {
+            if ready <= now {
                 let n = rays.len();
                 match (0..n).map(|k| (self.next_unit + k) % n).find(|&u| rays[u].can_push()) {
                     Some(u) => {
@@ -217,29 +254,28 @@ impl Rgs {
                         let _ = rays[u].push(job);
                         self.next_unit = (u + 1) % n;
                         moved = true;
-                        Activity::Busy
                     }
                     None => {
                         rays.iter_mut().for_each(|f| f.note_full());
                         self.generated = Some((job, ready));
-                        Activity::Stalled
+                        gen_activity = Activity::Stalled(Stall::OutputFull);
                     }
                 }
+            } else {
+                self.generated = Some((job, ready));
+                gen_activity = Activity::Busy;
             }
-            Some(pending) => {
-                self.generated = Some(pending);
-                Activity::Busy
-            }
+        }
+        if self.generated.is_none() {
             // Secondary rays first (so the stream stays short), then the next block.
-            None if !self.stream.is_empty() => {
+            if !self.stream.is_empty() {
                 let job = self.pack_secondary();
                 self.gen_stats.issue(lanes(job.lanes), self.packet_size);
                 let cycles = (lanes(job.lanes)).div_ceil(self.rays_per_cycle).max(1);
                 self.generated = Some((job, now + cycles));
                 moved = true;
-                Activity::Busy
-            }
-            None if self.next_block < self.blocks.len() && self.visibility.is_some() => {
+                gen_activity = Activity::Busy;
+            } else if self.next_block < self.blocks.len() && self.visibility.is_some() {
                 // The shadow caster: the block's hits are read from the G-buffer.
                 let b = self.next_block;
                 let mut packet = Box::new(HitPacket { index: b as u32, lanes: 0, hits: [None; 64] });
@@ -253,9 +289,8 @@ impl Rgs {
                 self.direct.push_back(packet);
                 self.next_block += 1;
                 moved = true;
-                Activity::Busy
-            }
-            None if self.next_block < self.blocks.len() => {
+                gen_activity = Activity::Busy;
+            } else if self.next_block < self.blocks.len() {
                 let b = self.next_block;
                 let mut job =
                     Box::new(RayPacketJob { index: b as u32, query: Query::Closest, lanes: 0, rays: [NO_RAY; 64] });
@@ -273,46 +308,95 @@ impl Rgs {
                 self.generated = Some((job, now + cycles));
                 self.next_block += 1;
                 moved = true;
-                Activity::Busy
+                gen_activity = Activity::Busy;
             }
-            None => Activity::Idle,
-        };
+        }
         self.gen_stats.cycle(gen_activity);
 
-        // Shader: finish the packet being shaded, or take the next finished one.
-        if let Some(s) = &self.shading {
-            if self.port.resolve(&s.wait).is_some_and(|r| r.max(s.busy_until) <= now) {
-                if s.primary {
+        // Shader: jobs done leave (framebuffer write, emitted rays released).
+        let mut k = 0;
+        while k < self.shading.len() {
+            if matches!(self.shading[k].stage, Stage::Shading(d) if d <= now) {
+                let j = self.shading.remove(k);
+                if j.primary {
                     self.packets_done += 1;
                 }
-                self.shading = None;
+                for r in j.emitted {
+                    self.stream.push(r);
+                }
+                self.stream_peak = self.stream_peak.max(self.stream.len());
+                if j.write.1 > 0 {
+                    self.port.write(FRAMEBUFFER, j.write.0, j.write.1, now);
+                }
+                moved = true;
+            } else {
+                k += 1;
+            }
+        }
+        // The datapath takes the oldest job whose data is there.
+        if self.shade_busy_until <= now {
+            let next = (0..self.shading.len())
+                .filter(|&k| self.shading[k].stage == Stage::Queued)
+                .min_by_key(|&k| self.shading[k].seq);
+            if let Some(k) = next {
+                let j = &mut self.shading[k];
+                debug_assert!(j.data_at <= now, "shaded before the shading data arrived");
+                let cycles = j.rays.div_ceil(self.shade_per_cycle).max(1);
+                self.shade_busy_until = now + cycles;
+                j.stage = Stage::Shading(now + cycles);
                 moved = true;
             }
         }
-        let shade_activity = if self.shading.is_some() {
-            Activity::Stalled
-        } else {
+        // A new packet to shade, if a job slot is free.
+        if self.shading.len() < self.shade_jobs {
             let n = hits.len();
             if let Some(packet) = self.direct.pop_front() {
                 self.shade(now, scene, &packet);
                 moved = true;
-                Activity::Busy
-            } else {
-                match (0..n).map(|k| (self.next_hits + k) % n).find(|&u| hits[u].peek().is_some()) {
-                    Some(u) => {
-                        self.next_hits = (u + 1) % n;
-                        let packet = hits[u].pop().expect("peeked");
-                        if (packet.index as usize) < self.blocks.len() {
-                            self.shade(now, scene, &packet);
-                        } else {
-                            self.shade_secondary(now, scene, &packet);
-                        }
-                        moved = true;
-                        Activity::Busy
+            } else if let Some(u) = (0..n).map(|k| (self.next_hits + k) % n).find(|&u| hits[u].peek().is_some()) {
+                self.next_hits = (u + 1) % n;
+                if let Some(packet) = hits[u].pop() {
+                    if (packet.index as usize) < self.blocks.len() {
+                        self.shade(now, scene, &packet);
+                    } else {
+                        self.shade_secondary(now, scene, &packet);
                     }
-                    None => Activity::Idle,
+                    moved = true;
                 }
             }
+        }
+        let mut order: Vec<usize> =
+            (0..self.shading.len()).filter(|&k| self.shading[k].stage == Stage::Fetching).collect();
+        order.sort_by_key(|&k| self.shading[k].seq);
+        for k in order {
+            let mut fetch = std::mem::take(&mut self.shading[k].fetch);
+            let before = fetch.position();
+            let state = self.port.advance(&mut fetch, now);
+            moved |= fetch.position() != before;
+            let j = &mut self.shading[k];
+            j.fetch = fetch;
+            if let FetchState::Done(at) = state {
+                if at <= now {
+                    j.data_at = at;
+                    j.stage = Stage::Queued;
+                    moved = true;
+                }
+            }
+        }
+        let shade_activity = if self.shade_busy_until > now {
+            Activity::Busy
+        } else if self.shading.is_empty() {
+            Activity::Idle
+        } else {
+            let fetching = self.shading.iter().filter(|j| j.stage == Stage::Fetching).min_by_key(|j| j.seq);
+            Activity::Stalled(match fetching {
+                Some(j) => match j.fetch.blocked {
+                    Some(b) => b,
+                    None if self.port.waits_on_queue(&j.fetch) => Stall::MemoryQueue,
+                    None => Stall::ShadingData,
+                },
+                None => Stall::PipelineLatency,
+            })
         };
         self.shade_stats.cycle(shade_activity);
         moved
@@ -325,12 +409,17 @@ impl Rgs {
         for (j, p) in where_.iter_mut().enumerate().take(self.packet_size as usize) {
             *p = self.pixel(b, j);
         }
-        let mut probe = PortProbe { port: &mut self.port, now, wait: Wait::default() };
+        let mut probe = Recorder::default();
+        let mut emitted = Vec::new();
         let mut pixels = 0u64;
+        let mut first_pixel = None;
         for (j, p) in where_.iter().enumerate() {
             let Some((x, y)) = *p else { continue };
             pixels += 1;
+            // Each pixel's reads are a chain of their own.
+            probe.at_level(0);
             let pixel = (y * self.eye.width + x) as usize;
+            first_pixel.get_or_insert(pixel);
             let ray = if packet.lanes & (1 << j) == 0 {
                 None
             } else if self.visibility.is_some() {
@@ -344,7 +433,6 @@ impl Rgs {
                 }
                 (None, None) => self.framebuffer[pixel] = rgb8(self.background),
                 (Some(shader), Some(ray)) => {
-                    let stream = &mut self.stream;
                     let sum = &mut self.radiance[pixel];
                     shader.shade_primary(
                         scene,
@@ -352,21 +440,42 @@ impl Rgs {
                         packet.hits[j],
                         sum,
                         &mut probe,
-                        &mut |r| stream.push(r),
+                        &mut |r| emitted.push(r),
                     );
                 }
                 (Some(_), None) => self.radiance[pixel].add(self.background),
             }
             self.hits[pixel] = if packet.lanes & (1 << j) != 0 { packet.hits[j] } else { None };
         }
-        self.stream_peak = self.stream_peak.max(self.stream.len());
-        let wait = probe.wait;
-        self.port.write(FRAMEBUFFER, 4 * pixels as u32);
         if self.visibility.is_none() {
             self.rays_retired += lanes(packet.lanes);
         }
         self.shade_stats.issue(lanes(packet.lanes), self.packet_size);
-        self.shading = Some(Shading { wait, busy_until: now + pixels.div_ceil(self.shade_per_cycle), primary: true });
+        let write = (FRAMEBUFFER_BASE + 4 * first_pixel.unwrap_or(0) as u64, 4 * pixels as u32);
+        self.push_job(now, probe, pixels, emitted, write, true);
+    }
+
+    /// Starts a shading job for the reads `probe` recorded.
+    fn push_job(
+        &mut self,
+        now: u64,
+        probe: Recorder,
+        rays: u64,
+        emitted: Vec<RayRecord>,
+        write: (u64, u32),
+        primary: bool,
+    ) {
+        self.shade_seq += 1;
+        self.shading.push(ShadeJob {
+            fetch: Fetch::new(probe.into_levels()),
+            stage: Stage::Fetching,
+            data_at: now,
+            primary,
+            rays,
+            emitted,
+            write,
+            seq: self.shade_seq,
+        });
     }
 
     /// Packs waiting records of one kind — the kind of the oldest record — into a packet,
@@ -391,8 +500,10 @@ impl Rgs {
     /// are shaded (and may emit more records).
     fn shade_secondary(&mut self, now: u64, scene: &SceneView<'_>, packet: &HitPacket) {
         let records = self.in_flight.remove(&packet.index).unwrap_or_default();
-        let mut probe = PortProbe { port: &mut self.port, now, wait: Wait::default() };
+        let mut probe = Recorder::default();
+        let mut emitted = Vec::new();
         for (j, rec) in records.iter().enumerate() {
+            probe.at_level(0);
             let hit = packet.hits[j];
             let Some(slot) = self.radiance.get_mut(rec.pixel as usize) else { continue };
             if rec.kind == RayKind::Shadow {
@@ -400,15 +511,13 @@ impl Rgs {
                     slot.add(rec.weight);
                 }
             } else if let Some(shader) = &self.shader {
-                let stream = &mut self.stream;
-                slot.add(shader.shade(scene, rec, hit, &mut probe, &mut |r| stream.push(r)));
+                slot.add(shader.shade(scene, rec, hit, &mut probe, &mut |r| emitted.push(r)));
             }
         }
-        self.stream_peak = self.stream_peak.max(self.stream.len());
         self.rays_retired += lanes(packet.lanes);
         self.shade_stats.issue(lanes(packet.lanes), self.packet_size);
-        let busy_until = now + (records.len() as u64).div_ceil(self.shade_per_cycle).max(1);
-        self.shading = Some(Shading { wait: probe.wait, busy_until, primary: false });
+        let rays = records.len() as u64;
+        self.push_job(now, probe, rays, emitted, (0, 0), false);
     }
 }
 

@@ -1,7 +1,12 @@
 //! The clock: every cycle each unit ticks (reading only state committed at the previous
 //! edge), then the edge commits every FIFO and hands the cycle's memory requests to the
-//! channel in a fixed port order. A watchdog stops a run in which nothing moves for
-//! `watchdog_cycles` and names every unit's state and every FIFO's occupancy.
+//! memory in a fixed port order. A cycle in which nothing moved repeats itself until the
+//! earliest cycle at which some wait is over (a datum arrives, a pipeline empties): the
+//! clock skips there, accounting the skipped cycles like the last one. A watchdog stops a
+//! run in which nothing moved and nothing is awaited — no datum, latency or queue slot can
+//! ever change it — after `watchdog_cycles`, naming every unit's state and every FIFO's
+//! occupancy. So a legitimate wait, however long, never trips it, and the verdict is the
+//! same whether the clock skips or ticks every cycle.
 
 use raypipe_core::camera::EyeRays;
 use raypipe_core::intersect::triangle::Intersector;
@@ -12,10 +17,11 @@ use crate::config::HwConfig;
 use crate::fifo::{AnyFifo, Fifo};
 use crate::intersection_unit::IntersectionUnit;
 use crate::jobs::{HitPacket, LeafJob, RayPacketJob};
-use crate::mem_port::MemPort;
-use crate::memory_channel::MemoryChannel;
+use crate::mem_port::{LatencyStats, MemPort};
+use crate::memory::Memory;
 use crate::report::{Report, Sources};
 use crate::rgs::Rgs;
+use crate::traffic::CLASSES;
 use crate::traversal_unit::TraversalUnit;
 
 /// A unit, for the tick order.
@@ -37,7 +43,7 @@ pub struct Simulator<'s, I: Intersector> {
     leaf_fifos: Vec<Fifo<Box<LeafJob>>>,
     result_fifos: Vec<Fifo<Box<LeafJob>>>,
     hit_fifos: Vec<Fifo<Box<HitPacket>>>,
-    channel: MemoryChannel,
+    memory: Memory,
     /// Scene bytes read at least once, one bit per 4-byte word.
     touched: Vec<u64>,
     order: Vec<UnitRef>,
@@ -79,7 +85,7 @@ impl<'s, I: Intersector> Simulator<'s, I> {
             leaf_fifos: (0..units).map(|u| Fifo::new(format!("leaves{u}"), f.leaves)).collect(),
             result_fifos: (0..units).map(|u| Fifo::new(format!("results{u}"), f.results)).collect(),
             hit_fifos: (0..units).map(|u| Fifo::new(format!("hits{u}"), f.hits)).collect(),
-            channel: MemoryChannel::new(&cfg.memory),
+            memory: Memory::new(cfg),
             touched: vec![0; words.div_ceil(64)],
             order,
             shuffle: None,
@@ -112,25 +118,33 @@ impl<'s, I: Intersector> Simulator<'s, I> {
         let mut quiet = 0u64;
         let total = self.rgs.packet_count();
         let mut last_done = usize::MAX;
-        while !self.rgs.is_done() {
+        // Until every packet is shaded and every request (the last framebuffer writes)
+        // has left its port.
+        while !self.rgs.is_done() || self.any_staged() {
             let moved = self.cycle();
-            // A cycle in which nothing moved repeats itself until a unit's wait is over:
-            // the clock jumps there, accounting the skipped cycles like this one.
+            let wake = if moved { None } else { self.next_wake() };
             let mut skipped = 0;
-            if !moved && self.skip {
-                let wake = self.next_wake();
-                let until = wake.unwrap_or(self.now + self.cfg.watchdog_cycles.saturating_sub(quiet) + 1);
-                skipped = until.saturating_sub(self.now + 1);
-                self.repeat_last(skipped);
-            }
-            if moved || self.channel.busy_after(self.now) {
+            if moved {
                 quiet = 0;
+            } else if let Some(w) = wake {
+                quiet = 0;
+                if self.skip {
+                    skipped = w.saturating_sub(self.now + 1);
+                }
             } else {
-                quiet += 1 + skipped;
+                // Nothing moved and nothing is awaited: nothing can ever move again.
+                quiet += 1;
+                if self.skip {
+                    skipped = self.cfg.watchdog_cycles.saturating_sub(quiet) + 1;
+                    quiet += skipped;
+                }
                 if quiet > self.cfg.watchdog_cycles {
+                    self.repeat_last(skipped);
+                    self.now += 1 + skipped;
                     return Err(self.deadlock());
                 }
             }
+            self.repeat_last(skipped);
             self.now += 1 + skipped;
             if self.rgs.packets_done != last_done && self.rgs.packets_done.is_multiple_of(64) {
                 last_done = self.rgs.packets_done;
@@ -175,15 +189,14 @@ impl<'s, I: Intersector> Simulator<'s, I> {
         for f in self.fifos_mut() {
             moved |= f.commit();
         }
-        let touched = &mut self.touched;
-        let channel = &mut self.channel;
-        let ports = std::iter::once(&mut self.rgs.port)
+        let mut ports: Vec<&mut MemPort> = std::iter::once(&mut self.rgs.port)
             .chain(self.tus.iter_mut().map(|t| &mut t.port))
-            .chain(self.ius.iter_mut().map(|i| &mut i.port));
-        for port in ports {
-            mark_touched(touched, port);
-            channel.accept(now, port);
+            .chain(self.ius.iter_mut().map(|i| &mut i.port))
+            .collect();
+        for port in ports.iter_mut() {
+            mark_touched(&mut self.touched, port);
         }
+        moved |= self.memory.accept(now, &mut ports);
         moved
     }
 
@@ -209,7 +222,19 @@ impl<'s, I: Intersector> Simulator<'s, I> {
     fn next_wake(&self) -> Option<u64> {
         let now = self.now;
         let units = self.tus.iter().map(|t| t.next_wake(now)).chain(self.ius.iter().map(|i| i.next_wake(now)));
-        std::iter::once(self.rgs.next_wake(now)).chain(units).flatten().min()
+        let staged = self.any_staged();
+        std::iter::once(self.rgs.next_wake(now))
+            .chain(units)
+            .chain(std::iter::once(self.memory.next_wake(now, staged)))
+            .flatten()
+            .min()
+    }
+
+    /// True if some port holds requests the memory has not accepted yet.
+    fn any_staged(&self) -> bool {
+        self.rgs.port.has_staged()
+            || self.tus.iter().any(|t| t.port.has_staged())
+            || self.ius.iter().any(|i| i.port.has_staged())
     }
 
     /// Accounts `n` cycles exactly like the last one, for every unit and FIFO.
@@ -219,7 +244,7 @@ impl<'s, I: Intersector> Simulator<'s, I> {
         }
         self.rgs.gen_stats.repeat_last(n);
         self.rgs.shade_stats.repeat_last(n);
-        self.tus.iter_mut().for_each(|t| t.stats.repeat_last(n));
+        self.tus.iter_mut().for_each(|t| t.repeat_last(n));
         self.ius.iter_mut().for_each(|i| i.stats.repeat_last(n));
         self.fifos_mut().for_each(|f| f.repeat_last(n));
     }
@@ -258,9 +283,9 @@ impl<'s, I: Intersector> Simulator<'s, I> {
         self.order.retain(|u| *u != UnitRef::Traversal(unit));
     }
 
-    /// Total cycles of the frame: until the last pixel was shaded and the channel drained.
+    /// Total cycles of the frame: until the last pixel was shaded and the memory drained.
     pub fn cycles(&self) -> u64 {
-        self.now.max(self.channel.drained_at())
+        self.now.max(self.memory.drained_at())
     }
 
     /// The report of the run so far.
@@ -276,14 +301,32 @@ impl<'s, I: Intersector> Simulator<'s, I> {
             .collect();
         let caches = ports.iter().flat_map(|p| p.caches.iter().map(|(name, c)| (name.clone(), &c.stats))).collect();
         let requested = ports.iter().map(|p| p.requested.iter().sum::<u64>()).sum();
+        let delivered = ports.iter().map(|p| p.delivered.iter().sum::<u64>()).sum();
+        let mut latency: Vec<LatencyStats> = vec![LatencyStats::default(); CLASSES];
+        for p in &ports {
+            for (k, l) in p.latency.iter().enumerate() {
+                latency[k].count += l.count;
+                latency[k].sum += l.sum;
+                for (b, n) in l.histogram.iter().enumerate() {
+                    latency[k].histogram[b] += n;
+                }
+            }
+        }
+        let port_name = |p: &MemPort| if p.name == "shading" { "rgs.shade".to_string() } else { p.name.clone() };
         Report::gather(Sources {
             cfg: &self.cfg,
             size: self.rgs.size(),
             cycles: self.cycles(),
             units,
+            traversal: self.tus.iter().map(|t| (format!("traversal{}", t.id), &t.tstats)).collect(),
+            port_bytes: ports.iter().map(|p| (port_name(p), p.delivered.iter().sum())).collect(),
+            latency,
+            utilization: self.memory.utilization(self.cycles(), self.cfg.clock_mhz),
+            delivered,
+            dram: self.memory.dram(),
             fifos,
             caches,
-            channel: &self.channel.stats,
+            channel: &self.memory.stats,
             requested,
             distinct: self.touched.iter().map(|w| w.count_ones() as u64).sum::<u64>() * 4,
             rays: (self.rgs.rays_issued, self.rgs.rays_retired),

@@ -1,24 +1,38 @@
-//! The traversal unit: several packets in flight ("threads", to hide memory latency),
-//! one traversal step of one ready packet issued per cycle for all of its lanes that are
-//! not waiting at a leaf (lanes step in lock-step; the active fraction is the SIMD
-//! efficiency). Each lane's registers are core's [`Walk`] — the structures' own step
-//! kernels — so the model computes exactly the host's hits. When no lane can step any
-//! more, the packet goes to the coupled intersection unit with the lanes' leaves and
-//! comes back with their best hits (Wald & Slusallek 2001 §7.3).
+//! The traversal unit (SaarCOR's, Schmittler, Wald & Slusallek 2002; Wald & Slusallek
+//! 2001 §7.3): `traversal.threads` packets in flight to hide memory latency, each a
+//! thread with its registers.
 //!
-//! Ports: `rays` in (from ray generation), `leaves` out and `results` in (to and from
-//! the intersection unit), `hits` out (to shading), and a memory port with a node cache.
+//! A packet in a tree shares one walk (core's `PacketWalk`: one node per step for the
+//! whole packet, one stack): a step fetches that node once, and the rays that need it are
+//! tested on a datapath of `traversal.lanes_per_cycle` ray–node tests per cycle, so a step
+//! of `n` active rays occupies it `ceil(n / lanes_per_cycle)` cycles. A packet in the
+//! uniform grid keeps per-ray lock-step (Purcell's 3D-DDA: its rays leave a voxel at
+//! different distances), each ray stepping its own walk and reading its own cell.
+//!
+//! A step goes through three stages: *issue* (one per cycle; the core kernel runs and its
+//! reads are recorded), *fetch* (the port replays the reads through the node cache), and
+//! *test* once the data has arrived (the datapath, then `step_latency` cycles of pipeline).
+//! Only then is its result used. When the packet stands at a leaf it goes to the coupled
+//! intersection unit; when the walk is over, to shading.
+//!
+//! Ports: `rays` in, `leaves` out, `results` in, `hits` out, and a memory port with a node
+//! cache.
 
+use std::collections::VecDeque;
+
+use raypipe_core::packet::step::{PacketEvent, PacketStep, PacketWalk};
 use raypipe_core::traverse::walk::{Leaf, Walk, WalkEvent};
-use raypipe_core::{Ray, SceneView};
+use raypipe_core::{DataClass, Ray, SceneView};
+use serde::Serialize;
 
 use crate::config::HwConfig;
 use crate::fifo::Fifo;
 use crate::jobs::{lanes, HitPacket, LeafJob, Query, RayPacketJob, NO_RAY};
-use crate::mem_port::{MemPort, PortProbe, Wait};
+use crate::mem_port::{Fetch, FetchState, MemPort, Recorder};
+use crate::stall::Stall;
 use crate::unit_stats::{Activity, UnitStats};
 
-/// What a thread does next once its wait is over.
+/// What a thread does once its step's result is there.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Next {
     Step,
@@ -31,32 +45,62 @@ enum Next {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum State {
     Free = 0,
-    /// Waiting for a step's data (memory) and its pipeline latency.
-    Waiting = 1,
-    Ready = 2,
-    SendLeaf = 3,
-    AtIntersection = 4,
-    Finished = 5,
+    /// Its next step may issue.
+    Ready = 1,
+    /// Its step's node data is being fetched.
+    Fetching = 2,
+    /// Its data is there; waiting for the datapath.
+    Queued = 3,
+    /// Its tests ran; the result is in the step pipeline.
+    Pipeline = 4,
+    SendLeaf = 5,
+    AtIntersection = 6,
+    Finished = 7,
 }
 
-const STATES: usize = 6;
+const STATES: usize = 8;
+
+/// Report names of the thread states.
+pub const STATE_NAMES: [&str; STATES] =
+    ["free", "ready", "fetching", "queued_for_datapath", "step_pipeline", "send_leaf", "at_intersection", "finished"];
+
+/// The walk registers of one packet.
+enum Regs {
+    /// A tree: one walk for the packet.
+    Shared(Box<PacketWalk<64>>),
+    /// The grid (or no structure): one walk per ray.
+    PerRay(Vec<Walk>),
+}
 
 /// One packet's registers (its control state is its bit in the unit's state masks).
 struct Thread {
-    /// While waiting: for what, until when, and what comes next.
-    wait: Wait,
-    not_before: u64,
-    then: Next,
     index: u32,
     query: Query,
     traced: u64,
-    /// Lanes whose walk is not over.
+    /// Lanes whose walk is not over (any-hit lanes leave at their first hit).
     live: u64,
     /// Lanes waiting at a leaf.
     at_leaf: u64,
     rays: Box<[Ray; 64]>,
-    walks: Vec<Walk>,
-    leaves: [Leaf; 64],
+    regs: Regs,
+    leaves: Box<[Leaf; 64]>,
+    then: Next,
+    fetch: Fetch,
+    /// Ray–node tests of the step in flight.
+    tested: u64,
+    data_at: u64,
+    result_at: u64,
+}
+
+/// Counters of the traversal unit beyond activity.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct TraversalStats {
+    /// Packet steps issued.
+    pub steps: u64,
+    /// Node records read by the steps' kernels (a shared packet step reads one).
+    pub node_reads: u64,
+    /// Cycles × threads in each state (`STATE_NAMES`).
+    pub thread_state_cycles: [u64; STATES],
 }
 
 /// A traversal unit.
@@ -65,14 +109,22 @@ pub struct TraversalUnit {
     pub id: usize,
     packet_size: u64,
     step_latency: u64,
+    lanes_per_cycle: u64,
     threads: Vec<Thread>,
     /// `masks[s]`: the threads in state `s`.
     masks: [u64; STATES],
     next_issue: u32,
+    /// Threads whose data is there, oldest first.
+    queued: VecDeque<usize>,
+    /// The datapath runs tests until this cycle (exclusive).
+    busy_until: u64,
     /// The node port.
     pub port: MemPort,
     /// Activity and SIMD lanes.
     pub stats: UnitStats,
+    /// Steps, node reads, thread states.
+    pub tstats: TraversalStats,
+    last_states: [u64; STATES],
 }
 
 /// The lowest set bit of `mask` at or after `start` (wrapping), if any.
@@ -85,22 +137,24 @@ fn first_from(mask: u64, start: u32) -> Option<usize> {
 }
 
 impl TraversalUnit {
-    /// A unit with `cfg.traversal.threads` free threads.
+    /// A unit with `cfg.traversal.threads` free threads (validated: 1 to 64).
     pub fn new(id: usize, cfg: &HwConfig) -> TraversalUnit {
         let n = cfg.traversal.threads.clamp(1, 64) as usize;
         let threads = (0..n)
             .map(|_| Thread {
-                wait: Wait::default(),
-                not_before: 0,
-                then: Next::Step,
                 index: 0,
                 query: Query::Closest,
                 traced: 0,
                 live: 0,
                 at_leaf: 0,
                 rays: Box::new([NO_RAY; 64]),
-                walks: vec![Walk::All { visited: true, best: None }; 64],
-                leaves: [Leaf::All { count: 0 }; 64],
+                regs: Regs::PerRay(Vec::new()),
+                leaves: Box::new([Leaf::All { count: 0 }; 64]),
+                then: Next::Step,
+                fetch: Fetch::default(),
+                tested: 0,
+                data_at: 0,
+                result_at: 0,
             })
             .collect();
         let mut masks = [0u64; STATES];
@@ -109,11 +163,16 @@ impl TraversalUnit {
             id,
             packet_size: cfg.packet_size as u64,
             step_latency: cfg.traversal.step_latency as u64,
+            lanes_per_cycle: cfg.traversal.lanes_per_cycle.max(1) as u64,
             threads,
             masks,
             next_issue: 0,
-            port: MemPort::new(format!("traversal{id}"), &cfg.cache.nodes),
+            queued: VecDeque::new(),
+            busy_until: 0,
+            port: MemPort::new(format!("traversal{id}"), &cfg.cache.nodes, cfg.memory.queue_depth),
             stats: UnitStats::default(),
+            tstats: TraversalStats::default(),
+            last_states: [0; STATES],
         }
     }
 
@@ -125,36 +184,127 @@ impl TraversalUnit {
         self.masks[state as usize] |= bit;
     }
 
-    /// True if no packet is in flight.
-    pub fn is_empty(&self) -> bool {
-        self.masks[State::Free as usize].count_ones() as usize == self.threads.len()
+    fn count(&self, s: State) -> u32 {
+        self.masks[s as usize].count_ones()
     }
 
-    /// The first cycle after `now` at which time alone changes something (a step's data
-    /// and latency are over); `None` if only FIFO traffic can.
+    /// True if no packet is in flight.
+    pub fn is_empty(&self) -> bool {
+        self.count(State::Free) as usize == self.threads.len()
+    }
+
+    /// The first cycle after `now` at which time alone changes something (data arrives,
+    /// an MSHR frees, the datapath frees, a result leaves the pipeline); `None` if only
+    /// FIFO traffic can.
     pub fn next_wake(&self, now: u64) -> Option<u64> {
-        crate::lane_iter(self.masks[State::Waiting as usize])
-            .map(|k| {
-                let t = &self.threads[k];
-                self.port.resolve(&t.wait).map_or(now + 1, |r| r.max(t.not_before))
-            })
-            .filter(|&w| w > now)
-            .min()
+        let fetching = crate::lane_iter(self.masks[State::Fetching as usize])
+            .filter_map(|k| self.port.wake_of(&self.threads[k].fetch, now));
+        let pipeline = crate::lane_iter(self.masks[State::Pipeline as usize]).map(|k| self.threads[k].result_at);
+        // The datapath's end frees it for a queued step and changes the unit's activity.
+        let datapath = Some(self.busy_until);
+        fetching.chain(pipeline).chain(datapath).filter(|&w| w > now).min()
     }
 
     /// One line describing the threads (for the watchdog).
     pub fn describe(&self) -> String {
-        let count = |s: State| self.masks[s as usize].count_ones();
-        format!(
-            "traversal{}: {} free, {} waiting, {} ready, {} to send to intersection, {} at intersection, {} finished",
-            self.id,
-            count(State::Free),
-            count(State::Waiting),
-            count(State::Ready),
-            count(State::SendLeaf),
-            count(State::AtIntersection),
-            count(State::Finished),
-        )
+        let parts: Vec<String> =
+            (0..STATES).map(|s| format!("{} {}", self.masks[s].count_ones(), STATE_NAMES[s])).collect();
+        format!("traversal{}: {}", self.id, parts.join(", "))
+    }
+
+    /// Sets up thread `k` for a new packet.
+    fn start(&mut self, k: usize, scene: &SceneView<'_>, job: &RayPacketJob) {
+        let t = &mut self.threads[k];
+        t.index = job.index;
+        t.query = job.query;
+        t.traced = job.lanes;
+        t.live = job.lanes;
+        t.at_leaf = 0;
+        *t.rays = job.rays;
+        t.regs = match PacketWalk::<64>::start(scene, &job.rays, job.lanes) {
+            Some(w) => Regs::Shared(Box::new(w)),
+            None => {
+                let mut walks = match std::mem::replace(&mut t.regs, Regs::PerRay(Vec::new())) {
+                    Regs::PerRay(w) if w.len() == 64 => w,
+                    _ => vec![Walk::All { visited: true, best: None }; 64],
+                };
+                for i in crate::lane_iter(job.lanes) {
+                    walks[i] = Walk::start(scene, &job.rays[i]);
+                }
+                Regs::PerRay(walks)
+            }
+        };
+    }
+
+    /// Issues one step of thread `k`: the kernel runs now, its reads are recorded for the
+    /// fetch; its result is used once they have arrived.
+    fn issue(&mut self, k: usize, now: u64, scene: &SceneView<'_>) {
+        let t = &mut self.threads[k];
+        let mut rec = Recorder::default();
+        let mut tested = 0u64;
+        match &mut t.regs {
+            Regs::Shared(w) => match w.step(scene, &t.rays[..], &mut rec) {
+                PacketEvent::Node { lanes } => {
+                    tested = lanes;
+                    t.then = Next::Step;
+                }
+                PacketEvent::Leaf { leaf, lanes } => {
+                    let at = lanes & t.live;
+                    if at == 0 {
+                        // Every ray here is blocked (any-hit): nothing to intersect.
+                        w.finish_leaf();
+                        t.then = Next::Step;
+                    } else {
+                        for i in crate::lane_iter(at) {
+                            t.leaves[i] = leaf;
+                        }
+                        t.at_leaf = at;
+                        t.then = Next::SendLeaf;
+                    }
+                }
+                PacketEvent::Done => t.then = Next::Finish,
+            },
+            Regs::PerRay(walks) => {
+                let stepping = t.live & !t.at_leaf;
+                for i in crate::lane_iter(stepping) {
+                    rec.at_level(0);
+                    match walks[i].step(scene, &t.rays[i], &mut rec) {
+                        WalkEvent::Inner => {}
+                        WalkEvent::Leaf(leaf) => {
+                            t.leaves[i] = leaf;
+                            t.at_leaf |= 1 << i;
+                        }
+                        WalkEvent::Done => t.live &= !(1 << i),
+                    }
+                }
+                tested = stepping;
+                t.then = if t.live & !t.at_leaf != 0 {
+                    Next::Step
+                } else if t.at_leaf != 0 {
+                    Next::SendLeaf
+                } else {
+                    Next::Finish
+                };
+            }
+        }
+        self.tstats.steps += 1;
+        self.tstats.node_reads += rec.reads().filter(|a| a.class == DataClass::Nodes as usize).count() as u64;
+        if tested != 0 {
+            self.stats.issue(lanes(tested), self.packet_size);
+        }
+        t.tested = tested;
+        t.fetch = Fetch::new(rec.into_levels());
+        t.data_at = now;
+        self.set(k, State::Fetching);
+    }
+
+    /// The state a thread goes to once its step's result is there.
+    fn after_step(&self, k: usize) -> State {
+        match self.threads[k].then {
+            Next::Step => State::Ready,
+            Next::SendLeaf => State::SendLeaf,
+            Next::Finish => State::Finished,
+        }
     }
 
     /// One cycle. Returns true if anything moved.
@@ -168,19 +318,34 @@ impl TraversalUnit {
         hits: &mut Fifo<Box<HitPacket>>,
     ) -> bool {
         let mut moved = false;
-        // A packet back from the intersection unit: its lanes finish their leaves.
+        // A packet back from the intersection unit: its rays finish the leaf.
         if self.masks[State::AtIntersection as usize] != 0 {
             if let Some(job) = results.pop() {
                 let k = job.thread as usize;
                 if k < self.threads.len() {
                     let t = &mut self.threads[k];
-                    for i in crate::lane_iter(job.lanes) {
-                        *t.walks[i].best_mut() = job.best[i];
-                        if t.query == Query::AnyHit && job.best[i].is_some() {
-                            // Blocked: a shadow ray needs no more of the walk.
-                            t.live &= !(1 << i);
-                        } else {
-                            t.walks[i].finish_leaf();
+                    match &mut t.regs {
+                        Regs::Shared(w) => {
+                            for i in crate::lane_iter(job.lanes) {
+                                if let Some(b) = w.best_mut(i) {
+                                    *b = job.best[i];
+                                }
+                                if t.query == Query::AnyHit && job.best[i].is_some() {
+                                    t.live &= !(1 << i);
+                                }
+                            }
+                            w.finish_leaf();
+                        }
+                        Regs::PerRay(walks) => {
+                            for i in crate::lane_iter(job.lanes) {
+                                *walks[i].best_mut() = job.best[i];
+                                if t.query == Query::AnyHit && job.best[i].is_some() {
+                                    // Blocked: a shadow ray needs no more of the walk.
+                                    t.live &= !(1 << i);
+                                } else {
+                                    walks[i].finish_leaf();
+                                }
+                            }
                         }
                     }
                     t.at_leaf &= !job.lanes;
@@ -195,7 +360,10 @@ impl TraversalUnit {
                 let t = &self.threads[k];
                 let mut out = Box::new(HitPacket { index: t.index, lanes: t.traced, hits: [None; 64] });
                 for i in crate::lane_iter(t.traced) {
-                    out.hits[i] = t.walks[i].best();
+                    out.hits[i] = match &t.regs {
+                        Regs::Shared(w) => w.best(i),
+                        Regs::PerRay(walks) => walks[i].best(),
+                    };
                 }
                 let _ = hits.push(out);
                 self.set(k, State::Free);
@@ -212,12 +380,15 @@ impl TraversalUnit {
                     thread: k as u8,
                     lanes: t.at_leaf,
                     query: t.query,
-                    leaves: t.leaves,
+                    leaves: *t.leaves,
                     rays: *t.rays,
                     best: [None; 64],
                 });
                 for i in crate::lane_iter(t.at_leaf) {
-                    job.best[i] = t.walks[i].best();
+                    job.best[i] = match &t.regs {
+                        Regs::Shared(w) => w.best(i),
+                        Regs::PerRay(walks) => walks[i].best(),
+                    };
                 }
                 let _ = leaves.push(job);
                 self.set(k, State::AtIntersection);
@@ -229,68 +400,118 @@ impl TraversalUnit {
         // A new packet into a free thread.
         if let Some(k) = first_from(self.masks[State::Free as usize], 0) {
             if let Some(job) = rays.pop() {
-                let t = &mut self.threads[k];
-                t.index = job.index;
-                t.query = job.query;
-                t.traced = job.lanes;
-                t.live = job.lanes;
-                t.at_leaf = 0;
-                *t.rays = job.rays;
-                for i in crate::lane_iter(job.lanes) {
-                    t.walks[i] = Walk::start(scene, &job.rays[i]);
-                }
+                self.start(k, scene, &job);
                 self.set(k, if job.lanes == 0 { State::Finished } else { State::Ready });
                 moved = true;
             }
         }
-        // Steps whose data has arrived.
-        for k in crate::lane_iter(self.masks[State::Waiting as usize]) {
-            let t = &self.threads[k];
-            if self.port.resolve(&t.wait).is_some_and(|r| r.max(t.not_before) <= now) {
-                let next = match t.then {
-                    Next::Step => State::Ready,
-                    Next::SendLeaf => State::SendLeaf,
-                    Next::Finish => State::Finished,
-                };
+        // Results out of the step pipeline.
+        for k in crate::lane_iter(self.masks[State::Pipeline as usize]) {
+            if self.threads[k].result_at <= now {
+                let next = self.after_step(k);
                 self.set(k, next);
                 moved = true;
             }
         }
+        // The datapath takes the oldest step whose data is there.
+        if self.busy_until <= now {
+            if let Some(k) = self.queued.pop_front() {
+                let t = &mut self.threads[k];
+                debug_assert!(t.data_at <= now, "a step tested before its node arrived");
+                let cycles = t.tested.count_ones().max(1) as u64;
+                let cycles = cycles.div_ceil(self.lanes_per_cycle);
+                self.busy_until = now + cycles;
+                t.result_at = now + cycles - 1 + self.step_latency;
+                self.set(k, State::Pipeline);
+                moved = true;
+            }
+        }
         // Issue one step of one ready packet (round robin).
-        let activity = if let Some(k) = first_from(self.masks[State::Ready as usize], self.next_issue) {
+        if let Some(k) = first_from(self.masks[State::Ready as usize], self.next_issue) {
             self.next_issue = (k as u32 + 1) % 64;
-            let t = &mut self.threads[k];
-            let stepping = t.live & !t.at_leaf;
-            let mut probe = PortProbe { port: &mut self.port, now, wait: Wait::default() };
-            for i in crate::lane_iter(stepping) {
-                match t.walks[i].step(scene, &t.rays[i], &mut probe) {
-                    WalkEvent::Inner => {}
-                    WalkEvent::Leaf(leaf) => {
-                        t.leaves[i] = leaf;
-                        t.at_leaf |= 1 << i;
+            self.issue(k, now, scene);
+            moved = true;
+        }
+        // Fetches: lookups while the port has them, oldest thread first.
+        for k in crate::lane_iter(self.masks[State::Fetching as usize]) {
+            let mut fetch = std::mem::take(&mut self.threads[k].fetch);
+            let before = fetch.position();
+            let state = self.port.advance(&mut fetch, now);
+            moved |= fetch.position() != before;
+            self.threads[k].fetch = fetch;
+            if let FetchState::Done(at) = state {
+                if at <= now {
+                    self.threads[k].data_at = at;
+                    if self.threads[k].tested != 0 {
+                        self.queued.push_back(k);
+                        self.set(k, State::Queued);
+                    } else {
+                        let next = self.after_step(k);
+                        self.set(k, next);
                     }
-                    WalkEvent::Done => t.live &= !(1 << i),
+                    moved = true;
                 }
             }
-            t.then = if t.live & !t.at_leaf != 0 {
-                Next::Step
-            } else if t.at_leaf != 0 {
-                Next::SendLeaf
-            } else {
-                Next::Finish
-            };
-            t.wait = probe.wait;
-            t.not_before = now + self.step_latency;
-            self.set(k, State::Waiting);
-            self.stats.issue(lanes(stepping), self.packet_size);
-            moved = true;
+        }
+        let activity = if self.busy_until > now {
             Activity::Busy
         } else if self.is_empty() {
             Activity::Idle
         } else {
-            Activity::Stalled
+            Activity::Stalled(self.stall_reason())
         };
         self.stats.cycle(activity);
+        for s in 0..STATES {
+            self.last_states[s] = self.masks[s].count_ones() as u64;
+            self.tstats.thread_state_cycles[s] += self.last_states[s];
+        }
         moved
+    }
+
+    /// Why the unit stalls this cycle: what its waiting work waits for, memory first.
+    fn stall_reason(&self) -> Stall {
+        let mut memory: Option<Stall> = None;
+        for k in crate::lane_iter(self.masks[State::Fetching as usize]) {
+            let f = &self.threads[k].fetch;
+            let r = match f.blocked {
+                Some(b) => b,
+                None if self.port.waits_on_queue(f) => Stall::MemoryQueue,
+                None => Stall::NodeData,
+            };
+            // Rank: an MSHR or the queue says more than "waiting for data".
+            memory = Some(match memory {
+                Some(m) if rank(m) >= rank(r) => m,
+                _ => r,
+            });
+        }
+        if let Some(m) = memory {
+            m
+        } else if self.count(State::Pipeline) + self.count(State::Queued) > 0 {
+            Stall::StepLatency
+        } else if self.count(State::Ready) > 0 {
+            Stall::IssueSlot
+        } else if self.count(State::SendLeaf) + self.count(State::Finished) > 0 {
+            Stall::OutputFull
+        } else {
+            Stall::AtIntersection
+        }
+    }
+
+    /// Accounts `n` more cycles like the last one (the clock skipped them).
+    pub fn repeat_last(&mut self, n: u64) {
+        self.stats.repeat_last(n);
+        for s in 0..STATES {
+            self.tstats.thread_state_cycles[s] += n * self.last_states[s];
+        }
+    }
+}
+
+/// Rank of memory stall reasons (higher is reported first).
+fn rank(s: Stall) -> u8 {
+    match s {
+        Stall::Mshr => 4,
+        Stall::MemoryQueue => 3,
+        Stall::CachePort => 2,
+        _ => 1,
     }
 }

@@ -3,13 +3,15 @@
 
 use serde::Serialize;
 
+use crate::stall::{Stall, STALLS};
+
 /// What a unit did in one cycle.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Activity {
     /// Did work (issued a step, a test batch, generated or shaded).
     Busy,
-    /// Had work but could not proceed (waiting for memory, a full FIFO, a latency).
-    Stalled,
+    /// Had work but could not proceed, for the given reason.
+    Stalled(Stall),
     /// Had nothing to do.
     Idle,
 }
@@ -29,6 +31,8 @@ pub struct UnitStats {
     pub active_lanes: u64,
     /// Lanes available, summed over issues (issues × packet size).
     pub lane_slots: u64,
+    /// Stall cycles by reason (`Stall as usize`); they sum to `stall_cycles`.
+    pub stall_reasons: [u64; STALLS],
     /// The activity of the last cycle counted.
     #[serde(skip)]
     pub last: Option<Activity>,
@@ -53,7 +57,10 @@ impl UnitStats {
     pub fn cycles(&mut self, a: Activity, n: u64) {
         match a {
             Activity::Busy => self.busy_cycles += n,
-            Activity::Stalled => self.stall_cycles += n,
+            Activity::Stalled(r) => {
+                self.stall_cycles += n;
+                self.stall_reasons[r as usize] += n;
+            }
             Activity::Idle => self.idle_cycles += n,
         }
     }

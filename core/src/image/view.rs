@@ -1149,6 +1149,8 @@ impl<'a> SceneView<'a> {
     pub fn triangle<P: MemoryProbe>(&self, prim: u32, probe: &mut P) -> [Vec3; 3] {
         probe.read(DataClass::Triangles, self.triangles_addr.wrapping_add(prim.wrapping_mul(12)), 12);
         let idx = self.triangles.get(prim as usize).map_or([0; 3], |t| t.0);
+        // The vertices' addresses come from the record just read.
+        probe.dependent();
         idx.map(|i| self.position(i, probe))
     }
 

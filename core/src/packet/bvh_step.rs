@@ -102,6 +102,8 @@ impl<const N: usize> BvhPacketTraversal<N> {
             return PacketEvent::Leaf { leaf, lanes: self.mask };
         }
         let (ia, ib) = (node.first, node.first.wrapping_add(1));
+        // The children's address comes from the node record.
+        probe.dependent();
         let a = bvh.node(ia, probe);
         let b = bvh.node(ib, probe);
         let (alo, ahi) = (Vec3A::from_array(a.min), Vec3A::from_array(a.max));

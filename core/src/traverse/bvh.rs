@@ -78,6 +78,8 @@ impl BvhTraversal {
         // Boxes entered beyond the best hit cannot hold a closer one; equal is kept.
         let t_end = self.best.map_or(self.t_max, |h| h.t);
         let (ia, ib) = (node.first, node.first.wrapping_add(1));
+        // The children's address comes from the node record.
+        probe.dependent();
         let a = bvh.node(ia, probe);
         let b = bvh.node(ib, probe);
         let ta = self.rb.entry(Vec3A::from_array(a.min), Vec3A::from_array(a.max), self.t_min, t_end);

@@ -81,18 +81,39 @@ impl Leaf {
     ) -> u32 {
         let mut k = 0;
         while let Some(prim) = self.entry(scene, k, probe) {
+            // The triangle's address comes from the list entry.
+            probe.dependent();
             let verts = I::fetch(scene, prim, probe);
             k += 1;
-            if any_hit {
-                if let Some(hit) = in_range(ray, I::intersect(prep, &verts), prim) {
-                    *best = Some(hit);
-                    break;
-                }
-            } else {
-                test_triangle::<I>(prep, ray, &verts, prim, best);
+            if test_fetched::<I>(prep, ray, any_hit, &verts, prim, best) {
+                break;
             }
         }
         k
+    }
+}
+
+/// One fetched leaf triangle against one ray, the body of [`Leaf::test`]: a closest-hit
+/// query keeps the closest hit in `best`; an any-hit query takes the first hit in range
+/// and returns true (the ray needs no more tests).
+#[inline]
+pub fn test_fetched<I: Intersector>(
+    prep: &I::Prepared,
+    ray: &Ray,
+    any_hit: bool,
+    tri: &I::Triangle,
+    prim: u32,
+    best: &mut Option<Hit>,
+) -> bool {
+    if any_hit {
+        if let Some(hit) = in_range(ray, I::intersect(prep, tri), prim) {
+            *best = Some(hit);
+            return true;
+        }
+        false
+    } else {
+        test_triangle::<I>(prep, ray, tri, prim, best);
+        false
     }
 }
 

@@ -1,0 +1,276 @@
+//! A DRAM timing model: channels of banks with one open row each, a shared data bus per
+//! channel, the main JEDEC timings (tRCD, tRP, CL, tRAS, tWR), periodic refresh (tREFI,
+//! tRFC) and an open or closed page policy. Requests are served first come, first served
+//! in the order the memory accepts them, burst by burst; a request's data is there when
+//! its last burst has crossed the bus.
+//!
+//! Address mapping (row : bank : column : channel, low to high bits reversed): bursts are
+//! interleaved over channels, a channel's bytes fill a row of one bank before moving to
+//! the next bank, so a stream of sequential reads hits open rows. The model is checked in
+//! its tests against what the DDR3-1600 datasheet timings give for a streaming and a
+//! random-access micro-benchmark (docs/hw-model.md, "DRAM").
+
+use crate::config::{DramConfig, PagePolicy};
+
+/// One bank's state, in DRAM clock cycles.
+#[derive(Clone, Copy, Debug, Default)]
+struct Bank {
+    open_row: Option<u64>,
+    /// When the last ACTIVATE issued (for tRAS).
+    activated: u64,
+    /// Earliest cycle the bank takes its next command.
+    ready: u64,
+    /// Refresh epoch the row was opened in (a refresh closes every row).
+    epoch: u64,
+}
+
+/// Per-bank counters.
+#[derive(Clone, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct BankStats {
+    /// Bursts served.
+    pub accesses: u64,
+    /// Bursts that found their row open.
+    pub row_hits: u64,
+    /// Bursts that found the bank closed (an ACTIVATE only).
+    pub row_empty: u64,
+    /// Bursts that found another row open (PRECHARGE and ACTIVATE).
+    pub row_conflicts: u64,
+}
+
+/// The DRAM's state.
+#[derive(Clone, Debug)]
+pub struct Dram {
+    cfg: DramConfig,
+    /// Chip cycles per DRAM cycle.
+    ratio: f64,
+    banks: Vec<Bank>,
+    /// Per channel: the data bus is free from this DRAM cycle.
+    bus_free: Vec<u64>,
+    /// Per bank, channel-major.
+    pub stats: Vec<BankStats>,
+    /// DRAM cycles the data buses carried data, all channels.
+    pub bus_busy: u64,
+}
+
+impl Dram {
+    /// An idle DRAM behind a chip clocked at `chip_mhz`.
+    pub fn new(cfg: &DramConfig, chip_mhz: f64) -> Dram {
+        let n = (cfg.channels * cfg.banks) as usize;
+        Dram {
+            cfg: cfg.clone(),
+            ratio: chip_mhz / cfg.clock_mhz,
+            banks: vec![Bank::default(); n],
+            bus_free: vec![0; cfg.channels as usize],
+            stats: vec![BankStats::default(); n],
+            bus_busy: 0,
+        }
+    }
+
+    /// Channels.
+    pub fn channels(&self) -> usize {
+        self.cfg.channels as usize
+    }
+
+    /// The DRAM clock in MHz.
+    pub fn clock_mhz(&self) -> f64 {
+        self.cfg.clock_mhz
+    }
+
+    /// Bytes of one burst.
+    pub fn burst_bytes(&self) -> u64 {
+        (self.cfg.bus_bytes * self.cfg.burst_length) as u64
+    }
+
+    fn burst_cycles(&self) -> u64 {
+        (self.cfg.burst_length / 2).max(1) as u64
+    }
+
+    /// The DRAM cycle at or after chip cycle `chip`.
+    fn to_dram(&self, chip: u64) -> u64 {
+        (chip as f64 / self.ratio).ceil() as u64
+    }
+
+    /// The chip cycle at or after DRAM cycle `dram`.
+    fn to_chip(&self, dram: u64) -> u64 {
+        (dram as f64 * self.ratio).ceil() as u64
+    }
+
+    /// Moves `t` out of any refresh window of its channel (every `t_refi` cycles all banks
+    /// refresh for `t_rfc`); returns the time and its refresh epoch.
+    fn after_refresh(&self, t: u64) -> (u64, u64) {
+        let (refi, rfc) = (self.cfg.t_refi as u64, self.cfg.t_rfc as u64);
+        if refi == 0 {
+            return (t, 0);
+        }
+        let epoch = t / refi;
+        let into = t % refi;
+        // The refresh of epoch e occupies [e·tREFI, e·tREFI + tRFC) (none at time 0).
+        if epoch > 0 && into < rfc {
+            (epoch * refi + rfc, epoch)
+        } else {
+            (t, epoch)
+        }
+    }
+
+    /// Serves a request of `bytes` at byte `addr` that reaches the DRAM at chip cycle
+    /// `arrive`: returns the chip cycle its first command issued and the chip cycle its
+    /// data has all crossed the bus (reads) or been written and recovered (writes).
+    pub fn access(&mut self, arrive: u64, addr: u64, bytes: u32, write: bool) -> (u64, u64) {
+        let c = &self.cfg;
+        let burst = self.burst_bytes();
+        let (channels, banks) = (c.channels as u64, c.banks as u64);
+        let first = addr / burst;
+        let last = (addr + bytes.max(1) as u64 - 1) / burst;
+        let mut start = u64::MAX;
+        let mut done = 0;
+        let t0 = self.to_dram(arrive);
+        for b in first..=last {
+            let channel = b % channels;
+            let local = (b / channels) * burst;
+            let bank_in = (local / c.row_bytes as u64) % banks;
+            let row = local / (c.row_bytes as u64 * banks);
+            let k = (channel * banks + bank_in) as usize;
+            let (mut t, epoch) = self.after_refresh(t0.max(self.banks[k].ready));
+            let mut bank = self.banks[k];
+            if bank.epoch != epoch {
+                // A refresh closed every row since this bank was last used.
+                bank.open_row = None;
+                bank.epoch = epoch;
+            }
+            let stats = &mut self.stats[k];
+            stats.accesses += 1;
+            let column_at = match bank.open_row {
+                Some(r) if r == row => {
+                    stats.row_hits += 1;
+                    t
+                }
+                Some(_) => {
+                    stats.row_conflicts += 1;
+                    // PRECHARGE no earlier than tRAS after the ACTIVATE, then ACTIVATE.
+                    let pre = t.max(bank.activated + c.t_ras as u64);
+                    let act = pre + c.t_rp as u64;
+                    bank.activated = act;
+                    t = pre;
+                    act + c.t_rcd as u64
+                }
+                None => {
+                    stats.row_empty += 1;
+                    bank.activated = t;
+                    t + c.t_rcd as u64
+                }
+            };
+            start = start.min(t);
+            // Data follows the column command by CL; the bus carries one burst at a time.
+            let bus = self.bus_free[channel as usize];
+            let data = (column_at + c.t_cl as u64).max(bus);
+            let end = data + self.burst_cycles();
+            self.bus_free[channel as usize] = end;
+            self.bus_busy += self.burst_cycles();
+            // The next column command to this bank: one burst later.
+            let mut next = column_at + self.burst_cycles();
+            let mut end_all = end;
+            if write {
+                // Write recovery before the row may close.
+                end_all = end + c.t_wr as u64;
+                next = next.max(end_all);
+            }
+            bank.open_row = Some(row);
+            if c.page_policy == PagePolicy::Closed {
+                let pre = next.max(bank.activated + c.t_ras as u64);
+                bank.open_row = None;
+                next = pre + c.t_rp as u64;
+            }
+            bank.ready = next;
+            self.banks[k] = bank;
+            done = done.max(end_all);
+        }
+        let ctrl = self.cfg.controller_latency as u64;
+        (self.to_chip(start), self.to_chip(done) + ctrl)
+    }
+
+    /// Row-buffer hit rate over all bursts.
+    pub fn row_hit_rate(&self) -> f64 {
+        let (hits, all) = self.stats.iter().fold((0, 0), |(h, a), s| (h + s.row_hits, a + s.accesses));
+        if all == 0 {
+            0.0
+        } else {
+            hits as f64 / all as f64
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// DDR3-1600K (11-11-11) from the Micron MT41K256M16 datasheet, at the DRAM's own
+    /// clock (ratio 1), no controller latency.
+    fn ddr3() -> DramConfig {
+        DramConfig { controller_latency: 0, ..DramConfig::default() }
+    }
+
+    #[test]
+    fn a_random_read_to_a_closed_bank_takes_trcd_cl_and_the_burst() {
+        let mut d = Dram::new(&ddr3(), 800.0);
+        let (start, done) = d.access(0, 0, 64, false);
+        assert_eq!(start, 0);
+        // ACTIVATE at 0, READ at tRCD = 11, data at 11 + CL = 22, four clocks of BL8.
+        assert_eq!(done, 11 + 11 + 4);
+        // A different row of the same bank: PRECHARGE waits for tRAS (28), then tRP,
+        // tRCD, CL and the burst: 28 + 11 + 11 + 11 + 4 = 65 cycles = 81.25 ns, which is
+        // the datasheet's tRC (48.75 ns) + tRCD + CL + burst (32.5 ns).
+        let row = 8192 * 8;
+        let (_, done2) = d.access(0, row, 64, false);
+        assert_eq!(done2, 28 + 11 + 11 + 11 + 4);
+    }
+
+    #[test]
+    fn streaming_reads_reach_the_datasheet_bandwidth_less_refresh() {
+        // 64 MiB read in 64-byte bursts back to back: rows hit, the bus is the limit.
+        // Peak: 8 bytes x 2 per clock = 16 bytes per DRAM cycle (12.8 GB/s at 800 MHz);
+        // refresh takes tRFC / tREFI = 208 / 6240 = 3.3% of the time; each new row costs
+        // a precharge and activate, hidden in part behind the other banks.
+        let mut d = Dram::new(&ddr3(), 800.0);
+        let bytes = 64u64 << 20;
+        let mut done = 0;
+        for k in 0..bytes / 64 {
+            done = done.max(d.access(0, k * 64, 64, false).1);
+        }
+        let rate = bytes as f64 / done as f64;
+        let peak = 16.0;
+        let with_refresh = peak * (1.0 - 208.0 / 6240.0);
+        assert!(rate <= peak, "{rate} bytes per cycle above the peak");
+        assert!(rate >= 0.90 * with_refresh, "{rate} bytes per cycle, datasheet {with_refresh:.2} less row switches");
+        assert!(d.row_hit_rate() > 0.95, "{}", d.row_hit_rate());
+    }
+
+    #[test]
+    fn random_reads_to_one_bank_are_limited_by_trc() {
+        // Every read to another row of bank 0, issued at once: each costs tRC at best
+        // (tRAS + tRP = 39 cycles = 48.75 ns), as the datasheet's row cycle time says.
+        let mut d = Dram::new(&ddr3(), 800.0);
+        let n = 1000u64;
+        let mut done = 0;
+        for k in 0..n {
+            done = done.max(d.access(0, k * 8192 * 8, 64, false).1);
+        }
+        let per = done as f64 / n as f64;
+        assert!((39.0..=40.0).contains(&per), "{per} cycles per random access, tRC is 39");
+        assert_eq!(d.row_hit_rate(), 0.0);
+    }
+
+    #[test]
+    fn the_closed_page_policy_pays_every_access_and_refresh_closes_rows() {
+        let cfg = DramConfig { page_policy: PagePolicy::Closed, ..ddr3() };
+        let mut d = Dram::new(&cfg, 800.0);
+        d.access(0, 0, 64, false);
+        let (_, done) = d.access(200, 64, 64, false);
+        assert_eq!(done, 200 + 11 + 11 + 4, "same row, but it was closed");
+        let mut d = Dram::new(&ddr3(), 800.0);
+        d.access(0, 0, 64, false);
+        // Inside the refresh at 6240: waits for its end, and the row is closed.
+        let (start, done) = d.access(6250, 64, 64, false);
+        assert_eq!(start, 6240 + 208);
+        assert_eq!(done, 6240 + 208 + 11 + 11 + 4);
+    }
+}
