@@ -1,5 +1,5 @@
 //! The report of a run, gathered in one place from the units' counters: a JSON document
-//! (schema `raypipe-hw-report/1`, documented in docs/hw-model.md) and a human summary.
+//! (schema `raypipe-hw-report/2`, documented in docs/hw-model.md) and a human summary.
 
 use std::collections::BTreeMap;
 
