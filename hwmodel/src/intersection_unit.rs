@@ -18,7 +18,7 @@ use raypipe_core::{DataClass, SceneView};
 use crate::config::HwConfig;
 use crate::fifo::Fifo;
 use crate::jobs::{lanes, LeafJob, Query};
-use crate::mem_port::{Fetch, FetchState, MemPort, Recorder};
+use crate::mem_port::{Fetch, MemPort, Recorder};
 use crate::stall::Stall;
 use crate::unit_stats::{Activity, UnitStats};
 
@@ -233,18 +233,13 @@ impl<I: Intersector> IntersectionUnit<I> {
         let mut order: Vec<usize> = (0..self.jobs.len()).filter(|&k| self.jobs[k].stage == Stage::Fetching).collect();
         order.sort_by_key(|&k| self.jobs[k].seq);
         for k in order {
-            let mut fetch = std::mem::take(&mut self.jobs[k].fetch);
-            let before = fetch.position();
-            let state = self.port.advance(&mut fetch, now);
-            moved |= fetch.position() != before;
             let j = &mut self.jobs[k];
-            j.fetch = fetch;
-            if let FetchState::Done(at) = state {
-                if at <= now {
-                    j.data_at = at;
-                    j.stage = Stage::Queued;
-                    moved = true;
-                }
+            let (progress, data) = self.port.step_fetch(&mut j.fetch, now);
+            moved |= progress;
+            if let Some(at) = data {
+                j.data_at = at;
+                j.stage = Stage::Queued;
+                moved = true;
             }
         }
         let activity = if self.busy_until > now {
@@ -261,11 +256,7 @@ impl<I: Intersector> IntersectionUnit<I> {
     fn stall_reason(&self, output_blocked: bool) -> Stall {
         let fetching = self.jobs.iter().filter(|j| j.stage == Stage::Fetching).min_by_key(|j| j.seq);
         if let Some(j) = fetching {
-            return match j.fetch.blocked {
-                Some(b) => b,
-                None if self.port.waits_on_queue(&j.fetch) => Stall::MemoryQueue,
-                None => Stall::TriangleData,
-            };
+            return self.port.stall_of(&j.fetch, Stall::TriangleData);
         }
         if output_blocked {
             Stall::OutputFull

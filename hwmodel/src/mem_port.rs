@@ -420,6 +420,28 @@ impl MemPort {
         self.level_ready(f).filter(|&t| t > now)
     }
 
+    /// One cycle of `f` for a unit: returns whether its lookups moved on, and the cycle
+    /// its data is all there once that is no later than `now`.
+    pub fn step_fetch(&mut self, f: &mut Fetch, now: u64) -> (bool, Option<u64>) {
+        let before = f.position();
+        let state = self.advance(f, now);
+        let moved = f.position() != before;
+        match state {
+            FetchState::Done(at) if at <= now => (moved, Some(at)),
+            _ => (moved, None),
+        }
+    }
+
+    /// Why a unit waiting on `f` stalls: what blocked its lookups, the memory queue, or
+    /// its data (`data`: the class of data the unit waits for).
+    pub fn stall_of(&self, f: &Fetch, data: Stall) -> Stall {
+        match f.blocked {
+            Some(b) => b,
+            None if self.waits_on_queue(f) => Stall::MemoryQueue,
+            None => data,
+        }
+    }
+
     /// Requests still staged (their fetches wait on the memory queue).
     pub fn has_staged(&self) -> bool {
         !self.staged.is_empty()

@@ -24,7 +24,7 @@ use raypipe_core::{SceneView, Vec3};
 use crate::config::HwConfig;
 use crate::fifo::Fifo;
 use crate::jobs::{lanes, HitPacket, Query, RayPacketJob, NO_RAY};
-use crate::mem_port::{Fetch, FetchState, MemPort, Recorder};
+use crate::mem_port::{Fetch, MemPort, Recorder};
 use crate::stall::Stall;
 use crate::traffic::FRAMEBUFFER;
 use crate::unit_stats::{Activity, UnitStats};
@@ -369,18 +369,13 @@ impl Rgs {
             (0..self.shading.len()).filter(|&k| self.shading[k].stage == Stage::Fetching).collect();
         order.sort_by_key(|&k| self.shading[k].seq);
         for k in order {
-            let mut fetch = std::mem::take(&mut self.shading[k].fetch);
-            let before = fetch.position();
-            let state = self.port.advance(&mut fetch, now);
-            moved |= fetch.position() != before;
             let j = &mut self.shading[k];
-            j.fetch = fetch;
-            if let FetchState::Done(at) = state {
-                if at <= now {
-                    j.data_at = at;
-                    j.stage = Stage::Queued;
-                    moved = true;
-                }
+            let (progress, data) = self.port.step_fetch(&mut j.fetch, now);
+            moved |= progress;
+            if let Some(at) = data {
+                j.data_at = at;
+                j.stage = Stage::Queued;
+                moved = true;
             }
         }
         let shade_activity = if self.shade_busy_until > now {
@@ -390,11 +385,7 @@ impl Rgs {
         } else {
             let fetching = self.shading.iter().filter(|j| j.stage == Stage::Fetching).min_by_key(|j| j.seq);
             Activity::Stalled(match fetching {
-                Some(j) => match j.fetch.blocked {
-                    Some(b) => b,
-                    None if self.port.waits_on_queue(&j.fetch) => Stall::MemoryQueue,
-                    None => Stall::ShadingData,
-                },
+                Some(j) => self.port.stall_of(&j.fetch, Stall::ShadingData),
                 None => Stall::PipelineLatency,
             })
         };

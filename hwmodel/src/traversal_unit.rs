@@ -28,7 +28,7 @@ use serde::Serialize;
 use crate::config::HwConfig;
 use crate::fifo::Fifo;
 use crate::jobs::{lanes, HitPacket, LeafJob, Query, RayPacketJob, NO_RAY};
-use crate::mem_port::{Fetch, FetchState, MemPort, Recorder};
+use crate::mem_port::{Fetch, MemPort, Recorder};
 use crate::stall::Stall;
 use crate::unit_stats::{Activity, UnitStats};
 
@@ -434,23 +434,18 @@ impl TraversalUnit {
         }
         // Fetches: lookups while the port has them, oldest thread first.
         for k in crate::lane_iter(self.masks[State::Fetching as usize]) {
-            let mut fetch = std::mem::take(&mut self.threads[k].fetch);
-            let before = fetch.position();
-            let state = self.port.advance(&mut fetch, now);
-            moved |= fetch.position() != before;
-            self.threads[k].fetch = fetch;
-            if let FetchState::Done(at) = state {
-                if at <= now {
-                    self.threads[k].data_at = at;
-                    if self.threads[k].tested != 0 {
-                        self.queued.push_back(k);
-                        self.set(k, State::Queued);
-                    } else {
-                        let next = self.after_step(k);
-                        self.set(k, next);
-                    }
-                    moved = true;
+            let (progress, data) = self.port.step_fetch(&mut self.threads[k].fetch, now);
+            moved |= progress;
+            if let Some(at) = data {
+                self.threads[k].data_at = at;
+                if self.threads[k].tested != 0 {
+                    self.queued.push_back(k);
+                    self.set(k, State::Queued);
+                } else {
+                    let next = self.after_step(k);
+                    self.set(k, next);
                 }
+                moved = true;
             }
         }
         let activity = if self.busy_until > now {
@@ -473,11 +468,7 @@ impl TraversalUnit {
         let mut memory: Option<Stall> = None;
         for k in crate::lane_iter(self.masks[State::Fetching as usize]) {
             let f = &self.threads[k].fetch;
-            let r = match f.blocked {
-                Some(b) => b,
-                None if self.port.waits_on_queue(f) => Stall::MemoryQueue,
-                None => Stall::NodeData,
-            };
+            let r = self.port.stall_of(f, Stall::NodeData);
             // Rank: an MSHR or the queue says more than "waiting for data".
             memory = Some(match memory {
                 Some(m) if rank(m) >= rank(r) => m,
