@@ -41,8 +41,6 @@ struct Job {
     /// Ray–triangle tests the job runs.
     tests: u64,
     data_at: u64,
-    /// Order of arrival (oldest first to the datapath and out).
-    seq: u64,
 }
 
 /// A list and intersection unit.
@@ -54,8 +52,8 @@ pub struct IntersectionUnit<I: Intersector> {
     interval: u64,
     lanes_per_cycle: u64,
     max_jobs: usize,
+    /// The jobs, oldest first (to the datapath and out in that order).
     jobs: Vec<Job>,
-    seq: u64,
     /// Test groups enter the pipeline until this cycle (exclusive).
     busy_until: u64,
     /// The list/triangle port.
@@ -79,7 +77,6 @@ impl<I: Intersector> IntersectionUnit<I> {
             lanes_per_cycle: cfg.intersection.lanes_per_cycle.max(1) as u64,
             max_jobs: cfg.intersection.jobs.max(1) as usize,
             jobs: Vec::new(),
-            seq: 0,
             busy_until: 0,
             port: {
                 let name = format!("intersection{id}");
@@ -180,8 +177,7 @@ impl<I: Intersector> IntersectionUnit<I> {
         }
         self.tests += tests;
         self.stats.issue(lanes(job.lanes), self.packet_size);
-        self.seq += 1;
-        Job { job, fetch: Fetch::new(rec.into_levels()), stage: Stage::Fetching, tests, data_at: now, seq: self.seq }
+        Job { job, fetch: Fetch::new(rec.into_levels()), stage: Stage::Fetching, tests, data_at: now }
     }
 
     /// One cycle. Returns true if anything moved.
@@ -194,9 +190,7 @@ impl<I: Intersector> IntersectionUnit<I> {
     ) -> bool {
         let mut moved = false;
         // The oldest job whose results are out goes back (one per cycle).
-        let done = (0..self.jobs.len())
-            .filter(|&k| matches!(self.jobs[k].stage, Stage::Pipeline(d) if d <= now))
-            .min_by_key(|&k| self.jobs[k].seq);
+        let done = self.jobs.iter().position(|j| matches!(j.stage, Stage::Pipeline(d) if d <= now));
         let mut output_blocked = false;
         if let Some(k) = done {
             if results.can_push() {
@@ -210,8 +204,7 @@ impl<I: Intersector> IntersectionUnit<I> {
         }
         // The datapath takes the oldest job whose data is there.
         if self.busy_until <= now {
-            let next =
-                (0..self.jobs.len()).filter(|&k| self.jobs[k].stage == Stage::Queued).min_by_key(|&k| self.jobs[k].seq);
+            let next = self.jobs.iter().position(|j| j.stage == Stage::Queued);
             if let Some(k) = next {
                 let j = &mut self.jobs[k];
                 debug_assert!(j.data_at <= now, "triangles tested before their data arrived");
@@ -230,10 +223,8 @@ impl<I: Intersector> IntersectionUnit<I> {
             }
         }
         // Fetches, oldest job first.
-        let mut order: Vec<usize> = (0..self.jobs.len()).filter(|&k| self.jobs[k].stage == Stage::Fetching).collect();
-        order.sort_by_key(|&k| self.jobs[k].seq);
-        for k in order {
-            let j = &mut self.jobs[k];
+        // Jobs are kept oldest first.
+        for j in self.jobs.iter_mut().filter(|j| j.stage == Stage::Fetching) {
             let (progress, data) = self.port.step_fetch(&mut j.fetch, now);
             moved |= progress;
             if let Some(at) = data {
@@ -254,7 +245,7 @@ impl<I: Intersector> IntersectionUnit<I> {
     }
 
     fn stall_reason(&self, output_blocked: bool) -> Stall {
-        let fetching = self.jobs.iter().filter(|j| j.stage == Stage::Fetching).min_by_key(|j| j.seq);
+        let fetching = self.jobs.iter().find(|j| j.stage == Stage::Fetching);
         if let Some(j) = fetching {
             return self.port.stall_of(&j.fetch, Stall::TriangleData);
         }

@@ -52,7 +52,6 @@ struct ShadeJob {
     emitted: Vec<RayRecord>,
     /// Framebuffer bytes written when done, at this address.
     write: (u64, u32),
-    seq: u64,
 }
 
 /// Framebuffer writes go to their own address space, above any scene image.
@@ -73,9 +72,9 @@ pub struct Rgs {
     generated: Option<(Box<RayPacketJob>, u64)>,
     next_unit: usize,
     next_hits: usize,
+    /// Packets being shaded, oldest first.
     shading: Vec<ShadeJob>,
     shade_jobs: usize,
-    shade_seq: u64,
     /// The shading datapath is busy until this cycle (exclusive).
     shade_busy_until: u64,
     /// The image, row-major.
@@ -145,7 +144,6 @@ impl Rgs {
             next_hits: 0,
             shading: Vec::new(),
             shade_jobs: cfg.rgs.shade_jobs.max(1) as usize,
-            shade_seq: 0,
             shade_busy_until: 0,
             framebuffer: vec![[0; 3]; pixels],
             hits: vec![None; pixels],
@@ -335,9 +333,7 @@ impl Rgs {
         }
         // The datapath takes the oldest job whose data is there.
         if self.shade_busy_until <= now {
-            let next = (0..self.shading.len())
-                .filter(|&k| self.shading[k].stage == Stage::Queued)
-                .min_by_key(|&k| self.shading[k].seq);
+            let next = self.shading.iter().position(|j| j.stage == Stage::Queued);
             if let Some(k) = next {
                 let j = &mut self.shading[k];
                 debug_assert!(j.data_at <= now, "shaded before the shading data arrived");
@@ -365,11 +361,8 @@ impl Rgs {
                 }
             }
         }
-        let mut order: Vec<usize> =
-            (0..self.shading.len()).filter(|&k| self.shading[k].stage == Stage::Fetching).collect();
-        order.sort_by_key(|&k| self.shading[k].seq);
-        for k in order {
-            let j = &mut self.shading[k];
+        // Jobs are kept oldest first.
+        for j in self.shading.iter_mut().filter(|j| j.stage == Stage::Fetching) {
             let (progress, data) = self.port.step_fetch(&mut j.fetch, now);
             moved |= progress;
             if let Some(at) = data {
@@ -383,7 +376,7 @@ impl Rgs {
         } else if self.shading.is_empty() {
             Activity::Idle
         } else {
-            let fetching = self.shading.iter().filter(|j| j.stage == Stage::Fetching).min_by_key(|j| j.seq);
+            let fetching = self.shading.iter().find(|j| j.stage == Stage::Fetching);
             Activity::Stalled(match fetching {
                 Some(j) => self.port.stall_of(&j.fetch, Stall::ShadingData),
                 None => Stall::PipelineLatency,
@@ -456,7 +449,6 @@ impl Rgs {
         write: (u64, u32),
         primary: bool,
     ) {
-        self.shade_seq += 1;
         self.shading.push(ShadeJob {
             fetch: Fetch::new(probe.into_levels()),
             stage: Stage::Fetching,
@@ -465,7 +457,6 @@ impl Rgs {
             rays,
             emitted,
             write,
-            seq: self.shade_seq,
         });
     }
 
