@@ -145,7 +145,8 @@ pub struct CachesConfig {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum MemoryModel {
-    /// Every read arrives the next cycle, without a bandwidth limit: the compute bound.
+    /// Every read arrives the next cycle, without a bandwidth limit and without passing
+    /// the L2: the compute bound.
     Perfect,
     /// One channel: `bytes_per_cycle`, then `latency` cycles.
     Fixed,

@@ -2,7 +2,7 @@
 //! models (`memory.model`):
 //!
 //! * **perfect** — every request's data arrives the next cycle, without a bandwidth
-//!   limit (the compute bound);
+//!   limit and without the L2 (the compute bound);
 //! * **fixed** — one channel moving `bytes_per_cycle`, a request a whole number of
 //!   `min_burst_bytes`, its data `latency` cycles after its transfer;
 //! * **dram** — [`crate::dram`]'s channels, banks and rows.
@@ -104,7 +104,10 @@ impl Memory {
                 if self.model != MemoryModel::Perfect && self.queue.len() >= self.queue_depth {
                     return took;
                 }
-                let ready = if self.l2.is_some() && !r.write {
+                // Perfect memory is the compute bound: nothing behind the units' own caches
+                // costs time, so it bypasses the L2 (whose ports and latency would bound
+                // it, and whose fills would reorder it, making it no bound at all).
+                let ready = if self.l2.is_some() && !r.write && self.model != MemoryModel::Perfect {
                     if l2_lookups == 0 {
                         return took;
                     }
