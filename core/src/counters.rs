@@ -16,9 +16,9 @@ pub struct RayCounters {
 impl RayCounters {
     /// Adds another ray's counters to these.
     pub fn add(&mut self, other: &RayCounters) {
-        self.nodes += other.nodes;
-        self.leaves += other.leaves;
-        self.list_entries += other.list_entries;
-        self.tri_tests += other.tri_tests;
+        self.nodes = self.nodes.saturating_add(other.nodes);
+        self.leaves = self.leaves.saturating_add(other.leaves);
+        self.list_entries = self.list_entries.saturating_add(other.list_entries);
+        self.tri_tests = self.tri_tests.saturating_add(other.tri_tests);
     }
 }

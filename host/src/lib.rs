@@ -22,6 +22,7 @@ pub mod npy;
 pub mod obj;
 pub mod output;
 pub mod packets;
+pub mod polygon;
 pub mod prefetch;
 pub mod progress;
 pub mod raster;

@@ -1,4 +1,4 @@
-//! OBJ/MTL loading through tobj: polygons are triangulated (fans), objects merged in file
+//! OBJ/MTL loading through tobj: polygons are triangulated ([`crate::polygon`]), objects merged in file
 //! order, and vertices that share position, normal and texture coordinate are unified so
 //! that positions and shading data share one index.
 
@@ -8,6 +8,7 @@ use anyhow::{anyhow, bail, Result};
 use raypipe_core::image::{MaterialRecord, ShadingVertex, NULL_INDEX};
 
 use crate::mesh::Mesh;
+use crate::polygon;
 use crate::texture_loader;
 
 /// What the loader noticed but did not reject.
@@ -18,7 +19,9 @@ pub struct LoadNotes {
 }
 
 fn load_options() -> tobj::LoadOptions {
-    tobj::LoadOptions { triangulate: true, single_index: true, ignore_points: true, ignore_lines: true }
+    // Polygons come whole (`face_arities`) and are triangulated here: tobj's fans made
+    // builds quadratic in a polygon's size.
+    tobj::LoadOptions { triangulate: false, single_index: true, ignore_points: true, ignore_lines: true }
 }
 
 /// Loads an OBJ file (and the MTL files it names) into a [`Mesh`].
@@ -111,7 +114,8 @@ fn convert(name: &str, dir: Option<&Path>, result: tobj::LoadResult) -> Result<(
 
     for model in &models {
         let m = &model.mesh;
-        if m.positions.len() % 3 != 0 || m.indices.len() % 3 != 0 {
+        let arities_cover = m.face_arities.iter().map(|&a| a as usize).sum::<usize>() == m.indices.len();
+        if m.positions.len() % 3 != 0 || !(m.face_arities.is_empty() && m.indices.len() % 3 == 0 || arities_cover) {
             bail!("{name}: malformed OBJ: object '{}' has incomplete data", model.name);
         }
         let base = mesh.positions.len() as u32;
@@ -143,13 +147,22 @@ fn convert(name: &str, dir: Option<&Path>, result: tobj::LoadResult) -> Result<(
                 (mesh.materials.len() - 1) as u32
             }),
         };
-        for t in m.indices.chunks_exact(3) {
-            let tri = [t[0] + base, t[1] + base, t[2] + base];
-            if tri.iter().any(|&v| v >= base + nv as u32) {
-                bail!("{name}: malformed OBJ: a face in object '{}' references a missing vertex", model.name);
-            }
-            mesh.triangles.push(tri);
+        if m.indices.iter().any(|&v| v as usize >= nv) {
+            bail!("{name}: malformed OBJ: a face in object '{}' references a missing vertex", model.name);
+        }
+        let mut add = |t: [u32; 3]| {
+            mesh.triangles.push(t.map(|v| v + base));
             mesh.tri_materials.push(material);
+        };
+        if m.face_arities.is_empty() {
+            m.indices.chunks_exact(3).for_each(|t| add([t[0], t[1], t[2]]));
+        } else {
+            let mut start = 0;
+            for &arity in &m.face_arities {
+                let face = &m.indices[start..start + arity as usize];
+                start += arity as usize;
+                polygon::triangulate(face, &mut add);
+            }
         }
     }
     mesh.validate(name)?;

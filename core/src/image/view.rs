@@ -135,6 +135,13 @@ pub enum SceneError {
     BadGrid,
     /// The last primitive list is not terminated by a null entry.
     UnterminatedList,
+    /// A grid cell's list does not start a list of its own: it begins inside another list
+    /// or at an offset an earlier cell already uses. Lists shared between cells would let
+    /// a small image cost a ray far more tests than the image has list entries.
+    SharedList {
+        /// The cell.
+        cell: u32,
+    },
     /// A texture's size or texel range is impossible, or its wrap mode unknown.
     BadTexture {
         /// The texture.
@@ -148,8 +155,9 @@ pub enum SceneError {
         record: u32,
     },
     /// A tree node is malformed: a child not after its parent, a node referenced twice or
-    /// never, a tree deeper than [`MAX_TREE_DEPTH`], a leaf range outside PRIM_LISTS, or
-    /// a NaN box or split.
+    /// never, a tree deeper than [`MAX_TREE_DEPTH`], a leaf range outside PRIM_LISTS,
+    /// leaves whose ranges add up to more than PRIM_LISTS holds, an empty wide-BVH slot
+    /// that is not exactly the empty encoding, or a NaN box or split.
     BadTree {
         /// BVH_NODES or KD_NODES.
         section: SectionKind,
@@ -222,6 +230,9 @@ impl fmt::Display for SceneError {
             ),
             BadGrid => write!(f, "grid dimensions, cell count or cell size are invalid"),
             UnterminatedList => write!(f, "primitive list section does not end with a null entry"),
+            SharedList { cell } => {
+                write!(f, "grid cell {cell} shares a primitive list with another cell (each cell needs its own list)")
+            }
             BadTree { section, node } => write!(
                 f,
                 "section {} node {node} is malformed (child order, sharing, depth above {MAX_TREE_DEPTH}, leaf range or NaN)",
@@ -417,11 +428,19 @@ type Children = heapless::Vec<u32, 8>;
 /// tree rooted at node 0: every child comes after its parent and inside the section, no
 /// path is [`MAX_TREE_DEPTH`] nodes deep (the traversal kernels' stacks hold one entry per
 /// level, seven for the 8-wide BVH), and the walk visits exactly `n` nodes. `children(i)`
-/// is `Err` for a malformed node, else the node's inner children (none for a leaf).
+/// is `Err` for a malformed node, else the node's inner children (none for a leaf) and
+/// the list entries its leaves hold; summed over every visit of the walk they may not
+/// exceed `list_entries`.
+///
+/// That bounds the work of any ray on an accepted tree (docs/scene-format.md, "Work
+/// bounds"): the walk visits each node at most once per path from the root, the paths
+/// are exactly the visits counted here (at most `n`), so a ray takes at most `n` node
+/// steps and tests at most `list_entries` list entries.
 fn validate_tree(
     n: usize,
     section: SectionKind,
-    mut children: impl FnMut(usize) -> Result<Children, ()>,
+    list_entries: u64,
+    mut children: impl FnMut(usize) -> Result<(Children, u64), ()>,
 ) -> Result<(), SceneError> {
     let bad = |node: usize| SceneError::BadTree { section, node: node as u32 };
     if n == 0 {
@@ -431,13 +450,19 @@ fn validate_tree(
     let mut stack: heapless::Vec<(u32, u32), { 7 * MAX_TREE_DEPTH as usize + 1 }> = heapless::Vec::new();
     let _ = stack.push((0, 0));
     let mut visited = 0usize;
+    let mut leaf_entries = 0u64;
     while let Some((i, depth)) = stack.pop() {
         let i = i as usize;
         visited += 1;
         if visited > n || depth >= MAX_TREE_DEPTH {
             return Err(bad(i));
         }
-        for c in children(i).map_err(|_| bad(i))? {
+        let (inner, entries) = children(i).map_err(|_| bad(i))?;
+        leaf_entries += entries;
+        if leaf_entries > list_entries {
+            return Err(bad(i));
+        }
+        for c in inner {
             if c as usize <= i || c as usize >= n || stack.push((c, depth + 1)).is_err() {
                 return Err(bad(i));
             }
@@ -887,8 +912,16 @@ impl<'a> SceneView<'a> {
         }
         let lists: &[u32] = s.required(K::PrimLists)?;
         let nl = lists.len() as u32;
+        // Each full cell starts its own list: offsets grow from cell to cell and each one
+        // follows a terminator (or is 0). So the lists a ray's cells hold are disjoint, and
+        // a ray tests at most as many entries as the section holds (docs/scene-format.md,
+        // "Work bounds").
+        let mut next_free = 0u32;
         for (i, &c) in cells.iter().enumerate() {
-            if c != NULL_INDEX && c >= nl {
+            if c == NULL_INDEX {
+                continue;
+            }
+            if c >= nl {
                 return Err(SceneError::IndexOutOfRange {
                     section: K::GridCells,
                     record: i as u32,
@@ -896,6 +929,11 @@ impl<'a> SceneView<'a> {
                     limit: nl,
                 });
             }
+            let starts_a_list = c == 0 || lists.get(c as usize - 1) == Some(&NULL_INDEX);
+            if c < next_free || !starts_a_list {
+                return Err(SceneError::SharedList { cell: i as u32 });
+            }
+            next_free = c + 1;
         }
         // A walk from any offset ends at a null entry inside the section because the last
         // entry is null; every other entry must name a triangle.
@@ -943,16 +981,16 @@ impl<'a> SceneView<'a> {
         let nodes: &[BvhNode] = s.required(SectionKind::BvhNodes)?;
         let prims = Self::prim_list(s, nt)?;
         let np = prims.len() as u64;
-        validate_tree(nodes.len(), SectionKind::BvhNodes, |i| {
+        validate_tree(nodes.len(), SectionKind::BvhNodes, np, |i| {
             let n = &nodes[i];
             let (lo, hi) = (Vec3::from(n.min), Vec3::from(n.max));
             if !(finite3(n.min) && finite3(n.max) && lo.cmple(hi).all()) {
                 return Err(());
             }
             if n.count == 0 {
-                Ok(pair(n.first))
+                Ok((pair(n.first), 0))
             } else if n.first as u64 + n.count as u64 <= np {
-                Ok(Children::new())
+                Ok((Children::new(), n.count as u64))
             } else {
                 Err(())
             }
@@ -972,16 +1010,16 @@ impl<'a> SceneView<'a> {
         let nodes: &[KdNode] = s.required(SectionKind::KdNodes)?;
         let prims = Self::prim_list(s, nt)?;
         let np = prims.len() as u64;
-        validate_tree(nodes.len(), SectionKind::KdNodes, |i| {
+        validate_tree(nodes.len(), SectionKind::KdNodes, np, |i| {
             let n = &nodes[i];
             if n.axis() == KdNode::LEAF {
                 if n.index() as u64 + n.value as u64 <= np {
-                    Ok(Children::new())
+                    Ok((Children::new(), n.value as u64))
                 } else {
                     Err(())
                 }
             } else if n.split().is_finite() {
-                Ok(pair(n.index()))
+                Ok((pair(n.index()), 0))
             } else {
                 Err(())
             }
@@ -1001,17 +1039,21 @@ impl<'a> SceneView<'a> {
         let nodes: &[N] = s.required(section)?;
         let prims = Self::prim_list(s, nt)?;
         let np = prims.len() as u64;
-        validate_tree(nodes.len(), section, |i| {
+        validate_tree(nodes.len(), section, np, |i| {
             let node = &nodes[i];
             let mut inner = Children::new();
+            let mut entries = 0u64;
             for k in 0..N::WIDTH {
                 let (lo, hi, c, count) = node.slot(k);
                 if !(finite3(lo) && finite3(hi)) {
                     return Err(());
                 }
                 if c == NULL_INDEX {
-                    // Empty slots carry an inverted box, which no slab test accepts.
-                    if !(0..3).all(|a| lo[a] > hi[a]) {
+                    // Empty slots are exactly the builder's encoding: the most inverted box
+                    // (which no slab test accepts, however it grows a box) and no leaf. An
+                    // almost-inverted box with a count would be entered as a leaf of up to
+                    // 2^32 entries.
+                    if lo != [f32::MAX; 3] || hi != [-f32::MAX; 3] || count != 0 {
                         return Err(());
                     }
                 } else if !Vec3::from(lo).cmple(Vec3::from(hi)).all() {
@@ -1020,13 +1062,20 @@ impl<'a> SceneView<'a> {
                     if c as u64 + count as u64 > np {
                         return Err(());
                     }
+                    entries += count as u64;
                 } else if inner.push(c).is_err() {
                     return Err(());
                 }
             }
-            Ok(inner)
+            Ok((inner, entries))
         })?;
         Ok(WideBvhView { nodes, prims, nodes_addr: s.addr(section), prims_addr: s.addr(SectionKind::PrimLists) })
+    }
+
+    /// Entries of PRIM_LISTS, the list the trees' leaves index (0 without a tree). A ray
+    /// through any tree tests at most this many triangles (the parse bounds the leaves).
+    pub fn prim_list_len(&self) -> usize {
+        self.prim_lists.len()
     }
 
     /// The 8-wide BVH, if the image holds one.

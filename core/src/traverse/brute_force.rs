@@ -24,6 +24,6 @@ pub fn trace_brute_force<I: Intersector, P: MemoryProbe>(
         let verts = I::fetch(scene, prim, probe);
         test_triangle::<I>(&prep, ray, &verts, prim, &mut best);
     }
-    counters.tri_tests += scene.triangle_count();
+    counters.tri_tests = counters.tri_tests.saturating_add(scene.triangle_count());
     best
 }

@@ -122,9 +122,9 @@ pub fn trace_grid<I: Intersector, P: MemoryProbe>(
             }
         }
     }
-    counters.nodes += voxels;
-    counters.leaves += full;
-    counters.list_entries += entries;
-    counters.tri_tests += tests;
+    counters.nodes = counters.nodes.saturating_add(voxels);
+    counters.leaves = counters.leaves.saturating_add(full);
+    counters.list_entries = counters.list_entries.saturating_add(entries);
+    counters.tri_tests = counters.tri_tests.saturating_add(tests);
     trav.best
 }

@@ -26,11 +26,12 @@ pub fn occluded<I: Intersector, P: MemoryProbe>(
     let mut walk = Walk::start(scene, ray);
     loop {
         match walk.step(scene, ray, probe) {
-            WalkEvent::Inner => counters.nodes += 1,
+            WalkEvent::Inner => counters.nodes = counters.nodes.saturating_add(1),
             WalkEvent::Leaf(leaf) => {
-                counters.leaves += 1;
+                counters.leaves = counters.leaves.saturating_add(1);
                 let mut hit = None;
-                counters.tri_tests += leaf.test::<I, P>(scene, &prep, ray, true, &mut hit, probe);
+                let tests = leaf.test::<I, P>(scene, &prep, ray, true, &mut hit, probe);
+                counters.tri_tests = counters.tri_tests.saturating_add(tests);
                 if hit.is_some() {
                     return true;
                 }

@@ -62,15 +62,16 @@ pub fn trace_tree<I: Intersector, P: MemoryProbe, V: PrimLists, W: TreeWalk<V>>(
             TreeEvent::Leaf { first, count } => {
                 leaves += 1;
                 test_leaf::<I, P, V>(scene, view, &prep, ray, (first, count), walk.best_mut(), probe);
+                // Cannot overflow: a ray tests at most PRIM_LISTS' length (the parse bounds it).
                 tests += count;
                 walk.finish_leaf();
             }
             TreeEvent::Done => break,
         }
     }
-    counters.nodes += nodes;
-    counters.leaves += leaves;
-    counters.tri_tests += tests;
+    counters.nodes = counters.nodes.saturating_add(nodes);
+    counters.leaves = counters.leaves.saturating_add(leaves);
+    counters.tri_tests = counters.tri_tests.saturating_add(tests);
     *walk.best_mut()
 }
 

@@ -359,6 +359,7 @@ fn walk<N: WideSlab, const C: usize, I: Intersector, P: MemoryProbe, const O: us
             } else {
                 test_leaf::<I, P, _>(scene, bvh, prep, ray, (index, count), &mut best, probe);
             }
+            // Cannot overflow: a ray tests at most PRIM_LISTS' length (the parse bounds it).
             tests += count;
             t_end = best.map_or(t_end, |h: Hit| h.t);
         }
@@ -367,8 +368,8 @@ fn walk<N: WideSlab, const C: usize, I: Intersector, P: MemoryProbe, const O: us
             None => break,
         }
     }
-    counters.nodes += nodes;
-    counters.leaves += leaves;
-    counters.tri_tests += tests;
+    counters.nodes = counters.nodes.saturating_add(nodes);
+    counters.leaves = counters.leaves.saturating_add(leaves);
+    counters.tri_tests = counters.tri_tests.saturating_add(tests);
     best
 }
