@@ -47,16 +47,22 @@ impl Ray {
         [self.dir.y, self.dir.z, self.t_min, self.t_max]
     }
 
-    /// True when every component is finite (or `t_max` is `+inf`) and the direction is
-    /// not zero; kernels return "miss" for any other ray rather than misbehave.
+    /// True when every component is finite (or `t_max` is `+inf`), the direction is not
+    /// zero and `0 <= t_min <= t_max`; kernels return "miss" for any other ray rather than
+    /// misbehave.
+    ///
+    /// A ray starts at its origin: a negative `t_min` (the part behind the origin) is not
+    /// a ray every structure can trace alike. The kd-tree's split rule and the robust box
+    /// tests' rounding margins are exact for `t >= 0` only, and the kd-tree returned a
+    /// different hit from every other structure on 6–52% of such rays (issue 18, D3), so
+    /// every structure rejects them (one rule, documented in the README).
     #[inline]
     pub fn is_valid(&self) -> bool {
         // `x − x` is 0 for a finite `x` and NaN otherwise: one test for all six
-        // components, without a branch per component. The comparison `t_min <= t_max`
-        // fails for a NaN on either side.
+        // components, without a branch per component. The comparisons fail for a NaN.
         let (o, d) = (Vec3A::from(self.origin), Vec3A::from(self.dir));
         #[allow(clippy::eq_op)]
         let finite = ((o - o) + (d - d)).cmpeq(Vec3A::ZERO).all();
-        finite & d.cmpne(Vec3A::ZERO).any() & (self.t_min <= self.t_max)
+        finite & d.cmpne(Vec3A::ZERO).any() & (self.t_min >= 0.0) & (self.t_min <= self.t_max)
     }
 }

@@ -42,6 +42,9 @@ pub fn rays_from_array(a: &Array2) -> Result<Vec<Ray>> {
         if t_min.is_nan() || t_max.is_nan() || t_min > t_max {
             bail!("row {i}: t range [{t_min}, {t_max}] is empty or NaN");
         }
+        if t_min < 0.0 {
+            bail!("row {i}: t_min {t_min} is negative (a ray starts at its origin: t_min >= 0)");
+        }
         rays.push(Ray { origin, dir, t_min, t_max });
     }
     Ok(rays)

@@ -247,3 +247,33 @@ fn a_large_obj_polygon_builds_a_grid_of_n_log_n_references() {
     println!("{n}-gon: {entries} grid list entries ({:.1} n log2 n)", entries as f64 / (n as f64 * log_n));
     assert!((entries as f64) < 4.0 * n as f64 * log_n, "{entries} list entries");
 }
+
+/// Issue 18, D3: with `t_min < 0` the kd-tree returned another hit than every other
+/// structure (it ignores the part of the ray behind its origin). The rule is now one for
+/// all: a ray starts at its origin, `Ray::is_valid` demands `0 <= t_min`, and every
+/// structure and the packet kernels return no hit for such a ray; the batch reader
+/// rejects it with the row named.
+#[test]
+fn a_negative_t_min_is_no_ray_for_any_structure() {
+    let origin = Vec3::new(0.0, 1.0, 0.5);
+    let dir = Vec3::new(0.3, -0.2, -1.0);
+    let behind = Ray { origin, dir, t_min: -2.0, t_max: f32::INFINITY };
+    assert!(!behind.is_valid());
+    let mut hits = Vec::new();
+    for accel in ACCELS {
+        let img = cornell(accel);
+        let view = SceneView::parse(&img).unwrap();
+        let mut c = RayCounters::default();
+        assert_eq!(trace::<Watertight, _>(&view, &behind, &mut NoProbe, &mut c), None, "{accel:?}");
+        assert!(!occluded::<Watertight, _>(&view, &behind, &mut NoProbe, &mut c), "{accel:?}");
+        let mut packet = raypipe_core::packet::RayPacket::<4>::new();
+        packet.set(0, &behind);
+        assert_eq!(packet.active & 1, 0, "{accel:?}: the packet lane is inactive");
+        let ahead = Ray { t_min: 0.0, ..behind };
+        hits.push(trace::<Watertight, _>(&view, &ahead, &mut NoProbe, &mut c).map(|h| (h.t.to_bits(), h.prim)));
+    }
+    assert!(hits[0].is_some() && hits.iter().all(|h| *h == hits[0]), "{hits:?}");
+    let rows = raypipe::npy::Array2 { rows: 1, cols: 8, data: vec![0.0, 1.0, 0.5, 0.3, -0.2, -1.0, -2.0, 10.0] };
+    let e = raypipe::batch::rays_from_array(&rows).unwrap_err().to_string();
+    assert!(e.contains("row 0") && e.contains("negative"), "{e}");
+}

@@ -109,7 +109,8 @@ impl<const N: usize> RayPacket<N> {
             & ((o[1] - o[1]) + (dir[1] - dir[1])).cmpeq(Vec4::ZERO)
             & ((o[2] - o[2]) + (dir[2] - dir[2])).cmpeq(Vec4::ZERO);
         let moving = dir[0].cmpne(Vec4::ZERO) | dir[1].cmpne(Vec4::ZERO) | dir[2].cmpne(Vec4::ZERO);
-        let ordered = Vec4::splat(t_min).cmple(Vec4::splat(t_max));
+        // `0 <= t_min <= t_max`, as `Ray::is_valid`.
+        let ordered = Vec4::splat(t_min).cmple(Vec4::splat(t_max)) & Vec4::splat(t_min).cmpge(Vec4::ZERO);
         let valid = (finite & moving & ordered).bitmask() & keep & 0xF;
         self.active = (self.active & !(0xF << i)) | (valid as u64) << i;
     }
@@ -153,7 +154,8 @@ impl<const N: usize> RayPacket<N> {
                 & ((oy - oy) + (dy - dy)).cmpeq(Vec4::ZERO)
                 & ((oz - oz) + (dz - dz)).cmpeq(Vec4::ZERO);
             let moving = dx.cmpne(Vec4::ZERO) | dy.cmpne(Vec4::ZERO) | dz.cmpne(Vec4::ZERO);
-            active |= ((finite & moving & t_min.cmple(t_max)).bitmask() as u64) << i;
+            let ordered = t_min.cmple(t_max) & t_min.cmpge(Vec4::ZERO);
+            active |= ((finite & moving & ordered).bitmask() as u64) << i;
             i += 4;
         }
         for r in quads.remainder() {
@@ -224,7 +226,8 @@ impl<const N: usize> RayPacket<N> {
             _mm256_or_ps(_mm256_cmp_ps::<_CMP_NEQ_UQ>(dx, zero), _mm256_cmp_ps::<_CMP_NEQ_UQ>(dy, zero)),
             _mm256_cmp_ps::<_CMP_NEQ_UQ>(dz, zero),
         );
-        let ordered = _mm256_cmp_ps::<_CMP_LE_OQ>(t_min, t_max);
+        let ordered =
+            _mm256_and_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(t_min, t_max), _mm256_cmp_ps::<_CMP_GE_OQ>(t_min, zero));
         _mm256_movemask_ps(_mm256_and_ps(_mm256_and_ps(finite, moving), ordered)) as u32 as u64
     }
 
