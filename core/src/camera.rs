@@ -30,6 +30,8 @@ pub struct Camera {
 pub enum CameraError {
     /// Width or height is zero.
     ZeroSize,
+    /// Width × height is more than [`MAX_PIXELS`].
+    TooLarge,
     /// A coordinate or the field of view is NaN or infinite.
     NonFinite,
     /// The field of view is not strictly between 0 and 180 degrees.
@@ -40,10 +42,14 @@ pub enum CameraError {
     UpParallelToView,
 }
 
+/// The most pixels a camera may ask for (16384 × 16384).
+pub const MAX_PIXELS: u64 = 1 << 28;
+
 impl fmt::Display for CameraError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(match self {
             CameraError::ZeroSize => "image size is zero",
+            CameraError::TooLarge => "image size is more than 2^28 pixels",
             CameraError::NonFinite => "camera has a NaN or infinite value",
             CameraError::BadFov => "field of view must be strictly between 0 and 180 degrees",
             CameraError::NoViewDirection => "camera eye and look-at point coincide",
@@ -89,6 +95,11 @@ impl EyeRays {
     pub fn new(cam: &Camera) -> Result<EyeRays, CameraError> {
         if cam.width == 0 || cam.height == 0 {
             return Err(CameraError::ZeroSize);
+        }
+        // Whatever the camera came from (a file, an image, the command line), a frame is
+        // something a driver can allocate and finish (issue 18, D4).
+        if cam.width as u64 * cam.height as u64 > MAX_PIXELS {
+            return Err(CameraError::TooLarge);
         }
         if !(cam.eye.is_finite() && cam.look_at.is_finite() && cam.up.is_finite() && cam.vfov_deg.is_finite()) {
             return Err(CameraError::NonFinite);

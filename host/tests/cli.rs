@@ -205,7 +205,18 @@ fn impossible_cameras_and_sizes() {
     assert_one_line_error(&raypipe(d, &["render", "--camera", "typo.camera", "-o", "o.png"]), "typo.camera:3");
     let o = raypipe(d, &["render", "--fov", "180", "-o", "o.png"]);
     assert_one_line_error(&o, "field of view");
-    assert!(!d.join("o.png").exists());
+    // Issue 18, D4: sizes from camera files are capped like --size (a 6 GB allocation
+    // aborted the process; 100000 x 100000 never finished).
+    write(d, "huge.camera", "eye 0 1 3\nlook_at 0 1 0\nsize 4294967295 1\n");
+    write(d, "wide.camera", "eye 0 1 3\nlook_at 0 1 0\nsize 100000 100000\n");
+    for cam in ["huge.camera", "wide.camera"] {
+        for args in [&["render", "-o", "o.png"][..], &["simulate", "-o", "o.png"], &["rays", "--output", "r.npy"]] {
+            let mut a = vec![args[0], "--camera", cam];
+            a.extend_from_slice(&args[1..]);
+            assert_one_line_error(&raypipe(d, &a), "more than 2^28 pixels");
+        }
+    }
+    assert!(!d.join("o.png").exists() && !d.join("r.npy").exists());
 }
 
 #[test]
