@@ -30,7 +30,7 @@ pub fn trace_bvh_packet<I: Intersector, P: MemoryProbe, const N: usize>(
     // The root box first.
     let root = bvh.node(0, probe);
     let mut mask = 0u64;
-    for i in Lanes(packet.active) {
+    for i in Lanes(packet.live()) {
         let hit =
             boxes[i].entry(Vec3A::from_array(root.min), Vec3A::from_array(root.max), rays[i].t_min, rays[i].t_max);
         if hit.is_some() {

@@ -310,7 +310,7 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
     counters: &mut PacketCounters,
 ) {
     *hits = [None; N];
-    let mask = packet.active;
+    let mask = packet.live();
     if mask == 0 {
         return;
     }

@@ -44,7 +44,7 @@ pub fn trace_lock_step<W: RayWalk, I: Intersector, P: MemoryProbe, const N: usiz
     let preps: [I::Prepared; N] = core::array::from_fn(|i| I::prepare(&rays[i]));
     let mut walks: [Option<W>; N] = core::array::from_fn(|i| start(&rays[i]));
     let mut active = 0u64;
-    for i in Lanes(packet.active) {
+    for i in Lanes(packet.live()) {
         if walks[i].is_some() {
             active |= 1 << i;
         }
@@ -68,7 +68,7 @@ pub fn trace_lock_step<W: RayWalk, I: Intersector, P: MemoryProbe, const N: usiz
     }
     for (i, hit) in hits.iter_mut().enumerate() {
         *hit = match walks[i].as_mut() {
-            Some(w) if packet.active & (1 << i) != 0 => *w.best_mut(),
+            Some(w) if packet.live() & (1 << i) != 0 => *w.best_mut(),
             _ => None,
         };
     }

@@ -47,6 +47,8 @@ pub struct RayPacket<const N: usize> {
 
 impl<const N: usize> Default for RayPacket<N> {
     fn default() -> Self {
+        // 1 to 64 lanes, checked at compile time (the active mask is a `u64`).
+        let () = Self::CHECK;
         RayPacket {
             ox: [0.0; N],
             oy: [0.0; N],
@@ -66,8 +68,14 @@ impl<const N: usize> RayPacket<N> {
 
     /// An empty packet.
     pub fn new() -> Self {
-        let () = Self::CHECK;
         Self::default()
+    }
+
+    /// The active lanes that exist: [`RayPacket::active`] is public, and the kernels read
+    /// only its first `N` bits, so stray higher bits cannot index past the lanes.
+    #[inline(always)]
+    pub fn live(&self) -> u64 {
+        self.active & step::lane_mask(N)
     }
 
     /// Stores ray `i` and marks it active; invalid rays stay inactive (they miss).
@@ -91,7 +99,7 @@ impl<const N: usize> RayPacket<N> {
     /// an image tile's packets spent a sixth of their time storing rays).
     #[inline]
     pub fn set4(&mut self, i: usize, origin: Vec3, dir: [Vec4; 3], t_min: f32, t_max: f32, keep: u32) {
-        if i + 4 > N {
+        if N < 4 || i > N - 4 {
             return;
         }
         let o = [origin.x, origin.y, origin.z].map(Vec4::splat);
@@ -246,13 +254,16 @@ impl<const N: usize> RayPacket<N> {
 
     /// Ray `i`.
     #[inline]
+    /// Ray `i`; past the last lane, the last lane's ray.
+    #[inline]
     pub fn ray(&self, i: usize) -> Ray {
-        let i = i.min(N - 1);
+        let i = i.min(N.saturating_sub(1));
+        let get = |a: &[f32; N]| a.get(i).copied().unwrap_or(0.0);
         Ray {
-            origin: Vec3::new(self.ox[i], self.oy[i], self.oz[i]),
-            dir: Vec3::new(self.dx[i], self.dy[i], self.dz[i]),
-            t_min: self.t_min[i],
-            t_max: self.t_max[i],
+            origin: Vec3::new(get(&self.ox), get(&self.oy), get(&self.oz)),
+            dir: Vec3::new(get(&self.dx), get(&self.dy), get(&self.dz)),
+            t_min: get(&self.t_min),
+            t_max: get(&self.t_max),
         }
     }
 }

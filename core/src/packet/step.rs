@@ -79,6 +79,8 @@ impl<const N: usize> PacketWalk<N> {
     /// Starts the rays of `active` (bits of `rays`' indices; invalid rays stay out) in
     /// the scene's tree, or `None` if the scene has no tree.
     pub fn start(scene: &SceneView<'_>, rays: &[Ray], active: u64) -> Option<PacketWalk<N>> {
+        // Only lanes that exist: stray bits past the rays (or past N) take no part.
+        let active = active & lane_mask(rays.len().min(N));
         if scene.grid().is_some() {
             None
         } else if scene.bvh4().is_some() {
