@@ -605,8 +605,9 @@ impl<'a> SceneView<'a> {
     }
 
     fn parse_table(header: &Header, bytes: &'a [u8]) -> Result<Sections<'a>, SceneError> {
-        let n = header.section_count as usize;
-        let table_end = 64 + 16 * n;
+        // In u64 and then checked: `64 + 16 n` overflows a 32-bit usize for a crafted count.
+        let table_end = 64 + 16 * header.section_count as u64;
+        let table_end = usize::try_from(table_end).unwrap_or(usize::MAX);
         let table_bytes =
             bytes.get(64..table_end).ok_or(SceneError::Truncated { needed: table_end, len: bytes.len() })?;
         let table: &[SectionEntry] = bytemuck::try_cast_slice(table_bytes)

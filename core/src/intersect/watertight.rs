@@ -10,6 +10,7 @@ use glam::{Vec3, Vec4};
 
 use crate::image::{SceneView, TriBlock4};
 use crate::intersect::triangle::{Hits8, Intersector, RayPair, Rays4Result, SharedTris};
+#[cfg(target_arch = "x86_64")]
 use crate::intersect::watertight8::SharedShear;
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;

@@ -5,6 +5,9 @@
 //! bits, with twice the lanes per instruction; each triangle's vertices are broadcast
 //! once for all the pairs of groups that entered its leaf.
 
+// Only the AVX form exists (x86-64); elsewhere the 4-lane test runs.
+#![cfg(target_arch = "x86_64")]
+
 use crate::intersect::triangle::{Hits8, SharedTris};
 use crate::intersect::watertight::ShearedRays4;
 use glam::Vec4;

@@ -252,8 +252,6 @@ impl<const N: usize> RayPacket<N> {
         self.t_max[i] = r.t_max;
     }
 
-    /// Ray `i`.
-    #[inline]
     /// Ray `i`; past the last lane, the last lane's ray.
     #[inline]
     pub fn ray(&self, i: usize) -> Ray {

@@ -64,7 +64,8 @@ pub fn rasterize_triangle(eye: &EyeRays, v: [Vec3; 3], prim: u32, g: &mut GBuffe
             }
             let inv_z = w0 / a.2 + w1 / b.2 + w2 / c.2;
             let z = 1.0 / inv_z;
-            let i = (y * w + x) as usize;
+            // In u64: `y * w` overflows u32 past 2^32 pixels (and `usize` on 32-bit targets).
+            let i = usize::try_from(y as u64 * w as u64 + x as u64).unwrap_or(usize::MAX);
             let (Some(depth), Some(id), Some(uv)) = (g.depth.get_mut(i), g.prim.get_mut(i), g.uv.get_mut(i)) else {
                 continue;
             };

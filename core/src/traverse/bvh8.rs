@@ -11,7 +11,9 @@ use crate::intersect::triangle::Intersector;
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::traverse::ray_box::RayBox;
-use crate::traverse::wide_bvh::{stack_capacity, trace_wide_bvh, NodeRay, WideBvhTraversal, WideSlab, OCTANTS};
+#[cfg(target_arch = "x86_64")]
+use crate::traverse::wide_bvh::OCTANTS;
+use crate::traverse::wide_bvh::{stack_capacity, trace_wide_bvh, NodeRay, WideBvhTraversal, WideSlab};
 
 /// `max` as the SIMD instruction computes it (the second operand when either is NaN),
 /// written so that the compiler emits exactly that instruction.

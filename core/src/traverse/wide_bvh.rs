@@ -50,11 +50,14 @@ pub struct NodeRay {
     pub(crate) avx8: bool,
     /// For that form, the origin, `inv` and `inv_far` of [`RayBox`] as eight lanes each
     /// (x, y, z of each), written once per ray: the node test takes them as memory
-    /// operands, where splatting them at each node took nine of its instructions.
+    /// operands, where splatting them at each node took nine of its instructions. Only
+    /// on x86-64 (288 bytes a ray that an embedded stack need not carry).
+    #[cfg(target_arch = "x86_64")]
     pub(crate) lanes8: [Lanes8; 9],
 }
 
 /// Eight copies of one value, aligned as one AVX register.
+#[cfg(target_arch = "x86_64")]
 #[derive(Clone, Copy, Debug, Default)]
 #[repr(C, align(32))]
 pub(crate) struct Lanes8(pub(crate) [f32; 8]);
@@ -102,9 +105,18 @@ impl NodeRay {
         let rb = RayBox::new(ray);
         let neg = rb.inv.cmplt(Vec3A::ZERO).bitmask() as usize;
         let avx8 = crate::cpu::has_avx() && rb.zero_axes == 0;
-        let (o, inv, far) = (rb.origin, rb.inv, rb.inv_far);
-        let lanes8 = [o.x, o.y, o.z, inv.x, inv.y, inv.z, far.x, far.y, far.z].map(|v| Lanes8([v; 8]));
-        NodeRay { rows: OCTANTS[neg & 7], rb, avx8, lanes8 }
+        #[cfg(target_arch = "x86_64")]
+        let lanes8 = {
+            let (o, inv, far) = (rb.origin, rb.inv, rb.inv_far);
+            [o.x, o.y, o.z, inv.x, inv.y, inv.z, far.x, far.y, far.z].map(|v| Lanes8([v; 8]))
+        };
+        NodeRay {
+            rows: OCTANTS[neg & 7],
+            rb,
+            avx8,
+            #[cfg(target_arch = "x86_64")]
+            lanes8,
+        }
     }
 
     /// The ray's octant (bit `a`: the direction is negative on axis `a`), the index of
