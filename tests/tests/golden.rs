@@ -61,9 +61,9 @@ fn tetra_fixture() {
     check_golden("tetra_96x72.png", &frame);
 }
 
-/// The image embedded by the no_std proof is what `raypipe build` makes today.
+/// The images embedded by the no_std proof are what `raypipe build` makes today.
 #[test]
-fn tetra_image_fixture_is_up_to_date() {
+fn tetra_image_fixtures_are_up_to_date() {
     let opts = BuildOptions { grid: GridResolution::MinDim(4), ..Default::default() };
     let built = scene::load(Some(&root().join("fixtures/tetra.obj")), &opts).unwrap();
     let committed = std::fs::read(root().join("fixtures/tetra.rpsi")).unwrap();
@@ -71,4 +71,14 @@ fn tetra_image_fixture_is_up_to_date() {
         committed == *built.image,
         "fixtures/tetra.rpsi is stale: run `cargo run --release -p raypipe -- build fixtures/tetra.obj -o fixtures/tetra.rpsi --grid-min-dim 4`"
     );
+    for (accel, name) in [(Accel::Kd, "kd"), (Accel::Bvh, "bvh"), (Accel::Bvh4, "bvh4"), (Accel::Bvh8, "bvh8")] {
+        let built =
+            scene::load(Some(&root().join("fixtures/tetra.obj")), &BuildOptions { accel, ..Default::default() })
+                .unwrap();
+        let committed = std::fs::read(root().join(format!("fixtures/tetra-{name}.rpsi"))).unwrap();
+        assert!(
+            committed == *built.image,
+            "fixtures/tetra-{name}.rpsi is stale: run `cargo run --release -p raypipe -- build fixtures/tetra.obj -o fixtures/tetra-{name}.rpsi --accel {name}`"
+        );
+    }
 }

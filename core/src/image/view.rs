@@ -983,7 +983,7 @@ impl<'a> SceneView<'a> {
         let prims = Self::prim_list(s, nt)?;
         let np = prims.len() as u64;
         validate_tree(nodes.len(), SectionKind::BvhNodes, np, |i| {
-            let n = &nodes[i];
+            let n = nodes.get(i).ok_or(())?;
             let (lo, hi) = (Vec3::from(n.min), Vec3::from(n.max));
             if !(finite3(n.min) && finite3(n.max) && lo.cmple(hi).all()) {
                 return Err(());
@@ -1012,7 +1012,7 @@ impl<'a> SceneView<'a> {
         let prims = Self::prim_list(s, nt)?;
         let np = prims.len() as u64;
         validate_tree(nodes.len(), SectionKind::KdNodes, np, |i| {
-            let n = &nodes[i];
+            let n = nodes.get(i).ok_or(())?;
             if n.axis() == KdNode::LEAF {
                 if n.index() as u64 + n.value as u64 <= np {
                     Ok((Children::new(), n.value as u64))
@@ -1041,7 +1041,7 @@ impl<'a> SceneView<'a> {
         let prims = Self::prim_list(s, nt)?;
         let np = prims.len() as u64;
         validate_tree(nodes.len(), section, np, |i| {
-            let node = &nodes[i];
+            let node = nodes.get(i).ok_or(())?;
             let mut inner = Children::new();
             let mut entries = 0u64;
             for k in 0..N::WIDTH {

@@ -149,11 +149,18 @@ impl Intersector for Watertight {
     #[inline(always)]
     fn intersect_block4(s: &ShearedRay, block: &TriBlock4) -> Rays4Result {
         let org = s.org.to_array();
-        let k = [s.kx as usize % 3, s.ky as usize % 3, s.kz as usize % 3];
+        let k = [s.kx, s.ky, s.kz];
         // Vertex coordinates relative to the ray's origin, read in the ray's axis order
         // (x, y, z of the sheared frame) so that no register array is indexed by axis.
-        let rel = |i: usize| -> [Vec4; 3] { k.map(|a| Vec4::from_array(block.v[i][a]) - Vec4::splat(org[a])) };
-        lanes(rel(0), rel(1), rel(2), [s.sx, s.sy, s.sz].map(Vec4::splat))
+        // (`min(2)`: axis indices are below 3, and the compiler sees it there.)
+        let rel = |v: &[[f32; 4]; 3]| -> [Vec4; 3] {
+            k.map(|a| {
+                let a = (a as usize).min(2);
+                Vec4::from_array(v[a]) - Vec4::splat(org[a])
+            })
+        };
+        let [v0, v1, v2] = &block.v;
+        lanes(rel(v0), rel(v1), rel(v2), [s.sx, s.sy, s.sz].map(Vec4::splat))
     }
 
     #[inline(always)]
@@ -196,7 +203,8 @@ impl Intersector for Watertight {
         let a = (v[0] - s.org).to_array();
         let b = (v[1] - s.org).to_array();
         let c = (v[2] - s.org).to_array();
-        let k = [s.kx as usize, s.ky as usize, s.kz as usize];
+        // Below 3 by construction; `min(2)` lets the compiler see it (no bounds checks).
+        let k = [s.kx, s.ky, s.kz].map(|a| (a as usize).min(2));
         let (sheared, [mut eu, mut ev, mut ew]) = shear_edges(a, b, c, k, s.sx, s.sy);
         if eu == 0.0 || ev == 0.0 || ew == 0.0 {
             [eu, ev, ew] = edges(sheared.map(f64::from)).map(|e| e as f32);
@@ -228,6 +236,9 @@ fn shear_edges<T: Copy + Sub<Output = T> + Mul<Output = T>>(
     sx: T,
     sy: T,
 ) -> ([T; 6], [T; 3]) {
+    // Axis indices are below 3 (`ShearedRay`); `min(2)` shows the compiler too, so the
+    // reads below have no bounds checks (a conditional move each, no panic path).
+    let (kx, ky, kz) = (kx.min(2), ky.min(2), kz.min(2));
     let ax = a[kx] - sx * a[kz];
     let ay = a[ky] - sy * a[kz];
     let bx = b[kx] - sx * b[kz];

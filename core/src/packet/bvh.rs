@@ -7,7 +7,7 @@ use glam::Vec3A;
 use crate::hit::Hit;
 use crate::image::{BvhView, SceneView, MAX_TREE_DEPTH};
 use crate::intersect::triangle::{test_triangle, Intersector};
-use crate::packet::{Lanes, PacketCounters, PacketHits, RayPacket};
+use crate::packet::{LanesOf, PacketCounters, PacketHits, RayPacket};
 use crate::probe::MemoryProbe;
 use crate::traverse::ray_box::RayBox;
 
@@ -30,7 +30,7 @@ pub fn trace_bvh_packet<I: Intersector, P: MemoryProbe, const N: usize>(
     // The root box first.
     let root = bvh.node(0, probe);
     let mut mask = 0u64;
-    for i in Lanes(packet.live()) {
+    for i in LanesOf::<N>(packet.live()) {
         let hit =
             boxes[i].entry(Vec3A::from_array(root.min), Vec3A::from_array(root.max), rays[i].t_min, rays[i].t_max);
         if hit.is_some() {
@@ -47,7 +47,7 @@ pub fn trace_bvh_packet<I: Intersector, P: MemoryProbe, const N: usize>(
                 for e in node.first..node.first.wrapping_add(node.count) {
                     let prim = bvh.prim(e, probe);
                     let verts = I::fetch(scene, prim, probe);
-                    for i in Lanes(mask) {
+                    for i in LanesOf::<N>(mask) {
                         test_triangle::<I>(&preps[i], &rays[i], &verts, prim, &mut hits[i]);
                     }
                 }
@@ -60,7 +60,7 @@ pub fn trace_bvh_packet<I: Intersector, P: MemoryProbe, const N: usize>(
                 let (blo, bhi) = (Vec3A::from_array(b.min), Vec3A::from_array(b.max));
                 let (mut ma, mut mb) = (0u64, 0u64);
                 let (mut ta, mut tb) = (f32::INFINITY, f32::INFINITY);
-                for i in Lanes(mask) {
+                for i in LanesOf::<N>(mask) {
                     let end = best_t(hits, i);
                     if let Some(t) = boxes[i].entry(alo, ahi, rays[i].t_min, end) {
                         ma |= 1 << i;
@@ -98,7 +98,7 @@ pub fn trace_bvh_packet<I: Intersector, P: MemoryProbe, const N: usize>(
             let mut next = None;
             while let Some((index, t, m)) = stack.pop() {
                 let mut still = 0u64;
-                for i in Lanes(m) {
+                for i in LanesOf::<N>(m) {
                     if t <= best_t(hits, i) {
                         still |= 1 << i;
                     }

@@ -282,11 +282,12 @@ fn nearest_first(mask: u32, t: &[f32; 4]) -> ([usize; 4], usize) {
     for k in 0..4 {
         if mask & (1 << k) != 0 {
             let mut j = m;
-            while j > 0 && t[order[j - 1]] > t[k] {
-                order[j] = order[j - 1];
+            // Indices masked below 4: the compiler sees them in range (no panic path).
+            while j > 0 && t[order[(j - 1) & 3] & 3] > t[k] {
+                order[j & 3] = order[(j - 1) & 3];
                 j -= 1;
             }
-            order[j] = k;
+            order[j & 3] = k;
             m += 1;
         }
     }
@@ -371,12 +372,14 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
             let (order, n) = nearest_first(needed, &child_t);
             if n > 0 {
                 let slot_box = |k: usize| {
+                    let k = k & 3;
                     [node.min_x[k], node.min_y[k], node.min_z[k], node.max_x[k], node.max_y[k], node.max_z[k]]
                 };
-                for &k in order[1..n].iter().rev() {
+                for &k in order.get(1..n).unwrap_or_default().iter().rev() {
+                    let k = k & 3;
                     let _ = stack.push((node.child[k], node.count[k], child_t[k], slot_box(k)));
                 }
-                let k = order[0];
+                let k = order[0] & 3;
                 current = (node.child[k], node.count[k], slot_box(k), child_t[k]);
                 continue;
             }

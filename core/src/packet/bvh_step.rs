@@ -10,7 +10,7 @@ use glam::Vec3A;
 
 use crate::hit::Hit;
 use crate::image::{BvhNode, BvhView, SceneView, MAX_TREE_DEPTH};
-use crate::packet::Lanes;
+use crate::packet::LanesOf;
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::traverse::ray_box::RayBox;
@@ -50,19 +50,22 @@ impl<const N: usize> BvhPacketTraversal<N> {
             done: false,
             best: [None; N],
         };
-        for i in Lanes(existing(active, rays.len(), N)) {
-            if rays[i].is_valid() {
+        for i in LanesOf::<N>(existing(active, rays.len(), N)) {
+            let Some(ray) = rays.get(i) else { continue };
+            if ray.is_valid() {
                 t.mask |= 1 << i;
-                t.boxes[i] = Some(RayBox::new(&rays[i]));
-                (t.t_min[i], t.t_max[i]) = (rays[i].t_min, rays[i].t_max);
+                t.boxes[i] = Some(RayBox::new(ray));
+                (t.t_min[i], t.t_max[i]) = (ray.t_min, ray.t_max);
             }
         }
         t.done = t.mask == 0;
         t
     }
 
+    /// Ray `i`'s end: its best hit's distance or its interval's end (0 past the lanes).
     fn t_end(&self, i: usize) -> f32 {
-        self.best[i].map_or(self.t_max[i], |h| h.t)
+        let t_max = self.t_max.get(i).copied().unwrap_or(0.0);
+        self.best.get(i).copied().flatten().map_or(t_max, |h| h.t)
     }
 
     /// One node for the packet: a popped node or the root is read first; an inner node's
@@ -81,7 +84,7 @@ impl<const N: usize> BvhPacketTraversal<N> {
                 let (lo, hi) = (Vec3A::from_array(node.min), Vec3A::from_array(node.max));
                 tested = self.mask;
                 let mut entered = 0;
-                for i in Lanes(self.mask) {
+                for i in LanesOf::<N>(self.mask) {
                     if self.boxes[i].is_some_and(|b| b.entry(lo, hi, self.t_min[i], self.t_max[i]).is_some()) {
                         entered |= 1 << i;
                     }
@@ -111,7 +114,7 @@ impl<const N: usize> BvhPacketTraversal<N> {
         let (mut ma, mut mb) = (0u64, 0u64);
         let (mut ta, mut tb) = (f32::INFINITY, f32::INFINITY);
         tested |= self.mask;
-        for i in Lanes(self.mask) {
+        for i in LanesOf::<N>(self.mask) {
             let Some(rb) = self.boxes[i] else { continue };
             // Boxes entered beyond the best hit cannot hold a closer one; equal is kept.
             let end = self.t_end(i);
@@ -146,7 +149,7 @@ impl<const N: usize> BvhPacketTraversal<N> {
     fn pop(&mut self) {
         while let Some((index, t, m)) = self.stack.pop() {
             let mut still = 0u64;
-            for i in Lanes(m) {
+            for i in LanesOf::<N>(m) {
                 if t <= self.t_end(i) {
                     still |= 1 << i;
                 }

@@ -11,7 +11,7 @@
 
 use crate::hit::Hit;
 use crate::image::{KdNode, KdTreeView, SceneView, MAX_TREE_DEPTH};
-use crate::packet::Lanes;
+use crate::packet::LanesOf;
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::traverse::aabb::clip_ray;
@@ -52,8 +52,8 @@ impl<const N: usize> KdPacketTraversal<N> {
             done: false,
             best: [None; N],
         };
-        for i in Lanes(existing(active, rays.len(), N)) {
-            let ray = &rays[i];
+        for i in LanesOf::<N>(existing(active, rays.len(), N)) {
+            let Some(ray) = rays.get(i) else { continue };
             if let Some((t0, t1)) = if ray.is_valid() { clip_ray(ray, kd.min, kd.max) } else { None } {
                 t.mask |= 1 << i;
                 (t.t_min[i], t.t_max[i]) = (t0, t1);
@@ -85,7 +85,7 @@ impl<const N: usize> KdPacketTraversal<N> {
         // Rays that need both children, by which one they visit first.
         let mut first_votes = [0u32; 2];
         let tested = self.mask;
-        for i in Lanes(self.mask) {
+        for i in LanesOf::<N>(self.mask) {
             let Some(ray) = rays.get(i) else { continue };
             let (o, d) = (ray.origin[a], ray.dir[a]);
             let (lo, hi) = (self.t_min[i], self.t_max[i]);
@@ -128,7 +128,7 @@ impl<const N: usize> KdPacketTraversal<N> {
         }
         self.index = c.wrapping_add(go_to as u32);
         self.mask = need[go_to];
-        for i in Lanes(self.mask) {
+        for i in LanesOf::<N>(self.mask) {
             (self.t_min[i], self.t_max[i]) = (t0[go_to][i], t1[go_to][i]);
         }
         PacketEvent::Node { lanes: tested }
@@ -139,7 +139,7 @@ impl<const N: usize> KdPacketTraversal<N> {
     pub fn finish_leaf(&mut self) {
         while let Some(e) = self.stack.pop() {
             let mut still = 0u64;
-            for i in Lanes(e.mask) {
+            for i in LanesOf::<N>(e.mask) {
                 if !self.best.get(i).copied().flatten().is_some_and(|h| h.t < e.t_min[i]) {
                     still |= 1 << i;
                 }
@@ -147,7 +147,7 @@ impl<const N: usize> KdPacketTraversal<N> {
             if still != 0 {
                 self.index = e.node;
                 self.mask = still;
-                for i in Lanes(still) {
+                for i in LanesOf::<N>(still) {
                     (self.t_min[i], self.t_max[i]) = (e.t_min[i], e.t_max[i]);
                 }
                 return;

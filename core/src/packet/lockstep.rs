@@ -10,7 +10,7 @@
 use crate::hit::Hit;
 use crate::image::SceneView;
 use crate::intersect::triangle::{test_triangle, Intersector};
-use crate::packet::{Lanes, PacketCounters, PacketHits, RayPacket};
+use crate::packet::{LanesOf, PacketCounters, PacketHits, RayPacket};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 
@@ -44,7 +44,7 @@ pub fn trace_lock_step<W: RayWalk, I: Intersector, P: MemoryProbe, const N: usiz
     let preps: [I::Prepared; N] = core::array::from_fn(|i| I::prepare(&rays[i]));
     let mut walks: [Option<W>; N] = core::array::from_fn(|i| start(&rays[i]));
     let mut active = 0u64;
-    for i in Lanes(packet.live()) {
+    for i in LanesOf::<N>(packet.live()) {
         if walks[i].is_some() {
             active |= 1 << i;
         }
@@ -53,7 +53,7 @@ pub fn trace_lock_step<W: RayWalk, I: Intersector, P: MemoryProbe, const N: usiz
     while active != 0 {
         c.visits += 1;
         c.active_lanes += active.count_ones() as u64;
-        for i in Lanes(active) {
+        for i in LanesOf::<N>(active) {
             let Some(walk) = walks[i].as_mut() else { continue };
             let (prep, ray) = (&preps[i], &rays[i]);
             let mut test = |w: &mut W, prim: u32, probe: &mut P| {

@@ -304,6 +304,28 @@ impl Iterator for Lanes {
     }
 }
 
+/// The set bits of a mask that lie below `N`, in increasing order: lane indices that a
+/// `[T; N]` can be indexed with. The bound is part of the iterator, so the compiler sees
+/// `i < N` at every use and keeps no bounds check (and no panic path); stray bits at or
+/// above `N` end the iteration.
+#[derive(Clone, Copy, Debug)]
+pub struct LanesOf<const N: usize>(pub u64);
+
+impl<const N: usize> Iterator for LanesOf<N> {
+    type Item = usize;
+
+    #[inline]
+    fn next(&mut self) -> Option<usize> {
+        // 64 for an empty mask, which is at least N.
+        let i = self.0.trailing_zeros() as usize;
+        if i >= N {
+            return None;
+        }
+        self.0 &= self.0 - 1;
+        Some(i)
+    }
+}
+
 /// The best hit of each ray of a packet.
 pub type PacketHits<const N: usize> = [Option<Hit>; N];
 

@@ -15,7 +15,7 @@
 use crate::hit::Hit;
 use crate::image::SceneView;
 use crate::intersect::triangle::Intersector;
-use crate::packet::Lanes;
+use crate::packet::LanesOf;
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::traverse::walk::{trace_walk, Leaf};
@@ -152,7 +152,7 @@ pub fn trace_packet_steps<I: Intersector, P: MemoryProbe, const N: usize>(
     *hits = [None; N];
     let active = active & lane_mask(N);
     let Some(mut walk) = PacketWalk::<N>::start(scene, rays, active) else {
-        for i in Lanes(active) {
+        for i in LanesOf::<N>(active) {
             hits[i] = trace_walk::<I, P>(scene, &rays[i], probe);
         }
         return 0;
@@ -164,7 +164,7 @@ pub fn trace_packet_steps<I: Intersector, P: MemoryProbe, const N: usize>(
         match walk.step(scene, rays, probe) {
             PacketEvent::Node { .. } => steps += 1,
             PacketEvent::Leaf { leaf, lanes } => {
-                for i in Lanes(lanes & active) {
+                for i in LanesOf::<N>(lanes & active) {
                     if let (Some(prep), Some(best)) = (&preps[i], walk.best_mut(i)) {
                         leaf.test::<I, P>(scene, prep, &rays[i], false, best, probe);
                     }

@@ -8,7 +8,7 @@
 
 use crate::hit::Hit;
 use crate::image::{Bvh4Node, Bvh8Node, SceneView, WideBvhView};
-use crate::packet::Lanes;
+use crate::packet::LanesOf;
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::traverse::walk::Leaf;
@@ -53,19 +53,22 @@ impl<W: WideSlab, const N: usize, const C: usize> WidePacketTraversal<W, N, C> {
             best: [None; N],
             node: core::marker::PhantomData,
         };
-        for i in Lanes(existing(active, rays.len(), N)) {
-            if rays[i].is_valid() {
+        for i in LanesOf::<N>(existing(active, rays.len(), N)) {
+            let Some(ray) = rays.get(i) else { continue };
+            if ray.is_valid() {
                 t.mask |= 1 << i;
-                t.rays[i] = Some(NodeRay::new(&rays[i]));
-                (t.t_min[i], t.t_max[i]) = (rays[i].t_min, rays[i].t_max);
+                t.rays[i] = Some(NodeRay::new(ray));
+                (t.t_min[i], t.t_max[i]) = (ray.t_min, ray.t_max);
             }
         }
         t.done = t.mask == 0;
         t
     }
 
+    /// Ray `i`'s end: its best hit's distance or its interval's end (0 past the lanes).
     fn t_end(&self, i: usize) -> f32 {
-        self.best[i].map_or(self.t_max[i], |h| h.t)
+        let t_max = self.t_max.get(i).copied().unwrap_or(0.0);
+        self.best.get(i).copied().flatten().map_or(t_max, |h| h.t)
     }
 
     /// Reads one inner node for the packet and moves to its nearest child needed by any
@@ -82,7 +85,7 @@ impl<W: WideSlab, const N: usize, const C: usize> WidePacketTraversal<W, N, C> {
         let mut need = [0u64; 8];
         let mut near = [f32::INFINITY; 8];
         let tested = self.mask;
-        for i in Lanes(self.mask) {
+        for i in LanesOf::<N>(self.mask) {
             let Some(r) = &self.rays[i] else { continue };
             let mut tn = W::Dist::default();
             let mut hit = node.slab(r, self.t_min[i], self.t_end(i), &mut tn);
@@ -102,8 +105,13 @@ impl<W: WideSlab, const N: usize, const C: usize> WidePacketTraversal<W, N, C> {
         }
         for i in 1..order.len() {
             let mut j = i;
-            while j > 0 && near[order[j - 1]] <= near[order[j]] {
-                order.swap(j - 1, j);
+            // Read through `get` and slots masked below 8: no bounds checks, no panic path.
+            while j > 0 {
+                let Some(pair) = order.get_mut(j - 1..=j) else { break };
+                if near[pair[0] & 7] > near[pair[1] & 7] {
+                    break;
+                }
+                pair.swap(0, 1);
                 j -= 1;
             }
         }
@@ -111,10 +119,10 @@ impl<W: WideSlab, const N: usize, const C: usize> WidePacketTraversal<W, N, C> {
         for &k in order.iter() {
             let (c, n) = node.link(k);
             // Cannot be full: `parse` bounds the depth (see `stack_capacity`).
-            let _ = self.stack.push((c, n, near[k], need[k]));
+            let _ = self.stack.push((c, n, near[k & 7], need[k & 7]));
         }
         self.current = node.link(nearest);
-        self.mask = need[nearest];
+        self.mask = need[nearest & 7];
         PacketEvent::Node { lanes: tested }
     }
 
@@ -126,7 +134,7 @@ impl<W: WideSlab, const N: usize, const C: usize> WidePacketTraversal<W, N, C> {
     fn pop(&mut self) {
         while let Some((c, n, t, m)) = self.stack.pop() {
             let mut still = 0u64;
-            for i in Lanes(m) {
+            for i in LanesOf::<N>(m) {
                 if t <= self.t_end(i) {
                     still |= 1 << i;
                 }

@@ -9,10 +9,13 @@ use crate::probe::MemoryProbe;
 use crate::shade::color::srgb8_to_linear;
 
 fn wrap(i: i64, n: u32, mode: u32) -> u32 {
+    // `n >= 1` for a validated texture; `max(1)` lets the compiler see it too (no panic
+    // path for an empty range or a remainder by zero).
+    let n = n.max(1) as i64;
     if mode == TextureRecord::CLAMP {
-        i.clamp(0, n as i64 - 1) as u32
+        i.clamp(0, n - 1) as u32
     } else {
-        i.rem_euclid(n as i64) as u32
+        i.rem_euclid(n) as u32
     }
 }
 

@@ -251,7 +251,7 @@ fn descend<N: WideSlab, const C: usize>(node: &N, t: &N::Dist, mask: u32, stack:
         // Cannot be full: `parse` bounds the depth (see `stack_capacity`).
         let _ = stack.push((c, n, t[k]));
     }
-    let s = &mut stack[base..];
+    let s = stack.get_mut(base..).unwrap_or_default();
     for i in 1..s.len() {
         let mut j = i;
         while j > 0 && s[j - 1].2 <= s[j].2 {
