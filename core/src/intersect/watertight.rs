@@ -78,7 +78,8 @@ impl Intersector for Watertight {
             // `& 3` into four entries: no bounds check per coordinate (a measurable
             // share of the test's instructions).
             let p = [p.x, p.y, p.z, 0.0];
-            [0, 1, 2].map(|i| Vec4::splat(p[r.k[i] & 3]) - r.org[i])
+            let ([k0, k1, k2], [o0, o1, o2]) = (r.k, r.org);
+            [Vec4::splat(p[k0 & 3]) - o0, Vec4::splat(p[k1 & 3]) - o1, Vec4::splat(p[k2 & 3]) - o2]
         };
         lanes(rel(v[0]), rel(v[1]), rel(v[2]), [r.sx, r.sy, r.sz])
     }

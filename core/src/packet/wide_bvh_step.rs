@@ -98,7 +98,12 @@ impl<W: WideSlab, const N: usize, const C: usize> WidePacketTraversal<W, N, C> {
         }
         // Slots in order of their nearest entry, farthest pushed first, ties in slot
         // order (as the single-ray walk sorts them).
-        let mut order: heapless::Vec<usize, 8> = (0..W::WIDTH.min(8)).filter(|&k| need[k] != 0).collect();
+        // Pushed one by one: `collect` into a fixed-capacity Vec keeps a panic path for an
+        // iterator longer than the capacity, which the compiler cannot always rule out.
+        let mut order: heapless::Vec<usize, 8> = heapless::Vec::new();
+        for k in (0..W::WIDTH.min(8)).filter(|&k| need[k & 7] != 0) {
+            let _ = order.push(k);
+        }
         if order.is_empty() {
             self.pop();
             return PacketEvent::Node { lanes: tested };
