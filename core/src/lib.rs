@@ -20,6 +20,43 @@
 //! * at the root, the scene image ([`image`]) and the plain records: [`ray`], [`hit`],
 //!   [`probe`] (the one access path of scene reads) and [`counters`].
 //!
+//! ## Firmware in five steps
+//!
+//! Build an image on the host (`raypipe build scene.obj --accel bvh4 -o scene.rpsi`),
+//! embed it, validate it once, and trace. Nothing below needs `std`, `alloc` or a heap,
+//! and nothing can panic (the no_std proof in `nostd-proof/` checks that at link time and
+//! runs this on an emulated Cortex-M4F and RV32).
+//!
+//! ```
+//! use raypipe_core::camera::{Camera, EyeRays};
+//! use raypipe_core::traverse::walk::trace_walk;
+//! use raypipe_core::{NoProbe, Ray, SceneView, Vec3, Watertight};
+//!
+//! // 1. Embed the image, aligned as `parse` needs (flash, BRAM, or a mapped file).
+//! static SCENE: &[u8] = raypipe_core::include_scene!("../../fixtures/tetra-bvh4.rpsi");
+//!
+//! // 2. Validate once: a typed error for a bad image, never a panic.
+//! let view = SceneView::parse(SCENE).expect("a valid image");
+//!
+//! // 3. Rays: from the image's camera, or any origin and direction of your own.
+//! let eye = EyeRays::new(&Camera::from(view.camera().expect("the image has a camera")))
+//!     .expect("a usable camera");
+//! let ray = eye.ray(eye.width / 2, eye.height - 1);
+//!
+//! // 4. Trace with the generic walk (it takes the image's structure, whichever it is;
+//! //    `NoProbe` because nobody watches the memory reads here).
+//! let hit = trace_walk::<Watertight, _>(&view, &ray, &mut NoProbe);
+//!
+//! // 5. Read the hit: distance, triangle, barycentrics.
+//! let hit = hit.expect("the bottom row of the view sees the floor");
+//! let point = ray.origin + ray.dir * hit.t;
+//! assert!(hit.t > 0.0 && hit.prim < view.triangle_count() && point.is_finite());
+//!
+//! // An invalid ray (here: a zero direction) is no hit, not an error.
+//! let nothing = Ray::new(Vec3::ZERO, Vec3::ZERO);
+//! assert!(trace_walk::<Watertight, _>(&view, &nothing, &mut NoProbe).is_none());
+//! ```
+//!
 //! ```
 //! use raypipe_core::{SceneView, SceneError};
 //! // A buffer that is not a scene image is rejected with a typed error, never a panic.
