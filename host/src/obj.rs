@@ -34,8 +34,28 @@ pub fn load_obj_file(path: &Path) -> Result<(Mesh, LoadNotes)> {
     if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("gz")) {
         return load_obj_gz(path, &name);
     }
-    let result = tobj::load_obj(path, &load_options());
+    let text = std::fs::read(path).map_err(|e| anyhow!("{name}: cannot read: {e}"))?;
+    let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
+    let mut reader = std::io::BufReader::new(text.as_slice());
+    let result = tobj::load_obj_buf(&mut reader, &load_options(), |mtl| match std::fs::read(dir.join(mtl)) {
+        Ok(bytes) => load_mtl(&bytes),
+        Err(_) => Err(tobj::LoadError::OpenFileFailed),
+    });
     convert(&name, Some(path.parent().unwrap_or(Path::new("."))), result)
+}
+
+/// Parses an MTL file through tobj, after rejecting what tobj would panic on: a colour
+/// (`Ka`, `Kd`, `Ks`, `Ke`) with fewer than three numbers (found by the `obj_mtl` fuzz
+/// target).
+fn load_mtl(bytes: &[u8]) -> tobj::MTLLoadResult {
+    let text = String::from_utf8_lossy(bytes);
+    for line in text.lines() {
+        let mut words = line.split_whitespace();
+        if matches!(words.next(), Some("Ka" | "Kd" | "Ks" | "Ke")) && words.count() < 3 {
+            return Err(tobj::LoadError::MaterialParseError);
+        }
+    }
+    tobj::load_mtl_buf(&mut std::io::BufReader::new(bytes))
 }
 
 /// A gzip-compressed OBJ (`scene.obj.gz`); its MTL files are read from beside it,
@@ -51,10 +71,14 @@ fn load_obj_gz(path: &Path, name: &str) -> Result<(Mesh, LoadNotes)> {
         let plain = dir.join(mtl);
         let mut gz = plain.clone().into_os_string();
         gz.push(".gz");
-        if let Ok(f) = std::fs::File::open(&plain) {
-            tobj::load_mtl_buf(&mut std::io::BufReader::new(f))
+        if let Ok(bytes) = std::fs::read(&plain) {
+            load_mtl(&bytes)
         } else if let Ok(f) = std::fs::File::open(&gz) {
-            tobj::load_mtl_buf(&mut std::io::BufReader::new(flate2::read::GzDecoder::new(f)))
+            let mut bytes = Vec::new();
+            match flate2::read::GzDecoder::new(f).read_to_end(&mut bytes) {
+                Ok(_) => load_mtl(&bytes),
+                Err(_) => Err(tobj::LoadError::ReadError),
+            }
         } else {
             Err(tobj::LoadError::OpenFileFailed)
         }
@@ -66,7 +90,7 @@ fn load_obj_gz(path: &Path, name: &str) -> Result<(Mesh, LoadNotes)> {
 pub fn load_obj_str(name: &str, obj: &str, mtl: &dyn Fn(&Path) -> Option<String>) -> Result<(Mesh, LoadNotes)> {
     let mut reader = std::io::BufReader::new(obj.as_bytes());
     let result = tobj::load_obj_buf(&mut reader, &load_options(), |p| match mtl(p) {
-        Some(text) => tobj::load_mtl_buf(&mut std::io::BufReader::new(text.as_bytes())),
+        Some(text) => load_mtl(text.as_bytes()),
         None => Err(tobj::LoadError::OpenFileFailed),
     });
     convert(name, None, result)
@@ -230,5 +254,17 @@ mod tests {
         let d = |name: &str| mesh.materials[mesh.material_names.iter().position(|n| n == name).unwrap()].dissolve;
         assert_eq!(d("a"), 0.75);
         assert_eq!(d("b"), 0.5, "d wins over Tr");
+    }
+
+    /// Found by the `obj_mtl` fuzz target: tobj panics on a colour of fewer than three
+    /// numbers; raypipe reports a malformed MTL instead.
+    #[test]
+    fn a_short_colour_line_is_a_malformed_mtl_not_a_panic() {
+        let obj = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n";
+        for line in ["Kd 1 1", "Ka", "Ks 0.5", "Ke 1 2"] {
+            let mtl = format!("newmtl a\n{line}\n");
+            let e = load_obj_str("t.obj", obj, &|_| Some(mtl.clone())).unwrap_err().to_string();
+            assert!(e.contains("malformed MTL") && !e.contains('\n'), "{line}: {e}");
+        }
     }
 }
