@@ -65,9 +65,13 @@
 //! ```
 #![no_std]
 #![deny(missing_docs)]
-// Safe code throughout, except the AVX forms of the 8-wide node test
-// (`bvh8::slab8_avx`) and of the packets' leaf entry test (`bvh4_packet::leaf_entries_avx`),
-// which run only once the host has reported AVX ([`cpu::assume_avx`]).
+// Safe code throughout, except the x86-64 AVX forms, which run only once the host has
+// reported AVX ([`cpu::assume_avx`]): 7 `unsafe fn` with `#[target_feature]` and the
+// blocks that call them or load through raw pointers (20 in all), in `cpu.rs`,
+// `traverse/bvh8.rs` (the 8-wide node test), `packet/bvh4.rs` (the packets' leaf entry
+// test), `packet/mod.rs` (the AVX transpose of a packet's rays) and
+// `intersect/watertight{,8}.rs` (eight rays against shared triangles); each with its
+// safety argument beside it. On every other target none of them is compiled.
 #![deny(unsafe_code)]
 
 #[cfg(target_endian = "big")]

@@ -651,6 +651,9 @@ fn cmd_render(a: RenderArgs) -> Result<()> {
 
 fn cmd_simulate(a: SimulateArgs) -> Result<()> {
     check_png_path(&a.output)?;
+    // Both outputs' directories before anything is written: never one without the other.
+    output::check_dir(&a.output)?;
+    output::check_dir(&a.report)?;
     // The configuration is checked before the scene is even loaded.
     let cfg = simulate::load_config(a.preset.as_deref(), a.config.as_deref(), &a.set)?;
     let scene = scene::load(a.scene.as_deref(), &a.structure.options())?;

@@ -12,11 +12,23 @@
 #[inline(always)]
 pub fn with_avx2<R>(f: impl FnOnce() -> R) -> R {
     #[cfg(target_arch = "x86_64")]
-    if std::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU has the features `avx2` is compiled for (checked above).
+    if has_avx2_set() {
+        // SAFETY: the CPU has every feature `avx2` is compiled for (checked above).
         return unsafe { avx2(f) };
     }
     f()
+}
+
+/// Every feature the AVX2 build enables, each checked (issue 18, D14: a VM may expose
+/// AVX2 without BMI; running BMI instructions there would be undefined behaviour).
+#[cfg(target_arch = "x86_64")]
+fn has_avx2_set() -> bool {
+    std::is_x86_feature_detected!("avx")
+        && std::is_x86_feature_detected!("avx2")
+        && std::is_x86_feature_detected!("bmi1")
+        && std::is_x86_feature_detected!("bmi2")
+        && std::is_x86_feature_detected!("lzcnt")
+        && std::is_x86_feature_detected!("popcnt")
 }
 
 /// Tells core which optional instruction sets the CPU has (a `no_std` library cannot

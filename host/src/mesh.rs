@@ -3,6 +3,10 @@
 use anyhow::{bail, Result};
 use raypipe_core::image::{LightRecord, MaterialRecord, ShadingVertex};
 
+/// The largest coordinate magnitude a mesh may have: the builders' surface areas (squares
+/// of extents) and grown boxes stay finite in f32 below it (issue 18, D12: scenes of
+/// extent 1e20 failed with "internal error: built an invalid image").
+pub const MAX_COORDINATE: f32 = 1e18;
 /// A triangle mesh with shading data, in the input's face order after triangulation
 /// (triangle ids in every output refer to this order).
 #[derive(Clone, Debug, Default)]
@@ -33,6 +37,12 @@ impl Mesh {
         }
         if let Some(i) = self.positions.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
             bail!("{name}: vertex {} has a NaN or infinite coordinate", i + 1);
+        }
+        if let Some(i) = self.positions.iter().position(|p| p.iter().any(|c| c.abs() > MAX_COORDINATE)) {
+            bail!(
+                "{name}: vertex {} has a coordinate beyond ±{MAX_COORDINATE:e}, the range raypipe builds (scale the scene)",
+                i + 1
+            );
         }
         let nv = self.positions.len() as u32;
         if let Some(i) = self.triangles.iter().position(|t| t.iter().any(|&v| v >= nv)) {

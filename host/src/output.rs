@@ -6,16 +6,28 @@ use std::path::Path;
 
 use anyhow::{anyhow, Result};
 
-/// Writes `path` atomically by calling `fill` on a temporary file next to it.
-pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut dyn Write) -> Result<()>) -> Result<()> {
-    let name = path.display();
+/// Checks that `path`'s directory exists, so that a command writing several outputs can
+/// refuse before it writes any (issue 18, D13: `simulate --report <bad dir>` left the PNG
+/// behind).
+pub fn check_dir(path: &Path) -> Result<()> {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
     if !dir.is_dir() {
-        return Err(anyhow!("{name}: directory {} does not exist", dir.display()));
+        return Err(anyhow!("{}: directory {} does not exist", path.display(), dir.display()));
     }
+    Ok(())
+}
+
+/// Writes `path` atomically by calling `fill` on a temporary file next to it.
+pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut dyn Write) -> Result<()>) -> Result<()> {
+    let name = path.display();
+    check_dir(path)?;
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
     let mut tmp = tempfile::Builder::new()
         .prefix(".raypipe-")
         .tempfile_in(dir)

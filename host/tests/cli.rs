@@ -158,6 +158,12 @@ fn malformed_and_degenerate_geometry() {
     assert_one_line_error(&raypipe(d, &["build", "face.obj", "-o", "o.rpsi"]), "face.obj");
     write(d, "nan.obj", "v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
     assert_one_line_error(&raypipe(d, &["build", "nan.obj", "-o", "o.rpsi"]), "NaN or infinite");
+    // Issue 18, D12: a scene of extent 1e20 was "internal error: built an invalid image".
+    write(d, "huge.obj", "v 0 0 0\nv 1e20 0 0\nv 0 1e20 0\nf 1 2 3\n");
+    for accel in ["grid", "kd", "bvh", "bvh4", "bvh8"] {
+        let o = raypipe(d, &["build", "huge.obj", "--accel", accel, "-o", "o.rpsi"]);
+        assert_one_line_error(&o, "beyond ±1e18");
+    }
     write(d, "inf.obj", "v inf 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
     assert_one_line_error(&raypipe(d, &["render", "inf.obj", "-o", "o.png"]), "NaN or infinite");
     write(d, "empty.obj", "# nothing\nv 0 0 0\n");
@@ -223,6 +229,10 @@ fn impossible_cameras_and_sizes() {
 fn failed_writes_leave_no_half_written_file() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
+    // Issue 18, D13: a report into a missing directory left the image behind.
+    let o = raypipe(d, &["simulate", "--size", "8x8", "-o", "o.png", "--report", "missing/r.json"]);
+    assert_one_line_error(&o, "does not exist");
+    assert!(!d.join("o.png").exists(), "no image without its report");
     let o = raypipe(d, &["render", "-o", "missing/dir/o.png", "--size", "8x8"]);
     assert_one_line_error(&o, "does not exist");
     // An existing output survives a failed run untouched.
