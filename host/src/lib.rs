@@ -20,6 +20,7 @@ pub mod kd_builder;
 pub mod mesh;
 pub mod npy;
 pub mod obj;
+pub mod obj_indices;
 pub mod output;
 pub mod packets;
 pub mod polygon;

@@ -8,6 +8,7 @@ use anyhow::{anyhow, bail, Result};
 use raypipe_core::image::{MaterialRecord, ShadingVertex, NULL_INDEX};
 
 use crate::mesh::Mesh;
+use crate::obj_indices;
 use crate::polygon;
 use crate::texture_loader;
 
@@ -35,6 +36,7 @@ pub fn load_obj_file(path: &Path) -> Result<(Mesh, LoadNotes)> {
         return load_obj_gz(path, &name);
     }
     let text = std::fs::read(path).map_err(|e| anyhow!("{name}: cannot read: {e}"))?;
+    obj_indices::check_face_indices(&name, &text)?;
     let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
     let mut reader = std::io::BufReader::new(text.as_slice());
     let result = tobj::load_obj_buf(&mut reader, &load_options(), |mtl| match std::fs::read(dir.join(mtl)) {
@@ -65,6 +67,7 @@ fn load_obj_gz(path: &Path, name: &str) -> Result<(Mesh, LoadNotes)> {
     let file = std::fs::File::open(path).map_err(|e| anyhow!("{name}: cannot read: {e}"))?;
     let mut text = Vec::new();
     flate2::read::GzDecoder::new(file).read_to_end(&mut text).map_err(|e| anyhow!("{name}: cannot decompress: {e}"))?;
+    obj_indices::check_face_indices(name, &text)?;
     let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
     let mut reader = std::io::BufReader::new(text.as_slice());
     let result = tobj::load_obj_buf(&mut reader, &load_options(), |mtl| {
@@ -88,6 +91,7 @@ fn load_obj_gz(path: &Path, name: &str) -> Result<(Mesh, LoadNotes)> {
 
 /// Loads an OBJ from memory; `mtl` resolves material library names to their text.
 pub fn load_obj_str(name: &str, obj: &str, mtl: &dyn Fn(&Path) -> Option<String>) -> Result<(Mesh, LoadNotes)> {
+    obj_indices::check_face_indices(name, obj.as_bytes())?;
     let mut reader = std::io::BufReader::new(obj.as_bytes());
     let result = tobj::load_obj_buf(&mut reader, &load_options(), |p| match mtl(p) {
         Some(text) => load_mtl(text.as_bytes()),
