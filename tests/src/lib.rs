@@ -5,10 +5,13 @@
 
 use std::path::{Path, PathBuf};
 
+use raypipe::aligned::AlignedBytes;
 use raypipe::grid_builder::GridResolution;
 use raypipe::mesh::Mesh;
 use raypipe::render::Frame;
 use raypipe::scene::{self, Accel, BuildOptions, Scene, TriangleLayout};
+use raypipe_core::image::{SectionEntry, SectionKind};
+use raypipe_core::{SceneError, SceneView};
 
 /// Builds a scene image with a triangle layout besides the indexed one (Wald's
 /// precomputed triangles, or leaf blocks).
@@ -28,6 +31,42 @@ pub fn build_soup(positions: Vec<[f32; 3]>, triangles: Vec<[u32; 3]>, accel: Acc
     let mesh = Mesh { positions, triangles, ..Default::default() };
     let opts = BuildOptions { accel, grid: GridResolution::MinDim(min_dim), ..Default::default() };
     scene::build("soup".into(), mesh, Vec::new(), Default::default(), &opts).expect("soup builds")
+}
+
+/// The section table of an image (its entries in file order).
+pub fn section_table(bytes: &[u8]) -> Vec<SectionEntry> {
+    let n = u32::from_le_bytes(bytes[20..24].try_into().unwrap()) as usize;
+    bytes[64..64 + 16 * n]
+        .chunks_exact(16)
+        .map(|e| {
+            let w = |k: usize| u32::from_le_bytes(e[4 * k..4 * k + 4].try_into().unwrap());
+            SectionEntry { kind: w(0), offset: w(1), size: w(2), count: w(3) }
+        })
+        .collect()
+}
+
+/// Where the table entry of section `kind` is in the image, and the entry.
+pub fn section_entry(bytes: &[u8], kind: SectionKind) -> (usize, SectionEntry) {
+    let (i, e) = section_table(bytes).into_iter().enumerate().find(|(_, e)| e.kind == kind as u32).unwrap();
+    (64 + 16 * i, e)
+}
+
+/// Writes a little-endian `u32` at byte `at`.
+pub fn put_u32(bytes: &mut [u8], at: usize, v: u32) {
+    bytes[at..at + 4].copy_from_slice(&v.to_le_bytes());
+}
+
+/// The built-in Cornell box's image with structure `accel`.
+pub fn cornell_with(accel: Accel) -> AlignedBytes {
+    scene::load_default(&BuildOptions { accel, ..Default::default() }).unwrap().image
+}
+
+/// `base` edited by `edit`, resealed, and the error `parse` must give it.
+pub fn corrupt_image(base: &[u8], edit: impl FnOnce(&mut [u8])) -> SceneError {
+    let mut b = AlignedBytes::from_slice(base);
+    edit(&mut b);
+    reseal(&mut b);
+    SceneView::parse(&b).expect_err("corruption must be rejected")
 }
 
 /// Recomputes the checksum after a test has edited an image on purpose, so the

@@ -5,26 +5,12 @@ use proptest::prelude::*;
 use raypipe::aligned::AlignedBytes;
 use raypipe::scene::{self, Accel, BuildOptions, TriangleLayout};
 use raypipe::tracer::trace;
-use raypipe_core::image::{SectionEntry, SectionKind, NULL_INDEX};
+use raypipe_core::image::{SectionKind, NULL_INDEX};
 use raypipe_core::{NoProbe, Ray, RayCounters, SceneError, SceneView, Vec3, Watertight};
-use raypipe_tests::{build_soup_layout, reseal};
+use raypipe_tests::{build_soup_layout, cornell_with, corrupt_image, put_u32, reseal, section_entry};
 
 fn cornell() -> AlignedBytes {
     scene::load_default(&BuildOptions::default()).unwrap().image
-}
-
-fn table(bytes: &[u8]) -> Vec<SectionEntry> {
-    let n = u32::from_le_bytes(bytes[20..24].try_into().unwrap()) as usize;
-    bytemuck::cast_slice::<u8, SectionEntry>(&bytes[64..64 + 16 * n]).to_vec()
-}
-
-fn entry_pos(bytes: &[u8], kind: SectionKind) -> (usize, SectionEntry) {
-    let (i, e) = table(bytes).into_iter().enumerate().find(|(_, e)| e.kind == kind as u32).unwrap();
-    (64 + 16 * i, e)
-}
-
-fn put_u32(bytes: &mut [u8], at: usize, v: u32) {
-    bytes[at..at + 4].copy_from_slice(&v.to_le_bytes());
 }
 
 /// Applies `edit`, reseals the checksum, and returns the parse error.
@@ -97,7 +83,7 @@ fn section_table_corruptions() {
         }),
         SceneError::DuplicateSection(_)
     ));
-    let (at, e) = entry_pos(&cornell(), SectionKind::Triangles);
+    let (at, e) = section_entry(&cornell(), SectionKind::Triangles);
     assert_eq!(
         corrupt(|b| put_u32(b, at + 4, e.offset + 4)),
         SceneError::SectionMisaligned { section: SectionKind::Triangles, offset: e.offset + 4 }
@@ -106,7 +92,7 @@ fn section_table_corruptions() {
     assert!(matches!(corrupt(|b| put_u32(b, at + 4, 0)), SceneError::SectionOutOfBounds { .. }));
     assert!(matches!(corrupt(|b| put_u32(b, at + 8, e.size - 4)), SceneError::SectionSize { .. }));
     // Point TRIANGLES at the POSITIONS bytes: overlap.
-    let (_, pos) = entry_pos(&cornell(), SectionKind::Positions);
+    let (_, pos) = section_entry(&cornell(), SectionKind::Positions);
     assert!(matches!(
         corrupt(|b| {
             put_u32(b, at + 4, pos.offset);
@@ -114,24 +100,24 @@ fn section_table_corruptions() {
         SceneError::SectionsOverlap(..) | SceneError::IndexOutOfRange { .. }
     ));
     // Remove the grid's cells from the table by renaming them into an unused kind.
-    let (cells_at, _) = entry_pos(&cornell(), SectionKind::GridCells);
+    let (cells_at, _) = section_entry(&cornell(), SectionKind::GridCells);
     assert!(matches!(corrupt(|b| put_u32(b, cells_at, SectionKind::Camera as u32)), SceneError::DuplicateSection(_)));
 }
 
 #[test]
 fn record_corruptions() {
     let base = cornell();
-    let (_, tris) = entry_pos(&base, SectionKind::Triangles);
+    let (_, tris) = section_entry(&base, SectionKind::Triangles);
     assert_eq!(
         corrupt(|b| put_u32(b, tris.offset as usize + 4, 1000)),
         SceneError::IndexOutOfRange { section: SectionKind::Triangles, record: 0, value: 1000, limit: 64 }
     );
-    let (_, pos) = entry_pos(&base, SectionKind::Positions);
+    let (_, pos) = section_entry(&base, SectionKind::Positions);
     assert_eq!(
         corrupt(|b| b[pos.offset as usize + 12..pos.offset as usize + 16].copy_from_slice(&f32::INFINITY.to_le_bytes())),
         SceneError::NonFinite { section: SectionKind::Positions, record: 1 }
     );
-    let (_, cells) = entry_pos(&base, SectionKind::GridCells);
+    let (_, cells) = section_entry(&base, SectionKind::GridCells);
     let first_full = (0..cells.count as usize)
         .find(|i| {
             let o = cells.offset as usize + 4 * i;
@@ -142,21 +128,21 @@ fn record_corruptions() {
         corrupt(|b| put_u32(b, cells.offset as usize + 4 * first_full, 1 << 30)),
         SceneError::IndexOutOfRange { section: SectionKind::GridCells, .. }
     ));
-    let (_, lists) = entry_pos(&base, SectionKind::PrimLists);
+    let (_, lists) = section_entry(&base, SectionKind::PrimLists);
     let last = lists.offset as usize + lists.size as usize - 4;
     assert_eq!(corrupt(|b| put_u32(b, last, 0)), SceneError::UnterminatedList);
     assert!(matches!(
         corrupt(|b| put_u32(b, lists.offset as usize, 77)),
         SceneError::IndexOutOfRange { section: SectionKind::PrimLists, value: 77, .. }
     ));
-    let (_, grid) = entry_pos(&base, SectionKind::Grid);
+    let (_, grid) = section_entry(&base, SectionKind::Grid);
     assert_eq!(corrupt(|b| put_u32(b, grid.offset as usize + 48, 0)), SceneError::BadGrid);
     assert_eq!(corrupt(|b| put_u32(b, grid.offset as usize + 60, 5)), SceneError::BadGrid);
     assert_eq!(
         corrupt(|b| b[grid.offset as usize + 32..grid.offset as usize + 36].copy_from_slice(&(-1.0f32).to_le_bytes())),
         SceneError::BadGrid
     );
-    let (_, mats) = entry_pos(&base, SectionKind::TriangleMaterials);
+    let (_, mats) = section_entry(&base, SectionKind::TriangleMaterials);
     assert!(matches!(
         corrupt(|b| put_u32(b, mats.offset as usize, 50)),
         SceneError::IndexOutOfRange { section: SectionKind::TriangleMaterials, .. }
@@ -219,23 +205,12 @@ proptest! {
     }
 }
 
-fn cornell_with(accel: Accel) -> AlignedBytes {
-    scene::load_default(&BuildOptions { accel, ..Default::default() }).unwrap().image
-}
-
-fn corrupt_image(base: &AlignedBytes, edit: impl FnOnce(&mut [u8])) -> SceneError {
-    let mut b = base.clone();
-    edit(&mut b);
-    reseal(&mut b);
-    SceneView::parse(&b).expect_err("corruption must be rejected")
-}
-
 /// A wide BVH's root (nodes of `width` slots: six rows of boxes, then children, then
 /// counts) with slot 0's child index back to the root, a leaf range past the list, and a
 /// NaN plane: each rejected. Returns the intact image.
 fn wide_root_corruptions(accel: Accel, section: SectionKind, width: usize) -> AlignedBytes {
     let img = cornell_with(accel);
-    let (_, nodes) = entry_pos(&img, section);
+    let (_, nodes) = section_entry(&img, section);
     let root = nodes.offset as usize;
     let (child, count) = (root + 24 * width, root + 28 * width);
     let tree = |e: SceneError| matches!(e, SceneError::BadTree { section: s, .. } if s == section);
@@ -256,7 +231,7 @@ fn tree_corruptions() {
     // BVH: node 0 is inner; point its children back at itself, past the end, or make a
     // leaf reach past PRIM_LISTS; put a NaN in a box.
     let bvh = cornell_with(Accel::Bvh);
-    let (_, nodes) = entry_pos(&bvh, SectionKind::BvhNodes);
+    let (_, nodes) = section_entry(&bvh, SectionKind::BvhNodes);
     let root = nodes.offset as usize;
     let tree = |e: SceneError| matches!(e, SceneError::BadTree { section: SectionKind::BvhNodes, .. });
     assert!(tree(corrupt_image(&bvh, |b| put_u32(b, root + 12, 0))));
@@ -268,7 +243,7 @@ fn tree_corruptions() {
     })));
 
     let kd = cornell_with(Accel::Kd);
-    let (_, nodes) = entry_pos(&kd, SectionKind::KdNodes);
+    let (_, nodes) = section_entry(&kd, SectionKind::KdNodes);
     let root = nodes.offset as usize;
     let tree = |e: SceneError| matches!(e, SceneError::BadTree { section: SectionKind::KdNodes, .. });
     let flags = u32::from_le_bytes(kd[root..root + 4].try_into().unwrap());
@@ -282,7 +257,7 @@ fn tree_corruptions() {
 
     let bvh4 = wide_root_corruptions(Accel::Bvh4, SectionKind::Bvh4Nodes, 4);
     let bvh8 = wide_root_corruptions(Accel::Bvh8, SectionKind::Bvh8Nodes, 8);
-    let (_, nodes) = entry_pos(&bvh8, SectionKind::Bvh8Nodes);
+    let (_, nodes) = section_entry(&bvh8, SectionKind::Bvh8Nodes);
     let root = nodes.offset as usize;
     let tree = |e: SceneError| matches!(e, SceneError::BadTree { section: SectionKind::Bvh8Nodes, .. });
     // An empty slot (child null) whose box is not inverted.
@@ -305,7 +280,7 @@ fn stale_triangle_blocks_are_rejected() {
         let opts = BuildOptions { accel, triangles: TriangleLayout::Blocks, ..Default::default() };
         let img = scene::load_default(&opts).unwrap().image;
         assert!(SceneView::parse(&img).unwrap().has_tri_blocks());
-        let (pos, blocks) = entry_pos(&img, SectionKind::TriBlocks);
+        let (pos, blocks) = section_entry(&img, SectionKind::TriBlocks);
         let first = blocks.offset as usize;
         // Lane 0's first vertex x moved.
         let stale = corrupt_image(&img, |b| {

@@ -12,7 +12,7 @@ use raypipe::tracer::trace;
 use raypipe_core::image::{SectionEntry, SectionKind, NULL_INDEX};
 use raypipe_core::traverse::occlusion::occluded;
 use raypipe_core::{NoProbe, Ray, RayCounters, SceneError, SceneView, Vec3, Watertight};
-use raypipe_tests::{build_soup, reseal};
+use raypipe_tests::{build_soup, cornell_with, corrupt_image, put_u32, section_entry};
 
 const ACCELS: [Accel; 6] = [Accel::Grid, Accel::Kd, Accel::Bvh, Accel::Bvh4, Accel::Bvh8, Accel::None];
 
@@ -116,36 +116,16 @@ fn a_fan_of_slivers_through_one_point_stays_within_the_bound() {
     }
 }
 
-fn table(bytes: &[u8]) -> Vec<SectionEntry> {
-    let n = u32::from_le_bytes(bytes[20..24].try_into().unwrap()) as usize;
-    bytemuck::cast_slice::<u8, SectionEntry>(&bytes[64..64 + 16 * n]).to_vec()
-}
-
 fn section(bytes: &[u8], kind: SectionKind) -> SectionEntry {
-    table(bytes).into_iter().find(|e| e.kind == kind as u32).unwrap()
+    section_entry(bytes, kind).1
 }
 
 fn u32_at(b: &[u8], at: usize) -> u32 {
     u32::from_le_bytes(b[at..at + 4].try_into().unwrap())
 }
 
-fn put_u32(b: &mut [u8], at: usize, v: u32) {
-    b[at..at + 4].copy_from_slice(&v.to_le_bytes());
-}
-
 fn put_f32(b: &mut [u8], at: usize, v: f32) {
     b[at..at + 4].copy_from_slice(&v.to_le_bytes());
-}
-
-fn rejected(img: &[u8], edit: impl FnOnce(&mut [u8])) -> SceneError {
-    let mut b = raypipe::aligned::AlignedBytes::from_slice(img);
-    edit(&mut b);
-    reseal(&mut b);
-    SceneView::parse(&b).expect_err("must be rejected")
-}
-
-fn cornell(accel: Accel) -> raypipe::aligned::AlignedBytes {
-    scene::load_default(&BuildOptions { accel, ..Default::default() }).unwrap().image
 }
 
 /// Issue 18, D1: an "empty" wide-BVH slot (child null) whose box is inverted by one ulp
@@ -154,7 +134,7 @@ fn cornell(accel: Accel) -> raypipe::aligned::AlignedBytes {
 #[test]
 fn an_almost_empty_wide_slot_with_a_huge_count_is_rejected() {
     for (accel, kind, w) in [(Accel::Bvh4, SectionKind::Bvh4Nodes, 4usize), (Accel::Bvh8, SectionKind::Bvh8Nodes, 8)] {
-        let img = cornell(accel);
+        let img = cornell_with(accel);
         let nodes = section(&img, kind);
         let size = 32 * w;
         // The first node with an empty slot.
@@ -170,10 +150,10 @@ fn an_almost_empty_wide_slot_with_a_huge_count_is_rejected() {
             }
             put_u32(b, at + 28 * w + 4 * k, u32::MAX);
         };
-        let e = rejected(&img, d1);
+        let e = corrupt_image(&img, d1);
         assert!(matches!(e, SceneError::BadTree { section, .. } if section == kind), "{accel:?}: {e}");
         // The exact empty box with a count is no better.
-        let e = rejected(&img, |b| put_u32(b, at + 28 * w + 4 * k, 7));
+        let e = corrupt_image(&img, |b| put_u32(b, at + 28 * w + 4 * k, 7));
         assert!(matches!(e, SceneError::BadTree { .. }), "{accel:?}: {e}");
     }
 }
@@ -182,7 +162,7 @@ fn an_almost_empty_wide_slot_with_a_huge_count_is_rejected() {
 /// slot of a node covering the whole list) would let a ray test the list many times over.
 #[test]
 fn leaves_holding_more_than_the_list_are_rejected() {
-    let img = cornell(Accel::Bvh4);
+    let img = cornell_with(Accel::Bvh4);
     let nodes = section(&img, SectionKind::Bvh4Nodes);
     let lists = section(&img, SectionKind::PrimLists);
     let size = 128;
@@ -192,7 +172,7 @@ fn leaves_holding_more_than_the_list_are_rejected() {
         .find(|&n| (0..4).filter(|&k| u32_at(&img, nodes.offset as usize + n * size + count + 4 * k) > 0).count() >= 2)
         .expect("a node with two leaves");
     let at = nodes.offset as usize + node * size;
-    let e = rejected(&img, |b| {
+    let e = corrupt_image(&img, |b| {
         for k in 0..4 {
             if u32_at(b, at + count + 4 * k) > 0 {
                 put_u32(b, at + child + 4 * k, 0);
@@ -207,7 +187,7 @@ fn leaves_holding_more_than_the_list_are_rejected() {
 /// starting in the middle of another cell's list, are rejected.
 #[test]
 fn grid_cells_sharing_a_list_are_rejected() {
-    let img = cornell(Accel::Grid);
+    let img = cornell_with(Accel::Grid);
     let cells = section(&img, SectionKind::GridCells);
     let full: Vec<usize> = (0..cells.count as usize)
         .filter(|&i| u32_at(&img, cells.offset as usize + 4 * i) != NULL_INDEX)
@@ -215,9 +195,9 @@ fn grid_cells_sharing_a_list_are_rejected() {
         .collect();
     let [a, b] = full[..] else { panic!("two full cells") };
     let first = u32_at(&img, cells.offset as usize + 4 * a);
-    let e = rejected(&img, |bytes| put_u32(bytes, cells.offset as usize + 4 * b, first));
+    let e = corrupt_image(&img, |bytes| put_u32(bytes, cells.offset as usize + 4 * b, first));
     assert_eq!(e, SceneError::SharedList { cell: b as u32 });
-    let e = rejected(&img, |bytes| put_u32(bytes, cells.offset as usize + 4 * b, first + 1));
+    let e = corrupt_image(&img, |bytes| put_u32(bytes, cells.offset as usize + 4 * b, first + 1));
     assert!(matches!(e, SceneError::SharedList { .. }), "{e}");
     assert!(e.to_string().contains("shares a primitive list"));
 }
@@ -261,7 +241,7 @@ fn a_negative_t_min_is_no_ray_for_any_structure() {
     assert!(!behind.is_valid());
     let mut hits = Vec::new();
     for accel in ACCELS {
-        let img = cornell(accel);
+        let img = cornell_with(accel);
         let view = SceneView::parse(&img).unwrap();
         let mut c = RayCounters::default();
         assert_eq!(trace::<Watertight, _>(&view, &behind, &mut NoProbe, &mut c), None, "{accel:?}");
