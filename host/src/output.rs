@@ -6,14 +6,19 @@ use std::path::Path;
 
 use anyhow::{anyhow, Result};
 
+/// The directory `path` is written in (`.` for a bare file name).
+fn dir_of(path: &Path) -> &Path {
+    match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    }
+}
+
 /// Checks that `path`'s directory exists, so that a command writing several outputs can
 /// refuse before it writes any (issue 18, D13: `simulate --report <bad dir>` left the PNG
 /// behind).
 pub fn check_dir(path: &Path) -> Result<()> {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
+    let dir = dir_of(path);
     if !dir.is_dir() {
         return Err(anyhow!("{}: directory {} does not exist", path.display(), dir.display()));
     }
@@ -24,10 +29,7 @@ pub fn check_dir(path: &Path) -> Result<()> {
 pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut dyn Write) -> Result<()>) -> Result<()> {
     let name = path.display();
     check_dir(path)?;
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
+    let dir = dir_of(path);
     let mut tmp = tempfile::Builder::new()
         .prefix(".raypipe-")
         .tempfile_in(dir)
