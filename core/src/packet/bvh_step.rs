@@ -16,7 +16,7 @@ use crate::ray::Ray;
 use crate::traverse::ray_box::RayBox;
 use crate::traverse::walk::Leaf;
 
-use super::step::{existing, PacketEvent, PacketStep};
+use super::step::{existing, lane_end, PacketEvent, PacketStep};
 
 /// The registers of a packet in the binary BVH.
 #[derive(Clone, Debug)]
@@ -62,10 +62,9 @@ impl<const N: usize> BvhPacketTraversal<N> {
         t
     }
 
-    /// Ray `i`'s end: its best hit's distance or its interval's end (0 past the lanes).
+    /// Ray `i`'s end: its best hit's distance or its interval's end.
     fn t_end(&self, i: usize) -> f32 {
-        let t_max = self.t_max.get(i).copied().unwrap_or(0.0);
-        self.best.get(i).copied().flatten().map_or(t_max, |h| h.t)
+        lane_end(&self.best, &self.t_max, i)
     }
 
     /// One node for the packet: a popped node or the root is read first; an inner node's

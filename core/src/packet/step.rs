@@ -190,6 +190,14 @@ pub const fn lane_mask(n: usize) -> u64 {
     }
 }
 
+/// Lane `i`'s end along its ray in a BVH packet walk: its best hit's distance, or its
+/// interval's end (0 past the lanes).
+#[inline]
+pub(crate) fn lane_end<const N: usize>(best: &[Option<Hit>; N], t_max: &[f32; N], i: usize) -> f32 {
+    let t_max = t_max.get(i).copied().unwrap_or(0.0);
+    best.get(i).copied().flatten().map_or(t_max, |h| h.t)
+}
+
 /// A packet's lanes limited to those that exist: the rays of `rays` and the packet's `N`.
 #[inline]
 pub(crate) fn existing(active: u64, rays: usize, n: usize) -> u64 {

@@ -14,7 +14,7 @@ use crate::ray::Ray;
 use crate::traverse::walk::Leaf;
 use crate::traverse::wide_bvh::{stack_capacity, NodeRay, WideSlab};
 
-use super::step::{existing, PacketEvent, PacketStep};
+use super::step::{existing, lane_end, PacketEvent, PacketStep};
 
 /// A shared-stack entry: child (or first list entry), leaf count or 0, the nearest
 /// entry distance of the rays that need it, and their mask.
@@ -65,10 +65,9 @@ impl<W: WideSlab, const N: usize, const C: usize> WidePacketTraversal<W, N, C> {
         t
     }
 
-    /// Ray `i`'s end: its best hit's distance or its interval's end (0 past the lanes).
+    /// Ray `i`'s end: its best hit's distance or its interval's end.
     fn t_end(&self, i: usize) -> f32 {
-        let t_max = self.t_max.get(i).copied().unwrap_or(0.0);
-        self.best.get(i).copied().flatten().map_or(t_max, |h| h.t)
+        lane_end(&self.best, &self.t_max, i)
     }
 
     /// Reads one inner node for the packet and moves to its nearest child needed by any
