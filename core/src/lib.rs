@@ -66,7 +66,7 @@
 #![no_std]
 #![deny(missing_docs)]
 // Safe code throughout, except the x86-64 AVX forms, which run only once the host has
-// reported AVX ([`cpu::assume_avx`]): 7 `unsafe fn` with `#[target_feature]` and the
+// reported AVX ([`simd::assume_avx`]): 7 `unsafe fn` with `#[target_feature]` and the
 // blocks that call them or load through raw pointers (20 in all), in `cpu.rs`,
 // `traverse/bvh8.rs` (the 8-wide node test), `packet/bvh4.rs` (the packets' leaf entry
 // test), `packet/mod.rs` (the AVX transpose of a packet's rays) and
@@ -79,7 +79,7 @@ compile_error!("raypipe-core reads little-endian scene images in place and needs
 
 pub mod camera;
 pub mod counters;
-pub mod cpu;
+pub mod simd;
 pub mod hit;
 pub mod image;
 pub mod intersect;

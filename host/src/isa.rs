@@ -38,7 +38,7 @@ pub fn report_cpu() {
     #[cfg(target_arch = "x86_64")]
     if std::is_x86_feature_detected!("avx") {
         // SAFETY: the CPU has AVX (checked above), as `assume_avx` requires.
-        unsafe { raypipe_core::cpu::assume_avx() }
+        unsafe { raypipe_core::simd::assume_avx() }
     }
 }
 

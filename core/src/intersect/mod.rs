@@ -7,4 +7,3 @@ pub mod moller_trumbore;
 pub mod triangle;
 pub mod wald;
 pub mod watertight;
-pub mod watertight8;

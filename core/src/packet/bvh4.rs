@@ -3,7 +3,7 @@
 //! exactly the rays that enter its box, in groups of four lanes (SIMD registers) for the
 //! box test and, where the intersector has a four-ray form, for the triangles too. Rays
 //! of one origin (a camera's) meet each triangle made ready once for it, eight lanes at a
-//! time where the CPU has AVX ([`crate::intersect::watertight8`]).
+//! time where the CPU has AVX ([`crate::simd::watertight8`]).
 
 use crate::traverse::bvh4::slab4_exact;
 use glam::{BVec4A, Vec3, Vec3A, Vec4};
@@ -462,8 +462,8 @@ fn leaf_entries(
     origin: Option<[f32; 3]>,
 ) -> u64 {
     #[cfg(target_arch = "x86_64")]
-    if crate::cpu::has_avx() {
-        // SAFETY: the host has reported AVX (`cpu::assume_avx`).
+    if crate::simd::has_avx() {
+        // SAFETY: the host has reported AVX (`simd::assume_avx`).
         #[allow(unsafe_code)]
         return unsafe { leaf_entries_avx(q, groups, mask, leaf_box, origin) };
     }
@@ -920,7 +920,7 @@ mod tests {
             let one = leaf_entries_portable(&q, groups, mask, &leaf_box, leaf_t, origin);
             assert_eq!(one, portable, "case {case}");
             #[cfg(target_arch = "x86_64")]
-            if crate::cpu::detected_avx() {
+            if crate::simd::detected_avx() {
                 #[allow(unsafe_code)]
                 // SAFETY: this CPU has AVX (checked just above).
                 let avx = unsafe { [None, origin].map(|o| leaf_entries_avx(&q, groups, mask, &leaf_box, o)) };

@@ -131,9 +131,9 @@ impl<const N: usize> RayPacket<N> {
         let mut active = 0u64;
         let mut i = 0;
         #[cfg(target_arch = "x86_64")]
-        if crate::cpu::has_avx() {
+        if crate::simd::has_avx() {
             for octet in all.chunks_exact(8) {
-                // SAFETY: the host has reported AVX (`cpu::assume_avx`).
+                // SAFETY: the host has reported AVX (`simd::assume_avx`).
                 #[allow(unsafe_code)]
                 let valid = unsafe { self.fill8_avx(i, octet) };
                 active |= valid << i;
@@ -369,7 +369,7 @@ mod tests {
             assert_eq!(filled.active, set.active, "N = {N}, {len} rays");
             // The AVX transpose, where this CPU has AVX, octet by octet.
             #[cfg(target_arch = "x86_64")]
-            if crate::cpu::detected_avx() {
+            if crate::simd::detected_avx() {
                 let mut avx = RayPacket::<N>::new();
                 let mut active = 0u64;
                 let whole = len.min(N) / 8 * 8;

@@ -52,7 +52,7 @@ pub fn slab8(r: &NodeRay, n: &Bvh8Node, t0: f32, t1: f32) -> ([f32; 8], u32) {
 pub fn slab8_into(r: &NodeRay, n: &Bvh8Node, t0: f32, t1: f32, tn: &mut [f32; 8]) -> u32 {
     #[cfg(target_arch = "x86_64")]
     if r.avx8 {
-        // SAFETY: `avx8` is set only where the host has reported AVX (`cpu::assume_avx`).
+        // SAFETY: `avx8` is set only where the host has reported AVX (`simd::assume_avx`).
         #[allow(unsafe_code)]
         return unsafe { slab8_avx(r, n, t0, t1, tn) };
     }
@@ -217,7 +217,7 @@ impl WideSlab for Bvh8Node {
     fn slab_in<const O: usize>(&self, r: &NodeRay, t0: f32, t1: f32, tn: &mut [f32; 8]) -> u32 {
         #[cfg(target_arch = "x86_64")]
         if r.avx8 {
-            // SAFETY: `avx8` is set only where the host has reported AVX (`cpu::assume_avx`).
+            // SAFETY: `avx8` is set only where the host has reported AVX (`simd::assume_avx`).
             #[allow(unsafe_code)]
             return unsafe { slab8_avx_in::<O>(core::hint::black_box(r), self, t0, t1, tn) };
         }
@@ -299,7 +299,7 @@ mod tests {
             });
             // The portable form, and the AVX form where this CPU has AVX.
             for avx in [false, true] {
-                if avx && !crate::cpu::detected_avx() {
+                if avx && !crate::simd::detected_avx() {
                     continue;
                 }
                 // (`slab8` sends rays with a zero direction component to the exact test.)

@@ -104,7 +104,7 @@ impl NodeRay {
     pub fn new(ray: &Ray) -> NodeRay {
         let rb = RayBox::new(ray);
         let neg = rb.inv.cmplt(Vec3A::ZERO).bitmask() as usize;
-        let avx8 = crate::cpu::has_avx() && rb.zero_axes == 0;
+        let avx8 = crate::simd::has_avx() && rb.zero_axes == 0;
         #[cfg(target_arch = "x86_64")]
         let lanes8 = {
             let (o, inv, far) = (rb.origin, rb.inv, rb.inv_far);

@@ -135,7 +135,7 @@ mod tests {
     /// blocks are the ones made ready from their vertices.)
     #[test]
     fn eight_rays_on_shared_triangles_match_the_four_ray_test() {
-        if !crate::cpu::detected_avx() {
+        if !crate::simd::detected_avx() {
             return;
         }
         let mut g = Lcg(17);

@@ -40,3 +40,6 @@ pub(crate) fn detected_avx() -> bool {
     #[cfg(not(target_arch = "x86_64"))]
     false
 }
+
+#[cfg(target_arch = "x86_64")]
+pub(crate) mod watertight8;
