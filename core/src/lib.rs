@@ -65,30 +65,39 @@
 //! ```
 #![no_std]
 #![deny(missing_docs)]
-// Safe code throughout, except the x86-64 AVX forms, which run only once the host has
-// reported AVX ([`simd::assume_avx`]): 7 `unsafe fn` with `#[target_feature]` and the
-// blocks that call them or load through raw pointers (20 in all), in `cpu.rs`,
-// `traverse/bvh8.rs` (the 8-wide node test), `packet/bvh4.rs` (the packets' leaf entry
-// test), `packet/mod.rs` (the AVX transpose of a packet's rays) and
-// `intersect/watertight{,8}.rs` (eight rays against shared triangles); each with its
-// safety argument beside it. On every other target none of them is compiled.
+// Safe code throughout: every module but `simd` forbids `unsafe` (an `allow` cannot
+// lift a `forbid`). `simd` holds the x86-64 AVX forms of four kernels, each reached by a
+// safe function that takes an `Avx` token, which exists only once the host has reported
+// AVX; each `unsafe` block there has its safety argument beside it. On other targets
+// none of them is compiled.
 #![deny(unsafe_code)]
 
 #[cfg(target_endian = "big")]
 compile_error!("raypipe-core reads little-endian scene images in place and needs a little-endian target");
 
+#[forbid(unsafe_code)]
 pub mod camera;
+#[forbid(unsafe_code)]
 pub mod counters;
-pub mod simd;
+#[forbid(unsafe_code)]
 pub mod hit;
+#[forbid(unsafe_code)]
 pub mod image;
+#[forbid(unsafe_code)]
 pub mod intersect;
+#[forbid(unsafe_code)]
 pub mod packet;
+#[forbid(unsafe_code)]
 pub mod probe;
+#[forbid(unsafe_code)]
 pub mod ray;
+#[forbid(unsafe_code)]
 pub mod shade;
+pub mod simd;
 #[cfg(test)]
+#[forbid(unsafe_code)]
 mod test_lcg;
+#[forbid(unsafe_code)]
 pub mod traverse;
 
 pub use camera::{Camera, CameraError};

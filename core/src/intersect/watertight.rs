@@ -10,10 +10,10 @@ use glam::{Vec3, Vec4};
 
 use crate::image::{SceneView, TriBlock4};
 use crate::intersect::triangle::{Hits8, Intersector, RayPair, Rays4Result, SharedTris};
-#[cfg(target_arch = "x86_64")]
-use crate::simd::watertight8::SharedShear;
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
+#[cfg(target_arch = "x86_64")]
+use crate::simd::watertight8::SharedShear;
 
 /// The watertight test (default).
 #[derive(Clone, Copy, Debug, Default)]
@@ -125,18 +125,14 @@ impl Intersector for Watertight {
         found: impl FnMut(usize, usize, &Hits8),
     ) -> bool {
         #[cfg(target_arch = "x86_64")]
-        if crate::simd::has_avx() {
+        if let Some(avx) = crate::simd::Avx::reported() {
             // Each pair's shear constants as eight lanes, once for all the triangles.
             let mut shear = heapless::Vec::<SharedShear, { crate::packet::MAX_PACKET / 8 }>::new();
             for p in pairs {
                 // Cannot be full: a packet has at most `MAX_PACKET / 8` pairs.
                 let _ = shear.push(SharedShear::pair(p.lo, p.hi, p.lanes));
             }
-            // SAFETY: the host has reported AVX (`simd::assume_avx`).
-            #[allow(unsafe_code)]
-            unsafe {
-                crate::simd::watertight8::shared8_avx(tris, n.min(SharedTris::SLOTS), &shear, found)
-            };
+            crate::simd::watertight8::shared8(avx, tris, n.min(SharedTris::SLOTS), &shear, found);
             return true;
         }
         let _ = (pairs, tris, n, found);

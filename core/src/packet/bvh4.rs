@@ -3,7 +3,7 @@
 //! exactly the rays that enter its box, in groups of four lanes (SIMD registers) for the
 //! box test and, where the intersector has a four-ray form, for the triangles too. Rays
 //! of one origin (a camera's) meet each triangle made ready once for it, eight lanes at a
-//! time where the CPU has AVX ([`crate::simd::watertight8`]).
+//! time where the CPU has AVX (`simd::watertight8`).
 
 use crate::traverse::bvh4::slab4_exact;
 use glam::{BVec4A, Vec3, Vec3A, Vec4};
@@ -188,16 +188,16 @@ const GROUP_LANES: [BVec4A; 16] = {
 };
 
 /// Groups of four lanes in the largest packet.
-const GROUPS: usize = MAX_PACKET / 4;
+pub(crate) const GROUPS: usize = MAX_PACKET / 4;
 
 /// The packet regrouped as SIMD registers of four lanes each, with reciprocal
 /// directions: loaded once, so that a leaf's box test per group is six aligned loads.
-struct Groups {
-    org: [[Vec4; GROUPS]; 3],
-    inv: [[Vec4; GROUPS]; 3],
-    t_min: [Vec4; GROUPS],
+pub(crate) struct Groups {
+    pub(crate) org: [[Vec4; GROUPS]; 3],
+    pub(crate) inv: [[Vec4; GROUPS]; 3],
+    pub(crate) t_min: [Vec4; GROUPS],
     /// Each lane's best-hit distance so far (or its ray's end).
-    ends: [Vec4; GROUPS],
+    pub(crate) ends: [Vec4; GROUPS],
     /// Per group, the largest end of its active lanes (−∞ without any).
     group_end: [f32; GROUPS],
     /// Some active lane has a zero direction component.
@@ -297,7 +297,7 @@ fn nearest_first(mask: u32, t: &[f32; 4]) -> ([usize; 4], usize) {
 /// Traces all active rays of `packet`; `hits[i]` receives ray `i`'s closest hit.
 ///
 /// Inner nodes are tested once for the whole packet with the interval-arithmetic
-/// [`Frustum`]; at a leaf each ray tests the leaf's box (up to its own best hit) and only
+/// `Frustum`; at a leaf each ray tests the leaf's box (up to its own best hit) and only
 /// the rays that enter it test the triangles (four rays against one triangle at once where
 /// two or more of a group of four lanes enter). Since the frustum test is conservative,
 /// every ray still tests every triangle its single-ray walk would. A packet whose rays
@@ -462,10 +462,8 @@ fn leaf_entries(
     origin: Option<[f32; 3]>,
 ) -> u64 {
     #[cfg(target_arch = "x86_64")]
-    if crate::simd::has_avx() {
-        // SAFETY: the host has reported AVX (`simd::assume_avx`).
-        #[allow(unsafe_code)]
-        return unsafe { leaf_entries_avx(q, groups, mask, leaf_box, origin) };
+    if let Some(avx) = crate::simd::Avx::reported() {
+        return crate::simd::leaf_entries::leaf_entries(avx, q, groups, mask, leaf_box, origin);
     }
     leaf_entries_portable(q, groups, mask, leaf_box, leaf_t, origin)
 }
@@ -504,56 +502,6 @@ fn leaf_entries_portable(
             tf = tf.min(p.max(r) * SLAB_GROWTH);
         }
         enter |= ((tn.cmple(tf).bitmask() as u64) & m4) << (4 * g);
-    }
-    enter
-}
-
-/// [`leaf_entries_portable`] in AVX intrinsics, two groups (eight rays) per register,
-/// lane for lane the same operations in the same order (so the same lanes enter: a
-/// group that the portable form skips by `leaf_t` fails the exact test too). Measured
-/// with paired runs on 1024² primary rays, 8×8 packets through the 4-wide BVH: 6–11%
-/// faster than the portable form.
-///
-/// # Safety
-///
-/// The CPU must support AVX.
-#[cfg(target_arch = "x86_64")]
-#[allow(unsafe_code)]
-#[target_feature(enable = "avx")]
-unsafe fn leaf_entries_avx(q: &Groups, groups: usize, mask: u64, leaf_box: &[f32; 6], origin: Option<[f32; 3]>) -> u64 {
-    use core::arch::x86_64::*;
-    let lo = [_mm256_set1_ps(leaf_box[0]), _mm256_set1_ps(leaf_box[1]), _mm256_set1_ps(leaf_box[2])];
-    let hi = [_mm256_set1_ps(leaf_box[3]), _mm256_set1_ps(leaf_box[4]), _mm256_set1_ps(leaf_box[5])];
-    let offsets: Option<[(__m256, __m256); 3]> = origin.map(|o| {
-        core::array::from_fn(|a| (_mm256_set1_ps(leaf_box[a] - o[a]), _mm256_set1_ps(leaf_box[3 + a] - o[a])))
-    });
-    let growth = _mm256_set1_ps(SLAB_GROWTH);
-    let mut enter = 0u64;
-    for pair in 0..groups.div_ceil(2).min(GROUPS / 2) {
-        let m8 = (mask >> (8 * pair)) & 0xFF;
-        if m8 == 0 {
-            continue;
-        }
-        // Groups 2·pair and 2·pair + 1 are adjacent registers: eight lanes in a row.
-        // SAFETY: `pair < GROUPS / 2`, so the eight floats lie inside the array.
-        let lanes = |v: &[Vec4; GROUPS]| unsafe { _mm256_loadu_ps((v.as_ptr() as *const f32).add(8 * pair)) };
-        let mut tn = lanes(&q.t_min);
-        let mut tf = lanes(&q.ends);
-        for a in 0..3 {
-            let inv = lanes(&q.inv[a]);
-            let (dl, dh) = match offsets {
-                Some(d) => d[a],
-                None => {
-                    let o = lanes(&q.org[a]);
-                    (_mm256_sub_ps(lo[a], o), _mm256_sub_ps(hi[a], o))
-                }
-            };
-            let (p, r) = (_mm256_mul_ps(dl, inv), _mm256_mul_ps(dh, inv));
-            tn = _mm256_max_ps(tn, _mm256_min_ps(p, r));
-            tf = _mm256_min_ps(tf, _mm256_mul_ps(_mm256_max_ps(p, r), growth));
-        }
-        let m = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u64;
-        enter |= (m & m8) << (8 * pair);
     }
     enter
 }
@@ -920,10 +868,9 @@ mod tests {
             let one = leaf_entries_portable(&q, groups, mask, &leaf_box, leaf_t, origin);
             assert_eq!(one, portable, "case {case}");
             #[cfg(target_arch = "x86_64")]
-            if crate::simd::detected_avx() {
-                #[allow(unsafe_code)]
-                // SAFETY: this CPU has AVX (checked just above).
-                let avx = unsafe { [None, origin].map(|o| leaf_entries_avx(&q, groups, mask, &leaf_box, o)) };
+            if let Some(avx) = crate::simd::Avx::detected() {
+                let avx = [None, origin]
+                    .map(|o| crate::simd::leaf_entries::leaf_entries(avx, &q, groups, mask, &leaf_box, o));
                 assert_eq!(avx, [portable; 2], "case {case}");
             }
             assert_eq!(portable & !mask, 0, "case {case}: an inactive lane entered");

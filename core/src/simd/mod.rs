@@ -1,7 +1,32 @@
-//! The optional instruction sets the CPU has, as the host reports them: a `no_std`
-//! library cannot ask the operating system, so the host detects them and says so once
-//! (`raypipe`'s `isa::report_cpu`). Until then, and on other architectures, every kernel
-//! runs its portable form. Either form gives the same bits.
+//! The one module of raypipe-core with `unsafe` code: the x86-64 AVX forms of four
+//! kernels, and the switch that lets them run. Every other module is
+//! `#[forbid(unsafe_code)]` (see `lib.rs`).
+//!
+//! A `no_std` library cannot ask the operating system which instruction sets the CPU
+//! has, so the host detects them and says so once ([`assume_avx`], `raypipe`'s
+//! `isa::report_cpu`). Until then, and on other architectures, every kernel runs its
+//! portable form. Either form gives the same bits (each AVX form has a test comparing it
+//! with the portable one lane for lane).
+//!
+//! The AVX forms are `#[target_feature(enable = "avx")]` functions, which are unsafe to
+//! call. Each is reached only through a safe function of this module that takes an
+//! [`Avx`] token, and a token exists only once the host has reported AVX: holding one is
+//! the proof every `unsafe` block here relies on. The forms:
+//!
+//! * `slab8`: the 8-wide BVH's node test (one register per plane, one move-mask);
+//! * `leaf_entries`: which rays of a packet enter a leaf's box, eight lanes at a time;
+//! * `transpose`: eight rays into a packet's lanes by one 8×8 transpose;
+//! * `watertight8`: the watertight test on eight rays against a leaf's shared
+//!   triangles.
+
+#[cfg(target_arch = "x86_64")]
+pub(crate) mod leaf_entries;
+#[cfg(target_arch = "x86_64")]
+pub(crate) mod slab8;
+#[cfg(target_arch = "x86_64")]
+pub(crate) mod transpose;
+#[cfg(target_arch = "x86_64")]
+pub(crate) mod watertight8;
 
 #[cfg(target_arch = "x86_64")]
 use core::sync::atomic::{AtomicBool, Ordering};
@@ -9,8 +34,38 @@ use core::sync::atomic::{AtomicBool, Ordering};
 #[cfg(target_arch = "x86_64")]
 static AVX: AtomicBool = AtomicBool::new(false);
 
-/// Records that the CPU has AVX, so that the 8-wide BVH's node test and the packets'
-/// leaf entry test may use it.
+/// Proof that the CPU has AVX: made only by [`Avx::reported`] once the host has called
+/// [`assume_avx`] (or, in the unit tests, by asking the operating system). The AVX
+/// forms of this module take one, so their callers need no `unsafe`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Avx(());
+
+impl Avx {
+    /// The token, if the host has reported AVX; `None` until then and on every other
+    /// architecture.
+    #[inline(always)]
+    pub fn reported() -> Option<Avx> {
+        #[cfg(target_arch = "x86_64")]
+        if AVX.load(Ordering::Relaxed) {
+            return Some(Avx(()));
+        }
+        None
+    }
+
+    /// The token, if the operating system says this CPU has AVX: for the unit tests
+    /// that compare the AVX forms with the portable ones (core itself cannot ask).
+    #[cfg(test)]
+    pub(crate) fn detected() -> Option<Avx> {
+        extern crate std;
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx") {
+            return Some(Avx(()));
+        }
+        None
+    }
+}
+
+/// Records that the CPU has AVX, so that the kernels may take their AVX forms.
 ///
 /// # Safety
 ///
@@ -24,22 +79,5 @@ pub unsafe fn assume_avx() {
 /// True once [`assume_avx`] has been called.
 #[inline(always)]
 pub fn has_avx() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    return AVX.load(Ordering::Relaxed);
-    #[cfg(not(target_arch = "x86_64"))]
-    false
+    Avx::reported().is_some()
 }
-
-/// Whether this CPU has AVX, asked of the operating system: for the unit tests that
-/// compare the AVX forms with the portable ones (core itself cannot ask, see above).
-#[cfg(test)]
-pub(crate) fn detected_avx() -> bool {
-    extern crate std;
-    #[cfg(target_arch = "x86_64")]
-    return std::is_x86_feature_detected!("avx");
-    #[cfg(not(target_arch = "x86_64"))]
-    false
-}
-
-#[cfg(target_arch = "x86_64")]
-pub(crate) mod watertight8;

@@ -5,9 +5,7 @@
 //! bits, with twice the lanes per instruction; each triangle's vertices are broadcast
 //! once for all the pairs of groups that entered its leaf.
 
-// Only the AVX form exists (x86-64); elsewhere the 4-lane test runs.
-#![cfg(target_arch = "x86_64")]
-
+use super::Avx;
 use crate::intersect::triangle::{Hits8, SharedTris};
 use crate::intersect::watertight::ShearedRays4;
 use glam::Vec4;
@@ -35,19 +33,30 @@ impl SharedShear {
 /// watertight test's outcome for the pair's eight rays, handed to `found` with the
 /// triangle's slot and the pair's index where some lane of the pair's `lanes` hits or
 /// is undecided. Triangle by triangle: its vertices are broadcast once for all pairs.
+#[inline(always)]
+pub(crate) fn shared8(
+    avx: Avx,
+    tris: &SharedTris,
+    n: usize,
+    pairs: &[SharedShear],
+    found: impl FnMut(usize, usize, &Hits8),
+) {
+    let Avx(()) = avx;
+    // SAFETY: an `Avx` token exists only where the CPU has AVX (see `Avx`).
+    #[allow(unsafe_code)]
+    unsafe {
+        shared8_avx(tris, n, pairs, found)
+    }
+}
+
+/// [`shared8`] with AVX enabled.
 ///
 /// # Safety
 ///
 /// The CPU must support AVX.
-#[cfg(target_arch = "x86_64")]
 #[allow(unsafe_code)]
 #[target_feature(enable = "avx")]
-pub(crate) unsafe fn shared8_avx(
-    tris: &SharedTris,
-    n: usize,
-    pairs: &[SharedShear],
-    mut found: impl FnMut(usize, usize, &Hits8),
-) {
+unsafe fn shared8_avx(tris: &SharedTris, n: usize, pairs: &[SharedShear], mut found: impl FnMut(usize, usize, &Hits8)) {
     use core::arch::x86_64::*;
     let zero = _mm256_setzero_ps();
     for index in 0..n.min(SharedTris::SLOTS) {
@@ -135,9 +144,7 @@ mod tests {
     /// blocks are the ones made ready from their vertices.)
     #[test]
     fn eight_rays_on_shared_triangles_match_the_four_ray_test() {
-        if !crate::simd::detected_avx() {
-            return;
-        }
+        let Some(avx) = Avx::detected() else { return };
         let mut g = Lcg(17);
         let (mut checked, mut hit, mut redo, mut quiet) = (0, 0, 0, 0);
         for case in 0..3000 {
@@ -187,11 +194,7 @@ mod tests {
             let lanes = [[0xFF, 0x0F], [0xF0, 0x5A], [0x01, 0xFF]][case % 3];
             let pairs = [0, 1].map(|p| SharedShear::pair(&groups[2 * p], &groups[2 * p + 1], lanes[p]));
             let mut out = [[None; 2]; SharedTris::SLOTS];
-            // SAFETY: this CPU has AVX (checked above).
-            #[allow(unsafe_code)]
-            unsafe {
-                shared8_avx(&tris, n, &pairs, |k, p, o| out[k][p] = Some(*o))
-            };
+            shared8(avx, &tris, n, &pairs, |k, p, o| out[k][p] = Some(*o));
             for (k, (v, o)) in verts.iter().zip(&out).enumerate() {
                 for (p, o) in o.iter().enumerate() {
                     let four = [

@@ -11,8 +11,6 @@ use crate::intersect::triangle::Intersector;
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::traverse::ray_box::RayBox;
-#[cfg(target_arch = "x86_64")]
-use crate::traverse::wide_bvh::OCTANTS;
 use crate::traverse::wide_bvh::{stack_capacity, trace_wide_bvh, NodeRay, WideBvhTraversal, WideSlab};
 
 /// `max` as the SIMD instruction computes it (the second operand when either is NaN),
@@ -51,10 +49,8 @@ pub fn slab8(r: &NodeRay, n: &Bvh8Node, t0: f32, t1: f32) -> ([f32; 8], u32) {
 #[inline(always)]
 pub fn slab8_into(r: &NodeRay, n: &Bvh8Node, t0: f32, t1: f32, tn: &mut [f32; 8]) -> u32 {
     #[cfg(target_arch = "x86_64")]
-    if r.avx8 {
-        // SAFETY: `avx8` is set only where the host has reported AVX (`simd::assume_avx`).
-        #[allow(unsafe_code)]
-        return unsafe { slab8_avx(r, n, t0, t1, tn) };
+    if let Some(avx) = r.avx8 {
+        return crate::simd::slab8::slab8(avx, r, n, t0, t1, tn);
     }
     if r.rb.zero_axes != 0 {
         let (t, mask) = slab8_exact(&r.rb, n, t0, t1);
@@ -79,85 +75,6 @@ pub fn slab8_into(r: &NodeRay, n: &Bvh8Node, t0: f32, t1: f32, tn: &mut [f32; 8]
         hit[k] = (near <= far) as u8;
     }
     mask8(hit)
-}
-
-/// [`slab8`] in AVX intrinsics, lane for lane the same operations (`vmaxps`/`vminps`
-/// are what `max`/`min` above emulate): one register per plane and one move-mask, which
-/// the portable form cannot get from the compiler. Measured with paired runs on 1024²
-/// primary rays, single rays through the 8-wide BVH: 5–13% faster than
-/// the portable form compiled for AVX2.
-///
-/// # Safety
-///
-/// The CPU must support AVX.
-#[cfg(target_arch = "x86_64")]
-#[allow(unsafe_code)]
-#[target_feature(enable = "avx")]
-#[inline]
-unsafe fn slab8_avx(r: &NodeRay, n: &Bvh8Node, t0: f32, t1: f32, out: &mut [f32; 8]) -> u32 {
-    // SAFETY: the caller's (AVX).
-    unsafe { slab8_avx_rows(r, n, t0, t1, out, r.rows.near8, r.rows.far8) }
-}
-
-/// [`slab8_avx`] for a ray of octant `O` (`O < 8`): its planes' offsets are constants.
-///
-/// # Safety
-///
-/// The CPU must support AVX.
-#[cfg(target_arch = "x86_64")]
-#[allow(unsafe_code)]
-#[target_feature(enable = "avx")]
-#[inline]
-unsafe fn slab8_avx_in<const O: usize>(r: &NodeRay, n: &Bvh8Node, t0: f32, t1: f32, out: &mut [f32; 8]) -> u32 {
-    let rows = &OCTANTS[O % 8];
-    // SAFETY: the caller's (AVX).
-    unsafe { slab8_avx_rows(r, n, t0, t1, out, rows.near8, rows.far8) }
-}
-
-/// [`slab8_avx`] with the near and far planes' byte offsets given.
-///
-/// # Safety
-///
-/// The CPU must support AVX.
-#[cfg(target_arch = "x86_64")]
-#[allow(unsafe_code)]
-#[target_feature(enable = "avx")]
-#[inline]
-unsafe fn slab8_avx_rows(
-    r: &NodeRay,
-    n: &Bvh8Node,
-    t0: f32,
-    t1: f32,
-    out: &mut [f32; 8],
-    near: [u32; 3],
-    far: [u32; 3],
-) -> u32 {
-    use core::arch::x86_64::*;
-    // The node's planes as rows of eight lanes: min x, y, z, then max x, y, z, at byte
-    // offsets 0, 32, … 160 (`NodeRay::near8`, `far8`).
-    let bytes: &[u8; 256] = bytemuck::cast_ref(n);
-    // SAFETY: `off & 0xE0` is at most 224, so the 32 bytes read lie inside the node's
-    // 256; `loadu` needs no alignment.
-    let row = |off: u32| unsafe { _mm256_loadu_ps(bytes.as_ptr().add(off as usize & 0xE0).cast::<f32>()) };
-    // The ray's lanes, splatted once per ray (`NodeRay::lanes8`); aligned loads, which
-    // the compiler folds into the operations that use them.
-    let l = &r.lanes8;
-    // SAFETY: each `Lanes8` is eight f32 aligned to 32 bytes.
-    let lane = |k: usize| unsafe { _mm256_load_ps(l[k % 9].0.as_ptr()) };
-    let (o, inv, inv_far) = ([lane(0), lane(1), lane(2)], [lane(3), lane(4), lane(5)], [lane(6), lane(7), lane(8)]);
-    let dist = |off: u32, a: usize, inv: &[__m256; 3]| _mm256_mul_ps(_mm256_sub_ps(row(off), o[a]), inv[a]);
-    let tn = _mm256_max_ps(
-        _mm256_max_ps(dist(near[0], 0, &inv), dist(near[1], 1, &inv)),
-        _mm256_max_ps(dist(near[2], 2, &inv), _mm256_set1_ps(t0)),
-    );
-    let tf = _mm256_min_ps(
-        _mm256_min_ps(dist(far[0], 0, &inv_far), dist(far[1], 1, &inv_far)),
-        _mm256_min_ps(dist(far[2], 2, &inv_far), _mm256_set1_ps(t1)),
-    );
-    let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u32;
-    // SAFETY: `out` holds eight f32, and `storeu` needs no alignment.
-    unsafe { _mm256_storeu_ps(out.as_mut_ptr(), tn) };
-    mask
 }
 
 /// The bits of eight lanes' outcomes (bit `k` for lane `k`, from bytes of 0 or 1).
@@ -216,10 +133,8 @@ impl WideSlab for Bvh8Node {
     #[inline(always)]
     fn slab_in<const O: usize>(&self, r: &NodeRay, t0: f32, t1: f32, tn: &mut [f32; 8]) -> u32 {
         #[cfg(target_arch = "x86_64")]
-        if r.avx8 {
-            // SAFETY: `avx8` is set only where the host has reported AVX (`simd::assume_avx`).
-            #[allow(unsafe_code)]
-            return unsafe { slab8_avx_in::<O>(core::hint::black_box(r), self, t0, t1, tn) };
+        if let Some(avx) = r.avx8 {
+            return crate::simd::slab8::slab8_in::<O>(avx, core::hint::black_box(r), self, t0, t1, tn);
         }
         slab8_into(core::hint::black_box(r), self, t0, t1, tn)
     }
@@ -298,39 +213,38 @@ mod tests {
                 (t4.to_array(), m4)
             });
             // The portable form, and the AVX form where this CPU has AVX.
-            for avx in [false, true] {
-                if avx && !crate::simd::detected_avx() {
-                    continue;
-                }
-                // (`slab8` sends rays with a zero direction component to the exact test.)
-                let (t8, m8) = if avx && r.rb.zero_axes == 0 {
-                    let mut t8 = [0.0; 8];
-                    // SAFETY: this CPU has AVX (checked above).
-                    #[allow(unsafe_code)]
-                    let m8 = unsafe { slab8_avx(&r, &wide, t0, t1, &mut t8) };
-                    // The form for the ray's octant, with its offsets as constants: the
-                    // same bits.
-                    let mut t_in = [0.0; 8];
-                    // SAFETY: this CPU has AVX (checked above).
-                    #[allow(unsafe_code)]
-                    let m_in = unsafe {
-                        match r.octant() {
-                            0 => slab8_avx_in::<0>(&r, &wide, t0, t1, &mut t_in),
-                            1 => slab8_avx_in::<1>(&r, &wide, t0, t1, &mut t_in),
-                            2 => slab8_avx_in::<2>(&r, &wide, t0, t1, &mut t_in),
-                            3 => slab8_avx_in::<3>(&r, &wide, t0, t1, &mut t_in),
-                            4 => slab8_avx_in::<4>(&r, &wide, t0, t1, &mut t_in),
-                            5 => slab8_avx_in::<5>(&r, &wide, t0, t1, &mut t_in),
-                            6 => slab8_avx_in::<6>(&r, &wide, t0, t1, &mut t_in),
-                            _ => slab8_avx_in::<7>(&r, &wide, t0, t1, &mut t_in),
-                        }
-                    };
-                    assert_eq!(m_in, m8, "case {case}: octant form's mask");
-                    assert_eq!(t_in.map(f32::to_bits), t8.map(f32::to_bits), "case {case}: octant form's distances");
-                    (t8, m8)
-                } else {
-                    slab8(&r, &wide, t0, t1)
+            for avx in [None, crate::simd::Avx::detected()] {
+                let (t8, m8) = match avx {
+                    // (`slab8` sends rays with a zero direction component to the exact test.)
+                    #[cfg(target_arch = "x86_64")]
+                    Some(avx) if r.rb.zero_axes == 0 => {
+                        let mut t8 = [0.0; 8];
+                        let m8 = crate::simd::slab8::slab8(avx, &r, &wide, t0, t1, &mut t8);
+                        // The form for the ray's octant, with its offsets as constants: the
+                        // same bits.
+                        let mut t_in = [0.0; 8];
+                        use crate::simd::slab8::slab8_in;
+                        let m_in = match r.octant() {
+                            0 => slab8_in::<0>(avx, &r, &wide, t0, t1, &mut t_in),
+                            1 => slab8_in::<1>(avx, &r, &wide, t0, t1, &mut t_in),
+                            2 => slab8_in::<2>(avx, &r, &wide, t0, t1, &mut t_in),
+                            3 => slab8_in::<3>(avx, &r, &wide, t0, t1, &mut t_in),
+                            4 => slab8_in::<4>(avx, &r, &wide, t0, t1, &mut t_in),
+                            5 => slab8_in::<5>(avx, &r, &wide, t0, t1, &mut t_in),
+                            6 => slab8_in::<6>(avx, &r, &wide, t0, t1, &mut t_in),
+                            _ => slab8_in::<7>(avx, &r, &wide, t0, t1, &mut t_in),
+                        };
+                        assert_eq!(m_in, m8, "case {case}: octant form's mask");
+                        assert_eq!(
+                            t_in.map(f32::to_bits),
+                            t8.map(f32::to_bits),
+                            "case {case}: octant form's distances"
+                        );
+                        (t8, m8)
+                    }
+                    _ => slab8(&r, &wide, t0, t1),
                 };
+                let avx = avx.is_some();
                 for (h, (t4, m4)) in four.iter().enumerate() {
                     assert_eq!((m8 >> (4 * h)) & 0xF, *m4, "case {case} avx {avx}: masks differ");
                     for k in 0..4 {

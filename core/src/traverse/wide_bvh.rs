@@ -45,9 +45,9 @@ pub struct NodeRay {
     pub(crate) rows: OctantRows,
     /// The scalar slab constants (and the zero-direction axes).
     pub(crate) rb: RayBox,
-    /// The 8-wide node test may take its AVX form: the CPU has AVX and no direction
-    /// component is zero. Decided once per ray rather than at each node.
-    pub(crate) avx8: bool,
+    /// The 8-wide node test may take its AVX form (the token, where the CPU has AVX and
+    /// no direction component is zero). Decided once per ray rather than at each node.
+    pub(crate) avx8: Option<crate::simd::Avx>,
     /// For that form, the origin, `inv` and `inv_far` of [`RayBox`] as eight lanes each
     /// (x, y, z of each), written once per ray: the node test takes them as memory
     /// operands, where splatting them at each node took nine of its instructions. Only
@@ -104,7 +104,7 @@ impl NodeRay {
     pub fn new(ray: &Ray) -> NodeRay {
         let rb = RayBox::new(ray);
         let neg = rb.inv.cmplt(Vec3A::ZERO).bitmask() as usize;
-        let avx8 = crate::simd::has_avx() && rb.zero_axes == 0;
+        let avx8 = crate::simd::Avx::reported().filter(|_| rb.zero_axes == 0);
         #[cfg(target_arch = "x86_64")]
         let lanes8 = {
             let (o, inv, far) = (rb.origin, rb.inv, rb.inv_far);
@@ -137,7 +137,7 @@ pub trait WideSlab: WideNode {
     fn slab(&self, r: &NodeRay, t0: f32, t1: f32, tn: &mut Self::Dist) -> u32;
     /// True where the node test has forms for rays of one octant ([`WideSlab::slab_in`]).
     const OCTANT_FORMS: bool = false;
-    /// [`WideSlab::slab`] for a ray of octant `O` (`O < 8`, [`NodeRay::octant`]), where
+    /// [`WideSlab::slab`] for a ray of octant `O` (`O < 8`, `NodeRay::octant`), where
     /// [`WideSlab::OCTANT_FORMS`]: the same bits.
     #[inline(always)]
     fn slab_in<const O: usize>(&self, r: &NodeRay, t0: f32, t1: f32, tn: &mut Self::Dist) -> u32 {
@@ -312,7 +312,7 @@ pub fn trace_wide_bvh<N: WideSlab, const C: usize, I: Intersector, P: MemoryProb
     // near and far planes at fixed offsets (reading the ray's six offsets and masking
     // them took 12 of a node's 62 instructions on Sponza). Coherent rays keep to one or
     // two of the eight walks.
-    if N::OCTANT_FORMS && r.avx8 {
+    if N::OCTANT_FORMS && r.avx8.is_some() {
         return match r.octant() {
             0 => walk::<N, C, I, P, 0>(scene, bvh, ray, &r, probe, counters),
             1 => walk::<N, C, I, P, 1>(scene, bvh, ray, &r, probe, counters),
