@@ -4,7 +4,7 @@
 //! triangle lying on a box face is never culled by the rounding of the entry distance.
 
 use glam::DVec3;
-use raypipe_core::image::{BvhNode, WideNode, MAX_TREE_DEPTH};
+use raypipe_core::image::{BvhNode, WideNode, MAX_TREE_DEPTH, MAX_WIDE_DEPTH};
 
 use crate::mesh::Mesh;
 use crate::spatial_split::{find_spatial_split, split_references};
@@ -37,6 +37,8 @@ pub struct BvhParams {
     /// Triangles a leaf tests at once (4 with TRI_BLOCKS): the SAH prices a leaf by its
     /// blocks, `ceil(n / leaf_block)`, as Embree does for its four-triangle leaves.
     pub leaf_block: usize,
+    /// Deepest the binary tree may grow (root = 1): deeper, a node becomes a leaf.
+    pub max_depth: u32,
 }
 
 impl Default for BvhParams {
@@ -50,6 +52,7 @@ impl Default for BvhParams {
             spatial_alpha: 1e-5,
             max_refs_per_triangle: 3.0,
             leaf_block: 1,
+            max_depth: MAX_TREE_DEPTH - 4,
         }
     }
 }
@@ -149,7 +152,7 @@ pub fn build_bvh(mesh: &Mesh, params: &BvhParams) -> BuiltBvh {
         BuiltBvh { nodes: vec![BvhNode { min: [0.0; 3], first: 0, max: [0.0; 3], count: 0 }], ..Default::default() };
     // (node, its references, depth)
     let mut todo = vec![(0usize, refs, 1u32)];
-    let max_depth = MAX_TREE_DEPTH - 4;
+    let max_depth = params.max_depth.clamp(1, MAX_TREE_DEPTH - 4);
     while let Some((node, refs, depth)) = todo.pop() {
         out.depth = out.depth.max(depth);
         let mut bounds = Bounds::EMPTY;
@@ -482,6 +485,25 @@ pub fn collapse_wide<N: WideNode>(bvh: &BuiltBvh, params: &BvhParams) -> BuiltWi
     out
 }
 
+/// Builds the binary BVH and collapses it into a wide one ([`collapse_wide`]) no deeper
+/// than the image format allows ([`MAX_WIDE_DEPTH`]); see [`build_wide_bvh_within`].
+pub fn build_wide_bvh<N: WideNode>(mesh: &Mesh, params: &BvhParams) -> BuiltWideBvh<N> {
+    build_wide_bvh_within(mesh, params, MAX_WIDE_DEPTH)
+}
+
+/// [`build_wide_bvh`] at most `limit` levels deep (root = 1). Every wide level takes at
+/// least one binary level, so where the collapse comes out deeper (no shared scene
+/// does: the deepest is 21 against the format's 32), the binary tree is rebuilt at most
+/// `limit − 1` deep, with larger leaves at the cut, and collapsed again.
+pub fn build_wide_bvh_within<N: WideNode>(mesh: &Mesh, params: &BvhParams, limit: u32) -> BuiltWideBvh<N> {
+    let wide = collapse_wide::<N>(&build_bvh(mesh, params), params);
+    if wide.depth <= limit {
+        return wide;
+    }
+    let shallow = BvhParams { max_depth: params.max_depth.min(limit.saturating_sub(1)), ..*params };
+    collapse_wide::<N>(&build_bvh(mesh, &shallow), &shallow)
+}
+
 /// Starts every leaf's list on a multiple of `block` entries, so that a leaf of up to
 /// `block` triangles is one TRI_BLOCKS record rather than straddling two. The gaps repeat
 /// the entry before them (a valid id that no leaf's range includes).
@@ -710,5 +732,42 @@ mod tests {
         assert_eq!(lists, before);
         // Blocks priced by the SAH: leaves fill up to four triangles rather than stop at one.
         assert!(after.iter().any(|&(_, c)| c > 1));
+    }
+    /// A wide BVH deeper than its limit is rebuilt within it, keeping every triangle in
+    /// exactly one leaf (here a limit of 6 on a scatter whose collapse is deeper), and
+    /// the image made from it gives the brute-force hits.
+    #[test]
+    fn a_wide_bvh_deeper_than_its_limit_is_rebuilt_within_it() {
+        use crate::image_writer::ImageWriter;
+        use raypipe_core::traverse::brute_force::trace_brute_force;
+        use raypipe_core::traverse::walk::trace_walk;
+        use raypipe_core::{NoProbe, Ray, RayCounters, SceneView, Vec3, Watertight};
+        let mesh = scatter(3000, 9);
+        let params = BvhParams::default();
+        let full = build_wide_bvh::<raypipe_core::image::Bvh4Node>(&mesh, &params);
+        let limit = 6;
+        assert!(full.depth > limit, "the scatter's 4-wide BVH is {} deep", full.depth);
+        let bvh = build_wide_bvh_within::<raypipe_core::image::Bvh4Node>(&mesh, &params, limit);
+        assert!(bvh.depth <= limit, "{} levels", bvh.depth);
+        let mut listed: Vec<u32> =
+            leaves(&bvh).iter().flat_map(|&(f, c)| bvh.prims[f as usize..(f + c) as usize].to_vec()).collect();
+        listed.sort_unstable();
+        listed.dedup();
+        assert_eq!(listed.len(), mesh.triangles.len());
+        let image = ImageWriter::new(&mesh).wide_bvh(&bvh).finish().unwrap();
+        let view = SceneView::parse(&image).unwrap();
+        let (lo, hi) = mesh.bounds();
+        let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
+        let mut hits = 0;
+        for i in 0..400 {
+            let f = |k: u32| ((i * 7919 + k * 104729) % 1000) as f32 / 1000.0;
+            let o = lo - (hi - lo) * 0.5 + (hi - lo) * Vec3::new(f(1), f(2), f(3)) * 2.0;
+            let target = lo + (hi - lo) * Vec3::new(f(4), f(5), f(6));
+            let ray = Ray::new(o, target - o);
+            let want = trace_brute_force::<Watertight, _>(&view, &ray, &mut NoProbe, &mut RayCounters::default());
+            assert_eq!(trace_walk::<Watertight, _>(&view, &ray, &mut NoProbe), want, "ray {i}");
+            hits += want.is_some() as u32;
+        }
+        assert!(hits > 100, "{hits} of 400 rays hit");
     }
 }

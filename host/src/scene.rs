@@ -12,7 +12,7 @@ use raypipe_core::{NoProbe, Ray, RayCounters, SceneView, Watertight};
 use crate::tracer::trace;
 
 use crate::aligned::AlignedBytes;
-use crate::bvh_builder::{align_leaves, build_bvh, collapse_wide, BvhParams};
+use crate::bvh_builder::{align_leaves, build_bvh, build_wide_bvh, BvhParams};
 use crate::camera_file::CameraSpec;
 use crate::default_scene;
 use crate::grid_builder::{build_grid, GridResolution};
@@ -295,7 +295,7 @@ fn default_lights(mesh: &Mesh, camera: &CameraRecord) -> Vec<LightRecord> {
 fn build_wide<N: WideNode>(mesh: &Mesh, opts: &BuildOptions, report: &mut BuildReport, writer: &mut ImageWriter) {
     let blocks = opts.triangles == TriangleLayout::Blocks;
     let params = BvhParams { leaf_block: if blocks { TriBlock4::LANES } else { 1 }, ..opts.bvh };
-    let mut bvh = collapse_wide::<N>(&build_bvh(mesh, &params), &params);
+    let mut bvh = build_wide_bvh::<N>(mesh, &params);
     if blocks {
         align_leaves(&mut bvh, TriBlock4::LANES);
     }

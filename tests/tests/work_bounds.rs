@@ -7,9 +7,17 @@
 //! rejected by the parse.
 
 use proptest::prelude::*;
+use raypipe::aligned::AlignedBytes;
+use raypipe::bvh_builder::BuiltWideBvh;
+use raypipe::image_writer::ImageWriter;
+use raypipe::mesh::Mesh;
 use raypipe::scene::{self, Accel, BuildOptions};
 use raypipe::tracer::trace;
-use raypipe_core::image::{SectionEntry, SectionKind, NULL_INDEX};
+use raypipe_core::image::{Bvh4Node, Bvh8Node, SectionEntry, SectionKind, WideNode, MAX_WIDE_DEPTH, NULL_INDEX};
+use raypipe_core::packet::bvh4::trace_bvh4_packet;
+use raypipe_core::packet::step::trace_packet_steps;
+use raypipe_core::packet::{PacketCounters, RayPacket};
+use raypipe_core::traverse::brute_force::trace_brute_force;
 use raypipe_core::traverse::occlusion::occluded;
 use raypipe_core::{NoProbe, Ray, RayCounters, SceneError, SceneView, Vec3, Watertight};
 use raypipe_tests::{build_soup, cornell_with, corrupt_image, put_u32, section_entry};
@@ -256,4 +264,92 @@ fn a_negative_t_min_is_no_ray_for_any_structure() {
     let rows = raypipe::npy::Array2 { rows: 1, cols: 8, data: vec![0.0, 1.0, 0.5, 0.3, -0.2, -1.0, -2.0, 10.0] };
     let e = raypipe::batch::rays_from_array(&rows).unwrap_err().to_string();
     assert!(e.contains("row 0") && e.contains("negative"), "{e}");
+}
+
+/// A chain of wide nodes `depth` deep, made to fill a walk's stack: each node's slot 0
+/// is the next node, with a box around everything, and its other slots leaves of one
+/// triangle each (the last node: leaves only). The triangles stand across the x axis,
+/// the deeper the nearer, and every leaf box lies beyond the nodes' entry: a ray along
+/// +x descends the whole chain first, leaving every level's leaves on its stack.
+fn chain_image<N: WideNode>(depth: usize) -> AlignedBytes {
+    let w = N::WIDTH;
+    let count = depth * (w - 1) + 1;
+    let mut mesh = Mesh::default();
+    let x_of = |id: usize| 10.0 + 0.01 * (count - id) as f32;
+    for id in 0..count {
+        let x = x_of(id);
+        let at = mesh.positions.len() as u32;
+        mesh.positions.extend([[x, -1.0, -1.0], [x, 3.0, -1.0], [x, -1.0, 3.0]]);
+        mesh.triangles.push([at, at + 1, at + 2]);
+    }
+    let (lo, hi) = ([9.0, -1.0, -1.0], [20.0, 3.0, 3.0]);
+    let mut nodes = Vec::new();
+    let mut id = 0u32;
+    for level in 0..depth {
+        let mut node = *N::empty();
+        let last = level + 1 == depth;
+        for k in 0..w {
+            if k == 0 && !last {
+                node.set_slot(0, lo, hi, level as u32 + 1, 0);
+            } else if k > 0 || last {
+                let x = x_of(id as usize);
+                node.set_slot(k, [x, -1.0, -1.0], [x, 3.0, 3.0], id, 1);
+                id += 1;
+            }
+        }
+        nodes.push(node);
+    }
+    let prims: Vec<u32> = (0..id).collect();
+    let bvh = BuiltWideBvh { nodes, prims, depth: depth as u32 };
+    ImageWriter::new(&mesh).wide_bvh(&bvh).finish().expect("the chain's image")
+}
+
+/// The wide BVHs may be at most `MAX_WIDE_DEPTH` levels deep, which bounds a firmware
+/// walk's stack (issue 18: ≤ 2 KiB for a 4-wide walk): a chain that deep, made to fill
+/// the stack, gives the brute-force hits on every kernel (single rays, any-hit, the
+/// packet walk and the 4-wide packet kernel); one level more is rejected by the parse.
+#[test]
+fn wide_bvhs_at_the_depth_limit_fill_the_stack_and_one_level_more_is_rejected() {
+    fn check<N: WideNode>() {
+        let img = chain_image::<N>(MAX_WIDE_DEPTH as usize);
+        let view = SceneView::parse(&img).expect("a chain at the depth limit is valid");
+        let rays: [Ray; 16] = std::array::from_fn(|i| {
+            let (y, z) = (0.1 + 0.05 * i as f32, 0.9 - 0.04 * i as f32);
+            Ray::new(Vec3::new(0.0, y, z), Vec3::new(1.0, 0.001 * i as f32, -0.002 * i as f32))
+        });
+        let mut reference = [None; 16];
+        for (i, ray) in rays.iter().enumerate() {
+            let want = trace_brute_force::<Watertight, _>(&view, ray, &mut NoProbe, &mut RayCounters::default());
+            assert!(want.is_some(), "{}: ray {i} crosses every triangle", N::WIDTH);
+            let mut counters = RayCounters::default();
+            assert_eq!(trace::<Watertight, _>(&view, ray, &mut NoProbe, &mut counters), want, "{}: ray {i}", N::WIDTH);
+            // The walk descended the whole chain before it found a hit.
+            assert!(counters.nodes >= MAX_WIDE_DEPTH, "{}: {} node steps", N::WIDTH, counters.nodes);
+            assert!(occluded::<Watertight, _>(&view, ray, &mut NoProbe, &mut RayCounters::default()));
+            reference[i] = want;
+        }
+        let mut hits = [None; 16];
+        trace_packet_steps::<Watertight, _, 16>(&view, &rays, u64::MAX, &mut hits, &mut NoProbe);
+        assert_eq!(hits, reference, "{}: packet walk", N::WIDTH);
+        if let Some(bvh) = view.bvh4() {
+            let mut packet = RayPacket::<16>::new();
+            packet.fill(&rays);
+            let mut hits = [None; 16];
+            trace_bvh4_packet::<Watertight, _, 16>(
+                &view,
+                bvh,
+                &packet,
+                &mut hits,
+                &mut NoProbe,
+                &mut PacketCounters::default(),
+            );
+            assert_eq!(hits, reference, "4-wide packet kernel");
+        }
+        let deeper = chain_image::<N>(MAX_WIDE_DEPTH as usize + 1);
+        let e = SceneView::parse(&deeper).expect_err("a chain one level deeper is rejected");
+        assert!(matches!(e, SceneError::BadTree { section, .. } if section == N::SECTION), "{e}");
+        assert!(e.to_string().contains(&format!("depth above {MAX_WIDE_DEPTH}")), "{e}");
+    }
+    check::<Bvh4Node>();
+    check::<Bvh8Node>();
 }

@@ -20,5 +20,5 @@ pub use records::{
 };
 pub use view::{
     Bvh4View, Bvh8View, BvhView, GridView, KdTreeView, SceneError, SceneView, WideBvhView, IMAGE_ALIGN, MAX_TREE_DEPTH,
-    SECTION_ALIGN,
+    MAX_WIDE_DEPTH, SECTION_ALIGN,
 };

@@ -18,9 +18,17 @@ use crate::probe::{DataClass, MemoryProbe};
 pub const IMAGE_ALIGN: usize = 16;
 /// Every section starts at a multiple of this (one cache line).
 pub const SECTION_ALIGN: u32 = 64;
-/// Deepest tree (BVH or kd-tree) a scene image may hold: traversal kernels keep a
+/// Deepest binary tree (BVH or kd-tree) a scene image may hold: traversal kernels keep a
 /// fixed-capacity stack of this many entries.
 pub const MAX_TREE_DEPTH: u32 = 64;
+/// Deepest wide (4- or 8-wide) BVH a scene image may hold. A wide walk's stack holds up
+/// to `width − 1` entries per level, so this bounds its size: 100 entries (1.2 KB) for
+/// the 4-wide BVH, where the binary trees' depth would take 196 (2.4 KB), over the
+/// 2 KiB a firmware walk may use. Builders keep well inside it: the deepest wide BVH of
+/// the shared scenes is 21 levels (the conference room's 4-wide), and a wide BVH
+/// collapsed from a binary one is never deeper than that (`raypipe`'s builder rebuilds
+/// the binary tree at most 31 deep in the rare case it would be).
+pub const MAX_WIDE_DEPTH: u32 = 32;
 
 /// Why a byte slice is not a valid scene image. Each variant carries the values a reader
 /// needs to see what is wrong (expected and found).
@@ -233,11 +241,17 @@ impl fmt::Display for SceneError {
             SharedList { cell } => {
                 write!(f, "grid cell {cell} shares a primitive list with another cell (each cell needs its own list)")
             }
-            BadTree { section, node } => write!(
-                f,
-                "section {} node {node} is malformed (child order, sharing, depth above {MAX_TREE_DEPTH}, leaf range or NaN)",
-                section.name()
-            ),
+            BadTree { section, node } => {
+                let depth = match section {
+                    SectionKind::Bvh4Nodes | SectionKind::Bvh8Nodes => MAX_WIDE_DEPTH,
+                    _ => MAX_TREE_DEPTH,
+                };
+                write!(
+                    f,
+                    "section {} node {node} is malformed (child order, sharing, depth above {depth}, leaf range or NaN)",
+                    section.name()
+                )
+            }
         }
     }
 }
@@ -426,8 +440,9 @@ type Children = heapless::Vec<u32, 8>;
 
 /// Checks, with a fixed-capacity stack and no allocation, that `children(i)` describes a
 /// tree rooted at node 0: every child comes after its parent and inside the section, no
-/// path is [`MAX_TREE_DEPTH`] nodes deep (the traversal kernels' stacks hold one entry per
-/// level, seven for the 8-wide BVH), and the walk visits exactly `n` nodes. `children(i)`
+/// path is `max_depth` nodes deep ([`MAX_TREE_DEPTH`] for binary trees, whose traversal
+/// kernels' stacks hold one entry per level; [`MAX_WIDE_DEPTH`] for wide BVHs, seven
+/// entries per level for the 8-wide one), and the walk visits exactly `n` nodes. `children(i)`
 /// is `Err` for a malformed node, else the node's inner children (none for a leaf) and
 /// the list entries its leaves hold; summed over every visit of the walk they may not
 /// exceed `list_entries`.
@@ -439,6 +454,7 @@ type Children = heapless::Vec<u32, 8>;
 fn validate_tree(
     n: usize,
     section: SectionKind,
+    max_depth: u32,
     list_entries: u64,
     mut children: impl FnMut(usize) -> Result<(Children, u64), ()>,
 ) -> Result<(), SceneError> {
@@ -446,15 +462,24 @@ fn validate_tree(
     if n == 0 {
         return Err(bad(0));
     }
-    // (node, depth); a depth-first walk pushes at most seven more entries per level.
-    let mut stack: heapless::Vec<(u32, u32), { 7 * MAX_TREE_DEPTH as usize + 1 }> = heapless::Vec::new();
+    // (node, depth); a depth-first walk pushes at most one more entry per level of a
+    // binary tree, seven of an 8-wide one.
+    const CAPACITY: usize = {
+        let (binary, wide) = (MAX_TREE_DEPTH as usize + 1, 7 * MAX_WIDE_DEPTH as usize + 1);
+        if binary > wide {
+            binary
+        } else {
+            wide
+        }
+    };
+    let mut stack: heapless::Vec<(u32, u32), CAPACITY> = heapless::Vec::new();
     let _ = stack.push((0, 0));
     let mut visited = 0usize;
     let mut leaf_entries = 0u64;
     while let Some((i, depth)) = stack.pop() {
         let i = i as usize;
         visited += 1;
-        if visited > n || depth >= MAX_TREE_DEPTH {
+        if visited > n || depth >= max_depth {
             return Err(bad(i));
         }
         let (inner, entries) = children(i).map_err(|_| bad(i))?;
@@ -982,7 +1007,7 @@ impl<'a> SceneView<'a> {
         let nodes: &[BvhNode] = s.required(SectionKind::BvhNodes)?;
         let prims = Self::prim_list(s, nt)?;
         let np = prims.len() as u64;
-        validate_tree(nodes.len(), SectionKind::BvhNodes, np, |i| {
+        validate_tree(nodes.len(), SectionKind::BvhNodes, MAX_TREE_DEPTH, np, |i| {
             let n = nodes.get(i).ok_or(())?;
             let (lo, hi) = (Vec3::from(n.min), Vec3::from(n.max));
             if !(finite3(n.min) && finite3(n.max) && lo.cmple(hi).all()) {
@@ -1011,7 +1036,7 @@ impl<'a> SceneView<'a> {
         let nodes: &[KdNode] = s.required(SectionKind::KdNodes)?;
         let prims = Self::prim_list(s, nt)?;
         let np = prims.len() as u64;
-        validate_tree(nodes.len(), SectionKind::KdNodes, np, |i| {
+        validate_tree(nodes.len(), SectionKind::KdNodes, MAX_TREE_DEPTH, np, |i| {
             let n = nodes.get(i).ok_or(())?;
             if n.axis() == KdNode::LEAF {
                 if n.index() as u64 + n.value as u64 <= np {
@@ -1040,7 +1065,7 @@ impl<'a> SceneView<'a> {
         let nodes: &[N] = s.required(section)?;
         let prims = Self::prim_list(s, nt)?;
         let np = prims.len() as u64;
-        validate_tree(nodes.len(), section, np, |i| {
+        validate_tree(nodes.len(), section, MAX_WIDE_DEPTH, np, |i| {
             let node = nodes.get(i).ok_or(())?;
             let mut inner = Children::new();
             let mut entries = 0u64;

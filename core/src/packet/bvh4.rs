@@ -10,14 +10,14 @@ use glam::{BVec4A, Vec3, Vec3A, Vec4};
 
 use crate::hit::keep_closest;
 use crate::hit::Hit;
-use crate::image::{Bvh4Node, Bvh4View, SceneView, MAX_TREE_DEPTH, NULL_INDEX};
+use crate::image::{Bvh4Node, Bvh4View, SceneView, MAX_WIDE_DEPTH, NULL_INDEX};
 use crate::intersect::triangle::{in_range, test_triangle, Intersector, LaneHits, RayPair, SharedTris};
 use crate::packet::{Lanes, PacketCounters, PacketHits, RayPacket, MAX_PACKET};
 use crate::probe::MemoryProbe;
 use crate::traverse::aabb::SLAB_GROWTH;
 use crate::traverse::ray_box::{recip, recip4, RayBox};
 
-const STACK: usize = 3 * MAX_TREE_DEPTH as usize + 4;
+const STACK: usize = 3 * MAX_WIDE_DEPTH as usize + 4;
 
 /// The packet as one conservative "frustum": the box of its origins and of its
 /// reciprocal directions. Interval arithmetic on these bounds gives, for a box, an entry

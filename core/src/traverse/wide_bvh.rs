@@ -12,7 +12,7 @@ use glam::Vec3A;
 
 use crate::counters::RayCounters;
 use crate::hit::Hit;
-use crate::image::{SceneView, WideBvhView, WideNode, MAX_TREE_DEPTH};
+use crate::image::{SceneView, WideBvhView, WideNode, MAX_WIDE_DEPTH};
 use crate::intersect::leaf_blocks::test_leaf_blocks;
 use crate::intersect::triangle::Intersector;
 use crate::probe::MemoryProbe;
@@ -21,9 +21,9 @@ use crate::traverse::ray_box::RayBox;
 use crate::traverse::tree_step::{test_leaf, TreeEvent, TreeWalk};
 
 /// Stack capacity for nodes of `width` children: at most `width − 1` entries wait per
-/// level of a tree of [`MAX_TREE_DEPTH`] (the image validation bounds the depth).
+/// level of a tree of [`MAX_WIDE_DEPTH`] (the image validation bounds the depth).
 pub const fn stack_capacity(width: usize) -> usize {
-    (width - 1) * MAX_TREE_DEPTH as usize + width
+    (width - 1) * MAX_WIDE_DEPTH as usize + width
 }
 
 /// The traversal stack of `C` entries: `(child or first entry, leaf count or 0, entry
