@@ -119,7 +119,7 @@ impl EyeRays {
         }
         let right = right.normalize();
         let up = right.cross(forward);
-        let half_h = libm::tanf(cam.vfov_deg.to_radians() * 0.5);
+        let half_h = crate::trig::tan(cam.vfov_deg.to_radians() * 0.5);
         let half_w = half_h * cam.width as f32 / cam.height as f32;
         Ok(EyeRays {
             eye: cam.eye,

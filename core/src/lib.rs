@@ -18,7 +18,8 @@
 //! * [`shade`]: Lambert shading, weighted ray records, Whitted's and the path tracer's
 //!   shaders as stream kernels that emit rays, counter-based random numbers;
 //! * at the root, the scene image ([`image`]) and the plain records: [`ray`], [`hit`],
-//!   [`probe`] (the one access path of scene reads) and [`counters`].
+//!   [`probe`] (the one access path of scene reads) and [`counters`], and [`trig`]
+//!   (sine, cosine and tangent in f32 only).
 //!
 //! ## Firmware in five steps
 //!
@@ -99,6 +100,8 @@ pub mod simd;
 mod test_lcg;
 #[forbid(unsafe_code)]
 pub mod traverse;
+#[forbid(unsafe_code)]
+pub mod trig;
 
 pub use camera::{Camera, CameraError};
 pub use counters::RayCounters;

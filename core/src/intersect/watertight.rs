@@ -202,10 +202,14 @@ impl Intersector for Watertight {
         let c = (v[2] - s.org).to_array();
         // Below 3 by construction; `min(2)` lets the compiler see it (no bounds checks).
         let k = [s.kx, s.ky, s.kz].map(|a| (a as usize).min(2));
-        let (sheared, [mut eu, mut ev, mut ew]) = shear_edges(a, b, c, k, s.sx, s.sy);
-        if eu == 0.0 || ev == 0.0 || ew == 0.0 {
-            [eu, ev, ew] = edges(sheared.map(f64::from)).map(|e| e as f32);
-        }
+        let (sheared, e) = shear_edges(a, b, c, k, s.sx, s.sy);
+        // An edge function of exactly 0: its true sign, from double precision (Woop et
+        // al. 2013, section 3.3). Without the feature the 0 counts as inside.
+        #[cfg(feature = "f64-fallback")]
+        let e = if e.contains(&0.0) { edges(sheared.map(f64::from)).map(|e| e as f32) } else { e };
+        #[cfg(not(feature = "f64-fallback"))]
+        let _ = sheared;
+        let [eu, ev, ew] = e;
         if (eu < 0.0 || ev < 0.0 || ew < 0.0) && (eu > 0.0 || ev > 0.0 || ew > 0.0) {
             return None;
         }

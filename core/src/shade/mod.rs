@@ -11,6 +11,7 @@ pub mod ray_record;
 pub mod rng;
 pub mod shader;
 pub mod specular;
+mod srgb_tables;
 pub mod surface;
 pub mod texture;
 pub mod whitted;

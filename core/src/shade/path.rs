@@ -44,7 +44,8 @@ pub struct PathOptions {
 pub fn cosine_direction(n: Vec3, u1: f32, u2: f32) -> Vec3 {
     let r = libm::sqrtf(u1);
     let phi = 2.0 * core::f32::consts::PI * u2;
-    let (x, y, z) = (r * libm::cosf(phi), r * libm::sinf(phi), libm::sqrtf((1.0 - u1).max(0.0)));
+    let (sin, cos) = crate::trig::sin_cos(phi);
+    let (x, y, z) = (r * cos, r * sin, libm::sqrtf((1.0 - u1).max(0.0)));
     let helper = if n.x.abs() > 0.9 { Vec3::Y } else { Vec3::X };
     let t = helper.cross(n).normalize_or_zero();
     let b = n.cross(t);
