@@ -18,8 +18,9 @@
 //! * [`shade`]: Lambert shading, weighted ray records, Whitted's and the path tracer's
 //!   shaders as stream kernels that emit rays, counter-based random numbers;
 //! * at the root, the scene image ([`image`]) and the plain records: [`ray`], [`hit`],
-//!   [`probe`] (the one access path of scene reads) and [`counters`], and [`trig`]
-//!   (sine, cosine and tangent in f32 only).
+//!   [`probe`] (the one access path of scene reads) and [`counters`], [`range`] (the
+//!   scenes and rays for which every path gives the same hit) and [`trig`] (sine,
+//!   cosine and tangent in f32 only).
 //!
 //! ## Firmware in five steps
 //!
@@ -90,6 +91,8 @@ pub mod intersect;
 pub mod packet;
 #[forbid(unsafe_code)]
 pub mod probe;
+#[forbid(unsafe_code)]
+pub mod range;
 #[forbid(unsafe_code)]
 pub mod ray;
 #[forbid(unsafe_code)]

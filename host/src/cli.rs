@@ -617,7 +617,21 @@ fn camera_for(view: &raypipe_core::SceneView<'_>, args: &CameraArgs) -> Result<C
             scene::framing_camera(lo.to_array(), hi.to_array())
         }
     };
-    args.resolve(&base)
+    let cam = args.resolve(&base)?;
+    // Each image's own rays are not checked one by one; its corners and centre stand
+    // for them (they bound the directions, and share the eye).
+    let eye = render::eye_rays(&cam, "camera")?;
+    let (w, h) = (eye.width.saturating_sub(1), eye.height.saturating_sub(1));
+    let rays = [(0, 0), (w, 0), (0, h), (w, h), (w / 2, h / 2)].map(|(x, y)| eye.ray(x, y));
+    warn_range(view, &rays, "camera rays (corners and centre)");
+    Ok(cam)
+}
+
+/// Warns about a scene or rays outside raypipe-core's guaranteed range.
+fn warn_range(view: &raypipe_core::SceneView<'_>, rays: &[raypipe_core::Ray], what: &str) {
+    for w in crate::range_check::warnings(view, rays, what) {
+        eprintln!("warning: {w}");
+    }
 }
 
 fn cmd_render(a: RenderArgs) -> Result<()> {
@@ -977,6 +991,7 @@ fn cmd_trace(a: TraceArgs) -> Result<()> {
     if a.runs == 0 {
         bail!("--runs must be at least 1");
     }
+    warn_range(&view, &rays, &format!("rays of {name}"));
     let mut times = Vec::new();
     // One output for all runs, as a caller tracing batch after batch keeps one: only the
     // first run pays for touching fresh pages.

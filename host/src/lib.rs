@@ -26,6 +26,7 @@ pub mod packets;
 pub mod polygon;
 pub mod prefetch;
 pub mod progress;
+pub mod range_check;
 pub mod raster;
 pub mod ray_stream;
 pub mod render;
