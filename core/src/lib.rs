@@ -82,6 +82,10 @@ pub mod camera;
 #[forbid(unsafe_code)]
 pub mod counters;
 #[forbid(unsafe_code)]
+pub mod fixed_point;
+#[forbid(unsafe_code)]
+pub mod fixed_ray;
+#[forbid(unsafe_code)]
 pub mod hit;
 #[forbid(unsafe_code)]
 pub mod image;
@@ -110,6 +114,7 @@ pub use camera::{Camera, CameraError};
 pub use counters::RayCounters;
 pub use hit::Hit;
 pub use image::{SceneError, SceneView};
+pub use intersect::fixed_watertight::{FixedWatertight, Q12_12, Q16_16};
 pub use intersect::triangle::{Intersector, MollerTrumbore, WaldProjection, Watertight};
 pub use probe::{DataClass, MemoryProbe, NoProbe};
 pub use ray::Ray;

@@ -670,6 +670,13 @@ fn cmd_simulate(a: SimulateArgs) -> Result<()> {
     output::check_dir(&a.report)?;
     // The configuration is checked before the scene is even loaded.
     let cfg = simulate::load_config(a.preset.as_deref(), a.config.as_deref(), &a.set)?;
+    if let (Some(k), true) = (a.intersector, cfg.datapath != raypipe_hw::Datapath::F32) {
+        bail!(
+            "--intersector {}: datapath {} has its own triangle test (fixed-point watertight)",
+            k.name(),
+            cfg.datapath.name()
+        );
+    }
     let scene = scene::load(a.scene.as_deref(), &a.structure.options())?;
     warn(&scene);
     let view = scene.view()?;
@@ -687,7 +694,10 @@ fn cmd_simulate(a: SimulateArgs) -> Result<()> {
         scene_hash: format!("{:016x}", raypipe_hw::report::fnv1a64(view.bytes())),
         structure: structure_summary(&view),
         algorithm: format!("{:?}", opts.algo).to_lowercase(),
-        intersector: kind.name().to_string(),
+        intersector: match cfg.datapath {
+            raypipe_hw::Datapath::F32 => kind.name().to_string(),
+            d => format!("fixed-watertight {}", d.name()),
+        },
         camera: format!(
             "eye {:?} look_at {:?} up {:?} vfov {} deg, {}x{}",
             cam.eye, cam.look_at, cam.up, cam.vfov_deg, cam.width, cam.height

@@ -4,17 +4,17 @@
 
 use std::path::Path;
 
-use anyhow::{anyhow, Result};
+use anyhow::{anyhow, bail, Result};
 use raypipe_core::image::CameraRecord;
 use raypipe_core::shade::shader::Shader;
-use raypipe_core::SceneView;
-use raypipe_hw::{HwConfig, Report, Simulator};
+use raypipe_core::{Intersector, SceneView};
+use raypipe_hw::{Datapath, HwConfig, Report, Simulator};
 
 use crate::progress;
 use crate::raster::{gbuffer_hit, rasterize};
 use crate::render::{eye_rays, Frame};
-use crate::tracer::IntersectorKind;
-use crate::with_intersector;
+use crate::tracer::{fixed_point_unsupported, IntersectorKind};
+use crate::{with_datapath, with_intersector};
 
 /// Builds the configuration: a preset or a file (else the defaults), then overrides;
 /// validated before anything runs.
@@ -45,9 +45,41 @@ pub fn simulate(
     show_progress: bool,
 ) -> Result<(Frame, Report)> {
     let eye = eye_rays(camera, "camera")?;
-    let (width, height) = (eye.width, eye.height);
-    let background = raypipe_core::Vec3::from(camera.background);
-    with_intersector!(intersector, I => {
+    if cfg.datapath != Datapath::F32 {
+        if let Some(why) = fixed_point_unsupported(scene) {
+            bail!(
+                "datapath {}: {why}; the fixed-point box test is for BVHs (build with --accel bvh, bvh4 or bvh8)",
+                cfg.datapath.name()
+            );
+        }
+    }
+    let run = Run {
+        scene,
+        eye,
+        background: raypipe_core::Vec3::from(camera.background),
+        cfg,
+        shader,
+        shadow_caster,
+        show_progress,
+    };
+    with_datapath!(cfg.datapath, I => run.go::<I>(), f32 => with_intersector!(intersector, I => run.go::<I>()))
+}
+
+/// One simulation's inputs, run with the triangle test `I` (and its box tests).
+struct Run<'a, 's> {
+    scene: &'a SceneView<'s>,
+    eye: raypipe_core::camera::EyeRays,
+    background: raypipe_core::Vec3,
+    cfg: &'a HwConfig,
+    shader: Option<Shader>,
+    shadow_caster: bool,
+    show_progress: bool,
+}
+
+impl Run<'_, '_> {
+    fn go<I: Intersector>(&self) -> Result<(Frame, Report)> {
+        let Run { scene, eye, background, cfg, shader, shadow_caster, show_progress } = *self;
+        let (width, height) = (eye.width, eye.height);
         let mut sim = Simulator::<I>::with_shader(*scene, eye, background, shader, cfg)
             .map_err(|e| anyhow!("hardware configuration: {e}"))?;
         if shadow_caster {
@@ -68,5 +100,5 @@ pub fn simulate(
         bar.finish_and_clear();
         let frame = Frame { width, height, pixels: sim.framebuffer() };
         Ok((frame, sim.report()))
-    })
+    }
 }

@@ -140,6 +140,58 @@ macro_rules! with_intersector {
     };
 }
 
+/// Calls `$body` with `$I` bound to the fixed-point triangle test of `$datapath`
+/// (a `raypipe_hw::Datapath`), or evaluates `$f32` for the `f32` datapath.
+#[macro_export]
+macro_rules! with_datapath {
+    ($datapath:expr, $I:ident => $body:expr, f32 => $f32:expr) => {
+        match $datapath {
+            raypipe_hw::Datapath::F32 => $f32,
+            raypipe_hw::Datapath::Q16_16 => {
+                type $I = raypipe_core::FixedWatertight<32, 16>;
+                $body
+            }
+            raypipe_hw::Datapath::Q20_12 => {
+                type $I = raypipe_core::FixedWatertight<32, 12>;
+                $body
+            }
+            raypipe_hw::Datapath::Q12_20 => {
+                type $I = raypipe_core::FixedWatertight<32, 20>;
+                $body
+            }
+            raypipe_hw::Datapath::Q24_8 => {
+                type $I = raypipe_core::FixedWatertight<32, 8>;
+                $body
+            }
+            raypipe_hw::Datapath::Q12_12 => {
+                type $I = raypipe_core::FixedWatertight<24, 12>;
+                $body
+            }
+            raypipe_hw::Datapath::Q8_16 => {
+                type $I = raypipe_core::FixedWatertight<24, 16>;
+                $body
+            }
+            raypipe_hw::Datapath::Q16_8 => {
+                type $I = raypipe_core::FixedWatertight<24, 8>;
+                $body
+            }
+        }
+    };
+}
+
+/// Why the fixed-point datapath cannot run on this scene: it needs a BVH (binary, 4- or
+/// 8-wide) or none, whose box tests it has; the grid's and kd-tree's steps are `f32`
+/// and would drop hits the fixed-point test finds half a unit across a cell boundary.
+pub fn fixed_point_unsupported(scene: &SceneView<'_>) -> Option<&'static str> {
+    if scene.grid().is_some() {
+        Some("the scene has a grid")
+    } else if scene.kdtree().is_some() {
+        Some("the scene has a kd-tree")
+    } else {
+        None
+    }
+}
+
 /// Whether the scene's structure has a packet kernel; packets of the others (no
 /// structure, the 8-wide BVH) are traced ray by ray.
 pub fn has_packet_kernel(scene: &SceneView<'_>) -> bool {

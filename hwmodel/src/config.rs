@@ -6,6 +6,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::datapath::Datapath;
 use crate::fifo::MAX_FIFO_DEPTH;
 
 /// Largest packet (the active mask is a `u64`).
@@ -30,6 +31,9 @@ pub struct HwConfig {
     pub packet_size: u32,
     /// Cycles without progress of any unit after which the run stops with an error.
     pub watchdog_cycles: u64,
+    /// The arithmetic of the box and triangle tests: "f32" (default) or a fixed-point
+    /// format ("q16.16", "q12.12", …; see [`Datapath`]). Fixed point needs a BVH scene.
+    pub datapath: Datapath,
     /// Ray generation and shading.
     pub rgs: RgsConfig,
     /// Traversal units.
@@ -226,6 +230,7 @@ impl Default for HwConfig {
             clock_mhz: 200.0,
             packet_size: 16,
             watchdog_cycles: 100_000,
+            datapath: Datapath::F32,
             rgs: RgsConfig::default(),
             traversal: TraversalConfig::default(),
             intersection: IntersectionConfig::default(),

@@ -19,6 +19,7 @@
 
 pub mod cache;
 pub mod config;
+pub mod datapath;
 pub mod dram;
 pub mod fifo;
 pub mod intersection_unit;
@@ -34,6 +35,7 @@ pub mod traversal_unit;
 pub mod unit_stats;
 
 pub use config::HwConfig;
+pub use datapath::Datapath;
 pub use report::Report;
 pub use simulator::Simulator;
 

@@ -37,7 +37,7 @@ pub struct Simulator<'s, I: Intersector> {
     cfg: HwConfig,
     scene: SceneView<'s>,
     rgs: Rgs,
-    tus: Vec<TraversalUnit>,
+    tus: Vec<TraversalUnit<I::Nodes>>,
     ius: Vec<IntersectionUnit<I>>,
     ray_fifos: Vec<Fifo<Box<RayPacketJob>>>,
     leaf_fifos: Vec<Fifo<Box<LeafJob>>>,

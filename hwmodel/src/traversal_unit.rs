@@ -21,6 +21,7 @@
 use std::collections::VecDeque;
 
 use raypipe_core::packet::step::{PacketEvent, PacketStep, PacketWalk};
+use raypipe_core::traverse::node_tests::{FloatNodes, NodeTests};
 use raypipe_core::traverse::walk::{Leaf, Walk, WalkEvent};
 use raypipe_core::{DataClass, Ray, SceneView};
 use serde::Serialize;
@@ -65,15 +66,16 @@ pub const STATE_NAMES: [&str; STATES] =
     ["free", "ready", "fetching", "queued_for_datapath", "step_pipeline", "send_leaf", "at_intersection", "finished"];
 
 /// The walk registers of one packet.
-enum Regs {
+enum Regs<D: NodeTests> {
     /// A tree: one walk for the packet.
     Shared(Box<PacketWalk<64>>),
-    /// The grid (or no structure): one walk per ray.
-    PerRay(Vec<Walk>),
+    /// The grid (or no structure), or any structure with a datapath whose box tests are
+    /// not the packet walk's `f32` ones (fixed point): one walk per ray.
+    PerRay(Vec<Walk<D>>),
 }
 
 /// One packet's registers (its control state is its bit in the unit's state masks).
-struct Thread {
+struct Thread<D: NodeTests> {
     index: u32,
     query: Query,
     traced: u64,
@@ -82,7 +84,7 @@ struct Thread {
     /// Lanes waiting at a leaf.
     at_leaf: u64,
     rays: Box<[Ray; 64]>,
-    regs: Regs,
+    regs: Regs<D>,
     leaves: Box<[Leaf; 64]>,
     then: Next,
     fetch: Fetch,
@@ -103,14 +105,15 @@ pub struct TraversalStats {
     pub thread_state_cycles: [u64; STATES],
 }
 
-/// A traversal unit.
-pub struct TraversalUnit {
+/// A traversal unit, whose datapath tests boxes with `D` (the `f32` tests, or the
+/// fixed-point test: `raypipe_core::traverse::node_tests`).
+pub struct TraversalUnit<D: NodeTests = FloatNodes> {
     /// Unit number.
     pub id: usize,
     packet_size: u64,
     step_latency: u64,
     lanes_per_cycle: u64,
-    threads: Vec<Thread>,
+    threads: Vec<Thread<D>>,
     /// `masks[s]`: the threads in state `s`.
     masks: [u64; STATES],
     next_issue: u32,
@@ -136,9 +139,9 @@ fn first_from(mask: u64, start: u32) -> Option<usize> {
     Some(((rotated.trailing_zeros() + start) % 64) as usize)
 }
 
-impl TraversalUnit {
+impl<D: NodeTests> TraversalUnit<D> {
     /// A unit with `cfg.traversal.threads` free threads (validated: 1 to 64).
-    pub fn new(id: usize, cfg: &HwConfig) -> TraversalUnit {
+    pub fn new(id: usize, cfg: &HwConfig) -> TraversalUnit<D> {
         let n = cfg.traversal.threads.clamp(1, 64) as usize;
         let threads = (0..n)
             .map(|_| Thread {
@@ -221,7 +224,9 @@ impl TraversalUnit {
         t.live = job.lanes;
         t.at_leaf = 0;
         *t.rays = job.rays;
-        t.regs = match PacketWalk::<64>::start(scene, &job.rays, job.lanes) {
+        // The packet walk's box tests are f32: another datapath walks each ray alone.
+        let shared = if D::FLOAT { PacketWalk::<64>::start(scene, &job.rays, job.lanes) } else { None };
+        t.regs = match shared {
             Some(w) => Regs::Shared(Box::new(w)),
             None => {
                 let mut walks = match std::mem::replace(&mut t.regs, Regs::PerRay(Vec::new())) {

@@ -32,7 +32,17 @@ use core::hint::black_box;
 use raypipe_core::camera::{Camera, EyeRays};
 use raypipe_core::shade::lambert::shade;
 use raypipe_core::traverse::brute_force::trace_brute_force;
-use raypipe_core::{Hit, NoProbe, Ray, RayCounters, SceneView, Vec3, Watertight};
+use raypipe_core::{Hit, NoProbe, Ray, RayCounters, SceneView, Vec3};
+
+/// The triangle test of the structure's own walk: the watertight test in `f32`, or with
+/// the `fixed` feature the fixed-point datapath in Q16.16 (its box and triangle tests;
+/// for the BVHs only, whose box tests it has).
+#[cfg(all(feature = "fixed", any(feature = "grid", feature = "kd")))]
+compile_error!("the fixed-point datapath has box tests for the BVHs only: build it with bvh, bvh4 or bvh8");
+#[cfg(not(feature = "fixed"))]
+type Datapath = raypipe_core::Watertight;
+#[cfg(feature = "fixed")]
+type Datapath = raypipe_core::Q16_16;
 
 /// The tetrahedron with each structure (`raypipe build fixtures/tetra.obj --accel …`).
 static IMAGES: &[(&str, &[u8])] = &[
@@ -89,23 +99,23 @@ fn trace_structure(view: &SceneView<'_>, ray: &Ray) -> Option<Hit> {
     let (p, c) = (&mut NoProbe, &mut RayCounters::default());
     #[cfg(feature = "grid")]
     if let Some(g) = view.grid() {
-        return raypipe_core::traverse::grid::trace_grid::<Watertight, _>(view, g, ray, p, c);
+        return raypipe_core::traverse::grid::trace_grid::<Datapath, _>(view, g, ray, p, c);
     }
     #[cfg(feature = "kd")]
     if let Some(t) = view.kdtree() {
-        return raypipe_core::traverse::kdtree::trace_kdtree::<Watertight, _>(view, t, ray, p, c);
+        return raypipe_core::traverse::kdtree::trace_kdtree::<Datapath, _>(view, t, ray, p, c);
     }
     #[cfg(feature = "bvh4")]
     if let Some(t) = view.bvh4() {
-        return raypipe_core::traverse::bvh4::trace_bvh4::<Watertight, _>(view, t, ray, p, c);
+        return raypipe_core::traverse::bvh4::trace_bvh4::<Datapath, _>(view, t, ray, p, c);
     }
     #[cfg(feature = "bvh8")]
     if let Some(t) = view.bvh8() {
-        return raypipe_core::traverse::bvh8::trace_bvh8::<Watertight, _>(view, t, ray, p, c);
+        return raypipe_core::traverse::bvh8::trace_bvh8::<Datapath, _>(view, t, ray, p, c);
     }
     #[cfg(feature = "bvh")]
     if let Some(t) = view.bvh() {
-        return raypipe_core::traverse::bvh::trace_bvh::<Watertight, _>(view, t, ray, p, c);
+        return raypipe_core::traverse::bvh::trace_bvh::<Datapath, _>(view, t, ray, p, c);
     }
     let _ = (view, ray, p, c);
     None
@@ -133,7 +143,7 @@ mod full {
     use raypipe_core::shade::whitted::WhittedOptions;
     use raypipe_core::traverse::occlusion::occluded;
     use raypipe_core::traverse::walk::trace_walk;
-    use raypipe_core::MollerTrumbore;
+    use raypipe_core::{MollerTrumbore, Watertight};
 
     /// The generic walk with two intersectors agrees with `want`, and so does any-hit.
     #[inline(never)]
@@ -141,6 +151,21 @@ mod full {
         let p = &mut NoProbe;
         same(&trace_walk::<Watertight, _>(view, ray, p), want)
             && same(&trace_walk::<MollerTrumbore, _>(view, ray, p).and(*want), want)
+    }
+
+    /// The fixed-point datapath in Q16.16 and Q12.12: on a BVH (or none) the generic walk
+    /// gives the fixed-point brute-force hit. (On a grid or kd-tree, whose steps are f32
+    /// and not conservative for it, it runs for the link-time proof only.)
+    #[inline(never)]
+    pub fn fixed_agrees(view: &SceneView<'_>, ray: &Ray) -> bool {
+        fn one<I: raypipe_core::Intersector>(view: &SceneView<'_>, ray: &Ray) -> bool {
+            let got = trace_walk::<I, _>(view, ray, &mut NoProbe);
+            if view.grid().is_some() || view.kdtree().is_some() {
+                return black_box(got).is_none() || got.is_some();
+            }
+            same(&got, &trace_brute_force::<I, _>(view, ray, &mut NoProbe, &mut RayCounters::default()))
+        }
+        one::<raypipe_core::Q16_16>(view, ray) && one::<raypipe_core::Q12_12>(view, ray)
     }
 
     #[inline(never)]
@@ -209,7 +234,8 @@ struct Depths {
 }
 
 /// Exit codes: 0 all good; 2 an image rejected; 3 no camera; 4 a kernel disagrees with
-/// brute force; 5 the any-hit query disagrees; 6 a packet disagrees; 7 implausible hits.
+/// brute force; 5 the any-hit query disagrees; 6 a packet disagrees; 7 implausible hits;
+/// 8 the fixed-point walk disagrees with fixed-point brute force.
 fn check(image: &[u8], depths: &mut Depths) -> i32 {
     let Ok(view) = SceneView::parse(image) else { return 2 };
     let Some(cam) = view.camera() else { return 3 };
@@ -220,7 +246,7 @@ fn check(image: &[u8], depths: &mut Depths) -> i32 {
     for y in 0..eye.height {
         for x in 0..eye.width {
             let ray = black_box(eye.ray(x, y));
-            let want = trace_brute_force::<Watertight, _>(&view, &ray, &mut NoProbe, &mut RayCounters::default());
+            let want = trace_brute_force::<Datapath, _>(&view, &ray, &mut NoProbe, &mut RayCounters::default());
             let mut got = None;
             depths.walk = depths.walk.max(stack::depth_of(|| got = trace_structure(&view, &ray)));
             if !same(&got, &want) {
@@ -234,6 +260,9 @@ fn check(image: &[u8], depths: &mut Depths) -> i32 {
             {
                 if !full::walks_agree(&view, &ray, &want) {
                     return 4;
+                }
+                if !full::fixed_agrees(&view, &ray) {
+                    return 8;
                 }
                 let mut any = false;
                 depths.any_hit = depths.any_hit.max(stack::depth_of(|| any = full::any_hit(&view, &ray)));
@@ -262,7 +291,7 @@ fn check(image: &[u8], depths: &mut Depths) -> i32 {
             }
             let want: [Option<Hit>; 16] = core::array::from_fn(|i| {
                 let ray = rays.get(i).filter(|_| active & (1 << i) != 0)?;
-                trace_brute_force::<Watertight, _>(&view, ray, &mut NoProbe, &mut RayCounters::default())
+                trace_brute_force::<raypipe_core::Watertight, _>(&view, ray, &mut NoProbe, &mut RayCounters::default())
             });
             let mut ok = false;
             depths.packet =

@@ -9,7 +9,7 @@ use raypipe::scene::{framing_camera, Accel};
 use raypipe::tracer::trace;
 use raypipe_core::camera::{Camera, EyeRays};
 use raypipe_core::image::CameraRecord;
-use raypipe_core::{Hit, NoProbe, RayCounters, SceneView, Vec3, Watertight};
+use raypipe_core::{FixedWatertight, Hit, Intersector, NoProbe, RayCounters, SceneView, Vec3, Watertight};
 use raypipe_hw::config::{MemoryModel, PagePolicy};
 use raypipe_hw::{HwConfig, Simulator};
 use raypipe_tests::build_soup;
@@ -143,13 +143,18 @@ fn camera(view: &SceneView<'_>, size: (u32, u32), eye_jitter: [f32; 3]) -> Camer
 
 /// The host's per-pixel hits for the view.
 fn host_hits(view: &SceneView<'_>, eye: &EyeRays) -> Vec<Option<Hit>> {
+    host_hits_with::<Watertight>(view, eye)
+}
+
+/// The host's per-pixel hits for the view with the triangle test `I`.
+fn host_hits_with<I: Intersector>(view: &SceneView<'_>, eye: &EyeRays) -> Vec<Option<Hit>> {
     let (lo, hi) = view.test_bounds();
     let mut out = Vec::new();
     for y in 0..eye.height {
         for x in 0..eye.width {
             out.push(
                 eye.ray_in_scene(x, y, lo, hi)
-                    .and_then(|r| trace::<Watertight, _>(view, &r, &mut NoProbe, &mut RayCounters::default())),
+                    .and_then(|r| trace::<I, _>(view, &r, &mut NoProbe, &mut RayCounters::default())),
             );
         }
     }
@@ -238,6 +243,47 @@ proptest! {
             perfect.memory.model = MemoryModel::Perfect;
             let p = run(&view, &cam, &perfect, Clocking::default());
             prop_assert!(p.cycles() <= sim.cycles(), "perfect {} > {:?} {}", p.cycles(), cfg.memory.model, sim.cycles());
+        }
+    }
+}
+
+/// The model with the fixed-point datapath on `view`: its hits.
+fn fixed_model_hits<I: Intersector>(view: &SceneView<'_>, cam: &CameraRecord, cfg: &HwConfig) -> Vec<Option<Hit>> {
+    let eye = EyeRays::new(&Camera::from(cam)).expect("valid camera");
+    let mut sim = Simulator::<I>::new(*view, eye, Vec3::from(cam.background), cfg).expect("valid config");
+    sim.run(|_, _| {}).expect("the run terminates");
+    sim.hits().to_vec()
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 80, ..ProptestConfig::default() })]
+
+    /// With the fixed-point datapath (issue 18, item 8) the model's traversal units walk
+    /// each ray with the fixed-point box test and its intersection units run the
+    /// fixed-point triangle test: every pixel's hit is the host's with the same datapath,
+    /// on every BVH and any chip.
+    #[test]
+    fn fixed_point_model_hits_equal_the_host(
+        (positions, tris) in soup(),
+        accel in prop_oneof![Just(Accel::Bvh), Just(Accel::Bvh4), Just(Accel::Bvh8)],
+        cfg in config(),
+        w in 1u32..24,
+        h in 1u32..24,
+        jitter in [-1.0f32..1.0, -1.0f32..1.0, -1.0f32..1.0],
+    ) {
+        let scene = build_soup(positions, tris, accel, 2);
+        let view = scene.view().expect("valid image");
+        let cam = camera(&view, (w, h), jitter);
+        let eye = EyeRays::new(&Camera::from(&cam)).unwrap();
+        let model = fixed_model_hits::<FixedWatertight<32, 16>>(&view, &cam, &cfg);
+        let host = host_hits_with::<FixedWatertight<32, 16>>(&view, &eye);
+        for (i, (m, h)) in model.iter().zip(&host).enumerate() {
+            prop_assert!(same(m, h), "Q16.16 pixel {i}: model {m:?} != host {h:?} ({accel:?})");
+        }
+        let model = fixed_model_hits::<FixedWatertight<24, 12>>(&view, &cam, &cfg);
+        let host = host_hits_with::<FixedWatertight<24, 12>>(&view, &eye);
+        for (i, (m, h)) in model.iter().zip(&host).enumerate() {
+            prop_assert!(same(m, h), "Q12.12 pixel {i}: model {m:?} != host {h:?} ({accel:?})");
         }
     }
 }

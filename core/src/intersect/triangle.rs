@@ -6,6 +6,7 @@ use glam::{Vec3, Vec4};
 use crate::image::{SceneView, TriBlock4};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
+use crate::traverse::node_tests::NodeTests;
 
 pub use crate::intersect::moller_trumbore::MollerTrumbore;
 pub use crate::intersect::wald::WaldProjection;
@@ -22,6 +23,9 @@ pub trait Intersector {
     type Triangle: Copy;
     /// A short name for reports.
     const NAME: &'static str;
+    /// The box tests that go with this test in the BVH walks: conservative for its
+    /// rounding ([`crate::traverse::node_tests`]).
+    type Nodes: NodeTests;
     /// Computes the per-ray constants.
     fn prepare(ray: &Ray) -> Self::Prepared;
     /// Reads triangle `prim` in this test's layout (an observed read).

@@ -4,11 +4,15 @@
 
 use glam::Vec3A;
 
+use crate::counters::RayCounters;
 use crate::hit::Hit;
 use crate::image::{BvhView, SceneView, MAX_TREE_DEPTH};
 use crate::intersect::triangle::{test_triangle, Intersector};
-use crate::packet::{LanesOf, PacketCounters, PacketHits, RayPacket};
+use crate::packet::{ray_by_ray, LanesOf, PacketCounters, PacketHits, RayPacket};
 use crate::probe::MemoryProbe;
+use crate::ray::Ray;
+use crate::traverse::bvh::trace_bvh;
+use crate::traverse::node_tests::NodeTests;
 use crate::traverse::ray_box::RayBox;
 
 /// Traces all active rays of `packet`; `hits[i]` receives ray `i`'s closest hit.
@@ -20,6 +24,10 @@ pub fn trace_bvh_packet<I: Intersector, P: MemoryProbe, const N: usize>(
     probe: &mut P,
     counters: &mut PacketCounters,
 ) {
+    if !<I::Nodes as NodeTests>::FLOAT {
+        let walk = |r: &Ray, c: &mut RayCounters| trace_bvh::<I, P>(scene, bvh, r, probe, c);
+        return ray_by_ray(packet, hits, counters, walk);
+    }
     let rays: [_; N] = core::array::from_fn(|i| packet.ray(i));
     let boxes: [RayBox; N] = core::array::from_fn(|i| RayBox::new(&rays[i]));
     let preps: [I::Prepared; N] = core::array::from_fn(|i| I::prepare(&rays[i]));

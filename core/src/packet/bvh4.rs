@@ -8,13 +8,17 @@
 use crate::traverse::bvh4::slab4_exact;
 use glam::{BVec4A, Vec3, Vec3A, Vec4};
 
+use crate::counters::RayCounters;
 use crate::hit::keep_closest;
 use crate::hit::Hit;
 use crate::image::{Bvh4Node, Bvh4View, SceneView, MAX_WIDE_DEPTH, NULL_INDEX};
 use crate::intersect::triangle::{in_range, test_triangle, Intersector, LaneHits, RayPair, SharedTris};
-use crate::packet::{Lanes, PacketCounters, PacketHits, RayPacket, MAX_PACKET};
+use crate::packet::{ray_by_ray, Lanes, PacketCounters, PacketHits, RayPacket, MAX_PACKET};
 use crate::probe::MemoryProbe;
+use crate::ray::Ray;
 use crate::traverse::aabb::SLAB_GROWTH;
+use crate::traverse::bvh4::trace_bvh4;
+use crate::traverse::node_tests::NodeTests;
 use crate::traverse::ray_box::{recip, recip4, RayBox};
 
 const STACK: usize = 3 * MAX_WIDE_DEPTH as usize + 4;
@@ -310,6 +314,10 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
     probe: &mut P,
     counters: &mut PacketCounters,
 ) {
+    if !<I::Nodes as NodeTests>::FLOAT {
+        let walk = |r: &Ray, c: &mut RayCounters| trace_bvh4::<I, P>(scene, bvh, r, probe, c);
+        return ray_by_ray(packet, hits, counters, walk);
+    }
     *hits = [None; N];
     let mask = packet.live();
     if mask == 0 {

@@ -219,6 +219,26 @@ impl PacketCounters {
     }
 }
 
+/// A packet traced ray by ray with the single-ray kernel `trace`: what the packet kernels
+/// do for a triangle test whose box tests are not the `f32` ones their lanes share (the
+/// fixed-point datapath, [`crate::traverse::node_tests`]). Each visit counts one lane.
+#[inline]
+pub fn ray_by_ray<const N: usize>(
+    packet: &RayPacket<N>,
+    hits: &mut PacketHits<N>,
+    counters: &mut PacketCounters,
+    mut trace: impl FnMut(&Ray, &mut crate::counters::RayCounters) -> Option<Hit>,
+) {
+    let mut c = crate::counters::RayCounters::default();
+    for (i, hit) in hits.iter_mut().enumerate() {
+        *hit = if packet.live() & (1 << i) != 0 { trace(&packet.ray(i), &mut c) } else { None };
+    }
+    let visits = u64::from(c.nodes) + u64::from(c.leaves);
+    counters.visits += visits;
+    counters.active_lanes += visits;
+    counters.tri_tests += u64::from(c.tri_tests);
+}
+
 /// Iterates the set bits of a mask, lowest first.
 #[derive(Clone, Copy, Debug)]
 pub struct Lanes(pub u64);

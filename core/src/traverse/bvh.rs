@@ -12,16 +12,18 @@ use crate::image::{BvhNode, BvhView, SceneView, MAX_TREE_DEPTH};
 use crate::intersect::triangle::Intersector;
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
+use crate::traverse::node_tests::{BoxTest, NodeTests};
 use crate::traverse::ray_box::RayBox;
 use crate::traverse::tree_step::{trace_tree, TreeEvent, TreeWalk};
 
 /// The traversal registers of one ray in the BVH: the node it stands on (its record is
 /// held, not re-read), a fixed-capacity stack of `(node, entry distance)`, and the best
 /// hit so far. One [`BvhTraversal::step`] visits one inner node: it reads the node's two
-/// children (adjacent records) and tests both boxes.
+/// children (adjacent records) and tests both boxes with the box test `B` (the `f32`
+/// slab test, or the fixed-point one: [`crate::traverse::node_tests`]).
 #[derive(Clone, Debug)]
-pub struct BvhTraversal {
-    rb: RayBox,
+pub struct BvhTraversal<B: BoxTest = RayBox> {
+    rb: B,
     t_min: f32,
     t_max: f32,
     node: BvhNode,
@@ -34,12 +36,12 @@ pub struct BvhTraversal {
     pub best: Option<Hit>,
 }
 
-impl BvhTraversal {
+impl<B: BoxTest> BvhTraversal<B> {
     /// Starts a ray at the root; an invalid ray is done at once.
     #[inline]
-    pub fn new(ray: &Ray) -> BvhTraversal {
+    pub fn new(ray: &Ray) -> BvhTraversal<B> {
         BvhTraversal {
-            rb: RayBox::new(ray),
+            rb: B::for_ray(ray),
             t_min: ray.t_min,
             t_max: ray.t_max,
             node: BvhNode::zeroed(),
@@ -121,7 +123,7 @@ impl BvhTraversal {
     }
 }
 
-impl TreeWalk<BvhView<'_>> for BvhTraversal {
+impl<B: BoxTest> TreeWalk<BvhView<'_>> for BvhTraversal<B> {
     #[inline(always)]
     fn step<P: MemoryProbe>(&mut self, view: &BvhView<'_>, _ray: &Ray, probe: &mut P) -> TreeEvent {
         BvhTraversal::step(self, view, probe)
@@ -147,5 +149,6 @@ pub fn trace_bvh<I: Intersector, P: MemoryProbe>(
     probe: &mut P,
     counters: &mut RayCounters,
 ) -> Option<Hit> {
-    trace_tree::<I, P, _, _>(scene, bvh, BvhTraversal::new(ray), ray, probe, counters)
+    let walk = BvhTraversal::<<I::Nodes as NodeTests>::Binary>::new(ray);
+    trace_tree::<I, P, _, _>(scene, bvh, walk, ray, probe, counters)
 }

@@ -88,8 +88,8 @@ impl WideSlab for Bvh4Node {
     }
 }
 
-/// One ray's walk through the 4-wide BVH.
-pub type Bvh4Traversal = WideBvhTraversal<Bvh4Node, { stack_capacity(4) }>;
+/// One ray's walk through the 4-wide BVH, with the box test `R`.
+pub type Bvh4Traversal<R = NodeRay> = WideBvhTraversal<Bvh4Node, { stack_capacity(4) }, R>;
 
 /// The closest hit of `ray` through the 4-wide BVH (see [`trace_wide_bvh`]).
 #[inline(always)]

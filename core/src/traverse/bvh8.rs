@@ -140,8 +140,8 @@ impl WideSlab for Bvh8Node {
     }
 }
 
-/// One ray's walk through the 8-wide BVH.
-pub type Bvh8Traversal = WideBvhTraversal<Bvh8Node, { stack_capacity(8) }>;
+/// One ray's walk through the 8-wide BVH, with the box test `R`.
+pub type Bvh8Traversal<R = NodeRay> = WideBvhTraversal<Bvh8Node, { stack_capacity(8) }, R>;
 
 /// The closest hit of `ray` through the 8-wide BVH (see [`trace_wide_bvh`]).
 #[inline(always)]

@@ -1,6 +1,6 @@
 //! Traversal: the structures' walks, one node or voxel per step — Purcell's uniform grid
 //! with its 3D-DDA, the kd-tree, the binary, 4-wide and 8-wide BVHs — the robust ray/box
-//! tests they share, the any-hit query of shadow rays, and the brute-force reference.
+//! tests they share (in `f32` and in fixed point), the any-hit query of shadow rays, and the brute-force reference.
 
 pub mod aabb;
 pub mod brute_force;
@@ -8,8 +8,10 @@ pub mod bvh;
 pub mod bvh4;
 pub mod bvh8;
 pub mod dda;
+pub mod fixed_ray_box;
 pub mod grid;
 pub mod kdtree;
+pub mod node_tests;
 pub mod occlusion;
 pub mod ray_box;
 pub mod tree_step;

@@ -23,7 +23,7 @@ pub fn occluded<I: Intersector, P: MemoryProbe>(
         return false;
     }
     let prep = I::prepare(ray);
-    let mut walk = Walk::start(scene, ray);
+    let mut walk = Walk::<I::Nodes>::start(scene, ray);
     loop {
         match walk.step(scene, ray, probe) {
             WalkEvent::Inner => counters.nodes = counters.nodes.saturating_add(1),

@@ -17,6 +17,7 @@ use crate::traverse::bvh8::Bvh8Traversal;
 use crate::traverse::dda::Voxel;
 use crate::traverse::grid::{GridEvent, GridTraversal};
 use crate::traverse::kdtree::KdTraversal;
+use crate::traverse::node_tests::{FloatNodes, NodeTests};
 use crate::traverse::tree_step::TreeEvent;
 
 /// Where a leaf's triangle ids are.
@@ -128,22 +129,27 @@ pub enum WalkEvent {
     Done,
 }
 
-/// The traversal registers of one ray, for the structure the scene holds.
+/// The traversal registers of one ray, for the structure the scene holds, with the box
+/// tests `D` in the BVHs (the `f32` ones, or the fixed-point one: see
+/// [`crate::traverse::node_tests`]; take them from the triangle test, `I::Nodes`). The
+/// grid's and the kd-tree's steps are `f32` whatever `D`: they have no box test to swap,
+/// and with a fixed-point triangle test they are not conservative (a hit half a unit
+/// across a cell boundary can be missed).
 // The 4-wide BVH's stack makes its variant the largest; core has no heap to box it in,
 // and a walk is a fixed-size register file anyway.
 #[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug)]
-pub enum Walk {
+pub enum Walk<D: NodeTests = FloatNodes> {
     /// Uniform grid: the DDA registers and the voxel whose list is being tested.
     Grid(GridTraversal, Option<Voxel>),
     /// kd-tree.
     Kd(KdTraversal),
     /// Binary BVH.
-    Bvh(BvhTraversal),
+    Bvh(BvhTraversal<D::Binary>),
     /// 4-wide BVH.
-    Bvh4(Bvh4Traversal),
+    Bvh4(Bvh4Traversal<D::Wide>),
     /// 8-wide BVH.
-    Bvh8(Bvh8Traversal),
+    Bvh8(Bvh8Traversal<D::Wide>),
     /// No structure: one leaf of every triangle.
     All {
         /// The single leaf was handed out.
@@ -153,10 +159,10 @@ pub enum Walk {
     },
 }
 
-impl Walk {
+impl<D: NodeTests> Walk<D> {
     /// Starts `ray` in the scene's structure. (An eye ray's bounding-box test comes
     /// before this, in the ray generator.)
-    pub fn start(scene: &SceneView<'_>, ray: &Ray) -> Walk {
+    pub fn start(scene: &SceneView<'_>, ray: &Ray) -> Walk<D> {
         if let Some(grid) = scene.grid() {
             Walk::Grid(GridTraversal::new(grid, ray), None)
         } else if scene.bvh4().is_some() {
@@ -268,7 +274,7 @@ impl Walk {
 /// loop (tests compare it with the structures' own tracers).
 pub fn trace_walk<I: Intersector, P: MemoryProbe>(scene: &SceneView<'_>, ray: &Ray, probe: &mut P) -> Option<Hit> {
     let prep = I::prepare(ray);
-    let mut walk = Walk::start(scene, ray);
+    let mut walk = Walk::<I::Nodes>::start(scene, ray);
     loop {
         match walk.step(scene, ray, probe) {
             WalkEvent::Inner => {}

@@ -6,7 +6,7 @@
 //! thing left to visit.
 
 use core::marker::PhantomData;
-use core::ops::Index;
+use core::ops::{Index, IndexMut};
 
 use glam::Vec3A;
 
@@ -17,8 +17,9 @@ use crate::intersect::leaf_blocks::test_leaf_blocks;
 use crate::intersect::triangle::Intersector;
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
+use crate::traverse::node_tests::{NodeTests, WideRay};
 use crate::traverse::ray_box::RayBox;
-use crate::traverse::tree_step::{test_leaf, TreeEvent, TreeWalk};
+use crate::traverse::tree_step::{test_leaf, trace_tree, TreeEvent, TreeWalk};
 
 /// Stack capacity for nodes of `width` children: at most `width − 1` entries wait per
 /// level of a tree of [`MAX_WIDE_DEPTH`] (the image validation bounds the depth).
@@ -132,7 +133,7 @@ impl NodeRay {
 /// never reject a box the ray touches (see [`crate::traverse::ray_box`]).
 pub trait WideSlab: WideNode {
     /// Entry distances, one per slot.
-    type Dist: Copy + Default + Index<usize, Output = f32>;
+    type Dist: Copy + Default + Index<usize, Output = f32> + IndexMut<usize>;
     /// The node test: the entry distances into `tn`, the mask returned.
     fn slab(&self, r: &NodeRay, t0: f32, t1: f32, tn: &mut Self::Dist) -> u32;
     /// True where the node test has forms for rays of one octant ([`WideSlab::slab_in`]).
@@ -147,10 +148,12 @@ pub trait WideSlab: WideNode {
 
 /// The traversal registers of one ray in a wide BVH: the entry to visit next, a
 /// fixed-capacity stack of `(child or first entry, leaf count or 0, entry distance)`, and
-/// the best hit so far. One [`WideBvhTraversal::step`] reads one node.
+/// the best hit so far. One [`WideBvhTraversal::step`] reads one node and tests its
+/// boxes with `R` (the `f32` SIMD tests, or the fixed-point test:
+/// [`crate::traverse::node_tests`]).
 #[derive(Clone, Debug)]
-pub struct WideBvhTraversal<N: WideSlab, const C: usize> {
-    ray: NodeRay,
+pub struct WideBvhTraversal<N: WideSlab, const C: usize, R: WideRay<N> = NodeRay> {
+    ray: R,
     t_min: f32,
     // The best hit's distance (or the ray's end): boxes entered beyond it are skipped.
     t_end: f32,
@@ -164,12 +167,12 @@ pub struct WideBvhTraversal<N: WideSlab, const C: usize> {
     node: PhantomData<fn() -> N>,
 }
 
-impl<N: WideSlab, const C: usize> WideBvhTraversal<N, C> {
+impl<N: WideSlab, const C: usize, R: WideRay<N>> WideBvhTraversal<N, C, R> {
     /// Starts a ray at the root; an invalid ray is done at once.
     #[inline]
-    pub fn new(ray: &Ray) -> WideBvhTraversal<N, C> {
+    pub fn new(ray: &Ray) -> WideBvhTraversal<N, C, R> {
         WideBvhTraversal {
-            ray: NodeRay::new(ray),
+            ray: R::for_ray(ray),
             t_min: ray.t_min,
             t_end: ray.t_max,
             current: (0, 0),
@@ -193,7 +196,7 @@ impl<N: WideSlab, const C: usize> WideBvhTraversal<N, C> {
         }
         let node = bvh.node(index, probe);
         let mut tn = N::Dist::default();
-        let mask = node.slab(&self.ray, self.t_min, self.t_end, &mut tn);
+        let mask = self.ray.slab(node, self.t_min, self.t_end, &mut tn);
         if mask == 0 {
             self.pop();
             return TreeEvent::Inner;
@@ -274,7 +277,7 @@ fn pop_next<const C: usize>(stack: &mut Stack<C>, t_end: f32) -> Option<(u32, u3
     }
 }
 
-impl<N: WideSlab, const C: usize> TreeWalk<WideBvhView<'_, N>> for WideBvhTraversal<N, C> {
+impl<N: WideSlab, const C: usize, R: WideRay<N>> TreeWalk<WideBvhView<'_, N>> for WideBvhTraversal<N, C, R> {
     #[inline(always)]
     fn step<P: MemoryProbe>(&mut self, view: &WideBvhView<'_, N>, _ray: &Ray, probe: &mut P) -> TreeEvent {
         WideBvhTraversal::step(self, view, probe)
@@ -303,7 +306,16 @@ pub fn trace_wide_bvh<N: WideSlab, const C: usize, I: Intersector, P: MemoryProb
     ray: &Ray,
     probe: &mut P,
     counters: &mut RayCounters,
-) -> Option<Hit> {
+) -> Option<Hit>
+where
+    <I::Nodes as NodeTests>::Wide: WideRay<N>,
+{
+    if !<I::Nodes as NodeTests>::FLOAT {
+        // Another datapath's box test: the step walk with it (the loop below is the f32
+        // tests' fast path).
+        let walk = WideBvhTraversal::<N, C, <I::Nodes as NodeTests>::Wide>::new(ray);
+        return trace_tree::<I, P, _, _>(scene, bvh, walk, ray, probe, counters);
+    }
     if !ray.is_valid() {
         return None;
     }
