@@ -12,6 +12,7 @@ pub mod bvh_builder;
 pub mod camera_file;
 pub mod cli;
 pub mod default_scene;
+pub mod fixed_point;
 pub mod grid_builder;
 pub mod huge_pages;
 pub mod image_writer;
