@@ -698,7 +698,7 @@ fn cmd_fixed_point(a: FixedPointArgs) -> Result<()> {
     let paths: Vec<Option<&Path>> =
         if a.scenes.is_empty() { vec![None] } else { a.scenes.iter().map(|p| Some(p.as_path())).collect() };
     println!(
-        "{:<22} {:<7} {:<8} {:>4} {:>8} {:>8} {:>7} {:>7} {:>7}  {:<34} {:<14} {}",
+        "{:<22} {:<7} {:<8} {:>4} {:>8} {:>8} {:>7} {:>7} {:>7}  {:<34} {:<14} tests/ray (f32 -> fixed)",
         "scene",
         "rays",
         "datapath",
@@ -710,7 +710,6 @@ fn cmd_fixed_point(a: FixedPointArgs) -> Result<()> {
         "fixonly",
         "hit offset median/p99/max (median ulp)",
         "nodes/ray",
-        "tests/ray (f32 -> fixed)"
     );
     for path in paths {
         let opts = BuildOptions { accel: a.accel, ..Default::default() };
@@ -730,8 +729,17 @@ fn cmd_fixed_point(a: FixedPointArgs) -> Result<()> {
             for (kind, rays) in [(RayKind::Primary, &primary), (RayKind::Bounce, &bounce)] {
                 let r = compare(&view, rays, *d);
                 let per = |x: u64| x as f64 / r.rays.max(1) as f64;
+                let offset = format!(
+                    "{:.2e}/{:.2e}/{:.2e} ({:.2})",
+                    r.offset(0.5),
+                    r.offset(0.99),
+                    r.offset(1.0),
+                    r.offset(0.5) / format.ulp()
+                );
+                let nodes = format!("{:.1} -> {:.1}", per(r.visits[0]), per(r.visits[1]));
+                let tests = format!("{:.2} -> {:.2}", per(r.tests[0]), per(r.tests[1]));
                 println!(
-                    "{:<22} {:<7} {:<8} {:>4} {:>8} {:>8.3} {:>7} {:>7} {:>7}  {:<34} {:<14} {}",
+                    "{:<22} {:<7} {:<8} {:>4} {:>8} {:>8.3} {:>7} {:>7} {:>7}  {offset:<34} {nodes:<14} {tests}",
                     scene.name,
                     kind.name(),
                     d.name(),
@@ -741,15 +749,6 @@ fn cmd_fixed_point(a: FixedPointArgs) -> Result<()> {
                     r.other_triangle,
                     r.f32_only,
                     r.fixed_only,
-                    format!(
-                        "{:.2e}/{:.2e}/{:.2e} ({:.2})",
-                        r.offset(0.5),
-                        r.offset(0.99),
-                        r.offset(1.0),
-                        r.offset(0.5) / format.ulp()
-                    ),
-                    format!("{:.1} -> {:.1}", per(r.visits[0]), per(r.visits[1])),
-                    format!("{:.2} -> {:.2}", per(r.tests[0]), per(r.tests[1])),
                 );
             }
             if !ok {

@@ -11,7 +11,7 @@ use raypipe_core::packet::step::trace_packet_steps;
 use raypipe_core::shade::lambert::shade;
 use raypipe_core::traverse::occlusion::occluded;
 use raypipe_core::traverse::walk::trace_walk;
-use raypipe_core::{NoProbe, Ray, RayCounters, SceneView, Vec3, Watertight};
+use raypipe_core::{NoProbe, Ray, RayCounters, SceneView, Vec3, Watertight, Q12_12};
 
 fuzz_target!(|data: &[u8]| {
     let bytes = AlignedBytes::from_slice(data);
@@ -42,6 +42,13 @@ fuzz_target!(|data: &[u8]| {
         let any = occluded::<Watertight, _>(&view, ray, &mut NoProbe, &mut RayCounters::default());
         assert_eq!(any, hit.is_some());
         let _ = shade(&view, ray, hit, Vec3::ZERO, &mut NoProbe);
+        // The fixed-point datapath: bounded and panic-free on any image; on a BVH (or
+        // none) its walk agrees with its own single-ray kernel.
+        let fixed = trace_walk::<Q12_12, _>(&view, ray, &mut NoProbe);
+        let fixed_kernel = trace::<Q12_12, _>(&view, ray, &mut NoProbe, &mut RayCounters::default());
+        if view.grid().is_none() && view.kdtree().is_none() {
+            assert_eq!(fixed.map(|h| (h.t.to_bits(), h.prim)), fixed_kernel.map(|h| (h.t.to_bits(), h.prim)));
+        }
     }
     let packet: [Ray; 4] = core::array::from_fn(|i| rays[i % rays.len()]);
     let mut hits = [None; 4];
