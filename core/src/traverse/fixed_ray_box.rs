@@ -3,12 +3,16 @@
 //! it never rejects a box the ray touches, nor a box holding a triangle that the
 //! fixed-point triangle test ([`crate::intersect::fixed_watertight`]) hits.
 //!
-//! * A box's corners are rounded outward into the format (floor, ceiling), so the box
-//!   still holds its triangles' vertices, which the triangle test rounds to the nearest.
-//! * The triangle test rounds each sheared coordinate to the nearest unit: its hit point
-//!   may lie up to half a unit off the triangle across the ray (never along the major
-//!   axis, whose coordinates it does not round). The box grows by one unit on the two
-//!   minor axes for that.
+//! * A box's corners are rounded outward into the format (floor, ceiling).
+//! * It grows by one unit on every axis. A box need not hold its triangles' vertices — a
+//!   BVH with spatial splits (Stich et al. 2009) gives each leaf the part of a triangle
+//!   inside its box — but the triangle's points lie in the union of its leaves' boxes.
+//!   The triangle test finds its hit on the triangle with rounded vertices (each moved at
+//!   most half a unit per axis), through a shear rounded to the nearest unit across the
+//!   ray: the hit point lies within one unit, on every axis, of the point with the same
+//!   barycentric weights on the exact triangle, which some leaf's box holds. (Where the
+//!   scene does not fit the format, coordinates saturate, vertices move further and no
+//!   margin is enough: the datapath is exact only for scenes it holds.)
 //! * Per ray, the reciprocal of each minor axis' direction ratio is held as an interval
 //!   `[floor, ceil]` with `BITS / 2` fraction bits in an unsigned `BITS`-bit register
 //!   (Keely 2014, "Reduced Precision for Hardware Ray Tracing in GPUs", tests boxes with
@@ -45,12 +49,13 @@ pub struct FixedRayBox<const BITS: u32, const FRAC: u32> {
     negative: [bool; 3],
     /// Per axis, the direction is zero (the ray runs inside the slab or misses it).
     zero: [bool; 3],
-    /// Per axis, how far the box grows (raw): 1 across the ray, 0 along its major axis.
-    margin: [i64; 3],
 }
 
 /// A reciprocal beyond its register: +∞.
 const UNBOUNDED: i64 = i64::MAX;
+
+/// How far a box grows on every axis, in raw units (see the module docs).
+const MARGIN: i64 = 1;
 
 impl<const BITS: u32, const FRAC: u32> FixedRayBox<BITS, FRAC> {
     /// Fraction bits of the reciprocals.
@@ -63,8 +68,7 @@ impl<const BITS: u32, const FRAC: u32> FixedRayBox<BITS, FRAC> {
     pub fn new(ray: &Ray) -> Self {
         let r = FixedRay::<BITS, FRAC>::new(ray);
         let s = FixedRay::<BITS, FRAC>::SLOPE_FRAC;
-        let mut b = FixedRayBox { ray: r, margin: [1; 3], ..Default::default() };
-        b.margin[usize::from(r.k[2]) % 3] = 0;
+        let mut b = FixedRayBox { ray: r, ..Default::default() };
         for axis in 0..3 {
             let (negative, mag) = r.direction(axis);
             b.negative[axis] = negative;
@@ -94,9 +98,8 @@ impl<const BITS: u32, const FRAC: u32> FixedRayBox<BITS, FRAC> {
         let mut near = self.ray.tau_floor(t0);
         let mut far = self.ray.tau_ceil(t1);
         for axis in 0..3 {
-            let m = self.margin[axis];
-            let l = fmt.from_f32(lo[axis], Round::Floor) - m;
-            let h = fmt.from_f32(hi[axis], Round::Ceil) + m;
+            let l = fmt.from_f32(lo[axis], Round::Floor) - MARGIN;
+            let h = fmt.from_f32(hi[axis], Round::Ceil) + MARGIN;
             let o = self.ray.origin[axis];
             // Mirrored so that the ray runs toward +axis: the lower plane is the near one.
             let (dl, dh) = if self.negative[axis] { (o - h, o - l) } else { (l - o, h - o) };
