@@ -218,13 +218,6 @@ pub fn trace_packet<I: Intersector, P: MemoryProbe, const N: usize>(
     } else {
         // No packet kernel (no structure, or the 8-wide BVH, whose single-ray kernel is
         // its fast path): each ray by itself.
-        let mut c = RayCounters::default();
-        for (i, hit) in hits.iter_mut().enumerate() {
-            *hit =
-                if packet.active & (1 << i) != 0 { trace::<I, P>(scene, &packet.ray(i), probe, &mut c) } else { None };
-        }
-        counters.visits += (c.nodes + c.leaves) as u64;
-        counters.active_lanes += (c.nodes + c.leaves) as u64;
-        counters.tri_tests += c.tri_tests as u64;
+        raypipe_core::packet::ray_by_ray(packet, hits, counters, |r, c| trace::<I, P>(scene, r, probe, c));
     }
 }

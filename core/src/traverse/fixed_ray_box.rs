@@ -91,12 +91,25 @@ impl<const BITS: u32, const FRAC: u32> FixedRayBox<BITS, FRAC> {
     /// `None`; never `None` for a box the ray touches in that interval (see the module).
     #[inline]
     pub fn entry(&self, lo: Vec3A, hi: Vec3A, t0: f32, t1: f32) -> Option<f32> {
+        let (near, far) = self.interval(t0, t1);
+        self.entry_tau(lo, hi, near, far).map(|tau| self.ray.tau_to_t(tau).max(t0))
+    }
+
+    /// The walk's `f32` interval `[t0, t1]` rounded outward into `τ` (once per node: it is
+    /// the same for every box of a wide node).
+    #[inline]
+    fn interval(&self, t0: f32, t1: f32) -> (i64, i64) {
+        (self.ray.tau_floor(t0), self.ray.tau_ceil(t1))
+    }
+
+    /// [`FixedRayBox::entry`] within the `τ` interval `[near, far]`: the entry's `τ` lower
+    /// bound, or `None`.
+    #[inline]
+    fn entry_tau(&self, lo: Vec3A, hi: Vec3A, mut near: i64, mut far: i64) -> Option<i64> {
         if !self.ray.valid {
             return None;
         }
         let fmt = FixedRay::<BITS, FRAC>::FORMAT;
-        let mut near = self.ray.tau_floor(t0);
-        let mut far = self.ray.tau_ceil(t1);
         for axis in 0..3 {
             let l = fmt.from_f32(lo[axis], Round::Floor) - MARGIN;
             let h = fmt.from_f32(hi[axis], Round::Ceil) + MARGIN;
@@ -112,7 +125,7 @@ impl<const BITS: u32, const FRAC: u32> FixedRayBox<BITS, FRAC> {
             near = near.max(self.lower(dl, axis));
             far = far.min(self.upper(dh, axis));
         }
-        (near <= far).then(|| self.ray.tau_to_t(near).max(t0))
+        (near <= far).then_some(near)
     }
 
     /// A lower bound of `x · (1 / |e|)` (raw `τ`), for the near plane at raw offset `x`.
@@ -165,6 +178,7 @@ impl<N: WideSlab, const BITS: u32, const FRAC: u32> WideRay<N> for FixedRayBox<B
     /// Slot by slot: a hardware unit would test them side by side, with the same result.
     #[inline]
     fn slab(&self, node: &N, t0: f32, t1: f32, tn: &mut N::Dist) -> u32 {
+        let (near, far) = self.interval(t0, t1);
         let mut mask = 0;
         for k in 0..N::WIDTH {
             let (lo, hi, _, _) = node.slot(k);
@@ -172,8 +186,8 @@ impl<N: WideSlab, const BITS: u32, const FRAC: u32> WideRay<N> for FixedRayBox<B
             if lo[0].partial_cmp(&hi[0]).is_none_or(|o| o.is_gt()) {
                 continue;
             }
-            if let Some(t) = self.entry(Vec3A::from_array(lo), Vec3A::from_array(hi), t0, t1) {
-                tn[k] = t;
+            if let Some(tau) = self.entry_tau(Vec3A::from_array(lo), Vec3A::from_array(hi), near, far) {
+                tn[k] = self.ray.tau_to_t(tau).max(t0);
                 mask |= 1 << k;
             }
         }
