@@ -30,6 +30,7 @@ pub mod report;
 pub mod rgs;
 pub mod simulator;
 pub mod stall;
+pub mod stream;
 pub mod traffic;
 pub mod traversal_unit;
 pub mod unit_stats;

@@ -1,0 +1,278 @@
+//! One frame on the stream machine: waves of rays (the eye rays, then each generation
+//! of rays the shader emits), each laid out over screens of fragments, each screen run
+//! by the configured architecture ([`crate::stream::pass_loop`],
+//! [`crate::stream::branching`]) and shaded by core's shading kernels
+//! ([`crate::stream::shading_pass`]). Pixels add their rays' radiance exactly
+//! ([`RadianceSum`]), so the image is the host's whatever order rays end in.
+
+use raypipe_core::camera::EyeRays;
+use raypipe_core::image::GridView;
+use raypipe_core::shade::color::rgb8;
+use raypipe_core::shade::radiance_sum::RadianceSum;
+use raypipe_core::shade::ray_record::RayRecord;
+use raypipe_core::shade::shader::Shader;
+use raypipe_core::{Hit, Intersector, Ray, SceneView, Vec3};
+
+use crate::stream::config::{Architecture, StreamConfig};
+use crate::stream::cost_model::{CostModel, Kernel};
+use crate::stream::counters::{ByKernel, PassKind, PassRecord, RayWork};
+use crate::stream::ray_state::StreamRay;
+use crate::stream::report::{LoopTotals, StreamReport};
+use crate::stream::texture_cache::TextureCache;
+
+/// What a fragment of a screen holds: a ray to trace, or a primary hit that visibility
+/// already decided (the shadow caster's G-buffer).
+#[derive(Clone, Copy, Debug)]
+pub enum Fragment {
+    /// Nothing (the eye ray missed the scene box).
+    Empty,
+    /// A ray record to trace, then shade.
+    Trace(RayRecord),
+    /// A primary record whose hit is known.
+    Visible(RayRecord, Option<Hit>),
+}
+
+/// The machine and everything it counts.
+pub struct StreamMachine<'s, I: Intersector> {
+    pub(crate) scene: SceneView<'s>,
+    pub(crate) grid: GridView<'s>,
+    eye: EyeRays,
+    pub(crate) background: Vec3,
+    pub(crate) shader: Option<Shader>,
+    pub(crate) cfg: StreamConfig,
+    pub(crate) costs: CostModel,
+    pub(crate) cache: TextureCache,
+    visibility: Option<Vec<(Option<Ray>, Option<Hit>)>>,
+    /// Every pass, in order.
+    pub passes: Vec<PassRecord>,
+    /// Totals by kernel.
+    pub kernels: ByKernel,
+    /// Loop totals (Table 2).
+    pub loops: LoopTotals,
+    /// Largest per-ray work.
+    pub max_work: RayWork,
+    /// Each pixel's linear radiance (shaders) or colour (ray casting).
+    pub(crate) radiance: Vec<RadianceSum>,
+    pub(crate) framebuffer: Vec<[u8; 3]>,
+    /// Each pixel's primary hit (first sample).
+    pub hits: Vec<Option<Hit>>,
+    /// Rays traced by wave.
+    pub rays_by_wave: Vec<u64>,
+    _intersector: core::marker::PhantomData<I>,
+}
+
+/// Waves allowed before the machine gives up (a shader that never stops emitting).
+const MAX_WAVES: usize = 256;
+
+impl<'s, I: Intersector> StreamMachine<'s, I> {
+    /// A machine for the view `eye` of `scene` (which must hold a uniform grid), shading
+    /// with `shader` (`None`: ray casting).
+    pub fn new(
+        scene: SceneView<'s>,
+        eye: EyeRays,
+        background: Vec3,
+        shader: Option<Shader>,
+        cfg: &StreamConfig,
+        costs: CostModel,
+    ) -> Result<Self, String> {
+        cfg.validate()?;
+        let grid = *scene.grid().ok_or_else(|| {
+            format!(
+                "the scene image holds a {:?}; Purcell's stream machine walks a uniform grid (build it with --accel grid)",
+                scene.accel()
+            )
+            .to_lowercase()
+        })?;
+        let pixels = (eye.width as usize) * (eye.height as usize);
+        Ok(StreamMachine {
+            scene,
+            grid,
+            eye,
+            background,
+            shader,
+            cfg: cfg.clone(),
+            costs,
+            cache: TextureCache::new(&cfg.cache),
+            visibility: None,
+            passes: Vec::new(),
+            kernels: ByKernel::default(),
+            loops: LoopTotals::default(),
+            max_work: RayWork::default(),
+            radiance: vec![RadianceSum::default(); pixels],
+            framebuffer: vec![rgb8(background); pixels],
+            hits: vec![None; pixels],
+            rays_by_wave: Vec::new(),
+            _intersector: core::marker::PhantomData,
+        })
+    }
+
+    /// Takes primary visibility from a G-buffer (row-major `(ray, hit)`, as the host's
+    /// shadow caster computes it) instead of tracing eye rays.
+    pub fn set_visibility(&mut self, v: Vec<(Option<Ray>, Option<Hit>)>) {
+        self.visibility = Some(v);
+    }
+
+    /// Screen width and fragments per screen.
+    pub(crate) fn screen(&self) -> (u32, usize) {
+        (self.eye.width, (self.eye.width as usize) * (self.eye.height as usize))
+    }
+
+    /// Runs the frame; `progress(screens done, screens known)`.
+    pub fn run(&mut self, mut progress: impl FnMut(usize, usize)) -> Result<(), String> {
+        let samples = self.shader.map_or(1, |s| s.samples()) as usize;
+        let (w, h) = (self.eye.width, self.eye.height);
+        let (lo, hi) = self.scene.test_bounds();
+        // Wave 0: one screen of eye rays per sample (Purcell's path tracer traces one
+        // eye ray per sample).
+        let mut wave: Vec<Vec<Fragment>> = Vec::with_capacity(samples);
+        for s in 0..samples {
+            let mut screen = Vec::with_capacity((w * h) as usize);
+            for y in 0..h {
+                for x in 0..w {
+                    let p = y * w + x;
+                    let weight = Vec3::splat(1.0 / samples as f32);
+                    let frag = match &self.visibility {
+                        Some(v) => match v.get(p as usize) {
+                            Some(&(Some(ray), hit)) => {
+                                let rec = RayRecord { weight, sample: s as u32, ..RayRecord::primary(ray, p) };
+                                Fragment::Visible(rec, hit)
+                            }
+                            _ => Fragment::Empty,
+                        },
+                        None => match self.eye.ray_in_scene(x, y, lo, hi) {
+                            Some(ray) => Fragment::Trace(RayRecord { weight, sample: s as u32, ..RayRecord::primary(ray, p) }),
+                            None => Fragment::Empty,
+                        },
+                    };
+                    screen.push(frag);
+                }
+            }
+            wave.push(screen);
+        }
+        let mut screens_done = 0;
+        let mut wave_index = 0u32;
+        while !wave.is_empty() {
+            if wave_index as usize >= MAX_WAVES {
+                return Err(format!("the shader still emits rays after {MAX_WAVES} generations"));
+            }
+            let mut next: Vec<RayRecord> = Vec::new();
+            let total = screens_done + wave.len();
+            let mut traced = 0u64;
+            for (s, screen) in wave.into_iter().enumerate() {
+                traced += screen.iter().filter(|f| matches!(f, Fragment::Trace(_))).count() as u64;
+                self.run_screen(wave_index, s as u32, screen, &mut next)?;
+                screens_done += 1;
+                progress(screens_done, total);
+            }
+            self.rays_by_wave.push(traced);
+            // The emitted records, packed densely into screens.
+            let (_, per_screen) = self.screen();
+            wave = next.chunks(per_screen.max(1)).map(|c| c.iter().map(|r| Fragment::Trace(*r)).collect()).collect();
+            wave_index += 1;
+        }
+        Ok(())
+    }
+
+    /// One screen: traversal by the architecture, then shading.
+    fn run_screen(&mut self, wave: u32, screen: u32, frags: Vec<Fragment>, next: &mut Vec<RayRecord>) -> Result<(), String> {
+        let rays: Vec<Option<(Ray, bool)>> = frags
+            .iter()
+            .map(|f| match f {
+                Fragment::Trace(r) => Some((r.ray, r.kind == raypipe_core::shade::ray_record::RayKind::Shadow)),
+                _ => None,
+            })
+            .collect();
+        let traced = rays.iter().any(Option::is_some);
+        let generate = wave == 0 && self.visibility.is_none();
+        let mut fused = PassRecord { wave, screen, kind: Some(PassKind::Fused), ..Default::default() };
+        let ends: Vec<Option<StreamRay<I>>> = if !traced {
+            vec![None; frags.len()]
+        } else {
+            match self.cfg.arch {
+                Architecture::Multipass => self.multipass_screen(wave, screen, &rays, generate)?,
+                Architecture::Branching => self.branching_screen(&rays, generate, &mut fused),
+            }
+        };
+        let shade = self.shading_pass(wave, screen, &frags, &ends, next);
+        match self.cfg.arch {
+            Architecture::Multipass => self.passes.push(shade),
+            Architecture::Branching => {
+                fused.processed += shade.processed;
+                fused.useful += shade.useful;
+                fused.instructions += shade.instructions;
+                for c in 0..4 {
+                    fused.random_words[c] += shade.random_words[c];
+                }
+                self.passes.push(fused);
+            }
+        }
+        Ok(())
+    }
+
+    /// Charges `invocations` of kernel `k` to the totals and to `pass`: instructions,
+    /// state words for `state_rays` rays (multipass), and random-access words (the
+    /// measured ones, unless the cost table fixes them).
+    pub(crate) fn charge(&mut self, k: Kernel, invocations: u64, state_rays: u64, measured: [u64; 4], pass: &mut PassRecord) {
+        let c = self.costs.get(k);
+        let t = self.kernels.get_mut(k);
+        t.invocations += invocations;
+        t.instructions += invocations * c.instructions;
+        pass.instructions += invocations * c.instructions;
+        if self.cfg.arch == Architecture::Multipass {
+            t.state_read += state_rays * c.r;
+            t.state_written += state_rays * c.w;
+            pass.state_read += state_rays * c.r;
+            pass.state_written += state_rays * c.w;
+        }
+        let words: u64 = measured.iter().sum();
+        t.random_words += match c.m {
+            Some(m) => m * invocations as f64,
+            None => words as f64,
+        };
+        for (p, m) in pass.random_words.iter_mut().zip(measured) {
+            *p += m;
+        }
+    }
+
+    /// Folds one ray's work into the maxima.
+    pub(crate) fn note_work(&mut self, w: &RayWork) {
+        let m = &mut self.max_work;
+        m.steps = m.steps.max(w.steps);
+        m.intersections = m.intersections.max(w.intersections);
+        m.traverse_passes = m.traverse_passes.max(w.traverse_passes);
+        m.intersect_passes = m.intersect_passes.max(w.intersect_passes);
+    }
+
+    /// The image.
+    pub fn image(&self) -> Vec<[u8; 3]> {
+        match self.shader {
+            None => self.framebuffer.clone(),
+            Some(_) => self.radiance.iter().map(|r| rgb8(r.value())).collect(),
+        }
+    }
+
+    /// The report of the frame so far.
+    pub fn report(&self) -> StreamReport {
+        StreamReport::new(self)
+    }
+
+    /// Image size.
+    pub fn size(&self) -> (u32, u32) {
+        (self.eye.width, self.eye.height)
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &StreamConfig {
+        &self.cfg
+    }
+
+    /// The cost table.
+    pub fn costs(&self) -> &CostModel {
+        &self.costs
+    }
+
+    /// The texture cache.
+    pub fn texture_cache(&self) -> &TextureCache {
+        &self.cache
+    }
+}

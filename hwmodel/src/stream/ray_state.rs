@@ -1,0 +1,140 @@
+//! One ray's state between kernel invocations: what Purcell's multipass machine keeps in
+//! its state textures (§3.2) and the branching machine in registers. The two kernels a
+//! ray alternates between are raypipe-core's: [`GridTraversal::step`] (one 3D-DDA step
+//! and one cell read, §3.1.2) and one [`test_triangle`] (§3.1.3), sequenced exactly as
+//! [`raypipe_core::traverse::grid::trace_grid`] sequences them, so every ray ends with
+//! the host's hit.
+//!
+//! The list pointer is read ahead: the traversal kernel that finds a non-empty cell also
+//! reads the first entry of its list, and each intersection reads the entry after the
+//! triangle it tests, so a ray knows at the end of the pass whether its list is done and
+//! the entries read equal the host's (each list's null terminator included).
+
+use raypipe_core::image::{GridView, NULL_INDEX};
+use raypipe_core::intersect::triangle::test_triangle;
+use raypipe_core::traverse::dda::{Dda, Voxel};
+use raypipe_core::traverse::grid::{GridEvent, GridTraversal};
+use raypipe_core::{Hit, Intersector, MemoryProbe, Ray, SceneView};
+
+use crate::stream::stencil::RayStage;
+
+/// Words of the per-ray state textures, from the records the kernels keep between
+/// invocations (a word is 4 bytes, as a texture channel).
+pub mod words {
+    use super::*;
+    /// The ray: origin, direction, `t_min`, `t_max`.
+    pub const RAY: u64 = (core::mem::size_of::<Ray>() / 4) as u64;
+    /// The 3D-DDA's per-ray registers: the `Dda` record less the grid's constants
+    /// (dims, corner, cell size: 9 words) and the origin (in the ray texture: 3 words).
+    pub const TRAVERSAL: u64 = (core::mem::size_of::<Dda>() / 4) as u64 - 12;
+    /// The best hit so far: `t`, `u`, `v`, triangle.
+    pub const HIT: u64 = (core::mem::size_of::<Hit>() / 4) as u64;
+    /// The voxel list being tested: position, the entry read ahead, the voxel's exit
+    /// distance (the hit is final if it lies before it).
+    pub const LIST: u64 = 3;
+    /// A pixel's colour (RGBA) or a shaded ray's radiance.
+    pub const COLOR: u64 = 4;
+}
+
+/// What one kernel invocation did to a ray.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Step {
+    /// The stage the ray is in afterwards.
+    pub next: RayStage,
+}
+
+/// One ray in the stream.
+pub struct StreamRay<I: Intersector> {
+    /// The ray.
+    pub ray: Ray,
+    prep: I::Prepared,
+    trav: GridTraversal,
+    /// Any-hit query (shadow rays): done at the first hit in range.
+    any_hit: bool,
+    /// The voxel whose list is being tested.
+    voxel: Option<Voxel>,
+    /// Position of the entry read ahead, and that entry.
+    pos: u32,
+    next_prim: u32,
+    /// Where the ray is.
+    pub stage: RayStage,
+}
+
+impl<I: Intersector> Clone for StreamRay<I> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+
+impl<I: Intersector> Copy for StreamRay<I> {}
+
+impl<I: Intersector> StreamRay<I> {
+    /// The traversal-setup kernel: the DDA's first voxel and registers; a ray that
+    /// misses the grid is done at once.
+    pub fn setup(grid: &GridView<'_>, ray: Ray, any_hit: bool) -> StreamRay<I> {
+        let trav = GridTraversal::new(grid, &ray);
+        let stage = if trav.missed_bounds() { RayStage::Done } else { RayStage::Traverse };
+        StreamRay {
+            ray,
+            prep: I::prepare(&ray),
+            trav,
+            any_hit,
+            voxel: None,
+            pos: 0,
+            next_prim: NULL_INDEX,
+            stage,
+        }
+    }
+
+    /// The closest hit (or, for an any-hit ray, some hit in range) once done.
+    pub fn hit(&self) -> Option<Hit> {
+        self.trav.best
+    }
+
+    /// One traversal step (a ray in [`RayStage::Traverse`]).
+    pub fn traverse<P: MemoryProbe>(&mut self, grid: &GridView<'_>, probe: &mut P) {
+        debug_assert_eq!(self.stage, RayStage::Traverse);
+        match self.trav.step(grid, probe) {
+            GridEvent::Done => self.stage = RayStage::Done,
+            GridEvent::Empty(voxel) => self.end_voxel(voxel),
+            GridEvent::Cell { voxel, list } => {
+                probe.dependent();
+                let first = grid.list_entry(list, probe);
+                if first == NULL_INDEX {
+                    self.end_voxel(voxel);
+                } else {
+                    (self.voxel, self.pos, self.next_prim) = (Some(voxel), list, first);
+                    self.stage = RayStage::Intersect;
+                }
+            }
+        }
+    }
+
+    /// One intersection: tests the entry read ahead and reads the one after it (a ray in
+    /// [`RayStage::Intersect`]).
+    pub fn intersect<P: MemoryProbe>(&mut self, scene: &SceneView<'_>, grid: &GridView<'_>, probe: &mut P) {
+        debug_assert_eq!(self.stage, RayStage::Intersect);
+        let prim = self.next_prim;
+        probe.dependent();
+        let tri = I::fetch(scene, prim, probe);
+        test_triangle::<I>(&self.prep, &self.ray, &tri, prim, &mut self.trav.best);
+        if self.any_hit && self.trav.best.is_some() {
+            self.stage = RayStage::Done;
+            return;
+        }
+        self.pos = self.pos.wrapping_add(1);
+        self.next_prim = grid.list_entry(self.pos, probe);
+        if self.next_prim == NULL_INDEX {
+            if let Some(voxel) = self.voxel.take() {
+                self.end_voxel(voxel);
+            }
+        }
+    }
+
+    /// A voxel is done: the walk goes on, unless the best hit lies inside it.
+    fn end_voxel(&mut self, voxel: Voxel) {
+        self.trav.finish_voxel(&voxel);
+        // `finish_voxel` ends the walk when the hit is final; the next step says so.
+        self.stage = if self.trav.best.is_some_and(|b| b.t < voxel.t_exit) { RayStage::Done } else { RayStage::Traverse };
+    }
+}

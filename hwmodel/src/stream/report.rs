@@ -1,0 +1,238 @@
+//! The stream machine's report: Purcell 2002's Table 2 quantities, the kernel costs
+//! (Table 1), totals by kernel (Figure 7) and by data type (Figure 8), the texture cache
+//! (Figure 9), the frame time on the machine, and every pass.
+
+use serde::Serialize;
+
+use crate::stream::config::{Architecture, StreamConfig};
+use crate::stream::cost_model::{CostModel, Kernel};
+use crate::stream::counters::{KernelTotals, PassKind, PassRecord, RayWork};
+use crate::stream::frame::StreamMachine;
+use crate::stream::machine::FrameTime;
+use crate::stream::texture_cache::{TextureCacheStats, CLASSES, CLASS_NAMES, STATE};
+
+/// Loop passes and the optimal bound, summed over every screen's loop.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct LoopTotals {
+    /// Traversal passes.
+    pub traverse_passes: u64,
+    /// Intersection passes.
+    pub intersect_passes: u64,
+    /// The optimal bound: per loop, the most traversal passes any ray needs plus the
+    /// most intersection passes any ray needs (max steps + max intersections without
+    /// unrolling).
+    pub bound: u64,
+    /// Loops run (screens traced on the multipass machine).
+    pub loops: u64,
+}
+
+/// Table 2's row.
+#[derive(Clone, Debug, Serialize)]
+pub struct Table2 {
+    /// Traversal passes.
+    pub traverse_passes: u64,
+    /// Intersection passes.
+    pub intersect_passes: u64,
+    /// Every other pass (eye rays, setup, shading; branching: its fused passes).
+    pub other_passes: u64,
+    /// All passes.
+    pub total_passes: u64,
+    /// The most traversal steps of any ray.
+    pub max_steps: u64,
+    /// The most triangle tests of any ray.
+    pub max_intersections: u64,
+    /// The optimal bound on loop passes.
+    pub optimal_passes: u64,
+    /// Loop passes over the bound (multipass).
+    pub ratio_to_optimal: Option<f64>,
+    /// SIMD efficiency of the traversal passes, the intersection passes and overall
+    /// (useful kernel iterations over iterations run).
+    pub simd_traverse: Option<f64>,
+    /// Of the intersection passes.
+    pub simd_intersect: Option<f64>,
+    /// Of the traversal and intersection work together.
+    pub simd_overall: Option<f64>,
+}
+
+/// One kernel's row: its costs per invocation and its totals.
+#[derive(Clone, Debug, Serialize)]
+pub struct KernelRow {
+    /// Kernel name.
+    pub kernel: &'static str,
+    /// Instructions per invocation.
+    pub instructions: u64,
+    /// State words read per invocation (multipass).
+    pub r: u64,
+    /// State words written per invocation (multipass).
+    pub w: u64,
+    /// Random-access words per invocation: the table's, or measured (mean).
+    pub m: f64,
+    /// Totals.
+    pub totals: KernelTotals,
+}
+
+/// One data type's traffic and cache behaviour.
+#[derive(Clone, Debug, Serialize)]
+pub struct ClassRow {
+    /// Data type.
+    pub class: &'static str,
+    /// Words read.
+    pub words: u64,
+    /// Cache hit rate (line accesses).
+    pub hit_rate: Option<f64>,
+    /// Bytes from memory without the cache (4 per word).
+    pub bytes_without_cache: u64,
+    /// Bytes from memory with the cache (a line per miss).
+    pub bytes_with_cache: u64,
+}
+
+/// Memory traffic of the frame in bytes.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct Traffic {
+    /// Random-access reads (through the cache when there is one).
+    pub random: u64,
+    /// Random-access reads without a cache.
+    pub random_uncached: u64,
+    /// State words read and written (4 bytes each; reads through the cache if so
+    /// configured).
+    pub state: u64,
+    /// Stencil reads and writes (1 byte each).
+    pub stencil: u64,
+    /// Everything the frame moves.
+    pub total: u64,
+}
+
+/// The report.
+#[derive(Clone, Debug, Serialize)]
+pub struct StreamReport {
+    /// Image size.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// The configuration.
+    pub config: StreamConfig,
+    /// The cost table used.
+    pub costs: CostModel,
+    /// Table 2.
+    pub table2: Table2,
+    /// Kernel rows (Table 1 and Figure 7).
+    pub kernels: Vec<KernelRow>,
+    /// Data types (Figures 8 and 9).
+    pub classes: Vec<ClassRow>,
+    /// Instructions in all.
+    pub instructions: u64,
+    /// State words read.
+    pub state_read: u64,
+    /// State words written.
+    pub state_written: u64,
+    /// Stencil reads.
+    pub stencil_reads: u64,
+    /// Stencil writes.
+    pub stencil_writes: u64,
+    /// Bytes moved.
+    pub traffic: Traffic,
+    /// Texture cache counts.
+    pub cache: TextureCacheStats,
+    /// Time on the machine.
+    pub frame_time: FrameTime,
+    /// Rays traced per wave (0: eye rays).
+    pub rays_by_wave: Vec<u64>,
+    /// Largest per-ray work.
+    pub max_work: RayWork,
+    /// Every pass.
+    pub passes: Vec<PassRecord>,
+}
+
+fn ratio(a: u64, b: u64) -> Option<f64> {
+    (b > 0).then(|| a as f64 / b as f64)
+}
+
+impl StreamReport {
+    /// The report of a machine's frame.
+    pub fn new<I: raypipe_core::Intersector>(m: &StreamMachine<'_, I>) -> StreamReport {
+        let cfg = m.config().clone();
+        let passes = m.passes.clone();
+        let count = |k: PassKind| passes.iter().filter(|p| p.kind == Some(k)).count() as u64;
+        let sum = |k: PassKind, f: fn(&PassRecord) -> u64| -> u64 {
+            passes.iter().filter(|p| p.kind == Some(k)).map(f).sum()
+        };
+        let (tp, ip) = (count(PassKind::Traverse), count(PassKind::Intersect));
+        let (tu, ti) = (sum(PassKind::Traverse, |p| p.useful), sum(PassKind::Traverse, |p| p.idle));
+        let (iu, ii) = (sum(PassKind::Intersect, |p| p.useful), sum(PassKind::Intersect, |p| p.idle));
+        let fused = passes.iter().filter(|p| p.kind == Some(PassKind::Fused));
+        let (fu, fi) = fused.fold((0, 0), |(u, i), p| (u + p.useful, i + p.idle));
+        let multipass = cfg.arch == Architecture::Multipass;
+        let table2 = Table2 {
+            traverse_passes: tp,
+            intersect_passes: ip,
+            other_passes: passes.len() as u64 - tp - ip,
+            total_passes: passes.len() as u64,
+            max_steps: m.max_work.steps,
+            max_intersections: m.max_work.intersections,
+            optimal_passes: m.loops.bound,
+            ratio_to_optimal: if multipass { ratio(tp + ip, m.loops.bound) } else { None },
+            simd_traverse: ratio(tu, tu + ti),
+            simd_intersect: ratio(iu, iu + ii),
+            simd_overall: if multipass { ratio(tu + iu, tu + ti + iu + ii) } else { ratio(fu, fu + fi) },
+        };
+        let costs = m.costs().clone();
+        let kernels = Kernel::ALL
+            .iter()
+            .map(|&k| {
+                let c = costs.get(k);
+                let t = *m.kernels.get(k);
+                let mean = if t.invocations > 0 { t.random_words / t.invocations as f64 } else { 0.0 };
+                let (r, w) = if multipass { (c.r, c.w) } else { (0, 0) };
+                KernelRow { kernel: k.name(), instructions: c.instructions, r, w, m: c.m.unwrap_or(mean), totals: t }
+            })
+            .collect();
+        let cache = m.texture_cache();
+        let stats = cache.stats;
+        let classes: Vec<ClassRow> = (0..CLASSES)
+            .filter(|&c| c != STATE || cfg.cache_state)
+            .map(|c| ClassRow {
+                class: CLASS_NAMES[c],
+                words: stats.words[c],
+                hit_rate: if cache.enabled() { stats.hit_rate(c) } else { None },
+                bytes_without_cache: stats.words[c] * 4,
+                bytes_with_cache: cache.bytes_fetched(c),
+            })
+            .collect();
+        let state_read: u64 = passes.iter().map(|p| p.state_read).sum();
+        let state_written: u64 = passes.iter().map(|p| p.state_written).sum();
+        let stencil_reads: u64 = passes.iter().map(|p| p.stencil.reads).sum();
+        let stencil_writes: u64 = passes.iter().map(|p| p.stencil.writes).sum();
+        let scene_classes = 0..STATE;
+        let random: u64 = scene_classes.clone().map(|c| cache.bytes_fetched(c)).sum();
+        let random_uncached: u64 = scene_classes.map(|c| stats.words[c] * 4).sum();
+        // With a table that fixes M, the table's words stand for the scene reads.
+        let fixed_m = costs.kernels.values().any(|c| c.m.is_some());
+        let table_words: f64 = m.kernels.0.iter().map(|t| t.random_words).sum();
+        let random = if fixed_m { (table_words * 4.0) as u64 } else { random };
+        let state_reads_bytes = if cfg.cache_state { cache.bytes_fetched(STATE) } else { state_read * 4 };
+        let state = state_reads_bytes + state_written * 4;
+        let stencil = stencil_reads + stencil_writes;
+        let traffic = Traffic { random, random_uncached, state, stencil, total: random + state + stencil };
+        let instructions = m.kernels.instructions();
+        StreamReport {
+            width: m.size().0,
+            height: m.size().1,
+            frame_time: cfg.machine.frame_time(instructions, traffic.total),
+            config: cfg,
+            costs,
+            table2,
+            kernels,
+            classes,
+            instructions,
+            state_read,
+            state_written,
+            stencil_reads,
+            stencil_writes,
+            traffic,
+            cache: stats,
+            rays_by_wave: m.rays_by_wave.clone(),
+            max_work: m.max_work,
+            passes,
+        }
+    }
+}

@@ -1,0 +1,98 @@
+//! The shading pass (Purcell 2002 §3.1.4) over one screen: each ray that finished
+//! traversal (and each pixel whose visibility the G-buffer gave) runs core's shading
+//! kernel — the ray caster's Lambert shader, or the ray-emitting Whitted and path
+//! shaders, whose new records form the next wave; a shadow ray adds its weight if
+//! nothing was in the way. Radiance goes to the pixel the record carries.
+
+use raypipe_core::shade::color::rgb8;
+use raypipe_core::shade::lambert::shade;
+use raypipe_core::shade::ray_record::{RayKind, RayRecord};
+use raypipe_core::Intersector;
+
+use crate::stream::config::Architecture;
+use crate::stream::cost_model::Kernel;
+use crate::stream::counters::{PassKind, PassRecord};
+use crate::stream::frame::{Fragment, StreamMachine};
+use crate::stream::memory_probe::StreamProbe;
+use crate::stream::ray_state::StreamRay;
+use crate::stream::stencil::StencilCounts;
+
+impl<I: Intersector> StreamMachine<'_, I> {
+    /// Shades one screen; emitted records go to `next`.
+    pub(crate) fn shading_pass(
+        &mut self,
+        wave: u32,
+        screen: u32,
+        frags: &[Fragment],
+        ends: &[Option<StreamRay<I>>],
+        next: &mut Vec<RayRecord>,
+    ) -> PassRecord {
+        let (width, _) = self.screen();
+        let mut p = PassRecord { wave, screen, kind: Some(PassKind::Shade), iterations: 1, ..Default::default() };
+        if self.cfg.arch == Architecture::Multipass {
+            let covered = (frags.len() as u64).div_ceil(width as u64) * width as u64;
+            p.stencil = StencilCounts { reads: covered, writes: 0 };
+        }
+        let lights = self.scene.light_count() as u64;
+        let (mut shaded, mut lit, mut shadows, emitted_before) = (0u64, 0u64, 0u64, next.len());
+        let (scene, background, shader) = (self.scene, self.background, self.shader);
+        let mut probe = StreamProbe::new(&mut self.cache);
+        for (i, f) in frags.iter().enumerate() {
+            let (rec, hit) = match f {
+                Fragment::Empty => {
+                    // A pixel whose eye ray missed the scene box: the background, once.
+                    if wave == 0 && screen == 0 {
+                        if let (Some(_), Some(r)) = (shader, self.radiance.get_mut(i)) {
+                            r.add(background);
+                        }
+                    }
+                    continue;
+                }
+                Fragment::Visible(rec, hit) => (*rec, *hit),
+                Fragment::Trace(rec) => (*rec, ends.get(i).and_then(|e| e.as_ref()).and_then(StreamRay::hit)),
+            };
+            let pixel = rec.pixel as usize;
+            if wave == 0 && rec.sample == 0 {
+                if let Some(h) = self.hits.get_mut(pixel) {
+                    *h = hit;
+                }
+            }
+            match shader {
+                None => {
+                    shaded += 1;
+                    lit += hit.is_some() as u64;
+                    let color = shade(&scene, &rec.ray, hit, background, &mut probe);
+                    if let Some(px) = self.framebuffer.get_mut(pixel) {
+                        *px = rgb8(color);
+                    }
+                }
+                Some(_) if rec.kind == RayKind::Shadow => {
+                    shadows += 1;
+                    if hit.is_none() {
+                        if let Some(r) = self.radiance.get_mut(pixel) {
+                            r.add(rec.weight);
+                        }
+                    }
+                }
+                Some(s) => {
+                    shaded += 1;
+                    lit += hit.is_some() as u64;
+                    let c = s.shade(&scene, &rec, hit, &mut probe, &mut |r| next.push(r));
+                    if let Some(r) = self.radiance.get_mut(pixel) {
+                        r.add(c);
+                    }
+                }
+            }
+        }
+        let words = probe.take_words();
+        drop(probe);
+        let emitted = (next.len() - emitted_before) as u64;
+        p.processed = shaded + shadows;
+        p.useful = p.processed;
+        self.charge(Kernel::Shade, shaded, shaded, words, &mut p);
+        self.charge(Kernel::ShadeLight, lit * lights, 0, [0; 4], &mut p);
+        self.charge(Kernel::Spawn, emitted, emitted, [0; 4], &mut p);
+        self.charge(Kernel::ShadowAdd, shadows, shadows, [0; 4], &mut p);
+        p
+    }
+}
