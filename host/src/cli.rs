@@ -54,6 +54,80 @@ pub enum Command {
     /// Compare the fixed-point datapath's hits with f32's (same triangle, distance between
     /// the hit points, nodes visited) on scenes, per format.
     FixedPoint(FixedPointArgs),
+    /// Run Purcell's stream machine (a programmable GPU ray tracing in rendering passes,
+    /// multipass or branching) on a scene: passes, instructions, memory words, texture
+    /// cache, frame time; image, JSON report and charts.
+    Stream(StreamArgs),
+}
+
+/// `raypipe stream`.
+#[derive(Args, Debug)]
+pub struct StreamArgs {
+    /// An OBJ file or a scene image with a uniform grid; the built-in Cornell box when
+    /// omitted.
+    pub scene: Option<PathBuf>,
+    /// Architecture: multipass (stencil-routed passes) or branching (fused kernels).
+    #[arg(long, default_value = "multipass")]
+    pub arch: raypipe_hw::stream::Architecture,
+    /// Multipass oracle: delany[:FRACTION] (intersect once that fraction of active rays
+    /// waits; 0.2), naive (alternate), optimal (clairvoyant).
+    #[arg(long, default_value = "delany")]
+    pub oracle: raypipe_hw::stream::Oracle,
+    /// Multipass loop unrolling: kernel iterations per pass, "traverse=N,intersect=M".
+    #[arg(long, value_name = "traverse=N,intersect=M", default_value = "traverse=1,intersect=1")]
+    pub unroll: raypipe_hw::stream::Unroll,
+    /// Suppress the memory references of unrolled iterations after a ray has finished.
+    #[arg(long)]
+    pub suppress: bool,
+    /// Branching: fragments in lock step (1: each fragment branches alone).
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    pub simd: u32,
+    /// Texture cache "SIZE,WAYS,LINE" (e.g. 64K,1,48, the default) or "off".
+    #[arg(long, value_name = "SIZE,WAYS,LINE", default_value = "64K,1,48")]
+    pub cache: raypipe_hw::stream::TextureCacheConfig,
+    /// State-texture reads go through the texture cache too (default: they bypass it).
+    #[arg(long)]
+    pub cache_state: bool,
+    /// Kernel cost table (TOML) over raypipe's counted one: [kernel] instructions, r, w, m.
+    #[arg(long, value_name = "FILE.toml")]
+    pub costs: Option<PathBuf>,
+    /// Machine rates "INSTR_PER_S,BYTES_PER_S" (default: Radeon 9700 Pro, 2.6e9,19.84e9).
+    #[arg(long, value_name = "I,B")]
+    pub machine: Option<raypipe_hw::stream::Machine>,
+    /// Rendering algorithm.
+    #[arg(long, value_enum, default_value_t = Algorithm::Cast)]
+    pub algo: Algorithm,
+    /// Whitted: largest number of reflection/refraction bounces.
+    #[arg(long, value_name = "N", default_value_t = 5)]
+    pub max_depth: u32,
+    /// Path tracing: bounces after the first hit.
+    #[arg(long, value_name = "N", default_value_t = 2)]
+    pub bounces: u32,
+    /// Path tracing: samples per pixel (one eye ray each).
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    pub samples: u32,
+    /// Ray–triangle test (default: the one the image's triangle layout is for).
+    #[arg(long, value_enum)]
+    pub intersector: Option<IntersectorKind>,
+    /// Output PNG.
+    #[arg(short, long, value_name = "PNG", default_value = "raypipe-stream.png")]
+    pub output: PathBuf,
+    /// The report as JSON.
+    #[arg(long, value_name = "JSON", default_value = "raypipe-stream.json")]
+    pub report: PathBuf,
+    /// Directory for the charts (Figures 7–9 and active rays per pass, SVG and PNG).
+    #[arg(long, value_name = "DIR", default_value = "raypipe-stream-charts")]
+    pub charts: PathBuf,
+    /// Write no charts.
+    #[arg(long)]
+    pub no_charts: bool,
+    /// Skip the ray-casting frame that Table 3's ratios need (other algorithms).
+    #[arg(long)]
+    pub no_table3: bool,
+    #[command(flatten)]
+    pub camera: CameraArgs,
+    #[command(flatten)]
+    pub structure: StructureArgs,
 }
 
 /// `raypipe fixed-point`.
@@ -516,6 +590,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Rays(a) => cmd_rays(a),
         Command::Simulate(a) => cmd_simulate(a),
         Command::FixedPoint(a) => cmd_fixed_point(a),
+        Command::Stream(a) => cmd_stream(a),
     }
 }
 
@@ -821,6 +896,109 @@ fn cmd_simulate(a: SimulateArgs) -> Result<()> {
         report.rays as f64 / secs / 1e6,
         a.report.display()
     );
+    Ok(())
+}
+
+fn cmd_stream(a: StreamArgs) -> Result<()> {
+    use raypipe_hw::stream::{CostModel, StreamConfig};
+    check_png_path(&a.output)?;
+    output::check_dir(&a.output)?;
+    output::check_dir(&a.report)?;
+    let cfg = StreamConfig {
+        arch: a.arch,
+        oracle: a.oracle,
+        unroll: a.unroll,
+        suppress: a.suppress,
+        simd: a.simd,
+        cache: a.cache,
+        cache_state: a.cache_state,
+        machine: a.machine.unwrap_or_default(),
+    };
+    cfg.validate().map_err(|e| anyhow!("stream configuration: {e}"))?;
+    let costs = match &a.costs {
+        Some(p) => {
+            let text = std::fs::read_to_string(p).map_err(|e| anyhow!("{}: {e}", p.display()))?;
+            CostModel::from_toml(&text, &p.display().to_string()).map_err(|e| anyhow!("{}: {e}", p.display()))?
+        }
+        None => CostModel::default(),
+    };
+    let algo =
+        AlgoArgs { algo: a.algo, max_depth: a.max_depth, bounces: a.bounces, samples: a.samples, roulette: false };
+    let mut opts = RenderOptions::default();
+    algo.apply(&mut opts)?;
+    let scene = scene::load(a.scene.as_deref(), &a.structure.options())?;
+    warn(&scene);
+    let view = scene.view()?;
+    if view.grid().is_none() {
+        bail!(
+            "{}: the image holds a {}; Purcell's stream machine walks a uniform grid (build with --accel grid)",
+            scene.name,
+            structure_summary(&view)
+        );
+    }
+    // Purcell's screen: 1024 x 1024 unless the size is given.
+    let camera = CameraArgs { size: a.camera.size.or(Some((1024, 1024))), ..a.camera.clone() };
+    let cam = camera_for(&view, &camera)?;
+    let kind = IntersectorKind::resolve(a.intersector, &view);
+    let background = raypipe_core::Vec3::from(cam.background);
+    let shader = opts.shader(background);
+    let shadow_caster = opts.algo == Algorithm::Shadow;
+    let start = Instant::now();
+    let (frame, report) = crate::stream::run_stream(&view, &cam, &cfg, &costs, kind, shader, shadow_caster, true)?;
+    let secs = start.elapsed().as_secs_f64();
+    // The same frame from the host renderer: the model must agree bit for bit.
+    opts.intersector = kind;
+    opts.packet = crate::packets::PacketSize::auto_for(&view);
+    let host = render::render(&view, &cam, &opts)?;
+    let same = host.pixels == frame.pixels;
+    let cast = if opts.algo != Algorithm::Cast && !a.no_table3 {
+        Some(crate::stream::run_stream(&view, &cam, &cfg, &costs, kind, None, false, true)?.1)
+    } else {
+        None
+    };
+    output::write_png(&a.output, frame.width, frame.height, &frame.pixels)?;
+    output::write_bytes(&a.report, report.to_json().as_bytes())?;
+    println!(
+        "stream {} ({} triangles, {}), {}x{}, {} {}",
+        scene.name,
+        view.triangle_count(),
+        structure_summary(&view),
+        frame.width,
+        frame.height,
+        format!("{:?}", opts.algo).to_lowercase(),
+        match cfg.arch {
+            raypipe_hw::stream::Architecture::Multipass => format!(
+                "multipass, oracle {}, unroll traverse={},intersect={}{}",
+                cfg.oracle,
+                cfg.unroll.traverse,
+                cfg.unroll.intersect,
+                if cfg.suppress { ", suppressed" } else { "" }
+            ),
+            raypipe_hw::stream::Architecture::Branching => format!("branching, simd {}", cfg.simd),
+        }
+    );
+    let label = format!("{} {}", scene.name, cfg.arch);
+    print!("{}", crate::stream::table2(&report, &label));
+    print!("{}", crate::stream::kernel_table(&report));
+    print!("{}", crate::stream::class_table(&report));
+    print!("{}", crate::stream::frame_lines(&report));
+    if let Some(c) = &cast {
+        print!("{}", crate::stream::table3(&format!("{:?}", opts.algo).to_lowercase(), &report, c));
+    }
+    if !a.no_charts {
+        let written = crate::stream_charts::write_all(&a.charts, &report)?;
+        println!("charts        {} files -> {}", written, a.charts.display());
+    }
+    println!(
+        "image         {} raypipe render's -> {}; report -> {}",
+        if same { "equals" } else { "DIFFERS FROM" },
+        a.output.display(),
+        a.report.display()
+    );
+    println!("wall time     {secs:.2} s for the frame");
+    if !same {
+        bail!("internal error: the stream machine's image differs from the host renderer's");
+    }
     Ok(())
 }
 

@@ -35,6 +35,8 @@ pub mod scene;
 pub mod simulate;
 pub mod spatial_split;
 pub mod stats;
+pub mod stream;
+pub mod stream_charts;
 pub mod texture_loader;
 pub mod tracer;
 pub mod tri_box;

@@ -63,7 +63,8 @@ impl FromStr for Unroll {
     fn from_str(s: &str) -> Result<Self, String> {
         let mut u = Unroll::default();
         for part in s.split(',').map(str::trim).filter(|p| !p.is_empty()) {
-            let (k, v) = part.split_once('=').ok_or_else(|| format!("unroll {s:?}: expected traverse=N,intersect=M"))?;
+            let (k, v) =
+                part.split_once('=').ok_or_else(|| format!("unroll {s:?}: expected traverse=N,intersect=M"))?;
             let n: u32 = v.trim().parse().map_err(|_| format!("unroll {s:?}: '{v}' is not a count"))?;
             if !(1..=64).contains(&n) {
                 return Err(format!("unroll {s:?}: {k} = {n} is not between 1 and 64"));

@@ -140,7 +140,9 @@ impl<'s, I: Intersector> StreamMachine<'s, I> {
                             _ => Fragment::Empty,
                         },
                         None => match self.eye.ray_in_scene(x, y, lo, hi) {
-                            Some(ray) => Fragment::Trace(RayRecord { weight, sample: s as u32, ..RayRecord::primary(ray, p) }),
+                            Some(ray) => {
+                                Fragment::Trace(RayRecord { weight, sample: s as u32, ..RayRecord::primary(ray, p) })
+                            }
                             None => Fragment::Empty,
                         },
                     };
@@ -174,7 +176,13 @@ impl<'s, I: Intersector> StreamMachine<'s, I> {
     }
 
     /// One screen: traversal by the architecture, then shading.
-    fn run_screen(&mut self, wave: u32, screen: u32, frags: Vec<Fragment>, next: &mut Vec<RayRecord>) -> Result<(), String> {
+    fn run_screen(
+        &mut self,
+        wave: u32,
+        screen: u32,
+        frags: Vec<Fragment>,
+        next: &mut Vec<RayRecord>,
+    ) -> Result<(), String> {
         let rays: Vec<Option<(Ray, bool)>> = frags
             .iter()
             .map(|f| match f {
@@ -212,7 +220,14 @@ impl<'s, I: Intersector> StreamMachine<'s, I> {
     /// Charges `invocations` of kernel `k` to the totals and to `pass`: instructions,
     /// state words for `state_rays` rays (multipass), and random-access words (the
     /// measured ones, unless the cost table fixes them).
-    pub(crate) fn charge(&mut self, k: Kernel, invocations: u64, state_rays: u64, measured: [u64; 4], pass: &mut PassRecord) {
+    pub(crate) fn charge(
+        &mut self,
+        k: Kernel,
+        invocations: u64,
+        state_rays: u64,
+        measured: [u64; 4],
+        pass: &mut PassRecord,
+    ) {
         let c = self.costs.get(k);
         let t = self.kernels.get_mut(k);
         t.invocations += invocations;

@@ -97,7 +97,8 @@ impl<I: Intersector> StreamMachine<'_, I> {
         let n = rays.len();
         let mut stencil = Stencil::new(n, width);
         let covered = stencil.covered();
-        let new_pass = |kind, iterations| PassRecord { wave, screen, kind: Some(kind), iterations, ..Default::default() };
+        let new_pass =
+            |kind, iterations| PassRecord { wave, screen, kind: Some(kind), iterations, ..Default::default() };
         if generate {
             // Every fragment runs the eye-ray kernel; it writes the stencil of the rays
             // that hit the scene box.

@@ -74,16 +74,7 @@ impl<I: Intersector> StreamRay<I> {
     pub fn setup(grid: &GridView<'_>, ray: Ray, any_hit: bool) -> StreamRay<I> {
         let trav = GridTraversal::new(grid, &ray);
         let stage = if trav.missed_bounds() { RayStage::Done } else { RayStage::Traverse };
-        StreamRay {
-            ray,
-            prep: I::prepare(&ray),
-            trav,
-            any_hit,
-            voxel: None,
-            pos: 0,
-            next_prim: NULL_INDEX,
-            stage,
-        }
+        StreamRay { ray, prep: I::prepare(&ray), trav, any_hit, voxel: None, pos: 0, next_prim: NULL_INDEX, stage }
     }
 
     /// The closest hit (or, for an any-hit ray, some hit in range) once done.
@@ -135,6 +126,7 @@ impl<I: Intersector> StreamRay<I> {
     fn end_voxel(&mut self, voxel: Voxel) {
         self.trav.finish_voxel(&voxel);
         // `finish_voxel` ends the walk when the hit is final; the next step says so.
-        self.stage = if self.trav.best.is_some_and(|b| b.t < voxel.t_exit) { RayStage::Done } else { RayStage::Traverse };
+        self.stage =
+            if self.trav.best.is_some_and(|b| b.t < voxel.t_exit) { RayStage::Done } else { RayStage::Traverse };
     }
 }

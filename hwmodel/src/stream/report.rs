@@ -148,6 +148,11 @@ fn ratio(a: u64, b: u64) -> Option<f64> {
 }
 
 impl StreamReport {
+    /// The report as pretty-printed JSON.
+    pub fn to_json(&self) -> String {
+        serde_json::to_string_pretty(self).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
+    }
+
     /// The report of a machine's frame.
     pub fn new<I: raypipe_core::Intersector>(m: &StreamMachine<'_, I>) -> StreamReport {
         let cfg = m.config().clone();

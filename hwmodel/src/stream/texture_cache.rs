@@ -87,7 +87,7 @@ impl TextureCacheConfig {
         if self.size_bytes == 0 {
             return Ok(());
         }
-        if self.line_bytes == 0 || self.line_bytes % 4 != 0 || self.line_bytes > 4096 {
+        if self.line_bytes == 0 || !self.line_bytes.is_multiple_of(4) || self.line_bytes > 4096 {
             return Err(format!("line size {} B is not a multiple of 4 between 4 and 4096", self.line_bytes));
         }
         if self.size_bytes < self.line_bytes {
@@ -97,7 +97,7 @@ impl TextureCacheConfig {
             return Err(format!("{} B is more than 1 GB", self.size_bytes));
         }
         let lines = self.size_bytes / self.line_bytes;
-        if self.ways == 0 || self.ways > lines || lines % self.ways != 0 {
+        if self.ways == 0 || self.ways > lines || !lines.is_multiple_of(self.ways) {
             return Err(format!("{} ways do not divide {lines} lines", self.ways));
         }
         Ok(())
@@ -213,10 +213,10 @@ mod tests {
         for i in 0..200_000u64 {
             x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
             let addr = match i % 4 {
-                0 => (x >> 33) % (1 << 20) & !3,
+                0 => ((x >> 33) % (1 << 20)) & !3,
                 1 => (i * 48 * 1365) % (1 << 22),
                 2 => (i % 512) * 4,
-                _ => (x >> 40) % 4096 & !3,
+                _ => ((x >> 40) % 4096) & !3,
             };
             if r.access(addr) {
                 hits += 1
