@@ -425,8 +425,17 @@ impl RunArgs {
 /// `raypipe build`.
 #[derive(Args, Debug)]
 pub struct BuildArgs {
-    /// The OBJ file to compile.
-    pub scene: PathBuf,
+    /// The OBJ file to compile (or --generate).
+    #[arg(required_unless_present = "generate", conflicts_with = "generate")]
+    pub scene: Option<PathBuf>,
+    /// Generate a scene instead: building[:floors=F,rooms=R,seed=S] (a Soda Hall
+    /// stand-in, ~1M triangles) or forest[:trees=T,leaves=L,seed=S] (~1M triangles).
+    #[arg(long, value_name = "NAME[:PARAMS]")]
+    pub generate: Option<String>,
+    /// The generated scene's view, the image's default camera: building: outside,
+    /// inside; forest: top, inside.
+    #[arg(long, value_name = "NAME", requires = "generate")]
+    pub view: Option<String>,
     /// Where to write the scene image (.rpsi).
     #[arg(short, long, value_name = "OUT")]
     pub output: PathBuf,
@@ -648,11 +657,28 @@ fn fmt_bytes(b: usize) -> String {
 
 fn cmd_build(a: BuildArgs) -> Result<()> {
     let start = Instant::now();
-    let scene::Source::Mesh { name, mesh, warnings, camera } = scene::load_source(Some(&a.scene))? else {
-        bail!("{}: is already a scene image; build takes an OBJ file", a.scene.display());
+    let (input, scene) = match (&a.generate, &a.scene) {
+        (Some(spec), _) => {
+            let g = crate::generate::generate(spec, a.view.as_deref())?;
+            let scene = scene::build(
+                g.name.clone(),
+                g.mesh,
+                Vec::new(),
+                g.camera.merged(a.camera.spec()?),
+                &a.structure.options(),
+            )?;
+            (format!("generated {}", g.name), scene)
+        }
+        (None, Some(path)) => {
+            let scene::Source::Mesh { name, mesh, warnings, camera } = scene::load_source(Some(path))? else {
+                bail!("{}: is already a scene image; build takes an OBJ file", path.display());
+            };
+            // The camera file and flags, over the OBJ's sidecar camera, become the image's default.
+            let scene = scene::build(name, mesh, warnings, camera.merged(a.camera.spec()?), &a.structure.options())?;
+            (path.display().to_string(), scene)
+        }
+        (None, None) => bail!("build: name an OBJ file or --generate a scene"),
     };
-    // The camera file and flags, over the OBJ's sidecar camera, become the image's default.
-    let scene = scene::build(name, mesh, warnings, camera.merged(a.camera.spec()?), &a.structure.options())?;
     warn(&scene);
     let what = a.camera.camera.as_ref().map_or("camera".to_string(), |p| p.display().to_string());
     let view = scene.view()?;
@@ -661,7 +687,7 @@ fn cmd_build(a: BuildArgs) -> Result<()> {
     let elapsed = start.elapsed().as_secs_f64();
     output::write_bytes(&a.output, &scene.image)?;
     let r = scene.report.as_ref().ok_or_else(|| anyhow!("internal error: no build report"))?;
-    println!("scene        {}", a.scene.display());
+    println!("scene        {input}");
     println!("triangles    {} ({} degenerate), vertices {}", r.triangles, r.degenerate, r.vertices);
     match a.structure.accel {
         Accel::Kd | Accel::Bvh | Accel::Bvh4 | Accel::Bvh8 => {

@@ -13,6 +13,7 @@ pub mod camera_file;
 pub mod cli;
 pub mod default_scene;
 pub mod fixed_point;
+pub mod generate;
 pub mod grid_builder;
 pub mod huge_pages;
 pub mod image_writer;

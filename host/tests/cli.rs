@@ -638,3 +638,98 @@ fn fixed_point_report_and_simulation() {
     let report = std::fs::read_to_string(dir.path().join("s.json")).unwrap();
     assert!(report.contains("\"datapath\": \"q16.16\"") && report.contains("fixed-watertight q16.16"), "{report}");
 }
+
+#[test]
+fn stream_machine_tables_report_charts_and_bad_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = raypipe(
+        dir.path(),
+        &["stream", "--size", "64x48", "--algo", "whitted", "--unroll", "traverse=4,intersect=2", "--charts", "charts"],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    for needle in ["Table 2", "Table 3", "intersect", "grid_cells", "compute bound", "equals raypipe render's"] {
+        assert!(
+            out.contains(needle) || needle == "compute bound" && out.contains("bandwidth bound"),
+            "{needle}: {out}"
+        );
+    }
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("raypipe-stream.json")).unwrap()).unwrap();
+    assert_eq!(report["width"], 64);
+    assert!(report["table2"]["traverse_passes"].as_u64().unwrap() > 0);
+    assert!(report["passes"].as_array().unwrap().len() as u64 == report["table2"]["total_passes"].as_u64().unwrap());
+    for name in [
+        "fig7_instructions_by_kernel",
+        "fig8_words_by_data_type",
+        "fig9_texture_cache_bandwidth",
+        "active_rays_per_pass",
+    ] {
+        for ext in ["svg", "png"] {
+            let p = dir.path().join("charts").join(format!("{name}.{ext}"));
+            assert!(std::fs::metadata(&p).map(|m| m.len() > 500).unwrap_or(false), "{}", p.display());
+        }
+    }
+    // A cost file replaces raypipe's counts.
+    std::fs::write(dir.path().join("paper.toml"), "[intersect]\ninstructions = 41\nm = 11\n").unwrap();
+    let o = raypipe(
+        dir.path(),
+        &["stream", "--size", "32x32", "--costs", "paper.toml", "--no-charts", "--arch", "branching"],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    let line = out.lines().find(|l| l.starts_with("intersect ")).unwrap();
+    assert!(line.split_whitespace().nth(1) == Some("41") && line.contains("11.00"), "{line}");
+    std::fs::write(dir.path().join("bad.toml"), "[intersekt]\ninstructions = 1\n").unwrap();
+    for (args, needle) in [
+        (vec!["--oracle", "sometimes"], "oracle"),
+        (vec!["--oracle", "delany:2"], "fraction"),
+        (vec!["--unroll", "traverse=0"], "traverse"),
+        (vec!["--cache", "64K,3,50"], "cache"),
+        (vec!["--machine", "1e9"], "machine"),
+        (vec!["--costs", "bad.toml"], "intersekt"),
+        (vec!["--costs", "missing.toml"], "missing.toml"),
+        (vec!["--arch", "branching", "--suppress"], "multipass"),
+        (vec!["--accel", "bvh"], "uniform grid"),
+    ] {
+        let mut all = vec!["stream", "--size", "16x16", "--no-charts"];
+        all.extend(args.iter());
+        let o = raypipe(dir.path(), &all);
+        let err = stderr(&o);
+        assert!(!o.status.success() && err.contains(needle) && !err.contains("panicked"), "{args:?}: {err}");
+    }
+}
+
+#[test]
+fn generated_scenes_build_with_their_views() {
+    let dir = tempfile::tempdir().unwrap();
+    for (spec, views) in
+        [("building:floors=1,rooms=2", ["outside", "inside"]), ("forest:trees=4,leaves=20", ["top", "inside"])]
+    {
+        for view in views {
+            let out = format!("{view}.rpsi");
+            let o = raypipe(dir.path(), &["build", "--generate", spec, "--view", view, "-o", &out]);
+            assert!(o.status.success(), "{spec} {view}: {}", stderr(&o));
+            let o = raypipe(dir.path(), &["stream", &out, "--size", "32x32", "--no-charts"]);
+            assert!(o.status.success(), "{spec} {view}: {}", stderr(&o));
+        }
+    }
+    // The same parameters give the same image bytes.
+    let a = raypipe(dir.path(), &["build", "--generate", "forest:trees=3,leaves=10,seed=7", "-o", "a.rpsi"]);
+    let b = raypipe(dir.path(), &["build", "--generate", "forest:trees=3,leaves=10,seed=7", "-o", "b.rpsi"]);
+    assert!(a.status.success() && b.status.success());
+    assert_eq!(std::fs::read(dir.path().join("a.rpsi")).unwrap(), std::fs::read(dir.path().join("b.rpsi")).unwrap());
+    for (args, needle) in [
+        (vec!["--generate", "castle"], "unknown scene"),
+        (vec!["--generate", "forest:trees=0"], "trees=0"),
+        (vec!["--generate", "forest:height=3"], "unknown parameter"),
+        (vec!["--generate", "building", "--view", "top"], "outside, inside"),
+        (vec!["--generate", "forest:trees"], "key=value"),
+    ] {
+        let mut all = vec!["build", "-o", "x.rpsi"];
+        all.extend(args.iter());
+        let o = raypipe(dir.path(), &all);
+        let err = stderr(&o);
+        assert!(!o.status.success() && err.contains(needle) && !err.contains("panicked"), "{args:?}: {err}");
+    }
+}
