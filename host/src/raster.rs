@@ -61,3 +61,16 @@ pub fn gbuffer_hit<I: raypipe_core::Intersector>(
     let hit = raster::gbuffer_hit::<I>(scene, eye, &ray, (x, y), g.prim[i], g.depth[i], g.uv[i]);
     (Some(ray), hit)
 }
+
+/// Every pixel's `(ray, hit)` from a rasterized G-buffer, row-major: the shadow caster's
+/// visibility pass, for the drivers that take visibility instead of tracing eye rays.
+pub fn gbuffer_visibility<I: raypipe_core::Intersector>(
+    scene: &SceneView<'_>,
+    eye: &EyeRays,
+) -> Vec<(Option<raypipe_core::Ray>, Option<raypipe_core::Hit>)> {
+    let g = rasterize(scene, eye);
+    (0..eye.height)
+        .flat_map(|y| (0..eye.width).map(move |x| (x, y)))
+        .map(|(x, y)| gbuffer_hit::<I>(scene, eye, &g, x, y))
+        .collect()
+}

@@ -11,7 +11,7 @@ use raypipe_core::{Intersector, SceneView};
 use raypipe_hw::{Datapath, HwConfig, Report, Simulator};
 
 use crate::progress;
-use crate::raster::{gbuffer_hit, rasterize};
+use crate::raster::gbuffer_visibility;
 use crate::render::{eye_rays, Frame};
 use crate::tracer::{fixed_point_unsupported, IntersectorKind};
 use crate::{with_datapath, with_intersector};
@@ -84,12 +84,7 @@ impl Run<'_, '_> {
             .map_err(|e| anyhow!("hardware configuration: {e}"))?;
         if shadow_caster {
             // Visibility from the host's rasterizer (the G-buffer pass), as on the host.
-            let g = rasterize(scene, &eye);
-            let hits = (0..height)
-                .flat_map(|y| (0..width).map(move |x| (x, y)))
-                .map(|(x, y)| gbuffer_hit::<I>(scene, &eye, &g, x, y).1)
-                .collect();
-            sim.set_visibility(hits);
+            sim.set_visibility(gbuffer_visibility::<I>(scene, &eye).into_iter().map(|(_, hit)| hit).collect());
         }
         let bar = progress::bar(0, "simulate", show_progress);
         sim.run(|done, total| {

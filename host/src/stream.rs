@@ -10,7 +10,7 @@ use raypipe_core::{Intersector, SceneView, Vec3};
 use raypipe_hw::stream::{CostModel, StreamConfig, StreamMachine, StreamReport};
 
 use crate::progress;
-use crate::raster::{gbuffer_hit, rasterize};
+use crate::raster::gbuffer_visibility;
 use crate::render::{eye_rays, Frame};
 use crate::tracer::IntersectorKind;
 use crate::with_intersector;
@@ -45,12 +45,7 @@ fn run_with<I: Intersector>(
     let mut m = StreamMachine::<I>::new(*scene, eye, background, shader, cfg, costs.clone()).map_err(|e| anyhow!(e))?;
     if shadow_caster {
         // Visibility from the host's rasterizer (the G-buffer pass), as on the host.
-        let g = rasterize(scene, &eye);
-        let v = (0..eye.height)
-            .flat_map(|y| (0..eye.width).map(move |x| (x, y)))
-            .map(|(x, y)| gbuffer_hit::<I>(scene, &eye, &g, x, y))
-            .collect();
-        m.set_visibility(v);
+        m.set_visibility(gbuffer_visibility::<I>(scene, &eye));
     }
     let bar = progress::bar(0, "stream", show_progress);
     m.run(|done, total| {
