@@ -49,6 +49,12 @@ impl GridTraversal {
         self.dda.is_none()
     }
 
+    /// True once the walk has ended: the ray missed the grid, or its hit became final at
+    /// [`GridTraversal::finish_voxel`] or at a step.
+    pub fn is_done(&self) -> bool {
+        self.dda.is_none()
+    }
+
     /// One traversal step: reads one cell and reports it.
     #[inline]
     pub fn step<P: MemoryProbe>(&mut self, grid: &GridView<'_>, probe: &mut P) -> GridEvent {

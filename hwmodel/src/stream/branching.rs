@@ -16,7 +16,7 @@ use crate::stream::frame::StreamMachine;
 use crate::stream::memory_probe::StreamProbe;
 use crate::stream::pass_loop::Runs;
 use crate::stream::ray_state::StreamRay;
-use crate::stream::stencil::RayStage;
+use crate::stream::stencil::{covered_fragments, RayStage};
 
 impl<I: Intersector> StreamMachine<'_, I> {
     /// Runs one screen of rays to the end of traversal in one fused pass, counting into
@@ -30,7 +30,7 @@ impl<I: Intersector> StreamMachine<'_, I> {
         let n = rays.len();
         if generate {
             let (width, _) = self.screen();
-            let fragments = (n as u64).div_ceil(width as u64) * width as u64;
+            let fragments = covered_fragments(n, width);
             self.charge(Kernel::Generate, fragments, 0, [0; 4], fused);
         }
         let mut state: Vec<Option<StreamRay<I>>> =
@@ -43,22 +43,14 @@ impl<I: Intersector> StreamMachine<'_, I> {
         let (mut exec, mut words) = ([0u64; 2], [[0u64; 4]; 2]);
         let mut work = vec![RayWork::default(); n];
         let mut runs = vec![Runs::default(); n];
-        let mut probe = StreamProbe::new(&mut self.cache);
+        let mut probe = StreamProbe::new(&mut self.cache, false);
         for start in (0..n).step_by(simd) {
             let end = (start + simd).min(n);
             if simd == 1 {
                 // Alone, a fragment pays only for the kernels it runs.
                 let Some(ray) = state[start].as_mut() else { continue };
-                loop {
-                    let (b, stage) = match ray.stage {
-                        RayStage::Traverse => (0, RayStage::Traverse),
-                        RayStage::Intersect => (1, RayStage::Intersect),
-                        _ => break,
-                    };
-                    match stage {
-                        RayStage::Traverse => ray.traverse(&self.grid, &mut probe),
-                        _ => ray.intersect(&self.scene, &self.grid, &mut probe),
-                    }
+                while let Some(stage) = ray.run_kernel(&self.scene, &self.grid, &mut probe) {
+                    let b = (stage == RayStage::Intersect) as usize;
                     exec[b] += 1;
                     fused.useful += 1;
                     runs[start].step(stage, &mut work[start]);
@@ -82,10 +74,7 @@ impl<I: Intersector> StreamMachine<'_, I> {
                             continue;
                         }
                         takers += 1;
-                        match stage {
-                            RayStage::Traverse => ray.traverse(&self.grid, &mut probe),
-                            _ => ray.intersect(&self.scene, &self.grid, &mut probe),
-                        }
+                        ray.run_kernel(&self.scene, &self.grid, &mut probe);
                         runs[i].step(stage, &mut work[i]);
                         if ray.stage != stage {
                             runs[i].close(stage, (1, 1), &mut work[i]);

@@ -15,12 +15,15 @@ pub struct StreamProbe<'c> {
     /// Words read by class since the probe was made.
     pub words: [u64; 4],
     log: Vec<(DataClass, u32, u32)>,
+    /// Keep the reads for [`StreamProbe::replay`] (only unrolled, unsuppressed passes
+    /// replay).
+    logging: bool,
 }
 
 impl<'c> StreamProbe<'c> {
-    /// A probe in front of `cache`.
-    pub fn new(cache: &'c mut TextureCache) -> StreamProbe<'c> {
-        StreamProbe { cache, words: [0; 4], log: Vec::new() }
+    /// A probe in front of `cache`; `replays`: an iteration's reads may be issued again.
+    pub fn new(cache: &'c mut TextureCache, replays: bool) -> StreamProbe<'c> {
+        StreamProbe { cache, words: [0; 4], log: Vec::new(), logging: replays }
     }
 
     /// Starts an iteration: forgets the previous one's reads.
@@ -59,7 +62,9 @@ impl<'c> StreamProbe<'c> {
 
 impl MemoryProbe for StreamProbe<'_> {
     fn read(&mut self, class: DataClass, addr: u32, bytes: u32) {
-        self.log.push((class, addr, bytes));
+        if self.logging {
+            self.log.push((class, addr, bytes));
+        }
         self.count(class, addr, bytes);
     }
 }

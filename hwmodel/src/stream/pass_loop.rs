@@ -70,13 +70,7 @@ impl<I: Intersector> StreamMachine<'_, I> {
     fn future(&self, ray: &StreamRay<I>) -> (u64, u64) {
         let per_pass = (self.cfg.unroll.traverse, self.cfg.unroll.intersect);
         let (mut r, mut work, mut runs) = (*ray, RayWork::default(), Runs::default());
-        loop {
-            let before = r.stage;
-            match before {
-                RayStage::Traverse => r.traverse(&self.grid, &mut NoProbe),
-                RayStage::Intersect => r.intersect(&self.scene, &self.grid, &mut NoProbe),
-                _ => break,
-            }
+        while let Some(before) = r.run_kernel(&self.scene, &self.grid, &mut NoProbe) {
             runs.step(before, &mut work);
             if r.stage != before {
                 runs.close(before, per_pass, &mut work);
@@ -164,7 +158,7 @@ impl<I: Intersector> StreamMachine<'_, I> {
             stencil.test_pass();
             let r_words = self.costs.get(kernel).r;
             let (cache_state, suppress) = (self.cfg.cache_state, self.cfg.suppress);
-            let mut probe = StreamProbe::new(&mut self.cache);
+            let mut probe = StreamProbe::new(&mut self.cache, iterations > 1 && !suppress);
             for &i in &alive {
                 let Some(ray) = state[i].as_mut() else { continue };
                 if ray.stage != stage {
@@ -177,10 +171,7 @@ impl<I: Intersector> StreamMachine<'_, I> {
                 for _ in 0..iterations {
                     if ray.stage == stage {
                         probe.begin();
-                        match kind {
-                            LoopPass::Traverse => ray.traverse(&self.grid, &mut probe),
-                            LoopPass::Intersect => ray.intersect(&self.scene, &self.grid, &mut probe),
-                        }
+                        ray.run_kernel(&self.scene, &self.grid, &mut probe);
                         p.useful += 1;
                         runs[i].step(stage, &mut work[i]);
                     } else {

@@ -36,13 +36,6 @@ pub mod words {
     pub const COLOR: u64 = 4;
 }
 
-/// What one kernel invocation did to a ray.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Step {
-    /// The stage the ray is in afterwards.
-    pub next: RayStage,
-}
-
 /// One ray in the stream.
 pub struct StreamRay<I: Intersector> {
     /// The ray.
@@ -80,6 +73,23 @@ impl<I: Intersector> StreamRay<I> {
     /// The closest hit (or, for an any-hit ray, some hit in range) once done.
     pub fn hit(&self) -> Option<Hit> {
         self.trav.best
+    }
+
+    /// Runs the kernel of the ray's stage once (a traversal step or a triangle test);
+    /// returns that stage, or `None` for a ray not waiting for either.
+    pub fn run_kernel<P: MemoryProbe>(
+        &mut self,
+        scene: &SceneView<'_>,
+        grid: &GridView<'_>,
+        probe: &mut P,
+    ) -> Option<RayStage> {
+        let stage = self.stage;
+        match stage {
+            RayStage::Traverse => self.traverse(grid, probe),
+            RayStage::Intersect => self.intersect(scene, grid, probe),
+            _ => return None,
+        }
+        Some(stage)
     }
 
     /// One traversal step (a ray in [`RayStage::Traverse`]).
@@ -125,8 +135,6 @@ impl<I: Intersector> StreamRay<I> {
     /// A voxel is done: the walk goes on, unless the best hit lies inside it.
     fn end_voxel(&mut self, voxel: Voxel) {
         self.trav.finish_voxel(&voxel);
-        // `finish_voxel` ends the walk when the hit is final; the next step says so.
-        self.stage =
-            if self.trav.best.is_some_and(|b| b.t < voxel.t_exit) { RayStage::Done } else { RayStage::Traverse };
+        self.stage = if self.trav.is_done() { RayStage::Done } else { RayStage::Traverse };
     }
 }

@@ -15,7 +15,7 @@ use crate::stream::counters::{PassKind, PassRecord};
 use crate::stream::frame::{Fragment, StreamMachine};
 use crate::stream::memory_probe::StreamProbe;
 use crate::stream::ray_state::StreamRay;
-use crate::stream::stencil::StencilCounts;
+use crate::stream::stencil::{covered_fragments, StencilCounts};
 
 impl<I: Intersector> StreamMachine<'_, I> {
     /// Shades one screen; emitted records go to `next`.
@@ -30,13 +30,12 @@ impl<I: Intersector> StreamMachine<'_, I> {
         let (width, _) = self.screen();
         let mut p = PassRecord { wave, screen, kind: Some(PassKind::Shade), iterations: 1, ..Default::default() };
         if self.cfg.arch == Architecture::Multipass {
-            let covered = (frags.len() as u64).div_ceil(width as u64) * width as u64;
-            p.stencil = StencilCounts { reads: covered, writes: 0 };
+            p.stencil = StencilCounts { reads: covered_fragments(frags.len(), width), writes: 0 };
         }
         let lights = self.scene.light_count() as u64;
         let (mut shaded, mut lit, mut shadows, emitted_before) = (0u64, 0u64, 0u64, next.len());
         let (scene, background, shader) = (self.scene, self.background, self.shader);
-        let mut probe = StreamProbe::new(&mut self.cache);
+        let mut probe = StreamProbe::new(&mut self.cache, false);
         for (i, f) in frags.iter().enumerate() {
             let (rec, hit) = match f {
                 Fragment::Empty => {

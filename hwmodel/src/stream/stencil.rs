@@ -39,6 +39,12 @@ impl StencilCounts {
     }
 }
 
+/// Fragments a pass over `rays` rays covers on a screen `width` wide: whole rows.
+pub fn covered_fragments(rays: usize, width: u32) -> u64 {
+    let w = width.max(1) as u64;
+    (rays as u64).div_ceil(w) * w
+}
+
 /// The stencil buffer of one screen of the ray stream.
 #[derive(Clone, Debug)]
 pub struct Stencil {
@@ -53,10 +59,9 @@ impl Stencil {
     /// A stencil for `rays` fragments of a screen `width` wide: passes cover the rows
     /// that hold rays.
     pub fn new(rays: usize, width: u32) -> Stencil {
-        let w = width.max(1) as u64;
         Stencil {
             values: vec![RayStage::Inactive; rays],
-            covered: (rays as u64).div_ceil(w) * w,
+            covered: covered_fragments(rays, width),
             counts: StencilCounts::default(),
         }
     }
