@@ -150,16 +150,31 @@ impl EyeRays {
     /// direction, or `None` if `p` is not in front of the eye.
     #[inline]
     pub fn project(&self, p: Vec3) -> Option<(f32, f32, f32)> {
-        let v = p - self.eye;
-        let z = v.dot(self.forward);
-        if z.is_nan() || z <= 0.0 {
+        let v = self.to_view(p);
+        if v.z.is_nan() || v.z <= 0.0 {
             return None;
         }
-        let sx = v.dot(self.right) / (z * self.half_w);
-        let sy = v.dot(self.up) / (z * self.half_h);
-        let x = (sx + 1.0) * 0.5 * self.width as f32 - 0.5;
-        let y = (1.0 - sy) * 0.5 * self.height as f32 - 0.5;
-        Some((x, y, z))
+        let (x, y) = self.view_to_pixel(v);
+        Some((x as f32, y as f32, v.z))
+    }
+
+    /// `p` in the camera's frame: `(right, up, forward)` components of `p - eye`, so
+    /// `z` is the view depth (a rasterizer clips against a plane of constant `z`).
+    #[inline]
+    pub fn to_view(&self, p: Vec3) -> Vec3 {
+        let v = p - self.eye;
+        Vec3::new(v.dot(self.right), v.dot(self.up), v.dot(self.forward))
+    }
+
+    /// Continuous pixel coordinates (centres at whole numbers, `y` downwards) of a point
+    /// in the camera's frame with `z > 0`, in `f64`: a vertex just past the near plane
+    /// projects millions of pixels away, where `f32` would lose the edge's position.
+    #[inline]
+    pub fn view_to_pixel(&self, v: Vec3) -> (f64, f64) {
+        let z = v.z as f64;
+        let sx = v.x as f64 / (z * self.half_w as f64);
+        let sy = v.y as f64 / (z * self.half_h as f64);
+        ((sx + 1.0) * 0.5 * self.width as f64 - 0.5, (1.0 - sy) * 0.5 * self.height as f64 - 0.5)
     }
 
     /// Cosine between the ray through pixel `(x, y)` and the view direction: a ray's

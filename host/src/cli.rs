@@ -1102,9 +1102,9 @@ fn cmd_stats(a: StatsArgs) -> Result<()> {
             ratio(c.bytes, cast.bytes)
         );
         if a.algo.algo == Algorithm::Shadow {
-            let (differ, pixels, skipped) = stats::coverage_mismatch(&view, &cam, &algo_opts)?;
+            let (differ, pixels, clipped) = stats::coverage_mismatch(&view, &cam, &algo_opts)?;
             println!(
-                "shadow caster coverage    rasterization and ray casting disagree at {:.4}% of pixels ({differ} of {pixels}); {skipped} triangles reaching behind the eye left out",
+                "shadow caster coverage    rasterization and ray casting disagree at {:.4}% of pixels ({differ} of {pixels}); {clipped} triangles clipped at the near plane",
                 100.0 * differ as f64 / pixels.max(1) as f64
             );
         }

@@ -3,7 +3,7 @@
 
 use raypipe_core::camera::EyeRays;
 use raypipe_core::image::NULL_INDEX;
-use raypipe_core::shade::raster::{self, rasterize_triangle, GBufferMut};
+use raypipe_core::shade::raster::{self, rasterize_triangle, Coverage, GBufferMut};
 use raypipe_core::{NoProbe, SceneView};
 
 /// Nearest triangle per pixel.
@@ -19,8 +19,22 @@ pub struct GBuffer {
     pub depth: Vec<f32>,
     /// Screen-space barycentric weights `(u, v)` of the second and third vertex.
     pub uv: Vec<(f32, f32)>,
-    /// Triangles left out because they reach behind the eye.
-    pub skipped: u32,
+    /// Triangles crossing the near plane, drawn clipped.
+    pub clipped: u32,
+}
+
+/// The near plane's view depth: a millionth of the scene's diagonal, so only what lies
+/// closer to the eye than that (which ray casting would see as a wall filling the
+/// screen) is lost, while the edge functions in `f64` stay exact to a small fraction of
+/// a pixel for vertices projected from just beyond it.
+pub fn near_plane(scene: &SceneView<'_>) -> f32 {
+    let (lo, hi) = scene.bounds();
+    let diagonal = (hi - lo).length();
+    if diagonal.is_finite() && diagonal > 0.0 {
+        (diagonal * 1e-6).max(f32::MIN_POSITIVE)
+    } else {
+        1e-6
+    }
 }
 
 /// Rasterizes every triangle of `scene` as `eye` sees it (core's kernel, triangle by
@@ -34,16 +48,17 @@ pub fn rasterize(scene: &SceneView<'_>, eye: &EyeRays) -> GBuffer {
         prim: vec![NULL_INDEX; n],
         depth: vec![f32::INFINITY; n],
         uv: vec![(0.0, 0.0); n],
-        skipped: 0,
+        clipped: 0,
     };
     let mut target = GBufferMut { width: w, height: h, prim: &mut g.prim, depth: &mut g.depth, uv: &mut g.uv };
-    let mut skipped = 0;
+    let near = near_plane(scene);
+    let mut clipped = 0;
     for prim in 0..scene.triangle_count() {
-        if !rasterize_triangle(eye, scene.triangle(prim, &mut NoProbe), prim, &mut target) {
-            skipped += 1;
+        if rasterize_triangle(eye, scene.triangle(prim, &mut NoProbe), prim, near, &mut target) == Coverage::Clipped {
+            clipped += 1;
         }
     }
-    g.skipped = skipped;
+    g.clipped = clipped;
     g
 }
 

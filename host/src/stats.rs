@@ -280,7 +280,7 @@ fn costs_with<I: Intersector>(
 }
 
 /// Pixels where the rasterizer's nearest triangle differs from ray casting's (the shadow
-/// caster's coverage disagreements at triangle edges), and the triangles it left out.
+/// caster's coverage disagreements at triangle edges), and the triangles it clipped at the near plane.
 pub fn coverage_mismatch(
     scene: &SceneView<'_>,
     camera: &CameraRecord,
@@ -305,5 +305,5 @@ pub fn coverage_mismatch(
             })
             .sum::<u64>()
     });
-    Ok((differ, eye.width as u64 * eye.height as u64, g.skipped))
+    Ok((differ, eye.width as u64 * eye.height as u64, g.clipped))
 }

@@ -293,7 +293,7 @@ fn the_shadow_caster_equals_ray_casting_plus_shadows_where_coverage_agrees() {
         }
         let n = (cam.width * cam.height) as usize;
         assert!(disagree * 100 < n, "{}: {disagree} of {n} pixels disagree", scene_path.display());
-        assert_eq!(g.skipped, 0);
+        assert_eq!(g.clipped, 0);
         if scene_path.ends_with("whitted.obj") {
             check_golden("shadow_160x120.png", &hybrid);
         }
