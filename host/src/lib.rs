@@ -11,6 +11,7 @@ pub mod bench;
 pub mod bvh_builder;
 pub mod camera_file;
 pub mod cli;
+pub mod commands;
 pub mod default_scene;
 pub mod fixed_point;
 pub mod generate;

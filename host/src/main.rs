@@ -1,3 +1,3 @@
 fn main() -> std::process::ExitCode {
-    raypipe::cli::main()
+    raypipe::commands::main()
 }

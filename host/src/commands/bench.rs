@@ -1,0 +1,160 @@
+//! `raypipe bench`: timed runs of the host renderer.
+
+use crate::bench::{self, median};
+use crate::cli::{BenchArgs, CameraArgs};
+use crate::grid_builder::GridResolution;
+use crate::packets::PacketSize;
+use crate::render::{Algorithm, RenderOptions};
+use crate::scene::{self, Accel, BuildOptions};
+use crate::simulate;
+use crate::tracer::IntersectorKind;
+use anyhow::{anyhow, bail, Result};
+use raypipe_core::image::CameraRecord;
+use std::path::PathBuf;
+use std::time::Instant;
+
+use super::{camera_for, structure_summary};
+
+pub(crate) fn cmd_bench(a: BenchArgs) -> Result<()> {
+    if a.threads == Some(0) {
+        bail!("--threads must be at least 1");
+    }
+    if a.runs == 0 {
+        bail!("--runs must be at least 1");
+    }
+    let mut targets: Vec<Option<PathBuf>> = Vec::new();
+    if !a.no_default {
+        targets.push(None);
+    }
+    targets.extend(a.scenes.iter().cloned().map(Some));
+    if targets.is_empty() {
+        bail!("nothing to measure: --no-default without scenes");
+    }
+    let kernel = a.intersector.map_or("default", IntersectorKind::name);
+    let chip = match &a.simulate {
+        Some(preset) => Some(simulate::load_config(Some(preset), None, &[])?),
+        None => None,
+    };
+    println!(
+        "primary rays {}x{}, trace only (eye ray, traversal, {kernel} intersection), median of {} runs",
+        a.size.0, a.size.1, a.runs
+    );
+    println!(
+        "{:<24} {:>8} {:<30} {:>8} {:>8} {:<7} {:>10} {:>10} {:>8} {:>6}",
+        "scene", "tris", "structure", "build s", "B/tri", "packet", "Mrays/s 1t", "Mrays/s", "threads", "SIMD"
+    );
+    for t in targets {
+        let source = scene::load_source(t.as_deref())?;
+        let name = t.as_ref().map_or("built-in Cornell box".to_string(), |p| {
+            p.file_name().map_or(p.display().to_string(), |f| f.to_string_lossy().into_owned())
+        });
+        let accels: Vec<Option<Accel>> = match source {
+            scene::Source::Image(_) => vec![None],
+            scene::Source::Mesh { .. } => a.accel.iter().copied().map(Some).collect(),
+        };
+        for accel in accels {
+            let opts = BuildOptions {
+                accel: accel.unwrap_or_default(),
+                grid: match a.grid_min_dim {
+                    Some(n) => GridResolution::MinDim(n),
+                    None => GridResolution::default(),
+                },
+                triangles: a.triangles,
+                ..Default::default()
+            };
+            // Structure build time: median of up to three builds (one for large scenes).
+            let mut builds = Vec::new();
+            let mut built = None;
+            for _ in 0..3 {
+                let s = source.build(&opts)?;
+                let big = s.view()?.triangle_count() > 20_000;
+                builds.push(s.report.as_ref().map_or(0.0, |r| r.grid_seconds));
+                built = Some(s);
+                if big {
+                    break;
+                }
+            }
+            let scene = built.ok_or_else(|| anyhow!("no scene"))?;
+            let view = scene.view()?;
+            let cam_args = CameraArgs { camera: a.camera.clone(), ..Default::default() };
+            let base = camera_for(&view, &cam_args)?;
+            let cam = CameraRecord { width: a.size.0, height: a.size.1, ..base };
+            let bytes_per_tri = scene.report.as_ref().map_or(view.bytes().len(), |r| r.structure_bytes) as f64
+                / view.triangle_count().max(1) as f64;
+            let kind = IntersectorKind::resolve(a.intersector, &view);
+            let mut best_single = 0.0f64;
+            for &packet in &a.packet {
+                let r = bench::primary_rays(&view, &cam, kind, packet, a.runs, a.threads)?;
+                best_single = best_single.max(r.mrays_single);
+                let simd = if packet == PacketSize::Single {
+                    "-".to_string()
+                } else if !crate::tracer::has_packet_kernel(&view) {
+                    // Traced ray by ray: no lock-step, no SIMD efficiency to report.
+                    "by ray".to_string()
+                } else {
+                    format!("{:.0}%", 100.0 * r.simd_efficiency)
+                };
+                println!(
+                    "{:<24} {:>8} {:<30} {:>8.3} {:>8.1} {:<7} {:>10.2} {:>10.2} {:>8} {:>6}",
+                    name,
+                    view.triangle_count(),
+                    structure_summary(&view),
+                    median(&builds),
+                    bytes_per_tri,
+                    packet.label(),
+                    r.mrays_single,
+                    r.mrays_all,
+                    r.threads,
+                    simd
+                );
+            }
+            if a.algo.algo != Algorithm::Cast {
+                let mut opts =
+                    RenderOptions { intersector: kind, packet: PacketSize::auto_for(&view), ..Default::default() };
+                a.algo.apply(&mut opts)?;
+                let r = bench::algorithm_rays(&view, &cam, &opts, a.runs, a.threads)?;
+                let px = cam.width as f64 * cam.height as f64;
+                let kinds: Vec<String> = raypipe_core::shade::ray_record::RayKind::ALL
+                    .iter()
+                    .filter(|k| r.rays[**k as usize] > 0)
+                    .map(|k| format!("{} {:.2}", k.name(), r.rays[*k as usize] as f64 / px))
+                    .collect();
+                println!(
+                    "{:<24} {:?}: rays per pixel {}; all rays {:.2} Mrays/s 1 thread, {:.2} Mrays/s {} threads",
+                    name,
+                    a.algo.algo,
+                    kinds.join(", "),
+                    r.mrays_single,
+                    r.mrays_all,
+                    r.threads
+                );
+            }
+            if let (Some(cfg), Some(preset)) = (&chip, &a.simulate) {
+                // The simulator is deterministic; its wall time is the median of up to 3 runs.
+                let mut walls = Vec::new();
+                let mut last = None;
+                for _ in 0..a.runs.min(3) {
+                    let start = Instant::now();
+                    let out = simulate::simulate(&view, &cam, cfg, kind, None, false, false)?;
+                    walls.push(start.elapsed().as_secs_f64());
+                    last = Some(out.1);
+                }
+                let report = last.ok_or_else(|| anyhow!("no simulation"))?;
+                let wall = median(&walls);
+                let host = (a.size.0 as f64 * a.size.1 as f64) / (best_single * 1e6);
+                println!(
+                    "{:<24} simulate --preset {preset}: {} cycles ({:.1} frames/s at {} MHz); simulator {:.2} s wall, {:.3} Mrays/s; host 1 thread {:.3} s: {:.1}x slower",
+                    name,
+                    report.cycles,
+                    report.frames_per_second,
+                    cfg.clock_mhz,
+                    wall,
+                    report.rays as f64 / wall / 1e6,
+                    host,
+                    wall / host
+                );
+            }
+        }
+    }
+    Ok(())
+}

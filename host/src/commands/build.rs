@@ -1,0 +1,89 @@
+//! `raypipe build`: an OBJ file (or a generated scene) into a scene image.
+
+use crate::cli::BuildArgs;
+use crate::output;
+use crate::render;
+use crate::scene::{self, Accel};
+use anyhow::{anyhow, bail, Result};
+use std::time::Instant;
+
+use super::{accel_name, fmt_bytes, warn};
+
+pub(crate) fn cmd_build(a: BuildArgs) -> Result<()> {
+    let start = Instant::now();
+    let (input, scene) = match (&a.generate, &a.scene) {
+        (Some(spec), _) => {
+            let g = crate::generate::generate(spec, a.view.as_deref())?;
+            let scene = scene::build(
+                g.name.clone(),
+                g.mesh,
+                Vec::new(),
+                g.camera.merged(a.camera.spec()?),
+                &a.structure.options(),
+            )?;
+            (format!("generated {}", g.name), scene)
+        }
+        (None, Some(path)) => {
+            let scene::Source::Mesh { name, mesh, warnings, camera } = scene::load_source(Some(path))? else {
+                bail!("{}: is already a scene image; build takes an OBJ file", path.display());
+            };
+            // The camera file and flags, over the OBJ's sidecar camera, become the image's default.
+            let scene = scene::build(name, mesh, warnings, camera.merged(a.camera.spec()?), &a.structure.options())?;
+            (path.display().to_string(), scene)
+        }
+        (None, None) => bail!("build: name an OBJ file or --generate a scene"),
+    };
+    warn(&scene);
+    let what = a.camera.camera.as_ref().map_or("camera".to_string(), |p| p.display().to_string());
+    let view = scene.view()?;
+    let camera = view.camera().ok_or_else(|| anyhow!("internal error: built image lacks a camera"))?;
+    render::eye_rays(camera, &what)?;
+    let elapsed = start.elapsed().as_secs_f64();
+    output::write_bytes(&a.output, &scene.image)?;
+    let r = scene.report.as_ref().ok_or_else(|| anyhow!("internal error: no build report"))?;
+    println!("scene        {input}");
+    println!("triangles    {} ({} degenerate), vertices {}", r.triangles, r.degenerate, r.vertices);
+    match a.structure.accel {
+        Accel::Kd | Accel::Bvh | Accel::Bvh4 | Accel::Bvh8 => {
+            println!(
+                "{:<12} {} nodes, depth {}, {} triangle references ({:.2} per triangle)",
+                accel_name(a.structure.accel),
+                r.tree_nodes,
+                r.tree_depth,
+                r.references,
+                r.references as f64 / r.triangles.max(1) as f64
+            );
+            println!(
+                "build        {:.3} s, structure {} bytes ({:.1} bytes/triangle)",
+                r.grid_seconds,
+                r.structure_bytes,
+                r.structure_bytes as f64 / r.triangles.max(1) as f64
+            );
+        }
+        Accel::None => {}
+        Accel::Grid => {
+            let [x, y, z] = r.dims;
+            println!(
+                "grid         {x} x {y} x {z} = {} cells, {} non-empty ({:.1}%)",
+                r.cells,
+                r.full_cells,
+                100.0 * r.full_cells as f64 / r.cells.max(1) as f64
+            );
+            println!(
+                "lists        {} entries ({} triangle references, {:.2} per triangle)",
+                r.list_entries,
+                r.references,
+                r.references as f64 / r.triangles.max(1) as f64
+            );
+            println!("grid build   {:.3} s", r.grid_seconds);
+        }
+    }
+    println!(
+        "image        {} bytes ({}), {:.1} bytes/triangle",
+        r.image_bytes,
+        fmt_bytes(r.image_bytes),
+        r.image_bytes as f64 / r.triangles.max(1) as f64
+    );
+    println!("total        {elapsed:.3} s -> {}", a.output.display());
+    Ok(())
+}

@@ -1,0 +1,133 @@
+//! What each subcommand does, one file per subcommand (the argument structs are in
+//! [`crate::cli`]), and the helpers they share.
+
+mod bench;
+mod build;
+mod fixed_point;
+mod rays;
+mod render;
+mod simulate;
+mod stats;
+mod stream;
+mod trace;
+
+use crate::cli::{CameraArgs, Cli, Command};
+use crate::scene::{self, Accel, Scene};
+use anyhow::{bail, Result};
+use raypipe_core::image::CameraRecord;
+use std::path::Path;
+use std::process::ExitCode;
+
+use clap::Parser;
+
+/// Parses the process arguments, runs, and turns any error into one line on stderr.
+pub fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            let msg = format!("{e:#}").replace('\n', " ");
+            eprintln!("error: {msg}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// Runs a parsed command.
+pub fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Build(a) => build::cmd_build(a),
+        Command::Render(a) => render::cmd_render(a),
+        Command::Stats(a) => stats::cmd_stats(a),
+        Command::Bench(a) => bench::cmd_bench(a),
+        Command::Trace(a) => trace::cmd_trace(a),
+        Command::Rays(a) => rays::cmd_rays(a),
+        Command::Simulate(a) => simulate::cmd_simulate(a),
+        Command::FixedPoint(a) => fixed_point::cmd_fixed_point(a),
+        Command::Stream(a) => stream::cmd_stream(a),
+    }
+}
+
+pub(crate) fn warn(scene: &Scene) {
+    if let Some(r) = &scene.report {
+        for w in &r.warnings {
+            eprintln!("warning: {w}");
+        }
+    }
+}
+
+pub(crate) fn accel_name(a: Accel) -> &'static str {
+    match a {
+        Accel::Grid => "grid",
+        Accel::Kd => "kd-tree",
+        Accel::Bvh => "BVH",
+        Accel::Bvh4 => "BVH4",
+        Accel::Bvh8 => "BVH8",
+        Accel::None => "brute force",
+    }
+}
+
+/// A short description of the structure a scene image holds.
+pub(crate) fn structure_summary(view: &raypipe_core::SceneView<'_>) -> String {
+    if let Some(g) = view.grid() {
+        format!("grid {}x{}x{}", g.dims[0], g.dims[1], g.dims[2])
+    } else if let Some(b) = view.bvh4() {
+        format!("BVH4 {} nodes{}", b.node_count(), blocks_note(view))
+    } else if let Some(b) = view.bvh8() {
+        format!("BVH8 {} nodes{}", b.node_count(), blocks_note(view))
+    } else if let Some(b) = view.bvh() {
+        format!("BVH {} nodes", b.node_count())
+    } else if let Some(k) = view.kdtree() {
+        format!("kd {} nodes", k.node_count())
+    } else {
+        "none".to_string()
+    }
+}
+
+pub(crate) fn blocks_note(view: &raypipe_core::SceneView<'_>) -> &'static str {
+    if view.has_tri_blocks() {
+        ", leaf blocks"
+    } else {
+        ""
+    }
+}
+
+pub(crate) fn fmt_bytes(b: usize) -> String {
+    if b >= 1 << 20 {
+        format!("{:.2} MiB", b as f64 / (1u64 << 20) as f64)
+    } else {
+        format!("{:.1} KiB", b as f64 / 1024.0)
+    }
+}
+
+pub(crate) fn camera_for(view: &raypipe_core::SceneView<'_>, args: &CameraArgs) -> Result<CameraRecord> {
+    let base = match view.camera() {
+        Some(c) => *c,
+        None => {
+            let (lo, hi) = view.bounds();
+            scene::framing_camera(lo.to_array(), hi.to_array())
+        }
+    };
+    let cam = args.resolve(&base)?;
+    // Each image's own rays are not checked one by one; its corners and centre stand
+    // for them (they bound the directions, and share the eye).
+    let eye = crate::render::eye_rays(&cam, "camera")?;
+    let (w, h) = (eye.width.saturating_sub(1), eye.height.saturating_sub(1));
+    let rays = [(0, 0), (w, 0), (0, h), (w, h), (w / 2, h / 2)].map(|(x, y)| eye.ray(x, y));
+    warn_range(view, &rays, "camera rays (corners and centre)");
+    Ok(cam)
+}
+
+/// Warns about a scene or rays outside raypipe-core's guaranteed range.
+pub(crate) fn warn_range(view: &raypipe_core::SceneView<'_>, rays: &[raypipe_core::Ray], what: &str) {
+    for w in crate::range_check::warnings(view, rays, what) {
+        eprintln!("warning: {w}");
+    }
+}
+
+pub(crate) fn check_png_path(p: &Path) -> Result<()> {
+    match p.extension().and_then(|e| e.to_str()) {
+        Some(e) if e.eq_ignore_ascii_case("png") => Ok(()),
+        _ => bail!("{}: output must be a .png file", p.display()),
+    }
+}

@@ -1,0 +1,47 @@
+//! `raypipe rays`: writes a batch of rays (eye or bounce rays of a view).
+
+use crate::cli::RaysArgs;
+use crate::render;
+use crate::scene::{self, Accel, BuildOptions};
+use anyhow::Result;
+
+use super::camera_for;
+
+pub(crate) fn cmd_rays(a: RaysArgs) -> Result<()> {
+    let scene = scene::load(a.scene.as_deref(), &BuildOptions { accel: Accel::None, ..Default::default() })?;
+    let view = scene.view()?;
+    let cam = camera_for(&view, &a.camera)?;
+    let eye = render::eye_rays(&cam, "camera")?;
+    let mut data = Vec::with_capacity(cam.width as usize * cam.height as usize * 8);
+    let b = a.block;
+    for by in (0..cam.height).step_by(b as usize) {
+        for bx in (0..cam.width).step_by(b as usize) {
+            // The lane order of the host's packets (Z-order within the block).
+            for lane in 0..b * b {
+                let (i, j) = crate::packets::lane_pixel(lane, b);
+                let (x, y) = (bx + i, by + j);
+                if x < cam.width && y < cam.height {
+                    let r = eye.ray(x, y);
+                    data.extend_from_slice(&[
+                        r.origin.x, r.origin.y, r.origin.z, r.dir.x, r.dir.y, r.dir.z, r.t_min, r.t_max,
+                    ]);
+                }
+            }
+        }
+    }
+    let rows = data.len() / 8;
+    crate::npy::write_f32_2d(&a.output, &crate::npy::Array2 { rows, cols: 8, data })?;
+    if let Some(path) = &a.triangles {
+        let mut data = Vec::with_capacity(view.triangle_count() as usize * 9);
+        for prim in 0..view.triangle_count() {
+            for v in view.triangle(prim, &mut raypipe_core::NoProbe) {
+                data.extend_from_slice(&v.to_array());
+            }
+        }
+        let tris = crate::npy::Array2 { rows: view.triangle_count() as usize, cols: 9, data };
+        crate::npy::write_f32_2d(path, &tris)?;
+        println!("wrote {} triangles -> {}", tris.rows, path.display());
+    }
+    println!("wrote {rows} primary rays ({}x{}) -> {}", cam.width, cam.height, a.output.display());
+    Ok(())
+}

@@ -1,0 +1,89 @@
+//! `raypipe stats`: Purcell's scene statistics for a view.
+
+use crate::cli::StatsArgs;
+use crate::packets::PacketSize;
+use crate::render::{Algorithm, RenderOptions};
+use crate::scene;
+use crate::stats;
+use crate::tracer::IntersectorKind;
+use anyhow::Result;
+use raypipe_core::DataClass;
+
+use super::{camera_for, structure_summary, warn};
+
+pub(crate) fn cmd_stats(a: StatsArgs) -> Result<()> {
+    a.run.check()?;
+    let scene = scene::load(a.scene.as_deref(), &a.structure.options())?;
+    warn(&scene);
+    let view = scene.view()?;
+    let cam = camera_for(&view, &a.camera)?;
+    let kind = IntersectorKind::resolve(a.run.intersector, &view);
+    let opts = RenderOptions {
+        threads: a.run.threads,
+        intersector: kind,
+        progress: false,
+        packet: a.packet,
+        ..Default::default()
+    };
+    let s = stats::gather(&view, &cam, &opts)?;
+    println!("scene                     {} ({} triangles)", scene.name, view.triangle_count());
+    println!("structure                 {}", structure_summary(&view));
+    let (node, leaf) = if view.grid().is_some() { ("voxels", "non-empty voxels") } else { ("nodes", "leaves") };
+    println!("view                      {}x{} = {} primary rays", cam.width, cam.height, s.rays);
+    println!("rays that hit             {:.2}%", 100.0 * s.hits as f64 / s.rays.max(1) as f64);
+    println!("rays missing scene bounds {:.2}%", 100.0 * s.missed_bounds as f64 / s.rays.max(1) as f64);
+    println!("{:<25} avg {:.2}, max {}", format!("{node} visited per ray"), s.per_ray(s.total.nodes), s.max_nodes);
+    println!("{:<25} avg {:.2}", format!("{leaf} per ray"), s.per_ray(s.total.leaves));
+    println!("triangles tested per ray  avg {:.2}, max {}", s.per_ray(s.total.tri_tests), s.max_tri_tests);
+    println!(
+        "list entries read         {} total, {:.2} per ray",
+        s.total.list_entries,
+        s.per_ray(s.total.list_entries)
+    );
+    let classes: Vec<String> =
+        DataClass::ALL.iter().map(|c| format!("{} {:.1}", c.name(), s.per_ray(s.bytes.bytes[*c as usize]))).collect();
+    println!("bytes read per ray        {}", classes.join(", "));
+    if a.packet != PacketSize::Single && !crate::tracer::has_packet_kernel(&view) {
+        println!("packets {:<17} none: the structure has no packet kernel (rays traced one by one)", a.packet.label());
+    } else if a.packet != PacketSize::Single {
+        let p = stats::gather_packets(&view, &cam, &opts, a.packet)?;
+        let n = a.packet.rays() as f64;
+        println!(
+            "packets {:<17} {} packets, {:.1} node visits per packet, SIMD efficiency {:.1}%, {:.2} triangle tests per ray",
+            a.packet.label(),
+            p.packets,
+            p.counters.visits as f64 / p.packets.max(1) as f64,
+            100.0 * p.counters.active_lanes as f64 / (p.counters.visits.max(1) as f64 * n),
+            p.counters.tri_tests as f64 / s.rays.max(1) as f64
+        );
+    }
+    if a.algo.algo != Algorithm::Cast {
+        let mut algo_opts = opts;
+        a.algo.apply(&mut algo_opts)?;
+        let cast = stats::algorithm_costs(&view, &cam, &RenderOptions { algo: Algorithm::Cast, ..algo_opts })?;
+        let c = stats::algorithm_costs(&view, &cam, &algo_opts)?;
+        let px = c.pixels.max(1) as f64;
+        let kinds: Vec<String> = raypipe_core::shade::ray_record::RayKind::ALL
+            .iter()
+            .map(|k| format!("{} {:.2}", k.name(), c.rays[*k as usize] as f64 / px))
+            .collect();
+        let ratio = |a: u64, b: u64| if b == 0 { 0.0 } else { a as f64 / b as f64 };
+        println!("algorithm                 {:?}", a.algo.algo);
+        println!("rays per pixel            {}; total {:.2}", kinds.join(", "), c.rays.iter().sum::<u64>() as f64 / px);
+        println!(
+            "relative to ray casting   traversal steps x{:.2}, triangle tests x{:.2}, shading x{:.2}, scene bytes x{:.2}",
+            ratio(c.steps, cast.steps),
+            ratio(c.tests, cast.tests),
+            ratio(c.shades, cast.shades),
+            ratio(c.bytes, cast.bytes)
+        );
+        if a.algo.algo == Algorithm::Shadow {
+            let (differ, pixels, clipped) = stats::coverage_mismatch(&view, &cam, &algo_opts)?;
+            println!(
+                "shadow caster coverage    rasterization and ray casting disagree at {:.4}% of pixels ({differ} of {pixels}); {clipped} triangles clipped at the near plane",
+                100.0 * differ as f64 / pixels.max(1) as f64
+            );
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,114 @@
+//! `raypipe stream`: a frame on Purcell's GPU seen as a stream processor.
+
+use crate::cli::{AlgoArgs, CameraArgs, StreamArgs};
+use crate::output;
+use crate::render::{self, Algorithm, RenderOptions};
+use crate::scene;
+use crate::tracer::IntersectorKind;
+use anyhow::{anyhow, bail, Result};
+use std::time::Instant;
+
+use super::{camera_for, check_png_path, structure_summary, warn};
+
+pub(crate) fn cmd_stream(a: StreamArgs) -> Result<()> {
+    use raypipe_hw::stream::{CostModel, StreamConfig};
+    check_png_path(&a.output)?;
+    output::check_dir(&a.output)?;
+    output::check_dir(&a.report)?;
+    let cfg = StreamConfig {
+        arch: a.arch,
+        oracle: a.oracle,
+        unroll: a.unroll,
+        suppress: a.suppress,
+        simd: a.simd,
+        cache: a.cache,
+        cache_state: a.cache_state,
+        machine: a.machine.unwrap_or_default(),
+    };
+    cfg.validate().map_err(|e| anyhow!("stream configuration: {e}"))?;
+    let costs = match &a.costs {
+        Some(p) => {
+            let text = std::fs::read_to_string(p).map_err(|e| anyhow!("{}: {e}", p.display()))?;
+            CostModel::from_toml(&text, &p.display().to_string()).map_err(|e| anyhow!("{}: {e}", p.display()))?
+        }
+        None => CostModel::default(),
+    };
+    let algo =
+        AlgoArgs { algo: a.algo, max_depth: a.max_depth, bounces: a.bounces, samples: a.samples, roulette: false };
+    let mut opts = RenderOptions::default();
+    algo.apply(&mut opts)?;
+    let scene = scene::load(a.scene.as_deref(), &a.structure.options())?;
+    warn(&scene);
+    let view = scene.view()?;
+    if view.grid().is_none() {
+        bail!(
+            "{}: the image holds a {}; Purcell's stream machine walks a uniform grid (build with --accel grid)",
+            scene.name,
+            structure_summary(&view)
+        );
+    }
+    // Purcell's screen: 1024 x 1024 unless the size is given.
+    let camera = CameraArgs { size: a.camera.size.or(Some((1024, 1024))), ..a.camera.clone() };
+    let cam = camera_for(&view, &camera)?;
+    let kind = IntersectorKind::resolve(a.intersector, &view);
+    let background = raypipe_core::Vec3::from(cam.background);
+    let shader = opts.shader(background);
+    let shadow_caster = opts.algo == Algorithm::Shadow;
+    let start = Instant::now();
+    let (frame, report) = crate::stream::run_stream(&view, &cam, &cfg, &costs, kind, shader, shadow_caster, true)?;
+    let secs = start.elapsed().as_secs_f64();
+    // The same frame from the host renderer: the model must agree bit for bit.
+    opts.intersector = kind;
+    opts.packet = crate::packets::PacketSize::auto_for(&view);
+    let host = render::render(&view, &cam, &opts)?;
+    let same = host.pixels == frame.pixels;
+    let cast = if opts.algo != Algorithm::Cast && !a.no_table3 {
+        Some(crate::stream::run_stream(&view, &cam, &cfg, &costs, kind, None, false, true)?.1)
+    } else {
+        None
+    };
+    output::write_png(&a.output, frame.width, frame.height, &frame.pixels)?;
+    output::write_bytes(&a.report, report.to_json().as_bytes())?;
+    println!(
+        "stream {} ({} triangles, {}), {}x{}, {} {}",
+        scene.name,
+        view.triangle_count(),
+        structure_summary(&view),
+        frame.width,
+        frame.height,
+        format!("{:?}", opts.algo).to_lowercase(),
+        match cfg.arch {
+            raypipe_hw::stream::Architecture::Multipass => format!(
+                "multipass, oracle {}, unroll traverse={},intersect={}{}",
+                cfg.oracle,
+                cfg.unroll.traverse,
+                cfg.unroll.intersect,
+                if cfg.suppress { ", suppressed" } else { "" }
+            ),
+            raypipe_hw::stream::Architecture::Branching => format!("branching, simd {}", cfg.simd),
+        }
+    );
+    let label = format!("{} {}", scene.name, cfg.arch);
+    print!("{}", crate::stream::table2(&report, &label));
+    print!("{}", crate::stream::kernel_table(&report));
+    print!("{}", crate::stream::class_table(&report));
+    print!("{}", crate::stream::frame_lines(&report));
+    if let Some(c) = &cast {
+        print!("{}", crate::stream::table3(&format!("{:?}", opts.algo).to_lowercase(), &report, c));
+    }
+    if !a.no_charts {
+        let written = crate::stream_charts::write_all(&a.charts, &report)?;
+        println!("charts        {} files -> {}", written, a.charts.display());
+    }
+    println!(
+        "image         {} raypipe render's -> {}; report -> {}",
+        if same { "equals" } else { "DIFFERS FROM" },
+        a.output.display(),
+        a.report.display()
+    );
+    println!("wall time     {secs:.2} s for the frame");
+    if !same {
+        bail!("internal error: the stream machine's image differs from the host renderer's");
+    }
+    Ok(())
+}
