@@ -5,6 +5,7 @@ use core::fmt;
 use glam::{Vec3, Vec4};
 
 use crate::image::CameraRecord;
+use crate::pixel_filter::PixelSampler;
 use crate::ray::Ray;
 use crate::traverse::aabb::{clip_ray, clip_rays4};
 
@@ -87,6 +88,8 @@ pub struct EyeRays {
     pub width: u32,
     /// Image height.
     pub height: u32,
+    /// Eye rays per pixel and where in the pixel they go.
+    pub sampler: PixelSampler,
 }
 
 impl EyeRays {
@@ -132,15 +135,53 @@ impl EyeRays {
             inv_h: 1.0 / cam.height as f32,
             width: cam.width,
             height: cam.height,
+            sampler: PixelSampler::default(),
         })
+    }
+
+    /// The same view with `sampler`'s eye rays per pixel.
+    pub fn with_sampler(self, sampler: PixelSampler) -> EyeRays {
+        EyeRays { sampler: PixelSampler { samples: sampler.samples.max(1), ..sampler }, ..self }
+    }
+
+    /// Eye rays per pixel.
+    #[inline]
+    pub fn samples(&self) -> u32 {
+        self.sampler.samples
+    }
+
+    /// Offset of sample `s` of pixel `(x, y)` from the pixel's centre, in pixels.
+    #[inline]
+    pub fn sample_offset(&self, x: u32, y: u32, s: u32) -> (f32, f32) {
+        self.sampler.offset(y.wrapping_mul(self.width).wrapping_add(x), s)
+    }
+
+    /// Eye ray `s` of pixel `(x, y)` ([`EyeRays::ray_at`] its offset).
+    #[inline]
+    pub fn sample_ray(&self, x: u32, y: u32, s: u32) -> Ray {
+        self.ray_at(x, y, self.sample_offset(x, y, s))
+    }
+
+    /// [`EyeRays::ray_in_scene`] for eye ray `s` of pixel `(x, y)`.
+    #[inline]
+    pub fn sample_ray_in_scene(&self, x: u32, y: u32, s: u32, bounds_min: Vec3, bounds_max: Vec3) -> Option<Ray> {
+        let ray = self.sample_ray(x, y, s);
+        clip_ray(&ray, bounds_min, bounds_max).map(|_| ray)
     }
 
     /// The primary ray through the centre of pixel `(x, y)`, `y` growing downwards;
     /// its direction has unit length, so `t` is a distance.
     #[inline]
     pub fn ray(&self, x: u32, y: u32) -> Ray {
-        let sx = ((x as f32 + 0.5) * self.inv_w) * 2.0 - 1.0;
-        let sy = 1.0 - ((y as f32 + 0.5) * self.inv_h) * 2.0;
+        self.ray_at(x, y, (0.0, 0.0))
+    }
+
+    /// The primary ray through pixel `(x, y)`'s centre moved by `(dx, dy)` pixels (`y`
+    /// down); with no offset, [`EyeRays::ray`] bit for bit.
+    #[inline]
+    pub fn ray_at(&self, x: u32, y: u32, (dx, dy): (f32, f32)) -> Ray {
+        let sx = ((x as f32 + 0.5 + dx) * self.inv_w) * 2.0 - 1.0;
+        let sy = 1.0 - ((y as f32 + 0.5 + dy) * self.inv_h) * 2.0;
         let d = self.forward + self.right * (sx * self.half_w) + self.up * (sy * self.half_h);
         Ray::new(self.eye, d.normalize())
     }
@@ -184,16 +225,30 @@ impl EyeRays {
         self.ray(x, y).dir.dot(self.forward)
     }
 
+    /// Cosine between `ray` (an eye ray of this view) and the view direction.
+    #[inline]
+    pub fn depth_per_distance_of(&self, ray: &Ray) -> f32 {
+        ray.dir.dot(self.forward)
+    }
+
     /// The eye rays of four pixels `(x[k], y[k])` as four SIMD lanes: their common origin
     /// and, per axis, their directions. Lane by lane the operations of [`EyeRays::ray`] in
     /// the same order, hence the same bits; four rays for about the cost of one (a
     /// packet's rays were half of `raypipe bench`'s time on the bunny).
     #[inline]
     pub fn rays4(&self, x: [u32; 4], y: [u32; 4]) -> (Vec3, [Vec4; 3]) {
+        self.rays4_at(x, y, [(0.0, 0.0); 4])
+    }
+
+    /// [`EyeRays::rays4`] moved by per-lane offsets `d` in pixels: lane by lane
+    /// [`EyeRays::ray_at`], bit for bit.
+    #[inline]
+    pub fn rays4_at(&self, x: [u32; 4], y: [u32; 4], d: [(f32, f32); 4]) -> (Vec3, [Vec4; 3]) {
         let xs = Vec4::from_array(x.map(|v| v as f32));
         let ys = Vec4::from_array(y.map(|v| v as f32));
-        let sx = ((xs + 0.5) * self.inv_w) * 2.0 - 1.0;
-        let sy = Vec4::ONE - ((ys + 0.5) * self.inv_h) * 2.0;
+        let (dx, dy) = (Vec4::from_array(d.map(|o| o.0)), Vec4::from_array(d.map(|o| o.1)));
+        let sx = ((xs + 0.5 + dx) * self.inv_w) * 2.0 - 1.0;
+        let sy = Vec4::ONE - ((ys + 0.5 + dy) * self.inv_h) * 2.0;
         let (a, b) = (sx * self.half_w, sy * self.half_h);
         let (f, r, u) = (self.forward.to_array(), self.right.to_array(), self.up.to_array());
         let d: [Vec4; 3] =
@@ -214,6 +269,22 @@ impl EyeRays {
         bounds_max: Vec3,
     ) -> (Vec3, [Vec4; 3], u32) {
         let (origin, dirs) = self.rays4(x, y);
+        let seen = clip_rays4(origin, dirs, Vec4::ZERO, Vec4::INFINITY, bounds_min, bounds_max);
+        (origin, dirs, seen)
+    }
+
+    /// [`EyeRays::rays4_in_scene`] for eye ray `s` of each of the four pixels.
+    #[inline]
+    pub fn sample_rays4_in_scene(
+        &self,
+        x: [u32; 4],
+        y: [u32; 4],
+        s: u32,
+        bounds_min: Vec3,
+        bounds_max: Vec3,
+    ) -> (Vec3, [Vec4; 3], u32) {
+        let d = core::array::from_fn(|k| self.sample_offset(x[k], y[k], s));
+        let (origin, dirs) = self.rays4_at(x, y, d);
         let seen = clip_rays4(origin, dirs, Vec4::ZERO, Vec4::INFINITY, bounds_min, bounds_max);
         (origin, dirs, seen)
     }

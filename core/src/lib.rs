@@ -94,6 +94,8 @@ pub mod intersect;
 #[forbid(unsafe_code)]
 pub mod packet;
 #[forbid(unsafe_code)]
+pub mod pixel_filter;
+#[forbid(unsafe_code)]
 pub mod probe;
 #[forbid(unsafe_code)]
 pub mod range;

@@ -67,7 +67,7 @@ fn trace_all<I: Intersector>(
         .map(|&tile| {
             let (mut c, mut pc) = (RayCounters::default(), PacketCounters::default());
             // Each hit goes through black_box so that no tracing can be optimised away.
-            trace_tile::<I>(scene, eye, bounds, tile, packet, &mut c, &mut pc, &mut |_, _, _, h| {
+            trace_tile::<I>(scene, eye, bounds, tile, 0, packet, &mut c, &mut pc, &mut |_, _, _, h| {
                 std::hint::black_box(h);
             });
             pc

@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use anyhow::{bail, Result};
 use clap::{Args, Parser, Subcommand};
 use raypipe_core::image::CameraRecord;
+use raypipe_core::pixel_filter::Filter;
 
 use crate::bvh_builder::BvhParams;
 use crate::camera_file::CameraSpec;
@@ -14,6 +15,7 @@ use crate::kd_builder::KdParams;
 use crate::packets::PacketSize;
 use crate::render::{self, Algorithm, RenderOptions};
 use crate::scene::{Accel, BuildOptions, TriangleLayout};
+use crate::tone_map::{Display, ToneMap};
 use crate::tracer::IntersectorKind;
 
 /// raypipe: a ray tracing engine whose no_std kernels drive both this host renderer and
@@ -96,15 +98,21 @@ pub struct StreamArgs {
     /// Path tracing: bounces after the first hit.
     #[arg(long, value_name = "N", default_value_t = 2)]
     pub bounces: u32,
-    /// Path tracing: samples per pixel (one eye ray each).
+    /// Eye rays per pixel (anti-aliasing; path tracing: one path each).
     #[arg(long, value_name = "N", default_value_t = 1)]
     pub samples: u32,
+    /// Reconstruction filter the eye rays' offsets follow: box, tent or gaussian.
+    #[arg(long, value_name = "FILTER", default_value = "box", value_parser = parse_filter)]
+    pub filter: Filter,
     /// Ray–triangle test (default: the one the image's triangle layout is for).
     #[arg(long, value_enum)]
     pub intersector: Option<IntersectorKind>,
-    /// Output PNG.
-    #[arg(short, long, value_name = "PNG", default_value = "raypipe-stream.png")]
+    /// Output image: .png (8-bit sRGB through --exposure and --tonemap), .exr (OpenEXR)
+    /// or .pfm, both linear radiance.
+    #[arg(short, long, value_name = "IMAGE", default_value = "raypipe-stream.png")]
     pub output: PathBuf,
+    #[command(flatten)]
+    pub display: DisplayArgs,
     /// The report as JSON.
     #[arg(long, value_name = "JSON", default_value = "raypipe-stream.json")]
     pub report: PathBuf,
@@ -157,9 +165,12 @@ pub struct SimulateArgs {
     /// Override one parameter, e.g. `--set traversal.threads=16` (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<String>,
-    /// Output PNG.
-    #[arg(short, long, value_name = "PNG", default_value = "raypipe-sim.png")]
+    /// Output image: .png (8-bit sRGB through --exposure and --tonemap), .exr (OpenEXR)
+    /// or .pfm, both linear radiance.
+    #[arg(short, long, value_name = "IMAGE", default_value = "raypipe-sim.png")]
     pub output: PathBuf,
+    #[command(flatten)]
+    pub display: DisplayArgs,
     /// The report as JSON (schema in docs/hw-model.md).
     #[arg(long, value_name = "JSON", default_value = "raypipe-sim.json")]
     pub report: PathBuf,
@@ -369,6 +380,15 @@ fn parse_light(s: &str) -> Result<[f32; 6], String> {
     Ok(out)
 }
 
+fn parse_filter(s: &str) -> Result<Filter, String> {
+    match s.to_ascii_lowercase().as_str() {
+        "box" => Ok(Filter::Box),
+        "tent" | "triangle" => Ok(Filter::Tent),
+        "gaussian" | "gauss" => Ok(Filter::Gaussian),
+        _ => Err(format!("unknown filter '{s}' (box, tent or gaussian)")),
+    }
+}
+
 fn parse_vec3(s: &str) -> Result<[f32; 3], String> {
     let v: Vec<f32> = s
         .split(',')
@@ -450,9 +470,14 @@ pub struct AlgoArgs {
     /// Path tracing: bounces after the first hit.
     #[arg(long, value_name = "N", default_value_t = 2)]
     pub bounces: u32,
-    /// Path tracing: samples per pixel.
-    #[arg(long, value_name = "N", default_value_t = 16)]
-    pub samples: u32,
+    /// Eye rays per pixel, jittered within the pixel by the filter (anti-aliasing; path
+    /// tracing: one path each). Default: 16 for path tracing, 1 (the pixel centre)
+    /// otherwise.
+    #[arg(long, value_name = "N")]
+    pub samples: Option<u32>,
+    /// Reconstruction filter the eye rays' offsets follow: box, tent or gaussian.
+    #[arg(long, value_name = "FILTER", default_value = "box", value_parser = parse_filter)]
+    pub filter: Filter,
     /// Path tracing: end paths at random after the first bounce (Russian roulette).
     #[arg(long)]
     pub roulette: bool,
@@ -467,15 +492,38 @@ impl AlgoArgs {
         if self.bounces > 64 {
             bail!("--bounces {} is more than 64", self.bounces);
         }
-        if self.samples == 0 || self.samples > 65536 {
-            bail!("--samples must be between 1 and 65536 (got {})", self.samples);
+        let samples = self.samples.unwrap_or(if self.algo == Algorithm::Path { 16 } else { 1 });
+        if samples == 0 || samples > 65536 {
+            bail!("--samples must be between 1 and 65536 (got {samples})");
         }
         opts.algo = self.algo;
         opts.max_depth = self.max_depth as u8;
         opts.bounces = self.bounces as u8;
-        opts.samples = self.samples;
+        opts.samples = samples;
+        opts.filter = self.filter;
         opts.roulette = self.roulette;
         Ok(())
+    }
+}
+
+/// How a PNG output shows linear radiance.
+#[derive(Args, Debug, Clone, Default)]
+pub struct DisplayArgs {
+    /// PNG: exposure in stops (radiance times 2^EV before tone mapping).
+    #[arg(long, value_name = "EV", default_value_t = 0.0, allow_negative_numbers = true)]
+    pub exposure: f32,
+    /// PNG: tone-mapping operator.
+    #[arg(long, value_enum, default_value_t = ToneMap::Clamp)]
+    pub tonemap: ToneMap,
+}
+
+impl DisplayArgs {
+    /// Checks the values: the display transform.
+    pub fn display(&self) -> Result<Display> {
+        if !self.exposure.is_finite() || self.exposure.abs() > 64.0 {
+            bail!("--exposure {} is not a number of stops between -64 and 64", self.exposure);
+        }
+        Ok(Display { exposure: self.exposure, tone_map: self.tonemap })
     }
 }
 
@@ -490,9 +538,12 @@ pub struct RenderArgs {
     pub algo: AlgoArgs,
     /// An OBJ file or a scene image; the built-in Cornell box when omitted.
     pub scene: Option<PathBuf>,
-    /// Output PNG.
-    #[arg(short, long, value_name = "PNG", default_value = "raypipe.png")]
+    /// Output image: .png (8-bit sRGB through --exposure and --tonemap), .exr (OpenEXR)
+    /// or .pfm, both linear radiance.
+    #[arg(short, long, value_name = "IMAGE", default_value = "raypipe.png")]
     pub output: PathBuf,
+    #[command(flatten)]
+    pub display: DisplayArgs,
     #[command(flatten)]
     pub camera: CameraArgs,
     #[command(flatten)]

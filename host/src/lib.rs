@@ -40,6 +40,7 @@ pub mod stats;
 pub mod stream;
 pub mod stream_charts;
 pub mod texture_loader;
+pub mod tone_map;
 pub mod tracer;
 pub mod tri_box;
 pub mod tri_clip;

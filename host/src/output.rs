@@ -39,8 +39,102 @@ pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut dyn Write) -> Result<()>
         fill(&mut w).map_err(|e| anyhow!("{name}: {e}"))?;
         w.flush().map_err(|e| anyhow!("{name}: cannot write: {e}"))?;
     }
+    // A temporary file is created 0600; the output gets what any new file would.
+    set_default_permissions(tmp.as_file()).map_err(|e| anyhow!("{name}: cannot set permissions: {e}"))?;
     tmp.persist(path).map_err(|e| anyhow!("{name}: cannot write: {}", e.error))?;
     Ok(())
+}
+
+/// Gives `file` the permissions a newly created file gets: 0666 less the umask.
+#[cfg(unix)]
+fn set_default_permissions(file: &std::fs::File) -> std::io::Result<()> {
+    use std::os::unix::fs::PermissionsExt;
+    // The umask can only be read by setting it; put it straight back.
+    // SAFETY: umask has no memory-safety preconditions.
+    let mask = unsafe {
+        let m = libc::umask(0o022);
+        libc::umask(m);
+        m
+    };
+    file.set_permissions(std::fs::Permissions::from_mode(0o666 & !(mask as u32)))
+}
+
+#[cfg(not(unix))]
+fn set_default_permissions(_: &std::fs::File) -> std::io::Result<()> {
+    Ok(())
+}
+
+/// The image formats a frame can be written as, by file extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImageFormat {
+    /// 8-bit sRGB PNG, through the display transform.
+    Png,
+    /// OpenEXR, 32-bit float linear RGB.
+    Exr,
+    /// Portable float map, 32-bit float linear RGB.
+    Pfm,
+}
+
+impl ImageFormat {
+    /// The format `path`'s extension names, or an error naming the path.
+    pub fn of(path: &Path) -> Result<ImageFormat> {
+        match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+            Some("png") => Ok(ImageFormat::Png),
+            Some("exr") => Ok(ImageFormat::Exr),
+            Some("pfm") => Ok(ImageFormat::Pfm),
+            _ => Err(anyhow!("{}: output must be a .png, .exr or .pfm file", path.display())),
+        }
+    }
+}
+
+/// Writes a frame atomically in the format its extension names: PNG through `display`,
+/// EXR and PFM as the linear radiance.
+pub fn write_frame(path: &Path, frame: &crate::render::Frame, display: &crate::tone_map::Display) -> Result<()> {
+    let format = ImageFormat::of(path)?;
+    if format != ImageFormat::Png || !display.is_identity() {
+        let n = frame.width as usize * frame.height as usize;
+        if frame.radiance.len() != n {
+            return Err(anyhow!("{}: internal error: the frame has no linear radiance", path.display()));
+        }
+    }
+    match format {
+        ImageFormat::Png if display.is_identity() => write_png(path, frame.width, frame.height, &frame.pixels),
+        ImageFormat::Png => {
+            let pixels: Vec<[u8; 3]> = frame.radiance.iter().map(|&c| display.pixel(glam::Vec3::from(c))).collect();
+            write_png(path, frame.width, frame.height, &pixels)
+        }
+        ImageFormat::Exr => write_exr(path, frame.width, frame.height, &frame.radiance),
+        ImageFormat::Pfm => write_pfm(path, frame.width, frame.height, &frame.radiance),
+    }
+}
+
+/// Writes linear RGB as a single-part scanline OpenEXR file of 32-bit floats.
+pub fn write_exr(path: &Path, width: u32, height: u32, rgb: &[[f32; 3]]) -> Result<()> {
+    use exr::prelude::*;
+    let w = width as usize;
+    let channels = SpecificChannels::rgb(|p: Vec2<usize>| {
+        let [r, g, b] = rgb[p.y() * w + p.x()];
+        (r, g, b)
+    });
+    let image = Image::from_channels((w, height as usize), channels);
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    image.write().to_buffered(&mut bytes).map_err(|e| anyhow!("{}: cannot encode EXR: {e}", path.display()))?;
+    write_bytes(path, bytes.get_ref())
+}
+
+/// Writes linear RGB as a little-endian portable float map (rows bottom to top).
+pub fn write_pfm(path: &Path, width: u32, height: u32, rgb: &[[f32; 3]]) -> Result<()> {
+    write_atomic(path, |w| {
+        write!(w, "PF\n{width} {height}\n-1.0\n").map_err(|e| anyhow!("cannot write: {e}"))?;
+        for row in rgb.chunks(width.max(1) as usize).rev() {
+            for px in row {
+                for c in px {
+                    w.write_all(&c.to_le_bytes()).map_err(|e| anyhow!("cannot write: {e}"))?;
+                }
+            }
+        }
+        Ok(())
+    })
 }
 
 /// Writes an 8-bit RGB PNG atomically.

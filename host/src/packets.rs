@@ -83,14 +83,16 @@ impl PacketSize {
     }
 }
 
-/// Calls `f(x, y, ray, hit)` for every pixel of the tile, tracing as `size` says; rays
-/// that miss the scene bounds (Purcell's test) come as `None`.
+/// Calls `f(x, y, ray, hit)` for every pixel of the tile with the pixel's eye ray
+/// `sample`, tracing as `size` says; rays that miss the scene bounds (Purcell's test)
+/// come as `None`.
 #[allow(clippy::too_many_arguments)]
 pub fn trace_tile<I: Intersector>(
     scene: &SceneView<'_>,
     eye: &EyeRays,
     bounds: (Vec3, Vec3),
     tile: (u32, u32, u32, u32),
+    sample: u32,
     size: PacketSize,
     counters: &mut RayCounters,
     packet_counters: &mut PacketCounters,
@@ -98,10 +100,10 @@ pub fn trace_tile<I: Intersector>(
 ) {
     crate::isa::report_cpu();
     match size.usable_for(scene) {
-        PacketSize::Single => singles::<I>(scene, eye, bounds, tile, counters, f),
-        PacketSize::P4 => blocks::<I, 4>(scene, eye, bounds, tile, 2, packet_counters, f),
-        PacketSize::P16 => blocks::<I, 16>(scene, eye, bounds, tile, 4, packet_counters, f),
-        PacketSize::P64 => blocks::<I, 64>(scene, eye, bounds, tile, 8, packet_counters, f),
+        PacketSize::Single => singles::<I>(scene, eye, bounds, tile, sample, counters, f),
+        PacketSize::P4 => blocks::<I, 4>(scene, eye, bounds, tile, sample, 2, packet_counters, f),
+        PacketSize::P16 => blocks::<I, 16>(scene, eye, bounds, tile, sample, 4, packet_counters, f),
+        PacketSize::P64 => blocks::<I, 64>(scene, eye, bounds, tile, sample, 8, packet_counters, f),
     }
 }
 
@@ -112,6 +114,7 @@ fn singles<I: Intersector>(
     eye: &EyeRays,
     (lo, hi): (Vec3, Vec3),
     (x0, y0, x1, y1): (u32, u32, u32, u32),
+    sample: u32,
     counters: &mut RayCounters,
     f: &mut impl FnMut(u32, u32, Option<Ray>, Option<Hit>),
 ) {
@@ -126,7 +129,7 @@ fn singles<I: Intersector>(
     let ray = |i: usize| {
         if quad.0 != i / 4 {
             let at: [(u32, u32); 4] = core::array::from_fn(|k| pixel(i / 4 * 4 + k));
-            let (eye_at, dirs, seen) = eye.rays4_in_scene(at.map(|p| p.0), at.map(|p| p.1), lo, hi);
+            let (eye_at, dirs, seen) = eye.sample_rays4_in_scene(at.map(|p| p.0), at.map(|p| p.1), sample, lo, hi);
             let rays = core::array::from_fn(|k| (seen & (1 << k) != 0).then(|| lane_ray(eye_at, &dirs, k)));
             quad = (i / 4, rays);
         }
@@ -138,11 +141,13 @@ fn singles<I: Intersector>(
     });
 }
 
+#[allow(clippy::too_many_arguments)]
 fn blocks<I: Intersector, const N: usize>(
     scene: &SceneView<'_>,
     eye: &EyeRays,
     (lo, hi): (Vec3, Vec3),
     (x0, y0, x1, y1): (u32, u32, u32, u32),
+    sample: u32,
     side: u32,
     counters: &mut PacketCounters,
     f: &mut impl FnMut(u32, u32, Option<Ray>, Option<Hit>),
@@ -162,7 +167,8 @@ fn blocks<I: Intersector, const N: usize>(
                     let (i, j) = offsets[(quad as usize + k) % N];
                     (bx + i, by + j)
                 });
-                let (eye_at, dirs, seen) = eye.rays4_in_scene(pixel.map(|p| p.0), pixel.map(|p| p.1), lo, hi);
+                let (eye_at, dirs, seen) =
+                    eye.sample_rays4_in_scene(pixel.map(|p| p.0), pixel.map(|p| p.1), sample, lo, hi);
                 let mut keep = 0;
                 for (k, &(x, y)) in pixel.iter().enumerate() {
                     if x < x1 && y < y1 && seen & (1 << k) != 0 {

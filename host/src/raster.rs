@@ -21,6 +21,8 @@ pub struct GBuffer {
     pub uv: Vec<(f32, f32)>,
     /// Triangles crossing the near plane, drawn clipped.
     pub clipped: u32,
+    /// The eye ray of each pixel it is for.
+    pub sample: u32,
 }
 
 /// The near plane's view depth: a millionth of the scene's diagonal, so only what lies
@@ -37,9 +39,9 @@ pub fn near_plane(scene: &SceneView<'_>) -> f32 {
     }
 }
 
-/// Rasterizes every triangle of `scene` as `eye` sees it (core's kernel, triangle by
-/// triangle, into storage allocated here).
-pub fn rasterize(scene: &SceneView<'_>, eye: &EyeRays) -> GBuffer {
+/// Rasterizes every triangle of `scene` as eye ray `sample` of each pixel sees it (core's
+/// kernel, triangle by triangle, into storage allocated here).
+pub fn rasterize(scene: &SceneView<'_>, eye: &EyeRays, sample: u32) -> GBuffer {
     let (w, h) = (eye.width, eye.height);
     let n = (w * h) as usize;
     let mut g = GBuffer {
@@ -49,12 +51,15 @@ pub fn rasterize(scene: &SceneView<'_>, eye: &EyeRays) -> GBuffer {
         depth: vec![f32::INFINITY; n],
         uv: vec![(0.0, 0.0); n],
         clipped: 0,
+        sample,
     };
     let mut target = GBufferMut { width: w, height: h, prim: &mut g.prim, depth: &mut g.depth, uv: &mut g.uv };
     let near = near_plane(scene);
     let mut clipped = 0;
     for prim in 0..scene.triangle_count() {
-        if rasterize_triangle(eye, scene.triangle(prim, &mut NoProbe), prim, near, &mut target) == Coverage::Clipped {
+        if rasterize_triangle(eye, scene.triangle(prim, &mut NoProbe), prim, near, sample, &mut target)
+            == Coverage::Clipped
+        {
             clipped += 1;
         }
     }
@@ -62,7 +67,7 @@ pub fn rasterize(scene: &SceneView<'_>, eye: &EyeRays) -> GBuffer {
     g
 }
 
-/// The primary ray of pixel `(x, y)` and the hit the G-buffer gives it (core's
+/// The eye ray of pixel `(x, y)` the G-buffer is for, and the hit it gives it (core's
 /// [`raypipe_core::shade::raster::gbuffer_hit`]).
 pub fn gbuffer_hit<I: raypipe_core::Intersector>(
     scene: &SceneView<'_>,
@@ -72,18 +77,20 @@ pub fn gbuffer_hit<I: raypipe_core::Intersector>(
     y: u32,
 ) -> (Option<raypipe_core::Ray>, Option<raypipe_core::Hit>) {
     let i = (y * g.width + x) as usize;
-    let ray = eye.ray(x, y);
-    let hit = raster::gbuffer_hit::<I>(scene, eye, &ray, (x, y), g.prim[i], g.depth[i], g.uv[i]);
+    let ray = eye.sample_ray(x, y, g.sample);
+    let hit = raster::gbuffer_hit::<I>(scene, eye, &ray, g.prim[i], g.depth[i], g.uv[i]);
     (Some(ray), hit)
 }
 
-/// Every pixel's `(ray, hit)` from a rasterized G-buffer, row-major: the shadow caster's
-/// visibility pass, for the drivers that take visibility instead of tracing eye rays.
+/// Every pixel's `(ray, hit)` for eye ray `sample` from a rasterized G-buffer, row-major:
+/// the shadow caster's visibility pass, for the drivers that take visibility instead of
+/// tracing eye rays.
 pub fn gbuffer_visibility<I: raypipe_core::Intersector>(
     scene: &SceneView<'_>,
     eye: &EyeRays,
+    sample: u32,
 ) -> Vec<(Option<raypipe_core::Ray>, Option<raypipe_core::Hit>)> {
-    let g = rasterize(scene, eye);
+    let g = rasterize(scene, eye, sample);
     (0..eye.height)
         .flat_map(|y| (0..eye.width).map(move |x| (x, y)))
         .map(|(x, y)| gbuffer_hit::<I>(scene, eye, &g, x, y))

@@ -67,28 +67,34 @@ impl TileGeometry {
     }
 }
 
-/// Radiance of a tile's pixels (row-major in the tile) from their primary rays and hits
-/// (`None` ray: the eye ray missed the scene's bounds, the pixel is `background`).
+/// Radiance of a tile's pixels (row-major in the tile) from their eye rays and hits:
+/// `samples` per pixel, sample-major (`primaries[s * pixels + p]`); a `None` ray missed
+/// the scene's bounds and brings the background.
 #[allow(clippy::too_many_arguments)]
 pub fn shade_tile<I: Intersector, P: MemoryProbe>(
     scene: &SceneView<'_>,
     shader: &Shader,
     background: Vec3,
     tile: TileGeometry,
+    samples: u32,
     primaries: &[(Option<Ray>, Option<Hit>)],
     probe: &mut P,
     counts: &mut StreamCounts,
 ) -> Vec<Vec3> {
-    let mut radiance = vec![RadianceSum::default(); primaries.len()];
+    let samples = samples.max(1);
+    let pixels = primaries.len() / samples as usize;
+    let mut radiance = vec![RadianceSum::default(); pixels];
     let mut stream: VecDeque<RayRecord> = VecDeque::new();
-    for (p, (ray, hit)) in primaries.iter().enumerate() {
+    let miss = background * (1.0 / samples as f32);
+    for (i, (ray, hit)) in primaries.iter().enumerate() {
+        let (s, p) = ((i / pixels.max(1)) as u32, i % pixels.max(1));
         match ray {
-            None => radiance[p].add(background),
+            None => radiance[p].add(miss),
             Some(ray) => {
-                counts.shades += hit.is_some() as u64 * shader.samples() as u64;
+                counts.shades += hit.is_some() as u64;
                 shader.shade_primary(
                     scene,
-                    RayRecord::primary(*ray, tile.global(p)),
+                    RayRecord::eye_sample(*ray, tile.global(p), s, samples),
                     *hit,
                     &mut radiance[p],
                     probe,

@@ -13,9 +13,11 @@ use raypipe_core::shade::lambert::shade;
 use raypipe_core::{Intersector, NoProbe, Ray, RayCounters, SceneView};
 
 use crate::packets::{trace_tile, PacketSize};
-use crate::raster::{gbuffer_hit, rasterize};
+use crate::raster::{gbuffer_hit, rasterize, GBuffer};
 use crate::ray_stream::{shade_tile, StreamCounts, TileGeometry};
+use raypipe_core::pixel_filter::{Filter, PixelSampler};
 use raypipe_core::shade::path::PathOptions;
+use raypipe_core::shade::radiance_sum::RadianceSum;
 use raypipe_core::shade::shader::Shader;
 use raypipe_core::shade::whitted::WhittedOptions;
 
@@ -43,8 +45,10 @@ pub struct RenderOptions {
     pub max_depth: u8,
     /// Path tracing: bounces after the first hit.
     pub bounces: u8,
-    /// Path tracing: samples per pixel.
+    /// Eye rays per pixel (every algorithm; path tracing: one path each).
     pub samples: u32,
+    /// The reconstruction filter the eye rays' offsets follow.
+    pub filter: Filter,
     /// Path tracing: Russian roulette after the first bounce.
     pub roulette: bool,
 }
@@ -71,13 +75,15 @@ impl RenderOptions {
             Algorithm::Cast => None,
             Algorithm::Shadow => Some(Shader::Whitted(WhittedOptions { max_depth: 0, background })),
             Algorithm::Whitted => Some(Shader::Whitted(WhittedOptions { max_depth: self.max_depth, background })),
-            Algorithm::Path => Some(Shader::Path(PathOptions {
-                bounces: self.bounces,
-                samples: self.samples,
-                roulette: self.roulette,
-                background,
-            })),
+            Algorithm::Path => {
+                Some(Shader::Path(PathOptions { bounces: self.bounces, roulette: self.roulette, background }))
+            }
         }
+    }
+
+    /// Eye rays per pixel and where they go.
+    pub fn sampler(&self) -> PixelSampler {
+        PixelSampler { samples: self.samples.max(1), filter: self.filter }
     }
 }
 
@@ -91,21 +97,38 @@ impl Default for RenderOptions {
             algo: Algorithm::Cast,
             max_depth: 5,
             bounces: 2,
-            samples: 16,
+            samples: 1,
+            filter: Filter::Box,
             roulette: false,
         }
     }
 }
 
-/// An 8-bit sRGB image, rows top to bottom.
-#[derive(Clone, Debug, PartialEq, Eq)]
+/// A rendered image, rows top to bottom: its linear radiance and that radiance as 8-bit
+/// sRGB (clamped, no exposure or tone mapping: what the golden images and the host =
+/// model checks compare).
+#[derive(Clone, Debug, PartialEq)]
 pub struct Frame {
     /// Width in pixels.
     pub width: u32,
     /// Height in pixels.
     pub height: u32,
-    /// Pixels, row-major.
+    /// Pixels, row-major, 8-bit sRGB.
     pub pixels: Vec<[u8; 3]>,
+    /// Pixels, row-major, linear RGB radiance (empty for an image read from a PNG).
+    pub radiance: Vec<[f32; 3]>,
+}
+
+impl Frame {
+    /// A frame from linear radiance, row-major.
+    pub fn from_radiance(width: u32, height: u32, radiance: Vec<Vec3>) -> Frame {
+        Frame {
+            width,
+            height,
+            pixels: radiance.iter().map(|&c| rgb8(c)).collect(),
+            radiance: radiance.iter().map(|c| c.to_array()).collect(),
+        }
+    }
 }
 
 /// Validates a camera record into eye-ray constants; `what` names it in errors.
@@ -134,9 +157,35 @@ pub fn tiles(w: u32, h: u32) -> Vec<(u32, u32, u32, u32)> {
     v
 }
 
+/// Rays a frame traced.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RayTotals {
+    /// Eye rays traced (those that entered the scene's box; the shadow caster's come from
+    /// its G-buffer and are not traced).
+    pub primary: u64,
+    /// Rays the shaders emitted (shadow, reflection, refraction, path), all traced.
+    pub secondary: u64,
+}
+
+impl RayTotals {
+    /// Every ray traced.
+    pub fn total(&self) -> u64 {
+        self.primary + self.secondary
+    }
+}
+
 /// Renders the scene as the camera sees it.
 pub fn render(scene: &SceneView<'_>, camera: &CameraRecord, opts: &RenderOptions) -> Result<Frame> {
-    let eye = eye_rays(camera, "camera")?;
+    Ok(render_counted(scene, camera, opts)?.0)
+}
+
+/// [`render`], and the rays it traced.
+pub fn render_counted(
+    scene: &SceneView<'_>,
+    camera: &CameraRecord,
+    opts: &RenderOptions,
+) -> Result<(Frame, RayTotals)> {
+    let eye = eye_rays(camera, "camera")?.with_sampler(opts.sampler());
     with_intersector!(opts.intersector, I => render_with::<I>(scene, &eye, Vec3::from(camera.background), opts))
 }
 
@@ -145,61 +194,58 @@ fn render_with<I: Intersector>(
     eye: &EyeRays,
     background: Vec3,
     opts: &RenderOptions,
-) -> Result<Frame> {
+) -> Result<(Frame, RayTotals)> {
     let (w, h) = (eye.width, eye.height);
     let (lo, hi) = scene.test_bounds();
     let tiles = tiles(w, h);
-    // The shadow caster's visibility pass.
-    let gbuffer = (opts.algo == Algorithm::Shadow).then(|| rasterize(scene, eye));
+    let samples = eye.samples();
+    // The shadow caster's visibility pass: a G-buffer per eye ray of the pixels.
+    let gbuffers: Option<Vec<GBuffer>> =
+        (opts.algo == Algorithm::Shadow).then(|| (0..samples).map(|s| rasterize(scene, eye, s)).collect());
     let bar = progress::bar(tiles.len() as u64, "render", opts.progress);
-    let done: Vec<Vec<[u8; 3]>> = in_pool(opts.threads, || {
+    let done: Vec<(Vec<Vec3>, RayTotals)> = in_pool(opts.threads, || {
         tiles
             .par_iter()
             .map(|&(x0, y0, x1, y1)| {
                 let tw = (x1 - x0) as usize;
-                let mut out = vec![[0u8; 3]; tw * (y1 - y0) as usize];
+                let n = tw * (y1 - y0) as usize;
                 let (mut counters, mut pc) = (RayCounters::default(), PacketCounters::default());
                 let tile = (x0, y0, x1, y1);
-                match opts.shader(background) {
-                    None => {
-                        let mut put = |x: u32, y: u32, ray: Option<Ray>, hit| {
-                            let color = match ray {
-                                Some(ray) => shade(scene, &ray, hit, background, &mut NoProbe),
-                                None => background,
-                            };
-                            out[(y - y0) as usize * tw + (x - x0) as usize] = rgb8(color);
-                        };
-                        trace_tile::<I>(scene, eye, (lo, hi), tile, opts.packet, &mut counters, &mut pc, &mut put);
-                    }
-                    Some(shader) => {
-                        // Primary hits first (in packets), then the tile's ray stream in
-                        // pixel order.
-                        let mut primaries = vec![(None, None); out.len()];
-                        match &gbuffer {
-                            Some(g) => {
-                                for y in y0..y1 {
-                                    for x in x0..x1 {
-                                        primaries[(y - y0) as usize * tw + (x - x0) as usize] =
-                                            gbuffer_hit::<I>(scene, eye, g, x, y);
-                                    }
+                let mut totals = RayTotals::default();
+                // Every eye ray of the tile and its hit, sample-major.
+                let mut primaries = vec![(None, None); n * samples as usize];
+                for s in 0..samples {
+                    let at = |x: u32, y: u32| s as usize * n + (y - y0) as usize * tw + (x - x0) as usize;
+                    match &gbuffers {
+                        Some(g) => {
+                            for y in y0..y1 {
+                                for x in x0..x1 {
+                                    primaries[at(x, y)] = gbuffer_hit::<I>(scene, eye, &g[s as usize], x, y);
                                 }
                             }
-                            None => {
-                                let mut put = |x: u32, y: u32, ray: Option<Ray>, hit| {
-                                    primaries[(y - y0) as usize * tw + (x - x0) as usize] = (ray, hit);
-                                };
-                                trace_tile::<I>(
-                                    scene,
-                                    eye,
-                                    (lo, hi),
-                                    tile,
-                                    opts.packet,
-                                    &mut counters,
-                                    &mut pc,
-                                    &mut put,
-                                );
-                            }
                         }
+                        None => {
+                            let mut put = |x: u32, y: u32, ray: Option<Ray>, hit| {
+                                totals.primary += ray.is_some() as u64;
+                                primaries[at(x, y)] = (ray, hit);
+                            };
+                            trace_tile::<I>(
+                                scene,
+                                eye,
+                                (lo, hi),
+                                tile,
+                                s,
+                                opts.packet,
+                                &mut counters,
+                                &mut pc,
+                                &mut put,
+                            );
+                        }
+                    }
+                }
+                let radiance = match opts.shader(background) {
+                    None => cast_tile(scene, background, samples, &primaries),
+                    Some(shader) => {
                         let geometry = TileGeometry { x0, y0, width: tw as u32, image_width: w };
                         let mut counts = StreamCounts::default();
                         let radiance = shade_tile::<I, _>(
@@ -207,28 +253,55 @@ fn render_with<I: Intersector>(
                             &shader,
                             background,
                             geometry,
+                            samples,
                             &primaries,
                             &mut NoProbe,
                             &mut counts,
                         );
-                        for (o, r) in out.iter_mut().zip(radiance) {
-                            *o = rgb8(r);
-                        }
+                        totals.secondary = counts.rays.iter().sum();
+                        radiance
                     }
-                }
+                };
                 bar.inc(1);
-                out
+                (radiance, totals)
             })
             .collect()
     })?;
     bar.finish_and_clear();
-    let mut pixels = vec![[0u8; 3]; (w * h) as usize];
-    for (&(x0, y0, x1, _), tile) in tiles.iter().zip(done) {
+    let mut radiance = vec![Vec3::ZERO; (w * h) as usize];
+    let mut totals = RayTotals::default();
+    for (&(x0, y0, x1, _), (tile, t)) in tiles.iter().zip(done) {
         let tw = (x1 - x0) as usize;
         for (row, chunk) in tile.chunks(tw).enumerate() {
             let start = (y0 as usize + row) * w as usize + x0 as usize;
-            pixels[start..start + tw].copy_from_slice(chunk);
+            radiance[start..start + tw].copy_from_slice(chunk);
         }
+        totals.primary += t.primary;
+        totals.secondary += t.secondary;
     }
-    Ok(Frame { width: w, height: h, pixels })
+    Ok((Frame::from_radiance(w, h, radiance), totals))
+}
+
+/// Ray casting's colours for a tile's eye rays (sample-major): one sample's colour as it
+/// is, several summed exactly ([`RadianceSum`]) with weight `1 / samples` each.
+fn cast_tile(
+    scene: &SceneView<'_>,
+    background: Vec3,
+    samples: u32,
+    primaries: &[(Option<Ray>, Option<raypipe_core::Hit>)],
+) -> Vec<Vec3> {
+    let color = |(ray, hit): &(Option<Ray>, Option<raypipe_core::Hit>)| match ray {
+        Some(ray) => shade(scene, ray, *hit, background, &mut NoProbe),
+        None => background,
+    };
+    if samples <= 1 {
+        return primaries.iter().map(color).collect();
+    }
+    let n = primaries.len() / samples as usize;
+    let mut sum = vec![RadianceSum::default(); n];
+    let weight = 1.0 / samples as f32;
+    for (i, p) in primaries.iter().enumerate() {
+        sum[i % n].add(color(p) * weight);
+    }
+    sum.iter().map(RadianceSum::value).collect()
 }

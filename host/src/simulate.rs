@@ -6,6 +6,7 @@ use std::path::Path;
 
 use anyhow::{anyhow, bail, Result};
 use raypipe_core::image::CameraRecord;
+use raypipe_core::pixel_filter::PixelSampler;
 use raypipe_core::shade::shader::Shader;
 use raypipe_core::{Intersector, SceneView};
 use raypipe_hw::{Datapath, HwConfig, Report, Simulator};
@@ -34,7 +35,8 @@ pub fn load_config(preset: Option<&str>, file: Option<&Path>, sets: &[String]) -
     Ok(cfg)
 }
 
-/// Simulates one frame; the image and the report.
+/// Simulates one frame with `sampler`'s eye rays per pixel; the image and the report.
+#[allow(clippy::too_many_arguments)]
 pub fn simulate(
     scene: &SceneView<'_>,
     camera: &CameraRecord,
@@ -42,9 +44,10 @@ pub fn simulate(
     intersector: IntersectorKind,
     shader: Option<Shader>,
     shadow_caster: bool,
+    sampler: PixelSampler,
     show_progress: bool,
 ) -> Result<(Frame, Report)> {
-    let eye = eye_rays(camera, "camera")?;
+    let eye = eye_rays(camera, "camera")?.with_sampler(sampler);
     if cfg.datapath != Datapath::F32 {
         if let Some(why) = fixed_point_unsupported(scene) {
             bail!(
@@ -84,7 +87,8 @@ impl Run<'_, '_> {
             .map_err(|e| anyhow!("hardware configuration: {e}"))?;
         if shadow_caster {
             // Visibility from the host's rasterizer (the G-buffer pass), as on the host.
-            sim.set_visibility(gbuffer_visibility::<I>(scene, &eye).into_iter().map(|(_, hit)| hit).collect());
+            let hits = (0..eye.samples()).flat_map(|s| gbuffer_visibility::<I>(scene, &eye, s)).map(|(_, hit)| hit);
+            sim.set_visibility(hits.collect());
         }
         let bar = progress::bar(0, "simulate", show_progress);
         sim.run(|done, total| {
@@ -93,7 +97,7 @@ impl Run<'_, '_> {
         })
         .map_err(|e| anyhow!(e))?;
         bar.finish_and_clear();
-        let frame = Frame { width, height, pixels: sim.framebuffer() };
+        let frame = Frame::from_radiance(width, height, sim.radiance_image());
         Ok((frame, sim.report()))
     }
 }

@@ -163,7 +163,7 @@ fn gather_packets_with<I: Intersector>(
             .par_iter()
             .map(|&tile| {
                 let (mut c, mut pc) = (RayCounters::default(), PacketCounters::default());
-                trace_tile::<I>(scene, eye, bounds, tile, size, &mut c, &mut pc, &mut |_, _, _, _| {});
+                trace_tile::<I>(scene, eye, bounds, tile, 0, size, &mut c, &mut pc, &mut |_, _, _, _| {});
                 let (w, h) = (tile.2 - tile.0, tile.3 - tile.1);
                 PacketStats { packets: (w.div_ceil(side) * h.div_ceil(side)) as u64, counters: pc }
             })
@@ -209,7 +209,7 @@ impl AlgoCosts {
 /// Counts what rendering the view with `opts.algo` costs (single rays; the counts do not
 /// depend on threads).
 pub fn algorithm_costs(scene: &SceneView<'_>, camera: &CameraRecord, opts: &RenderOptions) -> Result<AlgoCosts> {
-    let eye = eye_rays(camera, "camera")?;
+    let eye = eye_rays(camera, "camera")?.with_sampler(opts.sampler());
     with_intersector!(opts.intersector, I => costs_with::<I>(scene, &eye, camera, opts))
 }
 
@@ -221,7 +221,9 @@ fn costs_with<I: Intersector>(
 ) -> Result<AlgoCosts> {
     let background = raypipe_core::Vec3::from(camera.background);
     let shader = opts.shader(background);
-    let gbuffer = (opts.algo == Algorithm::Shadow).then(|| rasterize(scene, eye));
+    let samples = eye.samples();
+    let gbuffers: Option<Vec<_>> =
+        (opts.algo == Algorithm::Shadow).then(|| (0..samples).map(|s| rasterize(scene, eye, s)).collect());
     let (lo, hi) = scene.test_bounds();
     in_pool(opts.threads, || {
         tiles(eye.width, eye.height)
@@ -230,12 +232,12 @@ fn costs_with<I: Intersector>(
                 let mut c = AlgoCosts::default();
                 let mut probe = ByteCounter::default();
                 let mut primaries = Vec::new();
-                for y in y0..y1 {
-                    for x in x0..x1 {
-                        c.pixels += 1;
-                        primaries.push(match &gbuffer {
-                            Some(g) => gbuffer_hit::<I>(scene, eye, g, x, y),
-                            None => match eye.ray_in_scene(x, y, lo, hi) {
+                c.pixels += ((x1 - x0) * (y1 - y0)) as u64;
+                for s in 0..samples {
+                    for (x, y) in (y0..y1).flat_map(|y| (x0..x1).map(move |x| (x, y))) {
+                        primaries.push(match &gbuffers {
+                            Some(g) => gbuffer_hit::<I>(scene, eye, &g[s as usize], x, y),
+                            None => match eye.sample_ray_in_scene(x, y, s, lo, hi) {
                                 Some(ray) => {
                                     let mut rc = RayCounters::default();
                                     let hit = trace::<I, _>(scene, &ray, &mut probe, &mut rc);
@@ -262,7 +264,7 @@ fn costs_with<I: Intersector>(
                         let geometry = TileGeometry { x0, y0, width: x1 - x0, image_width: eye.width };
                         let mut s = StreamCounts::default();
                         std::hint::black_box(shade_tile::<I, _>(
-                            scene, shader, background, geometry, &primaries, &mut probe, &mut s,
+                            scene, shader, background, geometry, samples, &primaries, &mut probe, &mut s,
                         ));
                         for (a, b) in c.rays.iter_mut().zip(s.rays) {
                             *a += b;
@@ -287,7 +289,7 @@ pub fn coverage_mismatch(
     opts: &RenderOptions,
 ) -> Result<(u64, u64, u32)> {
     let eye = eye_rays(camera, "camera")?;
-    let g = rasterize(scene, &eye);
+    let g = rasterize(scene, &eye, 0);
     let (lo, hi) = scene.test_bounds();
     let differ = with_intersector!(opts.intersector, I => {
         (0..eye.height)

@@ -4,7 +4,9 @@
 //! Table 3 against ray casting), JSON and charts.
 
 use anyhow::{anyhow, Result};
+use raypipe_core::camera::EyeRays;
 use raypipe_core::image::CameraRecord;
+use raypipe_core::pixel_filter::PixelSampler;
 use raypipe_core::shade::shader::Shader;
 use raypipe_core::{Intersector, SceneView, Vec3};
 use raypipe_hw::stream::{CostModel, StreamConfig, StreamMachine, StreamReport};
@@ -25,27 +27,29 @@ pub fn run_stream(
     intersector: IntersectorKind,
     shader: Option<Shader>,
     shadow_caster: bool,
+    sampler: PixelSampler,
     show_progress: bool,
 ) -> Result<(Frame, StreamReport)> {
-    with_intersector!(intersector, I => run_with::<I>(scene, camera, cfg, costs, shader, shadow_caster, show_progress))
+    let eye = eye_rays(camera, "camera")?.with_sampler(sampler);
+    let background = Vec3::from(camera.background);
+    with_intersector!(intersector, I => run_with::<I>(scene, eye, background, cfg, costs, shader, shadow_caster, show_progress))
 }
 
 #[allow(clippy::too_many_arguments)]
 fn run_with<I: Intersector>(
     scene: &SceneView<'_>,
-    camera: &CameraRecord,
+    eye: EyeRays,
+    background: Vec3,
     cfg: &StreamConfig,
     costs: &CostModel,
     shader: Option<Shader>,
     shadow_caster: bool,
     show_progress: bool,
 ) -> Result<(Frame, StreamReport)> {
-    let eye = eye_rays(camera, "camera")?;
-    let background = Vec3::from(camera.background);
     let mut m = StreamMachine::<I>::new(*scene, eye, background, shader, cfg, costs.clone()).map_err(|e| anyhow!(e))?;
     if shadow_caster {
         // Visibility from the host's rasterizer (the G-buffer pass), as on the host.
-        m.set_visibility(gbuffer_visibility::<I>(scene, &eye));
+        m.set_visibility((0..eye.samples()).flat_map(|s| gbuffer_visibility::<I>(scene, &eye, s)).collect());
     }
     let bar = progress::bar(0, "stream", show_progress);
     m.run(|done, total| {
@@ -55,7 +59,7 @@ fn run_with<I: Intersector>(
     .map_err(|e| anyhow!("stream machine: {e}"))?;
     bar.finish_and_clear();
     let (width, height) = m.size();
-    Ok((Frame { width, height, pixels: m.image() }, m.report()))
+    Ok((Frame::from_radiance(width, height, m.radiance_image()), m.report()))
 }
 
 fn opt(x: Option<f64>, digits: usize) -> String {

@@ -733,3 +733,88 @@ fn generated_scenes_build_with_their_views() {
         assert!(!o.status.success() && err.contains(needle) && !err.contains("panicked"), "{args:?}: {err}");
     }
 }
+
+/// HDR outputs (issue 20, D5): `.exr` and `.pfm` hold the linear framebuffer exactly;
+/// exposure and tone mapping change only the PNG; outputs get the umask's permissions.
+#[test]
+fn hdr_outputs_hold_the_linear_framebuffer() {
+    use raypipe::render::{render, Algorithm, RenderOptions};
+    let dir = tempfile::tempdir().unwrap();
+    let args = ["--algo", "whitted", "--size", "48x40", "--samples", "4", "--filter", "tent"];
+    for out in ["a.exr", "a.pfm", "a.png", "b.png"] {
+        let mut all = vec!["render", "-o", out];
+        all.extend(args);
+        if out == "b.png" {
+            all.extend(["--exposure", "1.5", "--tonemap", "aces"]);
+        }
+        let o = raypipe(dir.path(), &all);
+        assert!(o.status.success(), "{out}: {}", stderr(&o));
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        assert!(stdout.contains("4 samples per pixel") && stdout.contains("Mrays/s"), "{stdout}");
+        assert!(stdout.contains("load") && stdout.contains("build") && stdout.contains("render"), "{stdout}");
+    }
+    // The same frame in-process.
+    let scene = raypipe::scene::load(None, &Default::default()).unwrap();
+    let view = scene.view().unwrap();
+    let cam = raypipe_core::image::CameraRecord { width: 48, height: 40, ..*view.camera().unwrap() };
+    let opts = RenderOptions {
+        algo: Algorithm::Whitted,
+        samples: 4,
+        filter: raypipe_core::pixel_filter::Filter::Tent,
+        packet: raypipe::packets::PacketSize::auto_for(&view),
+        ..Default::default()
+    };
+    let frame = render(&view, &cam, &opts).unwrap();
+
+    let mut exr = vec![[f32::NAN; 3]; 48 * 40];
+    let image = exr::prelude::read_first_rgba_layer_from_file(
+        dir.path().join("a.exr"),
+        |res, _| {
+            assert_eq!((res.width(), res.height()), (48, 40));
+            vec![[0.0f32; 3]; 48 * 40]
+        },
+        |px: &mut Vec<[f32; 3]>, pos, (r, g, b, _a): (f32, f32, f32, f32)| px[pos.y() * 48 + pos.x()] = [r, g, b],
+    )
+    .unwrap();
+    exr.copy_from_slice(&image.layer_data.channel_data.pixels);
+    assert!(exr == frame.radiance, "EXR values equal the linear framebuffer");
+    assert!(frame.radiance.iter().any(|c| c.iter().any(|&v| v > 0.0 && v != 1.0)));
+
+    let pfm = std::fs::read(dir.path().join("a.pfm")).unwrap();
+    let header = b"PF\n48 40\n-1.0\n";
+    assert_eq!(&pfm[..header.len()], header);
+    let floats: Vec<f32> =
+        pfm[header.len()..].chunks_exact(4).map(|b| f32::from_le_bytes(b.try_into().unwrap())).collect();
+    for y in 0..40 {
+        for x in 0..48 {
+            // Rows bottom to top.
+            let at = ((39 - y) * 48 + x) * 3;
+            assert_eq!(&floats[at..at + 3], &frame.radiance[y * 48 + x], "pfm pixel {x},{y}");
+        }
+    }
+    let (_, _, plain) = decode(&dir.path().join("a.png"));
+    assert_eq!(plain, frame.pixels.as_flattened(), "the default PNG is the clamped sRGB image");
+    let (_, _, mapped) = decode(&dir.path().join("b.png"));
+    assert_ne!(plain, mapped, "exposure and tone mapping change the PNG");
+
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        let mode = std::fs::metadata(dir.path().join("a.png")).unwrap().permissions().mode() & 0o777;
+        // SAFETY: umask has no memory-safety preconditions; it is put straight back.
+        let mask = unsafe {
+            let m = libc::umask(0o022);
+            libc::umask(m);
+            m
+        } as u32;
+        assert_eq!(mode, 0o666 & !mask, "output permissions follow the umask");
+    }
+    for (bad, what) in [("x.jpg", "must be a .png, .exr or .pfm"), ("nodir/x.exr", "does not exist")] {
+        let o = raypipe(dir.path(), &["render", "-o", bad, "--size", "8x8"]);
+        assert_one_line_error(&o, what);
+    }
+    let o = raypipe(dir.path(), &["render", "-o", "c.png", "--exposure", "inf"]);
+    assert_one_line_error(&o, "--exposure");
+    let o = raypipe(dir.path(), &["render", "-o", "c.png", "--filter", "lanczos"]);
+    assert!(!o.status.success() && stderr(&o).contains("unknown filter"), "{}", stderr(&o));
+}

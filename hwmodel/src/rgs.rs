@@ -66,8 +66,8 @@ pub struct Rgs {
     packet_size: u64,
     rays_per_cycle: u64,
     shade_per_cycle: u64,
-    /// Pixel block origins, in issue order.
-    blocks: Vec<(u32, u32)>,
+    /// Pixel block origins and the eye ray of their pixels, in issue order.
+    blocks: Vec<(u32, u32, u32)>,
     next_block: usize,
     generated: Option<(Box<RayPacketJob>, u64)>,
     next_unit: usize,
@@ -78,7 +78,7 @@ pub struct Rgs {
     /// The shading datapath is busy until this cycle (exclusive).
     shade_busy_until: u64,
     /// The image, row-major.
-    pub framebuffer: Vec<[u8; 3]>,
+    pub framebuffer: Vec<Vec3>,
     /// Each pixel's closest hit (what the equivalence tests compare with the host).
     pub hits: Vec<Option<raypipe_core::Hit>>,
     /// The shading port.
@@ -91,7 +91,8 @@ pub struct Rgs {
     pub packets_done: usize,
     /// The ray-emitting shader (Whitted, path tracing), or `None` for ray casting.
     shader: Option<Shader>,
-    /// Each pixel's radiance (ray-emitting shaders), summed exactly in any order.
+    /// Each pixel's radiance (ray-emitting shaders, or several eye rays per pixel),
+    /// summed exactly in any order.
     radiance: Vec<RadianceSum>,
     /// Records the shader emitted, waiting to be packed (first in, first out).
     stream: RayStream,
@@ -121,9 +122,13 @@ impl Rgs {
         let mut blocks = Vec::new();
         for ty in (0..eye.height).step_by(TILE as usize) {
             for tx in (0..eye.width).step_by(TILE as usize) {
-                for by in (ty..(ty + TILE).min(eye.height)).step_by(side as usize) {
-                    for bx in (tx..(tx + TILE).min(eye.width)).step_by(side as usize) {
-                        blocks.push((bx, by));
+                // A tile's blocks for each eye ray of its pixels in turn (one sample: the
+                // pixel centres).
+                for s in 0..eye.samples() {
+                    for by in (ty..(ty + TILE).min(eye.height)).step_by(side as usize) {
+                        for bx in (tx..(tx + TILE).min(eye.width)).step_by(side as usize) {
+                            blocks.push((bx, by, s));
+                        }
                     }
                 }
             }
@@ -145,14 +150,18 @@ impl Rgs {
             shading: Vec::new(),
             shade_jobs: cfg.rgs.shade_jobs.max(1) as usize,
             shade_busy_until: 0,
-            framebuffer: vec![[0; 3]; pixels],
+            framebuffer: vec![Vec3::ZERO; pixels],
             hits: vec![None; pixels],
             port: MemPort::new("shading".into(), &cfg.cache.shading, cfg.memory.queue_depth),
             gen_stats: UnitStats::default(),
             shade_stats: UnitStats::default(),
             packets_done: 0,
             shader,
-            radiance: if shader.is_some() { vec![RadianceSum::default(); pixels] } else { Vec::new() },
+            radiance: if shader.is_some() || eye.samples() > 1 {
+                vec![RadianceSum::default(); pixels]
+            } else {
+                Vec::new()
+            },
             stream: RayStream::default(),
             in_flight: HashMap::new(),
             next_secondary: 0,
@@ -170,7 +179,8 @@ impl Rgs {
         self.blocks.len()
     }
 
-    /// Takes primary visibility from a G-buffer (row-major hits) instead of tracing it.
+    /// Takes primary visibility from G-buffers (hits of every eye ray, row-major and
+    /// sample-major: `hits[s * pixels + p]`) instead of tracing it.
     pub fn set_visibility(&mut self, hits: Vec<Option<raypipe_core::Hit>>) {
         self.visibility = Some(hits);
     }
@@ -190,11 +200,18 @@ impl Rgs {
             && self.direct.is_empty()
     }
 
-    /// The image: the framebuffer (ray casting), or the summed radiance of each pixel.
+    /// The image, 8-bit sRGB.
     pub fn image(&self) -> Vec<[u8; 3]> {
-        match self.shader {
-            None => self.framebuffer.clone(),
-            Some(_) => self.radiance.iter().map(|r| rgb8(r.value())).collect(),
+        self.radiance_image().into_iter().map(rgb8).collect()
+    }
+
+    /// The image, linear: the framebuffer (ray casting, one eye ray per pixel), or the
+    /// summed radiance of each pixel.
+    pub fn radiance_image(&self) -> Vec<Vec3> {
+        if self.radiance.is_empty() {
+            self.framebuffer.clone()
+        } else {
+            self.radiance.iter().map(RadianceSum::value).collect()
         }
     }
 
@@ -224,9 +241,19 @@ impl Rgs {
         )
     }
 
+    /// The eye ray (sample) block `b` traces for its pixels.
+    fn sample_of(&self, b: usize) -> u32 {
+        self.blocks.get(b).map_or(0, |blk| blk.2)
+    }
+
+    /// Pixels in the image.
+    fn pixel_count(&self) -> usize {
+        self.eye.width as usize * self.eye.height as usize
+    }
+
     /// Pixel of lane `j` of block `b`, if inside the image.
     fn pixel(&self, b: usize, j: usize) -> Option<(u32, u32)> {
-        let (bx, by) = *self.blocks.get(b)?;
+        let (bx, by, _) = *self.blocks.get(b)?;
         let (x, y) = (bx + j as u32 % self.side, by + j as u32 / self.side);
         (x < self.eye.width && y < self.eye.height).then_some((x, y))
     }
@@ -280,7 +307,8 @@ impl Rgs {
                 for j in 0..self.packet_size as usize {
                     if let (Some((x, y)), Some(vis)) = (self.pixel(b, j), &self.visibility) {
                         packet.lanes |= 1 << j;
-                        packet.hits[j] = vis.get((y * self.eye.width + x) as usize).copied().flatten();
+                        let at = self.sample_of(b) as usize * self.pixel_count() + (y * self.eye.width + x) as usize;
+                        packet.hits[j] = vis.get(at).copied().flatten();
                     }
                 }
                 self.gen_stats.issue(lanes(packet.lanes), self.packet_size);
@@ -294,7 +322,8 @@ impl Rgs {
                     Box::new(RayPacketJob { index: b as u32, query: Query::Closest, lanes: 0, rays: [NO_RAY; 64] });
                 for j in 0..self.packet_size as usize {
                     if let Some((x, y)) = self.pixel(b, j) {
-                        if let Some(ray) = self.eye.ray_in_scene(x, y, self.bounds.0, self.bounds.1) {
+                        let s = self.sample_of(b);
+                        if let Some(ray) = self.eye.sample_ray_in_scene(x, y, s, self.bounds.0, self.bounds.1) {
                             job.rays[j] = ray;
                             job.lanes |= 1 << j;
                         }
@@ -404,32 +433,43 @@ impl Rgs {
             probe.at_level(0);
             let pixel = (y * self.eye.width + x) as usize;
             first_pixel.get_or_insert(pixel);
+            let (s, samples) = (self.sample_of(b), self.eye.samples());
             let ray = if packet.lanes & (1 << j) == 0 {
                 None
             } else if self.visibility.is_some() {
-                Some(self.eye.ray(x, y))
+                Some(self.eye.sample_ray(x, y, s))
             } else {
-                self.eye.ray_in_scene(x, y, self.bounds.0, self.bounds.1)
+                self.eye.sample_ray_in_scene(x, y, s, self.bounds.0, self.bounds.1)
             };
+            let share = 1.0 / samples as f32;
             match (&self.shader, ray) {
                 (None, Some(ray)) => {
-                    self.framebuffer[pixel] = rgb8(shade(scene, &ray, packet.hits[j], self.background, &mut probe))
+                    let color = shade(scene, &ray, packet.hits[j], self.background, &mut probe);
+                    match self.radiance.get_mut(pixel) {
+                        Some(sum) => sum.add(color * share),
+                        None => self.framebuffer[pixel] = color,
+                    }
                 }
-                (None, None) => self.framebuffer[pixel] = rgb8(self.background),
+                (None, None) => match self.radiance.get_mut(pixel) {
+                    Some(sum) => sum.add(self.background * share),
+                    None => self.framebuffer[pixel] = self.background,
+                },
                 (Some(shader), Some(ray)) => {
                     let sum = &mut self.radiance[pixel];
                     shader.shade_primary(
                         scene,
-                        RayRecord::primary(ray, pixel as u32),
+                        RayRecord::eye_sample(ray, pixel as u32, s, samples),
                         packet.hits[j],
                         sum,
                         &mut probe,
                         &mut |r| emitted.push(r),
                     );
                 }
-                (Some(_), None) => self.radiance[pixel].add(self.background),
+                (Some(_), None) => self.radiance[pixel].add(self.background * share),
             }
-            self.hits[pixel] = if packet.lanes & (1 << j) != 0 { packet.hits[j] } else { None };
+            if s == 0 {
+                self.hits[pixel] = if packet.lanes & (1 << j) != 0 { packet.hits[j] } else { None };
+            }
         }
         if self.visibility.is_none() {
             self.rays_retired += lanes(packet.lanes);

@@ -94,8 +94,8 @@ impl<'s, I: Intersector> Simulator<'s, I> {
         })
     }
 
-    /// The shadow caster: primary visibility comes from a rasterized G-buffer (each
-    /// pixel's hit, row-major), so only shadow rays are traced on the chip.
+    /// The shadow caster: primary visibility comes from rasterized G-buffers (each
+    /// eye ray's hit, row-major and sample-major), so only shadow rays are traced on the chip.
     pub fn set_visibility(&mut self, hits: Vec<Option<raypipe_core::Hit>>) {
         self.rgs.set_visibility(hits);
     }
@@ -270,6 +270,11 @@ impl<'s, I: Intersector> Simulator<'s, I> {
     /// The rendered image, row-major.
     pub fn framebuffer(&self) -> Vec<[u8; 3]> {
         self.rgs.image()
+    }
+
+    /// The image as linear radiance, row-major.
+    pub fn radiance_image(&self) -> Vec<Vec3> {
+        self.rgs.radiance_image()
     }
 
     /// Each pixel's closest hit, row-major.

@@ -89,7 +89,8 @@ pub fn decode_png(path: &Path) -> Frame {
     let mut buf = vec![0; reader.output_buffer_size().unwrap()];
     let info = reader.next_frame(&mut buf).unwrap();
     buf.truncate(info.buffer_size());
-    Frame { width: info.width, height: info.height, pixels: buf.chunks(3).map(|c| [c[0], c[1], c[2]]).collect() }
+    let pixels = buf.chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
+    Frame { width: info.width, height: info.height, pixels, radiance: Vec::new() }
 }
 
 /// Compares `frame` with `fixtures/golden/<name>` pixel for pixel (rendering is

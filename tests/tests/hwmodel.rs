@@ -9,6 +9,7 @@ use raypipe::scene::{framing_camera, Accel};
 use raypipe::tracer::trace;
 use raypipe_core::camera::{Camera, EyeRays};
 use raypipe_core::image::CameraRecord;
+use raypipe_core::pixel_filter::Filter;
 use raypipe_core::{FixedWatertight, Hit, Intersector, NoProbe, RayCounters, SceneView, Vec3, Watertight};
 use raypipe_hw::config::{MemoryModel, PagePolicy};
 use raypipe_hw::{HwConfig, Simulator};
@@ -375,8 +376,13 @@ fn model_images_equal_the_host_for_every_algorithm() {
         .unwrap();
         let view = scene.view().unwrap();
         let cam = CameraRecord { width: 40, height: 30, ..*view.camera().unwrap() };
-        for algo in [Algorithm::Cast, Algorithm::Shadow, Algorithm::Whitted, Algorithm::Path] {
-            let opts = RenderOptions { algo, samples: 2, bounces: 2, max_depth: 3, ..Default::default() };
+        // One eye ray per pixel (its centre), and four anti-aliased ones through a tent.
+        let samplings = [(1, Filter::Box), (4, Filter::Tent)];
+        for (algo, (samples, filter)) in [Algorithm::Cast, Algorithm::Shadow, Algorithm::Whitted, Algorithm::Path]
+            .into_iter()
+            .flat_map(|a| samplings.map(|s| (a, s)))
+        {
+            let opts = RenderOptions { algo, samples, filter, bounces: 2, max_depth: 3, ..Default::default() };
             let host = render(&view, &cam, &opts).unwrap();
             let shader = opts.shader(Vec3::from(cam.background));
             let mut configs = vec![HwConfig::preset("saarcor").unwrap(), HwConfig::preset("minimal").unwrap()];
@@ -387,22 +393,30 @@ fn model_images_equal_the_host_for_every_algorithm() {
             odd.cache.nodes.size_bytes = 0;
             configs.push(odd);
             for (k, cfg) in configs.iter().enumerate() {
-                let eye = EyeRays::new(&Camera::from(&cam)).unwrap();
+                let eye = EyeRays::new(&Camera::from(&cam)).unwrap().with_sampler(opts.sampler());
                 let mut sim =
                     Simulator::<Watertight>::with_shader(view, eye, Vec3::from(cam.background), shader, cfg).unwrap();
                 if k == 2 {
                     sim.shuffle_tick_order(99);
                 }
                 if algo == Algorithm::Shadow {
-                    let g = raypipe::raster::rasterize(&view, &eye);
-                    let hits = (0..cam.height)
-                        .flat_map(|y| (0..cam.width).map(move |x| (x, y)))
-                        .map(|(x, y)| raypipe::raster::gbuffer_hit::<Watertight>(&view, &eye, &g, x, y).1)
-                        .collect();
+                    let mut hits = Vec::new();
+                    for s in 0..samples {
+                        let g = raypipe::raster::rasterize(&view, &eye, s);
+                        hits.extend(
+                            (0..cam.height)
+                                .flat_map(|y| (0..cam.width).map(move |x| (x, y)))
+                                .map(|(x, y)| raypipe::raster::gbuffer_hit::<Watertight>(&view, &eye, &g, x, y).1),
+                        );
+                    }
                     sim.set_visibility(hits);
                 }
                 sim.run(|_, _| {}).unwrap();
-                assert!(sim.framebuffer() == host.pixels, "{accel:?} {algo:?} config {k}");
+                assert!(sim.framebuffer() == host.pixels, "{accel:?} {algo:?} {samples} samples config {k}");
+                assert!(
+                    sim.radiance_image().iter().map(|c| c.to_array()).eq(host.radiance.iter().copied()),
+                    "linear radiance: {accel:?} {algo:?} {samples} samples config {k}"
+                );
                 let r = sim.report();
                 assert_eq!(r.conservation.rays_issued, r.conservation.rays_retired);
                 assert_eq!(r.conservation.bytes_requested, r.conservation.bytes_delivered);

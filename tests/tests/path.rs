@@ -44,7 +44,7 @@ proptest! {
     ) {
         let scene = scene::load(Some(&root().join("fixtures/whitted.obj")), &BuildOptions::default()).unwrap();
         let view = scene.view().unwrap();
-        let opts = PathOptions { bounces: 6, samples: 1, roulette: false, background: Vec3::ZERO };
+        let opts = PathOptions { bounces: 6, roulette: false, background: Vec3::ZERO };
         let ray = Ray::new(Vec3::new(0.4, 1.7, 4.6), Vec3::from(dir));
         let mut stack = vec![RayRecord { sample, ..RayRecord::primary(ray, pixel) }];
         while let Some(rec) = stack.pop() {
@@ -113,7 +113,7 @@ fn area_light_samples_are_never_blocked_by_the_emitter_itself() {
     };
     let scene = scene::build("lit".into(), mesh, Vec::new(), Default::default(), &BuildOptions::default()).unwrap();
     let view = scene.view().unwrap();
-    let opts = PathOptions { bounces: 0, samples: 1, roulette: false, background: Vec3::ZERO };
+    let opts = PathOptions { bounces: 0, roulette: false, background: Vec3::ZERO };
     let mut near = 0.0f32;
     let mut far = 0.0f32;
     for i in 0..64u32 {

@@ -21,7 +21,7 @@ fn coverage(positions: Vec<[f32; 3]>, tris: Vec<[u32; 3]>, camera: &CameraRecord
     let scene = build_soup(positions, tris, Accel::Bvh, 3);
     let view = scene.view().unwrap();
     let eye = eye_rays(camera, "camera").unwrap();
-    let g = rasterize(&view, &eye);
+    let g = rasterize(&view, &eye, 0);
     let mut out = Vec::new();
     for y in 0..eye.height {
         for x in 0..eye.width {

@@ -13,6 +13,7 @@ use raypipe::stream::run_stream;
 use raypipe::tracer::{trace, IntersectorKind};
 use raypipe_core::camera::{Camera, EyeRays};
 use raypipe_core::image::CameraRecord;
+use raypipe_core::pixel_filter::Filter;
 use raypipe_core::{NoProbe, RayCounters, SceneView, Vec3, Watertight};
 use raypipe_hw::stream::counters::PassKind;
 use raypipe_hw::stream::{Architecture, CostModel, Oracle, StreamConfig, StreamMachine, StreamReport, Unroll};
@@ -98,8 +99,15 @@ fn the_image_is_the_hosts_for_every_architecture_oracle_and_algorithm() {
     let scene = scene::load(None, &BuildOptions { accel: Accel::Grid, ..Default::default() }).unwrap();
     let view = scene.view().unwrap();
     let cam = small_camera(&view, 40, 32);
-    for algo in [Algorithm::Cast, Algorithm::Shadow, Algorithm::Whitted, Algorithm::Path] {
-        let opts = RenderOptions { algo, samples: 2, bounces: 2, max_depth: 3, threads: Some(2), ..Default::default() };
+    for (algo, samples, filter) in [
+        (Algorithm::Cast, 1, Filter::Box),
+        (Algorithm::Cast, 4, Filter::Gaussian),
+        (Algorithm::Shadow, 4, Filter::Box),
+        (Algorithm::Whitted, 2, Filter::Tent),
+        (Algorithm::Path, 2, Filter::Box),
+    ] {
+        let opts =
+            RenderOptions { algo, samples, filter, bounces: 2, max_depth: 3, threads: Some(2), ..Default::default() };
         let host = render(&view, &cam, &opts).unwrap();
         let shader = opts.shader(Vec3::from(cam.background));
         for cfg in configs() {
@@ -111,10 +119,12 @@ fn the_image_is_the_hosts_for_every_architecture_oracle_and_algorithm() {
                 IntersectorKind::Watertight,
                 shader,
                 algo == Algorithm::Shadow,
+                opts.sampler(),
                 false,
             )
             .unwrap();
-            assert!(frame.pixels == host.pixels, "{algo:?} {cfg:?}");
+            assert!(frame.pixels == host.pixels, "{algo:?} {samples} samples {cfg:?}");
+            assert!(frame.radiance == host.radiance, "linear radiance: {algo:?} {samples} samples {cfg:?}");
             check_conservation(&report, 40 * 32);
             if algo != Algorithm::Cast {
                 assert!(report.rays_by_wave.len() > 1, "{algo:?} emitted no rays");

@@ -274,7 +274,7 @@ fn the_shadow_caster_equals_ray_casting_plus_shadows_where_coverage_agrees() {
         let hybrid = render(&view, &cam, &RenderOptions { algo: Algorithm::Shadow, ..base }).unwrap();
         let traced = render(&view, &cam, &RenderOptions { algo: Algorithm::Whitted, ..base }).unwrap();
         let eye = raypipe_core::camera::EyeRays::new(&raypipe_core::Camera::from(&cam)).unwrap();
-        let g = raypipe::raster::rasterize(&view, &eye);
+        let g = raypipe::raster::rasterize(&view, &eye, 0);
         let (lo, hi) = view.test_bounds();
         let mut disagree = 0;
         for y in 0..cam.height {

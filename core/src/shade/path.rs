@@ -31,8 +31,6 @@ pub const MAX_AREA_SAMPLES: u32 = 8;
 pub struct PathOptions {
     /// Bounces after the first hit (Purcell used 2).
     pub bounces: u8,
-    /// Samples per pixel.
-    pub samples: u32,
     /// End paths at random after the first bounce, reweighting the survivors (unbiased,
     /// but a surviving path's weight can grow).
     pub roulette: bool,

@@ -85,7 +85,18 @@ fn clip_near(v: [ClipVertex; 3], near: f32, out: &mut [ClipVertex; 4]) -> usize 
 /// against the near plane at view depth `near > 0` first, as a GPU clips in clip space
 /// before the perspective divide: the part in front of the plane is drawn whatever the
 /// rest does, so the G-buffer covers what ray casting sees beyond `near`.
-pub fn rasterize_triangle(eye: &EyeRays, v: [Vec3; 3], prim: u32, near: f32, g: &mut GBufferMut<'_>) -> Coverage {
+///
+/// The G-buffer is for eye ray `sample` of each pixel: with several samples per pixel
+/// ([`EyeRays::samples`]) the edge functions are evaluated at each pixel's sample
+/// position instead of its centre, so each sample's G-buffer holds what its eye ray sees.
+pub fn rasterize_triangle(
+    eye: &EyeRays,
+    v: [Vec3; 3],
+    prim: u32,
+    near: f32,
+    sample: u32,
+    g: &mut GBufferMut<'_>,
+) -> Coverage {
     let corners: [ClipVertex; 3] = core::array::from_fn(|k| {
         let mut b = [0.0; 3];
         b[k] = 1.0;
@@ -101,7 +112,7 @@ pub fn rasterize_triangle(eye: &EyeRays, v: [Vec3; 3], prim: u32, near: f32, g: 
     }
     // The polygon is convex: a fan from its first vertex.
     for k in 1..n - 1 {
-        fill(eye, [poly[0], poly[k], poly[k + 1]], prim, g);
+        fill(eye, [poly[0], poly[k], poly[k + 1]], prim, sample, g);
     }
     if corners.iter().all(|c| c.p.z >= near) {
         Coverage::Whole
@@ -114,7 +125,7 @@ pub fn rasterize_triangle(eye: &EyeRays, v: [Vec3; 3], prim: u32, near: f32, g: 
 /// can project millions of pixels away); depth and the original triangle's weights
 /// interpolated perspective-correctly (as attribute / z over 1 / z); ties to the lower
 /// triangle id.
-fn fill(eye: &EyeRays, t: [ClipVertex; 3], prim: u32, g: &mut GBufferMut<'_>) {
+fn fill(eye: &EyeRays, t: [ClipVertex; 3], prim: u32, sample: u32, g: &mut GBufferMut<'_>) {
     let (w, h) = (g.width, g.height);
     let s: [(f64, f64, f64); 3] = core::array::from_fn(|k| {
         let (x, y) = eye.view_to_pixel(t[k].p);
@@ -127,17 +138,20 @@ fn fill(eye: &EyeRays, t: [ClipVertex; 3], prim: u32, g: &mut GBufferMut<'_>) {
     if area == 0.0 || !area.is_finite() {
         return;
     }
-    let lo_x = libm::ceil(a.0.min(b.0).min(c.0)).max(0.0);
-    let hi_x = libm::floor(a.0.max(b.0).max(c.0)).min(w as f64 - 1.0);
-    let lo_y = libm::ceil(a.1.min(b.1).min(c.1)).max(0.0);
-    let hi_y = libm::floor(a.1.max(b.1).max(c.1)).min(h as f64 - 1.0);
+    // Sample positions stray from pixel centres by up to the filter's radius.
+    let r = if eye.samples() > 1 { eye.sampler.filter.radius() as f64 } else { 0.0 };
+    let lo_x = libm::ceil(a.0.min(b.0).min(c.0) - r).max(0.0);
+    let hi_x = libm::floor(a.0.max(b.0).max(c.0) + r).min(w as f64 - 1.0);
+    let lo_y = libm::ceil(a.1.min(b.1).min(c.1) - r).max(0.0);
+    let hi_y = libm::floor(a.1.max(b.1).max(c.1) + r).min(h as f64 - 1.0);
     if !(lo_x <= hi_x && lo_y <= hi_y) {
         return;
     }
     for y in lo_y as u32..=hi_y as u32 {
         for x in lo_x as u32..=hi_x as u32 {
-            let (fx, fy) = (x as f64, y as f64);
-            // Weights of a, b, c; the pixel centre is inside (edges included) when all
+            let (dx, dy) = eye.sample_offset(x, y, sample);
+            let (fx, fy) = (x as f64 + dx as f64, y as f64 + dy as f64);
+            // Weights of a, b, c; the sample position is inside (edges included) when all
             // have the sign of the area.
             let wt = [edge(b, c, fx, fy) / area, edge(c, a, fx, fy) / area, edge(a, b, fx, fy) / area];
             if wt.iter().any(|&x| x < 0.0) {
@@ -165,8 +179,8 @@ fn fill(eye: &EyeRays, t: [ClipVertex; 3], prim: u32, g: &mut GBufferMut<'_>) {
     }
 }
 
-/// The hit a G-buffer pixel `(x, y)` — nearest triangle `prim`, view depth `depth`,
-/// weights `uv` — gives the pixel's primary ray `ray`: the triangle hit exactly by the
+/// The hit a G-buffer pixel — nearest triangle `prim`, view depth `depth`, weights
+/// `uv` — gives the eye ray `ray` it was rasterized for: the triangle hit exactly by the
 /// intersection kernel where the ray's test agrees (the same bits as ray casting), else
 /// — a pixel centre on a triangle's edge that the two tests decide differently — at the
 /// rasterizer's depth and weights.
@@ -174,7 +188,6 @@ pub fn gbuffer_hit<I: Intersector>(
     scene: &SceneView<'_>,
     eye: &EyeRays,
     ray: &Ray,
-    (x, y): (u32, u32),
     prim: u32,
     depth: f32,
     uv: (f32, f32),
@@ -185,6 +198,6 @@ pub fn gbuffer_hit<I: Intersector>(
     let tri = I::fetch(scene, prim, &mut NoProbe);
     Some(match I::intersect(&I::prepare(ray), &tri) {
         Some((t, u, v)) => Hit { t, u, v, prim },
-        None => Hit { t: depth / eye.depth_per_distance(x, y), u: uv.0, v: uv.1, prim },
+        None => Hit { t: depth / eye.depth_per_distance_of(ray), u: uv.0, v: uv.1, prim },
     })
 }

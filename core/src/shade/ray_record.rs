@@ -66,6 +66,12 @@ impl RayRecord {
         RayRecord { ray, pixel, weight: Vec3::ONE, kind: RayKind::Primary, depth: 0, sample: 0 }
     }
 
+    /// Eye ray `sample` of `samples` through pixel `pixel`: weight `1 / samples`, so the
+    /// pixel's records add up to the mean of its samples.
+    pub fn eye_sample(ray: Ray, pixel: u32, sample: u32, samples: u32) -> RayRecord {
+        RayRecord { weight: Vec3::splat(1.0 / samples.max(1) as f32), sample, ..RayRecord::primary(ray, pixel) }
+    }
+
     /// A record continuing from `self` (same pixel and sample).
     pub fn child(&self, ray: Ray, weight: Vec3, kind: RayKind, depth: u8) -> RayRecord {
         RayRecord { ray, pixel: self.pixel, weight, kind, depth, sample: self.sample }

@@ -38,8 +38,10 @@ impl Shader {
         }
     }
 
-    /// Shades the hit of a primary record (`RayRecord::primary`): one record per sample,
-    /// each of weight `1 / samples`, their radiance added to `sum` one by one.
+    /// Shades the hit of eye ray `sample` of `samples` (built with
+    /// [`RayRecord::eye_sample`]: weight `1 / samples`), its radiance added to `sum`.
+    /// Each sample has its own eye ray and hit (Purcell's path tracer traces one eye ray
+    /// per sample).
     #[inline]
     pub fn shade_primary<P: MemoryProbe>(
         &self,
@@ -50,18 +52,6 @@ impl Shader {
         probe: &mut P,
         emit: &mut impl FnMut(RayRecord),
     ) {
-        let samples = self.samples();
-        for s in 0..samples {
-            let rec = RayRecord { weight: Vec3::splat(1.0 / samples as f32), sample: s, ..primary };
-            sum.add(self.shade(scene, &rec, hit, probe, emit));
-        }
-    }
-
-    /// Primary records per pixel (path tracing's samples).
-    pub fn samples(&self) -> u32 {
-        match self {
-            Shader::Whitted(_) => 1,
-            Shader::Path(o) => o.samples.max(1),
-        }
+        sum.add(self.shade(scene, &primary, hit, probe, emit));
     }
 }

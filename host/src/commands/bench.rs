@@ -135,7 +135,7 @@ pub(crate) fn cmd_bench(a: BenchArgs) -> Result<()> {
                 let mut last = None;
                 for _ in 0..a.runs.min(3) {
                     let start = Instant::now();
-                    let out = simulate::simulate(&view, &cam, cfg, kind, None, false, false)?;
+                    let out = simulate::simulate(&view, &cam, cfg, kind, None, false, Default::default(), false)?;
                     walls.push(start.elapsed().as_secs_f64());
                     last = Some(out.1);
                 }

@@ -13,7 +13,7 @@ mod trace;
 
 use crate::cli::{CameraArgs, Cli, Command};
 use crate::scene::{self, Accel, Scene};
-use anyhow::{bail, Result};
+use anyhow::Result;
 use raypipe_core::image::CameraRecord;
 use std::path::Path;
 use std::process::ExitCode;
@@ -125,9 +125,6 @@ pub(crate) fn warn_range(view: &raypipe_core::SceneView<'_>, rays: &[raypipe_cor
     }
 }
 
-pub(crate) fn check_png_path(p: &Path) -> Result<()> {
-    match p.extension().and_then(|e| e.to_str()) {
-        Some(e) if e.eq_ignore_ascii_case("png") => Ok(()),
-        _ => bail!("{}: output must be a .png file", p.display()),
-    }
+pub(crate) fn check_image_path(p: &Path) -> Result<()> {
+    crate::output::ImageFormat::of(p).map(|_| ())
 }

@@ -9,12 +9,15 @@ use crate::tracer::IntersectorKind;
 use anyhow::Result;
 use std::time::Instant;
 
-use super::{camera_for, check_png_path, warn};
+use super::{camera_for, check_image_path, warn};
 
 pub(crate) fn cmd_render(a: RenderArgs) -> Result<()> {
     a.run.check()?;
-    check_png_path(&a.output)?;
+    check_image_path(&a.output)?;
+    let display = a.display.display()?;
+    let loading = Instant::now();
     let scene = scene::load(a.scene.as_deref(), &a.structure.options())?;
+    let load_secs = loading.elapsed().as_secs_f64();
     warn(&scene);
     let view = scene.view()?;
     let cam = camera_for(&view, &a.camera)?;
@@ -24,18 +27,33 @@ pub(crate) fn cmd_render(a: RenderArgs) -> Result<()> {
         RenderOptions { threads: a.run.threads, intersector: kind, progress: true, packet, ..Default::default() };
     a.algo.apply(&mut opts)?;
     let start = Instant::now();
-    let frame = render::render(&view, &cam, &opts)?;
+    let (frame, rays) = render::render_counted(&view, &cam, &opts)?;
     let secs = start.elapsed().as_secs_f64();
-    output::write_png(&a.output, frame.width, frame.height, &frame.pixels)?;
+    output::write_frame(&a.output, &frame, &display)?;
+    // Building the structure is part of loading an OBJ; the report says how long it took.
+    let build_secs = scene.report.as_ref().map_or(0.0, |r| r.grid_seconds);
     println!(
-        "rendered {} ({} triangles) at {}x{} in {:.3} s ({:.2} Mrays/s) -> {}",
+        "rendered {} ({} triangles) at {}x{}, {} sample{} per pixel -> {}",
         scene.name,
         view.triangle_count(),
         frame.width,
         frame.height,
-        secs,
-        (frame.width as f64 * frame.height as f64) / secs / 1e6,
+        opts.samples,
+        if opts.samples == 1 { "" } else { "s" },
         a.output.display()
+    );
+    println!(
+        "time     load {:.3} s, build {:.3} s, render {:.3} s",
+        (load_secs - build_secs).max(0.0),
+        build_secs,
+        secs
+    );
+    println!(
+        "rays     {} traced ({} eye, {} secondary): {:.2} Mrays/s",
+        rays.total(),
+        rays.primary,
+        rays.secondary,
+        rays.total() as f64 / secs.max(1e-9) / 1e6
     );
     Ok(())
 }

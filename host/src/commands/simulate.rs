@@ -9,10 +9,11 @@ use crate::tracer::IntersectorKind;
 use anyhow::{bail, Result};
 use std::time::Instant;
 
-use super::{camera_for, check_png_path, structure_summary, warn};
+use super::{camera_for, check_image_path, structure_summary, warn};
 
 pub(crate) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
-    check_png_path(&a.output)?;
+    check_image_path(&a.output)?;
+    let display = a.display.display()?;
     // Both outputs' directories before anything is written: never one without the other.
     output::check_dir(&a.output)?;
     output::check_dir(&a.report)?;
@@ -35,7 +36,7 @@ pub(crate) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
     let shader = opts.shader(raypipe_core::Vec3::from(cam.background));
     let start = Instant::now();
     let shadow_caster = opts.algo == Algorithm::Shadow;
-    let (frame, mut report) = simulate::simulate(&view, &cam, &cfg, kind, shader, shadow_caster, true)?;
+    let (frame, mut report) = simulate::simulate(&view, &cam, &cfg, kind, shader, shadow_caster, opts.sampler(), true)?;
     let secs = start.elapsed().as_secs_f64();
     report.run = raypipe_hw::report::RunIdentity {
         scene: a.scene.as_ref().map_or("built-in Cornell box".to_string(), |p| p.display().to_string()),
@@ -52,7 +53,7 @@ pub(crate) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
         ),
         raypipe_version: env!("CARGO_PKG_VERSION").to_string(),
     };
-    output::write_png(&a.output, frame.width, frame.height, &frame.pixels)?;
+    output::write_frame(&a.output, &frame, &display)?;
     output::write_bytes(&a.report, report.to_json().as_bytes())?;
     println!(
         "simulated {} ({}, {} triangles) -> {}",

@@ -8,11 +8,12 @@ use crate::tracer::IntersectorKind;
 use anyhow::{anyhow, bail, Result};
 use std::time::Instant;
 
-use super::{camera_for, check_png_path, structure_summary, warn};
+use super::{camera_for, check_image_path, structure_summary, warn};
 
 pub(crate) fn cmd_stream(a: StreamArgs) -> Result<()> {
     use raypipe_hw::stream::{CostModel, StreamConfig};
-    check_png_path(&a.output)?;
+    check_image_path(&a.output)?;
+    let display = a.display.display()?;
     output::check_dir(&a.output)?;
     output::check_dir(&a.report)?;
     let cfg = StreamConfig {
@@ -33,8 +34,14 @@ pub(crate) fn cmd_stream(a: StreamArgs) -> Result<()> {
         }
         None => CostModel::default(),
     };
-    let algo =
-        AlgoArgs { algo: a.algo, max_depth: a.max_depth, bounces: a.bounces, samples: a.samples, roulette: false };
+    let algo = AlgoArgs {
+        algo: a.algo,
+        max_depth: a.max_depth,
+        bounces: a.bounces,
+        samples: Some(a.samples),
+        filter: a.filter,
+        roulette: false,
+    };
     let mut opts = RenderOptions::default();
     algo.apply(&mut opts)?;
     let scene = scene::load(a.scene.as_deref(), &a.structure.options())?;
@@ -55,7 +62,8 @@ pub(crate) fn cmd_stream(a: StreamArgs) -> Result<()> {
     let shader = opts.shader(background);
     let shadow_caster = opts.algo == Algorithm::Shadow;
     let start = Instant::now();
-    let (frame, report) = crate::stream::run_stream(&view, &cam, &cfg, &costs, kind, shader, shadow_caster, true)?;
+    let (frame, report) =
+        crate::stream::run_stream(&view, &cam, &cfg, &costs, kind, shader, shadow_caster, opts.sampler(), true)?;
     let secs = start.elapsed().as_secs_f64();
     // The same frame from the host renderer: the model must agree bit for bit.
     opts.intersector = kind;
@@ -63,11 +71,11 @@ pub(crate) fn cmd_stream(a: StreamArgs) -> Result<()> {
     let host = render::render(&view, &cam, &opts)?;
     let same = host.pixels == frame.pixels;
     let cast = if opts.algo != Algorithm::Cast && !a.no_table3 {
-        Some(crate::stream::run_stream(&view, &cam, &cfg, &costs, kind, None, false, true)?.1)
+        Some(crate::stream::run_stream(&view, &cam, &cfg, &costs, kind, None, false, opts.sampler(), true)?.1)
     } else {
         None
     };
-    output::write_png(&a.output, frame.width, frame.height, &frame.pixels)?;
+    output::write_frame(&a.output, &frame, &display)?;
     output::write_bytes(&a.report, report.to_json().as_bytes())?;
     println!(
         "stream {} ({} triangles, {}), {}x{}, {} {}",

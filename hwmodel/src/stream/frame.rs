@@ -53,7 +53,8 @@ pub struct StreamMachine<'s, I: Intersector> {
     pub max_work: RayWork,
     /// Each pixel's linear radiance (shaders) or colour (ray casting).
     pub(crate) radiance: Vec<RadianceSum>,
-    pub(crate) framebuffer: Vec<[u8; 3]>,
+    /// Ray casting's colour per pixel (one sample per pixel).
+    pub(crate) framebuffer: Vec<Vec3>,
     /// Each pixel's primary hit (first sample).
     pub hits: Vec<Option<Hit>>,
     /// Rays traced by wave.
@@ -99,15 +100,16 @@ impl<'s, I: Intersector> StreamMachine<'s, I> {
             loops: LoopTotals::default(),
             max_work: RayWork::default(),
             radiance: vec![RadianceSum::default(); pixels],
-            framebuffer: vec![rgb8(background); pixels],
+            framebuffer: vec![background; pixels],
             hits: vec![None; pixels],
             rays_by_wave: Vec::new(),
             _intersector: core::marker::PhantomData,
         })
     }
 
-    /// Takes primary visibility from a G-buffer (row-major `(ray, hit)`, as the host's
-    /// shadow caster computes it) instead of tracing eye rays.
+    /// Takes primary visibility from G-buffers (`(ray, hit)` for every eye ray, row-major
+    /// and sample-major — `v[s * pixels + p]` — as the host's shadow caster computes
+    /// them) instead of tracing eye rays.
     pub fn set_visibility(&mut self, v: Vec<(Option<Ray>, Option<Hit>)>) {
         self.visibility = Some(v);
     }
@@ -119,7 +121,7 @@ impl<'s, I: Intersector> StreamMachine<'s, I> {
 
     /// Runs the frame; `progress(screens done, screens known)`.
     pub fn run(&mut self, mut progress: impl FnMut(usize, usize)) -> Result<(), String> {
-        let samples = self.shader.map_or(1, |s| s.samples()) as usize;
+        let samples = self.eye.samples() as usize;
         let (w, h) = (self.eye.width, self.eye.height);
         let (lo, hi) = self.scene.test_bounds();
         // Wave 0: one screen of eye rays per sample (Purcell's path tracer traces one
@@ -130,19 +132,14 @@ impl<'s, I: Intersector> StreamMachine<'s, I> {
             for y in 0..h {
                 for x in 0..w {
                     let p = y * w + x;
-                    let weight = Vec3::splat(1.0 / samples as f32);
+                    let record = |ray| RayRecord::eye_sample(ray, p, s as u32, samples as u32);
                     let frag = match &self.visibility {
-                        Some(v) => match v.get(p as usize) {
-                            Some(&(Some(ray), hit)) => {
-                                let rec = RayRecord { weight, sample: s as u32, ..RayRecord::primary(ray, p) };
-                                Fragment::Visible(rec, hit)
-                            }
+                        Some(v) => match v.get(s * (w * h) as usize + p as usize) {
+                            Some(&(Some(ray), hit)) => Fragment::Visible(record(ray), hit),
                             _ => Fragment::Empty,
                         },
-                        None => match self.eye.ray_in_scene(x, y, lo, hi) {
-                            Some(ray) => {
-                                Fragment::Trace(RayRecord { weight, sample: s as u32, ..RayRecord::primary(ray, p) })
-                            }
+                        None => match self.eye.sample_ray_in_scene(x, y, s as u32, lo, hi) {
+                            Some(ray) => Fragment::Trace(record(ray)),
                             None => Fragment::Empty,
                         },
                     };
@@ -258,12 +255,30 @@ impl<'s, I: Intersector> StreamMachine<'s, I> {
         m.intersect_passes = m.intersect_passes.max(w.intersect_passes);
     }
 
-    /// The image.
+    /// The image, 8-bit sRGB.
     pub fn image(&self) -> Vec<[u8; 3]> {
-        match self.shader {
-            None => self.framebuffer.clone(),
-            Some(_) => self.radiance.iter().map(|r| rgb8(r.value())).collect(),
+        self.radiance_image().into_iter().map(rgb8).collect()
+    }
+
+    /// The image, linear radiance: ray casting's colours with one sample per pixel, the
+    /// exact sums of the samples' radiance otherwise.
+    pub fn radiance_image(&self) -> Vec<Vec3> {
+        if self.sums_radiance() {
+            self.radiance.iter().map(RadianceSum::value).collect()
+        } else {
+            self.framebuffer.clone()
         }
+    }
+
+    /// Whether pixels are sums of weighted radiance (a shader, or several samples) rather
+    /// than one colour.
+    pub(crate) fn sums_radiance(&self) -> bool {
+        self.shader.is_some() || self.eye.samples() > 1
+    }
+
+    /// Eye rays per pixel.
+    pub(crate) fn samples(&self) -> u32 {
+        self.eye.samples()
     }
 
     /// The report of the frame so far.

@@ -4,7 +4,6 @@
 //! shaders, whose new records form the next wave; a shadow ray adds its weight if
 //! nothing was in the way. Radiance goes to the pixel the record carries.
 
-use raypipe_core::shade::color::rgb8;
 use raypipe_core::shade::lambert::shade;
 use raypipe_core::shade::ray_record::{RayKind, RayRecord};
 use raypipe_core::Intersector;
@@ -35,14 +34,15 @@ impl<I: Intersector> StreamMachine<'_, I> {
         let lights = self.scene.light_count() as u64;
         let (mut shaded, mut lit, mut shadows, emitted_before) = (0u64, 0u64, 0u64, next.len());
         let (scene, background, shader) = (self.scene, self.background, self.shader);
+        let (sums, miss) = (self.sums_radiance(), background * (1.0 / self.samples() as f32));
         let mut probe = StreamProbe::new(&mut self.cache, false);
         for (i, f) in frags.iter().enumerate() {
             let (rec, hit) = match f {
                 Fragment::Empty => {
-                    // A pixel whose eye ray missed the scene box: the background, once.
-                    if wave == 0 && screen == 0 {
-                        if let (Some(_), Some(r)) = (shader, self.radiance.get_mut(i)) {
-                            r.add(background);
+                    // An eye ray that missed the scene box: its share of the background.
+                    if wave == 0 && sums {
+                        if let Some(r) = self.radiance.get_mut(i) {
+                            r.add(miss);
                         }
                     }
                     continue;
@@ -61,8 +61,12 @@ impl<I: Intersector> StreamMachine<'_, I> {
                     shaded += 1;
                     lit += hit.is_some() as u64;
                     let color = shade(&scene, &rec.ray, hit, background, &mut probe);
-                    if let Some(px) = self.framebuffer.get_mut(pixel) {
-                        *px = rgb8(color);
+                    if sums {
+                        if let Some(r) = self.radiance.get_mut(pixel) {
+                            r.add(color * rec.weight);
+                        }
+                    } else if let Some(px) = self.framebuffer.get_mut(pixel) {
+                        *px = color;
                     }
                 }
                 Some(_) if rec.kind == RayKind::Shadow => {
