@@ -23,31 +23,56 @@ const CHUNK: usize = 4096;
 /// and 64 measured alike on Sponza, 1.10–1.20x against none).
 const SINGLE_PREFETCH_AHEAD: usize = 16;
 
-/// Converts an (N, 6) or (N, 8) array into rays, rejecting rows no ray can be made of.
-pub fn rays_from_array(a: &Array2) -> Result<Vec<Ray>> {
+/// Rays from an (N, 6) or (N, 8) array, and which rows could not be rays (NaN or
+/// infinite values, a zero direction, an empty, NaN or negative interval): those are
+/// traced as an empty ray that hits nothing, and the caller reports them as misses.
+pub fn rays_from_array(a: &Array2) -> Result<(Vec<Ray>, Vec<bool>)> {
     if a.cols != 6 && a.cols != 8 {
         bail!("array has {} columns; expected 6 (origin, direction) or 8 (and t_min, t_max)", a.cols);
     }
     let mut rays = huge_pages::empty_vec(a.rows);
+    let mut invalid = vec![false; a.rows];
     for (i, row) in a.data.chunks_exact(a.cols).enumerate() {
         let origin = Vec3::new(row[0], row[1], row[2]);
         let dir = Vec3::new(row[3], row[4], row[5]);
         let (t_min, t_max) = if a.cols == 8 { (row[6], row[7]) } else { (0.0, f32::INFINITY) };
-        if !origin.is_finite() || !dir.is_finite() {
-            bail!("row {i}: origin or direction is NaN or infinite");
+        let valid = origin.is_finite()
+            && dir.is_finite()
+            && dir != Vec3::ZERO
+            && !t_min.is_nan()
+            && !t_max.is_nan()
+            && t_min <= t_max
+            && t_min >= 0.0;
+        if valid {
+            rays.push(Ray { origin, dir, t_min, t_max });
+        } else {
+            invalid[i] = true;
+            rays.push(NO_RAY);
         }
-        if dir == Vec3::ZERO {
-            bail!("row {i}: direction is zero");
-        }
-        if t_min.is_nan() || t_max.is_nan() || t_min > t_max {
-            bail!("row {i}: t range [{t_min}, {t_max}] is empty or NaN");
-        }
-        if t_min < 0.0 {
-            bail!("row {i}: t_min {t_min} is negative (a ray starts at its origin: t_min >= 0)");
-        }
-        rays.push(Ray { origin, dir, t_min, t_max });
     }
-    Ok(rays)
+    Ok((rays, invalid))
+}
+
+/// What an invalid row is traced as: an interval no hit can fall in.
+const NO_RAY: Ray = Ray { origin: Vec3::ZERO, dir: Vec3::X, t_min: 1.0, t_max: 0.0 };
+
+/// The share of packets of `n` consecutive rays whose directions do not agree (a ray
+/// more than 60° from the packet's mean direction): what `trace --packet` warns about,
+/// since incoherent packets split at once and cost more than single rays.
+pub fn incoherent_share(rays: &[Ray], n: usize) -> f64 {
+    if n <= 1 || rays.is_empty() {
+        return 0.0;
+    }
+    let groups = rays.chunks(n);
+    let total = groups.len();
+    let bad = rays
+        .chunks(n)
+        .filter(|g| {
+            let mean: Vec3 = g.iter().map(|r| r.dir.normalize_or_zero()).sum::<Vec3>().normalize_or_zero();
+            g.iter().any(|r| r.dir.normalize_or_zero().dot(mean) < 0.5)
+        })
+        .count();
+    bad as f64 / total as f64
 }
 
 /// Closest hit of every ray.

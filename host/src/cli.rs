@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::{bail, Result};
 use clap::{Args, Parser, Subcommand};
-use raypipe_core::image::CameraRecord;
+use raypipe_core::image::{CameraRecord, LightRecord};
 use raypipe_core::pixel_filter::Filter;
 
 use crate::bvh_builder::BvhParams;
@@ -53,6 +53,9 @@ pub enum Command {
     /// multipass or branching) on a scene: passes, instructions, memory words, texture
     /// cache, frame time; image, JSON report and charts.
     Stream(StreamArgs),
+    /// Describe a scene: bounds, triangles, materials, lights, camera, structure and the
+    /// image's sections.
+    Info(InfoArgs),
 }
 
 /// `raypipe stream`.
@@ -190,12 +193,24 @@ pub struct SimulateArgs {
 pub struct TraceArgs {
     /// An OBJ file or a scene image.
     pub scene: PathBuf,
-    /// Rays: float32 array of shape (N, 6) — origin, direction — or (N, 8) with t_min, t_max.
+    /// Rays: float32 or float64 array of shape (N, 6) — origin, direction — or (N, 8) with
+    /// t_min, t_max. A row that is no ray (NaN, zero direction, empty interval) is a miss,
+    /// counted.
     #[arg(long, value_name = "NPY")]
     pub rays: PathBuf,
-    /// Output: structured array of N records (t, u, v float32; prim int32, -1 on a miss).
+    /// Output: structured array of N records with the --fields chosen (closest: t, u, v
+    /// float32 and prim int32, -1 on a miss, by default; any: occluded uint8).
     #[arg(long, value_name = "NPY")]
     pub hits: PathBuf,
+    /// What each ray asks: the closest hit, or whether anything lies in its interval
+    /// (occlusion, cheaper: traversal stops at the first hit).
+    #[arg(long, value_enum, default_value_t = Query::Closest)]
+    pub query: Query,
+    /// Output fields, comma-separated. Closest: t, u, v, prim, ng (geometric normal,
+    /// winding order, unit), ns (shading normal facing the ray, unit), material (id, -1
+    /// without); default t,u,v,prim. Any: occluded.
+    #[arg(long, value_name = "LIST", value_delimiter = ',')]
+    pub fields: Vec<String>,
     #[command(flatten)]
     pub structure: StructureArgs,
     #[command(flatten)]
@@ -206,6 +221,27 @@ pub struct TraceArgs {
     /// Trace consecutive rays in packets of this many (1 = single rays); hits are the same.
     #[arg(long, value_enum, default_value_t = PacketSize::Single)]
     pub packet: PacketSize,
+}
+
+/// `raypipe info`.
+#[derive(Args, Debug)]
+pub struct InfoArgs {
+    /// An OBJ file or a scene image; the built-in Cornell box when omitted.
+    pub scene: Option<PathBuf>,
+    #[command(flatten)]
+    pub structure: StructureArgs,
+    #[command(flatten)]
+    pub camera: CameraArgs,
+}
+
+/// What `raypipe trace` asks of each ray.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Query {
+    /// The closest hit.
+    #[default]
+    Closest,
+    /// Any hit in the interval (occlusion).
+    Any,
 }
 
 /// `raypipe rays`.
@@ -231,10 +267,19 @@ pub struct RaysArgs {
 /// How to build the acceleration structure when the scene is an OBJ.
 #[derive(Args, Debug, Clone)]
 pub struct StructureArgs {
-    /// A point light "x,y,z" or "x,y,z,r,g,b" (repeatable), instead of the default light
-    /// (OBJ input; an image keeps its lights).
+    /// A point light "x,y,z" or "x,y,z,r,g,b" (repeatable), instead of the default light;
+    /// on a scene image it replaces the image's lights (its emitters stay area lights).
     #[arg(long, value_name = "X,Y,Z[,R,G,B]", value_parser = parse_light, allow_hyphen_values = true)]
     pub light: Vec<[f32; 6]>,
+    /// A directional (sun) light from direction "dx,dy,dz" towards the scene, with
+    /// irradiance r,g,b (default 1,1,1) (repeatable), instead of the default light.
+    #[arg(long, value_name = "DX,DY,DZ[,R,G,B]", value_parser = parse_light, allow_hyphen_values = true)]
+    pub sun: Vec<[f32; 6]>,
+    /// A sky: constant radiance "r,g,b", or a gradient "r,g,b,R,G,B" from the horizon's
+    /// r,g,b to the zenith's R,G,B (+y up). Path tracing samples it; the other
+    /// algorithms add its mean as ambient light.
+    #[arg(long, value_name = "R,G,B[,R,G,B]", value_parser = parse_sky)]
+    pub sky: Option<[f32; 6]>,
     /// Acceleration structure.
     #[arg(long, value_enum, default_value_t = Accel::Grid)]
     pub accel: Accel,
@@ -277,18 +322,54 @@ pub struct StructureArgs {
 }
 
 impl StructureArgs {
+    /// The structure flags given a value other than their default (they apply only when
+    /// building).
+    pub(crate) fn flags_given(&self) -> Vec<&'static str> {
+        let (kd, bvh) = (KdParams::default(), BvhParams::default());
+        let mut v = Vec::new();
+        let checks = [
+            (self.accel != Accel::Grid, "--accel"),
+            (self.grid_min_dim.is_some(), "--grid-min-dim"),
+            (self.grid_density != DEFAULT_CELLS_PER_TRIANGLE, "--grid-density"),
+            (self.triangles != TriangleLayout::Indexed, "--triangles"),
+            (self.kd_traversal_cost != kd.traversal_cost, "--kd-traversal-cost"),
+            (self.kd_intersection_cost != kd.intersection_cost, "--kd-intersection-cost"),
+            (self.kd_empty_bonus != kd.empty_bonus, "--kd-empty-bonus"),
+            (self.kd_max_depth.is_some(), "--kd-max-depth"),
+            (self.bvh_traversal_cost != bvh.traversal_cost, "--bvh-traversal-cost"),
+            (self.bvh_max_leaf != bvh.max_leaf, "--bvh-max-leaf"),
+            (self.bvh_presplit != bvh.presplit_extent, "--bvh-presplit"),
+            (self.bvh_spatial_alpha != bvh.spatial_alpha, "--bvh-spatial-alpha"),
+        ];
+        for (given, flag) in checks {
+            if given {
+                v.push(flag);
+            }
+        }
+        v
+    }
+
     pub(crate) fn options(&self) -> BuildOptions {
         BuildOptions {
             lights: self
                 .light
                 .iter()
-                .map(|l| raypipe_core::image::LightRecord {
+                .map(|l| (l, LightRecord::POINT))
+                .chain(self.sun.iter().map(|l| (l, LightRecord::DIRECTIONAL)))
+                .map(|(l, kind)| LightRecord {
                     position: [l[0], l[1], l[2]],
-                    kind: raypipe_core::image::LightRecord::POINT,
+                    kind,
                     color: [l[3], l[4], l[5]],
                     triangle: 0,
                 })
+                .chain(self.sky.iter().map(|s| LightRecord {
+                    position: [s[0], s[1], s[2]],
+                    kind: LightRecord::ENVIRONMENT,
+                    color: [s[3], s[4], s[5]],
+                    triangle: 0,
+                }))
                 .collect(),
+            camera: CameraSpec::default(),
             accel: self.accel,
             grid: match self.grid_min_dim {
                 Some(n) => GridResolution::MinDim(n),
@@ -376,6 +457,20 @@ fn parse_light(s: &str) -> Result<[f32; 6], String> {
     }
     if out[3..].iter().any(|c| *c < 0.0) {
         return Err(format!("{s:?}: negative light colour"));
+    }
+    Ok(out)
+}
+
+fn parse_sky(s: &str) -> Result<[f32; 6], String> {
+    let v: Vec<f32> =
+        s.split(',').map(|p| p.trim().parse::<f32>()).collect::<Result<_, _>>().map_err(|e| format!("{s:?}: {e}"))?;
+    let out = match v.as_slice() {
+        [r, g, b] => [*r, *g, *b, *r, *g, *b],
+        [r, g, b, r2, g2, b2] => [*r, *g, *b, *r2, *g2, *b2],
+        _ => return Err(format!("{s:?}: expected r,g,b or r,g,b,R,G,B")),
+    };
+    if out.iter().any(|c| !c.is_finite() || *c < 0.0) {
+        return Err(format!("{s:?}: radiance must be finite and not negative"));
     }
     Ok(out)
 }

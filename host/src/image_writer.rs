@@ -4,8 +4,8 @@
 use anyhow::{bail, Result};
 use bytemuck::Pod;
 use raypipe_core::image::{
-    crc32, AccelKind, CameraRecord, Header, Position, SectionEntry, SectionKind, TextureRecord, TriangleRecord,
-    FORMAT_VERSION, MAGIC, SECTION_ALIGN,
+    crc32, AccelKind, CameraRecord, Header, LightAlias, LightRecord, Position, SectionEntry, SectionKind,
+    TextureRecord, TriangleRecord, FORMAT_VERSION, MAGIC, SECTION_ALIGN,
 };
 
 use raypipe_core::image::{TriBlock4, WaldTriangle, WideNode};
@@ -60,6 +60,10 @@ impl ImageWriter {
         }
         if !mesh.lights.is_empty() {
             w.add(SectionKind::Lights, &mesh.lights);
+            let alias = crate::light_distribution::mesh_alias_table(mesh);
+            if !alias.is_empty() {
+                w.add(SectionKind::LightAlias, &alias);
+            }
         }
         if !mesh.textures.is_empty() {
             let mut records = Vec::new();
@@ -158,6 +162,35 @@ impl ImageWriter {
     }
 
     /// Lays the sections out and computes the checksum.
+    /// A copy of the valid image `image` with LIGHTS and LIGHT_ALIAS replaced: every
+    /// other section's bytes as they are, laid out anew.
+    pub fn replace_lights(image: &[u8], lights: &[LightRecord], alias: &[LightAlias]) -> Result<AlignedBytes> {
+        let header: Header = bytemuck::pod_read_unaligned(&image[..64]);
+        let mut w = ImageWriter {
+            accel: header.accel,
+            bounds: (header.bounds_min, header.bounds_max),
+            counts: (header.triangle_count, header.vertex_count),
+            sections: Vec::new(),
+        };
+        for k in 0..header.section_count as usize {
+            let e: SectionEntry = bytemuck::pod_read_unaligned(&image[64 + 16 * k..80 + 16 * k]);
+            let Some(kind) = SectionKind::from_u32(e.kind) else { bail!("unknown section kind {}", e.kind) };
+            if matches!(kind, SectionKind::Lights | SectionKind::LightAlias) {
+                continue;
+            }
+            let bytes = image.get(e.offset as usize..e.offset as usize + e.size as usize);
+            let Some(bytes) = bytes else { bail!("section {} lies outside the image", kind.name()) };
+            w.sections.push((kind, bytes.to_vec(), e.count));
+        }
+        if !lights.is_empty() {
+            w.add(SectionKind::Lights, lights);
+        }
+        if !alias.is_empty() {
+            w.add(SectionKind::LightAlias, alias);
+        }
+        w.finish()
+    }
+
     pub fn finish(&self) -> Result<AlignedBytes> {
         let align = SECTION_ALIGN as u64;
         let table_end = 64 + 16 * self.sections.len() as u64;

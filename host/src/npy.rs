@@ -26,7 +26,8 @@ pub fn read_f32_2d(path: &Path) -> Result<Array2> {
     parse_f32_2d(&bytes).map_err(|e| anyhow!("{name}: {e}"))
 }
 
-/// Parses the bytes of a `.npy` file holding a 2-D float32 array.
+/// Parses the bytes of a `.npy` file holding a 2-D float32 or float64 array (float64
+/// values are rounded to float32, the precision raypipe traces in).
 pub fn parse_f32_2d(bytes: &[u8]) -> Result<Array2> {
     if bytes.len() < 10 || &bytes[..6] != b"\x93NUMPY" {
         bail!("not a NumPy .npy file");
@@ -40,9 +41,12 @@ pub fn parse_f32_2d(bytes: &[u8]) -> Result<Array2> {
     let header = std::str::from_utf8(header).map_err(|_| anyhow!("malformed .npy header"))?;
     let descr = dict_value(header, "descr").ok_or_else(|| anyhow!("malformed .npy header: no descr"))?;
     let descr = descr.trim_matches(|c| c == '\'' || c == '"');
-    if descr != "<f4" && descr != "=f4" && descr != "f4" {
-        bail!("array has dtype {descr}; expected float32 ('<f4')");
-    }
+    // float32 as is; float64 (NumPy's default) rounded to the nearest float32.
+    let width = match descr {
+        "<f4" | "=f4" | "f4" => 4,
+        "<f8" | "=f8" | "f8" => 8,
+        _ => bail!("array has dtype {descr}; expected float32 ('<f4') or float64 ('<f8')"),
+    };
     if dict_value(header, "fortran_order").is_some_and(|v| v.trim() == "True") {
         bail!("array is in Fortran order; save it C-contiguous");
     }
@@ -56,11 +60,15 @@ pub fn parse_f32_2d(bytes: &[u8]) -> Result<Array2> {
         .collect::<Result<_>>()?;
     let [rows, cols] = dims[..] else { bail!("array has shape {shape}; expected two dimensions (N, 6) or (N, 8)") };
     let body = &bytes[start + header_len..];
-    let need = rows.checked_mul(cols).and_then(|n| n.checked_mul(4)).ok_or_else(|| anyhow!("array too large"))?;
+    let need = rows.checked_mul(cols).and_then(|n| n.checked_mul(width)).ok_or_else(|| anyhow!("array too large"))?;
     if body.len() < need {
         bail!("truncated array: shape {shape} needs {need} bytes of data, file has {}", body.len());
     }
-    let data = body[..need].chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
+    let data = if width == 4 {
+        body[..need].chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect()
+    } else {
+        body[..need].chunks_exact(8).map(|c| f64::from_le_bytes(c.try_into().unwrap_or([0; 8])) as f32).collect()
+    };
     Ok(Array2 { rows, cols, data })
 }
 
@@ -138,6 +146,19 @@ pub fn write_hits(path: &Path, hits: &[HitRecord]) -> Result<()> {
     })
 }
 
+/// Writes a structured array of `rows` records: `fields` as `(name, dtype)` (a dtype such
+/// as `'<f4'`, or `('<f4', (3,))` for a sub-array), `data` the records packed in order.
+pub fn write_records(path: &Path, fields: &[(&str, &str)], rows: usize, data: &[u8]) -> Result<()> {
+    let descr: Vec<String> = fields.iter().map(|(n, t)| format!("('{n}', {t})")).collect();
+    let header =
+        header_bytes(&format!("{{'descr': [{}], 'fortran_order': False, 'shape': ({rows},), }}", descr.join(", ")));
+    write_atomic(path, |w| {
+        w.write_all(&header)?;
+        w.write_all(data)?;
+        Ok(())
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -158,7 +179,15 @@ mod tests {
             b.splice(at..at + from.len(), to.bytes());
             b
         };
-        assert!(parse_f32_2d(&edit("<f4", "<f8")).unwrap_err().to_string().contains("float32"));
+        // float64 is read (and rounded); other dtypes are not.
+        let mut f8 = edit("<f4", "<f8");
+        f8.extend(std::iter::repeat_n(0u8, 12 * 4));
+        let body = f8.len() - 12 * 8;
+        for (i, v) in (0..12).map(|i| i as f64 * 0.5 * (1.0 + 1e-12)).enumerate() {
+            f8[body + 8 * i..body + 8 * i + 8].copy_from_slice(&v.to_le_bytes());
+        }
+        assert_eq!(parse_f32_2d(&f8).unwrap(), a);
+        assert!(parse_f32_2d(&edit("<f4", "<i4")).unwrap_err().to_string().contains("float64"));
         assert!(parse_f32_2d(&edit("(2, 6)", "(12,)  ")).unwrap_err().to_string().contains("two dimensions"));
         assert!(parse_f32_2d(&edit("False", "True ")).unwrap_err().to_string().contains("Fortran"));
         assert!(parse_f32_2d(&bytes[..bytes.len() - 4]).unwrap_err().to_string().contains("truncated"));

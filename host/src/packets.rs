@@ -30,6 +30,11 @@ impl PacketSize {
     /// Every choice, smallest first.
     pub const ALL: [PacketSize; 4] = [PacketSize::Single, PacketSize::P4, PacketSize::P16, PacketSize::P64];
 
+    /// Rays per packet.
+    pub fn lanes(self) -> usize {
+        (self.side() * self.side()) as usize
+    }
+
     /// Side of the square pixel block.
     pub fn side(self) -> u32 {
         match self {

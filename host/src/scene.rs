@@ -58,8 +58,12 @@ pub enum TriangleLayout {
 /// How to build a scene image from a mesh.
 #[derive(Clone, Debug, Default)]
 pub struct BuildOptions {
-    /// Point lights to use instead of the default one (a dim ambient term is kept).
+    /// Point, directional and sky lights to use instead of the default one (a dim
+    /// ambient term is kept, emitters stay area lights).
     pub lights: Vec<LightRecord>,
+    /// The camera that will render (a camera file and flags over the input's own): the
+    /// image's default camera, and what the default light is chosen for.
+    pub camera: CameraSpec,
     /// Acceleration structure.
     pub accel: Accel,
     /// Grid resolution.
@@ -81,6 +85,8 @@ pub struct BuildReport {
     pub vertices: usize,
     /// Zero-area triangles.
     pub degenerate: usize,
+    /// What lights the image has and why (one line).
+    pub lights: String,
     /// Grid cells per axis (zero without a grid).
     pub dims: [u32; 3],
     /// Grid cells.
@@ -241,54 +247,69 @@ pub fn framing_camera(lo: [f32; 3], hi: [f32; 3]) -> CameraRecord {
     }
 }
 
-/// Lights when the input has none of its own: a point light just inside the emissive
-/// triangles' area-weighted centre if there are emitters, else a headlight above the
-/// camera; plus a dim ambient term.
-fn default_lights(mesh: &Mesh, camera: &CameraRecord) -> Vec<LightRecord> {
-    let (lo, hi) = mesh.bounds();
-    let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
-    let centre = (lo + hi) * 0.5;
-    let mut area_sum = 0.0f64;
-    let mut weighted = glam::DVec3::ZERO;
-    let mut emission = Vec3::ZERO;
-    for (t, &m) in mesh.triangles.iter().zip(&mesh.tri_materials) {
-        let ke = Vec3::from(mesh.materials[m as usize].emission);
-        if ke.max_element() <= 0.0 {
-            continue;
-        }
-        let [a, b, c] = t.map(|i| glam::DVec3::from(mesh.positions[i as usize].map(f64::from)));
-        let area = 0.5 * (b - a).cross(c - a).length();
-        area_sum += area;
-        weighted += (a + b + c) / 3.0 * area;
-        emission = emission.max(ke);
+/// Settles `mesh`'s lights: the input's own (an MTL cannot give any today), else the
+/// user's (`--light`, `--sun`, `--sky`) plus a dim ambient term and the emitters as area
+/// lights, else the defaults for `camera` ([`crate::default_lights`]). Area lights go
+/// last. Returns one line describing them.
+fn choose_lights(name: &str, mesh: &mut Mesh, camera: &CameraRecord, user: &[LightRecord]) -> Result<String> {
+    if user.is_empty() && mesh.lights.is_empty() {
+        let (lights, note) = crate::default_lights::default_lights(mesh, camera);
+        mesh.lights = lights;
+        return Ok(note);
     }
-    let mut lights = Vec::new();
-    if area_sum > 0.0 {
-        let p = (weighted / area_sum).as_vec3();
-        // Nudge the light off the emitter, towards the middle of the scene.
-        let p = p + (centre - p).normalize_or_zero() * (hi - lo).length() * 0.01;
-        let color = emission / emission.max_element();
-        lights.push(LightRecord {
-            position: p.to_array(),
-            kind: LightRecord::EMITTERS,
-            color: color.to_array(),
-            triangle: 0,
-        });
-        // The emitters themselves, for path tracing.
-        for (i, (t, &m)) in mesh.triangles.iter().zip(&mesh.tri_materials).enumerate() {
-            let ke = mesh.materials[m as usize].emission;
-            if Vec3::from(ke).max_element() > 0.0 && !mesh.is_degenerate(*t) {
-                lights.push(LightRecord { position: [0.0; 3], kind: LightRecord::AREA, color: ke, triangle: i as u32 });
-            }
-        }
+    if !user.is_empty() {
+        check_user_lights(name, user)?;
+        let (_, areas) = crate::default_lights::emitters(mesh);
+        mesh.lights = user.to_vec();
+        mesh.lights.push(LightRecord { position: [0.0; 3], kind: LightRecord::AMBIENT, color: [0.1; 3], triangle: 0 });
+        let n = areas.len();
+        mesh.lights.extend(areas);
+        return Ok(format!("{} given light{}{}", user.len(), if user.len() == 1 { "" } else { "s" }, area_note(n)));
+    }
+    mesh.lights.sort_by_key(|l| l.kind == LightRecord::AREA);
+    Ok(format!("{} lights from the input", mesh.lights.len()))
+}
+
+fn area_note(n: usize) -> String {
+    if n == 0 {
+        String::new()
     } else {
-        let eye = Vec3::from(camera.eye);
-        let up = Vec3::from(camera.up).normalize_or_zero();
-        let p = eye + up * (eye - centre).length() * 0.25;
-        lights.push(LightRecord { position: p.to_array(), kind: LightRecord::POINT, color: [0.9; 3], triangle: 0 });
+        format!("; {n} emissive triangles are area lights")
     }
+}
+
+/// What the command line's lights must be: a sun has a direction.
+fn check_user_lights(name: &str, user: &[LightRecord]) -> Result<()> {
+    for l in user {
+        if l.kind == LightRecord::DIRECTIONAL && Vec3::from(l.position).length_squared() == 0.0 {
+            bail!("{name}: --sun: the direction is zero");
+        }
+    }
+    Ok(())
+}
+
+/// The image `scene` with its point, directional, sky and ambient lights replaced by
+/// `user`'s (its emitters stay area lights): `--light` and friends on a built image.
+pub fn relight(scene: &Scene, user: &[LightRecord]) -> Result<Scene> {
+    check_user_lights(&scene.name, user)?;
+    let view = scene.view()?;
+    let first_area = view.shading_light_count();
+    let areas: Vec<LightRecord> = (first_area..view.light_count()).map(|i| view.light(i, &mut NoProbe)).collect();
+    let mut lights = user.to_vec();
     lights.push(LightRecord { position: [0.0; 3], kind: LightRecord::AMBIENT, color: [0.1; 3], triangle: 0 });
-    lights
+    lights.extend(areas.iter().copied());
+    let power: Vec<f64> = areas
+        .iter()
+        .map(|l| {
+            let [a, b, c] = view.triangle(l.triangle, &mut NoProbe);
+            crate::light_distribution::triangle_power(a, b, c, l.color)
+        })
+        .collect();
+    let image = ImageWriter::replace_lights(&scene.image, &lights, &crate::light_distribution::alias_table(&power))
+        .map_err(|e| anyhow!("{}: {e}", scene.name))?;
+    let out = Scene { name: scene.name.clone(), image, report: scene.report.clone() };
+    out.view().map_err(|e| anyhow!("internal error: relit an invalid image: {e}"))?;
+    Ok(out)
 }
 
 /// Builds the binary BVH, collapses it into nodes of `N`'s width and adds it to the image.
@@ -317,19 +338,14 @@ pub fn build(
 ) -> Result<Scene> {
     mesh.validate(&name)?;
     let (lo, hi) = mesh.bounds();
-    let camera = camera.apply(&framing_camera(lo, hi));
-    if !opts.lights.is_empty() {
-        mesh.lights = opts.lights.clone();
-        mesh.lights.push(LightRecord { position: [0.0; 3], kind: LightRecord::AMBIENT, color: [0.1; 3], triangle: 0 });
-    }
-    if mesh.lights.is_empty() {
-        mesh.lights = default_lights(&mesh, &camera);
-    }
+    let camera = camera.merged(opts.camera).apply(&framing_camera(lo, hi));
+    let lights_note = choose_lights(&name, &mut mesh, &camera, &opts.lights)?;
     let mut report = BuildReport {
         triangles: mesh.triangles.len(),
         vertices: mesh.positions.len(),
         degenerate: mesh.degenerate_count(),
         warnings,
+        lights: lights_note,
         ..Default::default()
     };
     let wide = matches!(opts.accel, Accel::Bvh4 | Accel::Bvh8);

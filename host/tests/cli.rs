@@ -349,6 +349,85 @@ fn trace_a_ray_batch_with_every_structure_and_packet_size() {
     assert!((h[0].0 - 1359.2).abs() < 1e-3, "{h:?}");
 }
 
+/// Ray queries (issue 20, D8): float64 input, rows that are no rays returned as misses
+/// and counted, any-hit queries, optional fields, and the warning for incoherent packets.
+#[test]
+fn ray_queries_fields_and_invalid_rays() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let obj = fixtures().join("cornell_box.obj");
+    let obj = obj.to_str().unwrap();
+    // Down the box from above the blocks; a NaN row; a zero direction; an empty interval;
+    // the same ray with an interval too short to reach anything.
+    let good = [100.0, 450.0, -800.0, 0.0, 0.0, 1.0, 0.0, f32::INFINITY];
+    let mut rows = good.to_vec();
+    rows.extend([f32::NAN, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0]);
+    rows.extend([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0]);
+    rows.extend([0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 5.0, 1.0]);
+    rows.extend([100.0, 450.0, -800.0, 0.0, 0.0, 1.0, 0.0, 10.0]);
+    // As float64.
+    let mut bytes = Vec::new();
+    let mut header = "{'descr': '<f8', 'fortran_order': False, 'shape': (5, 8), }".to_string();
+    while !(10 + header.len() + 1).is_multiple_of(64) {
+        header.push(' ');
+    }
+    header.push('\n');
+    bytes.extend_from_slice(b"\x93NUMPY\x01\x00");
+    bytes.extend_from_slice(&(header.len() as u16).to_le_bytes());
+    bytes.extend_from_slice(header.as_bytes());
+    for v in &rows {
+        bytes.extend_from_slice(&(*v as f64).to_le_bytes());
+    }
+    std::fs::write(d.join("rays.npy"), bytes).unwrap();
+    let o = raypipe(d, &["trace", obj, "--rays", "rays.npy", "--hits", "h.npy"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("3 rows are not rays"), "{}", stderr(&o));
+    let h = read_hits(&d.join("h.npy"));
+    assert_eq!(h.len(), 5);
+    assert!((h[0].0 - 1359.2).abs() < 1e-3 && h[0].3 >= 0, "{h:?}");
+    assert!(h[1..].iter().all(|r| r.3 == -1 && r.0 == f32::INFINITY), "{h:?}");
+
+    let o = raypipe(d, &["trace", obj, "--rays", "rays.npy", "--hits", "any.npy", "--query", "any"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let any = std::fs::read(d.join("any.npy")).unwrap();
+    let hl = u16::from_le_bytes([any[8], any[9]]) as usize;
+    assert!(String::from_utf8_lossy(&any[10..10 + hl]).contains("('occluded', 'u1')"));
+    assert_eq!(&any[10 + hl..], &[1, 0, 0, 0, 0], "only the first ray is blocked");
+
+    let o = raypipe(d, &["trace", obj, "--rays", "rays.npy", "--hits", "f.npy", "--fields", "prim,ng,ns,material"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let f = std::fs::read(d.join("f.npy")).unwrap();
+    let hl = u16::from_le_bytes([f[8], f[9]]) as usize;
+    let header = String::from_utf8_lossy(&f[10..10 + hl]).into_owned();
+    assert!(header.contains("('ng', '<f4', (3,))") && header.contains("('material', '<i4')"), "{header}");
+    let rec = &f[10 + hl..10 + hl + 32];
+    let fl = |i: usize| f32::from_le_bytes(rec[i..i + 4].try_into().unwrap());
+    // The back wall faces the ray: both normals along z, the shading one towards -z.
+    assert!(fl(12).abs() > 0.99 && (fl(24) + 1.0).abs() < 1e-3, "{rec:?}");
+    assert!(i32::from_le_bytes(rec[28..32].try_into().unwrap()) >= 0);
+    assert_eq!(f.len() - 10 - hl, 5 * 32);
+
+    let o = raypipe(d, &["trace", obj, "--rays", "rays.npy", "--hits", "x.npy", "--fields", "t,colour"]);
+    assert_one_line_error(&o, "unknown field 'colour'");
+    let o = raypipe(d, &["trace", obj, "--rays", "rays.npy", "--hits", "x.npy", "--query", "any", "--fields", "t"]);
+    assert_one_line_error(&o, "only 'occluded'");
+
+    // Incoherent packets: random directions, traced as 4×4 packets, are warned about.
+    let mut g = 12345u32;
+    let mut next = || {
+        g ^= g << 13;
+        g ^= g >> 17;
+        g ^= g << 5;
+        g as f32 / u32::MAX as f32 * 2.0 - 1.0
+    };
+    let scattered: Vec<f32> = (0..64).flat_map(|_| [250.0, 250.0, 250.0, next(), next(), next()]).collect();
+    write_npy(&d.join("scattered.npy"), &[64, 6], &scattered, "<f4");
+    let o = raypipe(d, &["trace", obj, "--rays", "scattered.npy", "--hits", "s.npy", "--packet", "16"]);
+    assert!(o.status.success() && stderr(&o).contains("incoherent"), "{}", stderr(&o));
+    let o = raypipe(d, &["trace", obj, "--rays", "scattered.npy", "--hits", "s.npy"]);
+    assert!(o.status.success() && !stderr(&o).contains("incoherent"), "{}", stderr(&o));
+}
+
 #[test]
 fn malformed_ray_arrays() {
     let dir = tempfile::tempdir().unwrap();
@@ -358,14 +437,14 @@ fn malformed_ray_arrays() {
     let run = |name: &str| raypipe(d, &["trace", obj, "--rays", name, "--hits", "h.npy"]);
     write_npy(&d.join("cols.npy"), &[2, 5], &[0.0; 10], "<f4");
     assert_one_line_error(&run("cols.npy"), "5 columns");
-    write_npy(&d.join("f8.npy"), &[1, 6], &[0.0; 12], "<f8");
-    assert_one_line_error(&run("f8.npy"), "float32");
-    write_npy(&d.join("nan.npy"), &[2, 6], &[0.0, 0.0, 0.0, 0.0, 0.0, 1.0, f32::NAN, 0.0, 0.0, 1.0, 0.0, 0.0], "<f4");
-    assert_one_line_error(&run("nan.npy"), "row 1");
-    write_npy(&d.join("zero.npy"), &[1, 6], &[0.0; 6], "<f4");
-    assert_one_line_error(&run("zero.npy"), "direction is zero");
-    write_npy(&d.join("range.npy"), &[1, 8], &[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 5.0, 1.0], "<f4");
-    assert_one_line_error(&run("range.npy"), "t range");
+    std::fs::write(d.join("i4.npy"), {
+        let mut b = std::fs::read(d.join("cols.npy")).unwrap();
+        let at = b.windows(3).position(|w| w == b"<f4").unwrap();
+        b[at..at + 3].copy_from_slice(b"<i4");
+        b
+    })
+    .unwrap();
+    assert_one_line_error(&run("i4.npy"), "float64");
     std::fs::write(d.join("junk.npy"), b"not numpy").unwrap();
     assert_one_line_error(&run("junk.npy"), "junk.npy");
     assert_one_line_error(&run("missing.npy"), "missing.npy");
@@ -817,4 +896,71 @@ fn hdr_outputs_hold_the_linear_framebuffer() {
     assert_one_line_error(&o, "--exposure");
     let o = raypipe(dir.path(), &["render", "-o", "c.png", "--filter", "lanczos"]);
     assert!(!o.status.success() && stderr(&o).contains("unknown filter"), "{}", stderr(&o));
+}
+
+/// Lights on the command line (issue 20, D2): a sun and a sky light the path tracer; on a
+/// built image they replace its lights with a note; a structure flag the image cannot
+/// apply is a warning; `info` describes the scene and its sections.
+#[test]
+fn lights_on_obj_and_image_and_info() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let tetra = fixtures().join("tetra.obj");
+    let tetra = tetra.to_str().unwrap();
+    let mean = |p: &Path| {
+        let (_, _, px) = decode(p);
+        px.iter().map(|&v| v as f64).sum::<f64>() / px.len() as f64
+    };
+    let o = raypipe(d, &["render", tetra, "--algo", "path", "--samples", "2", "--size", "48x36", "-o", "plain.png"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("chosen for the camera"));
+    let o = raypipe(
+        d,
+        &[
+            "render",
+            tetra,
+            "--algo",
+            "path",
+            "--samples",
+            "2",
+            "--size",
+            "48x36",
+            "--sun",
+            "0.3,1,0.2,3,3,3",
+            "--sky",
+            "0.2,0.3,0.5,0.4,0.6,1",
+            "-o",
+            "sky.png",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(mean(&d.join("sky.png")) > mean(&d.join("plain.png")) + 5.0, "sun and sky brighten the scene");
+    let o = raypipe(d, &["render", tetra, "--sun", "0,0,0", "-o", "x.png"]);
+    assert_one_line_error(&o, "direction is zero");
+    let o = raypipe(d, &["render", tetra, "--sky", "1,2", "-o", "x.png"]);
+    assert!(!o.status.success() && stderr(&o).contains("expected r,g,b"), "{}", stderr(&o));
+
+    let image = fixtures().join("tetra.rpsi");
+    let image = image.to_str().unwrap();
+    let o = raypipe(d, &["render", image, "--size", "48x36", "-o", "image.png"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = raypipe(
+        d,
+        &["render", image, "--size", "48x36", "--light", "0,3,-3,2,2,2", "--accel", "bvh", "-o", "relit.png"],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(err.contains("note:") && err.contains("replace the image's"), "{err}");
+    assert!(err.contains("warning:") && err.contains("--accel applies when building"), "{err}");
+    assert_ne!(decode(&d.join("image.png")).2, decode(&d.join("relit.png")).2, "the new light is used");
+
+    let o = raypipe(d, &["info", image]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    for needle in ["bounds", "triangles   6", "lights", "camera", "structure   grid", "POSITIONS", "PRIM_LISTS"] {
+        assert!(out.contains(needle), "{needle} in {out}");
+    }
+    let o = raypipe(d, &["info"]);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("LIGHT_ALIAS"), "the Cornell box's emitters have a table");
+    assert_one_line_error(&raypipe(d, &["info", "missing.obj"]), "missing.obj");
 }

@@ -125,7 +125,7 @@ fn area_light_samples_are_never_blocked_by_the_emitter_itself() {
         let mut out = Vec::new();
         shade_path(&view, &RayRecord::primary(ray, i), hit, &opts, &mut NoProbe, &mut |r| out.push(r));
         let shadows: Vec<_> = out.iter().filter(|r| r.kind == RayKind::Shadow).collect();
-        assert_eq!(shadows.len(), 2, "one sample per emitting triangle");
+        assert_eq!(shadows.len(), 1, "one emitting triangle picked by power per hit");
         for s in &shadows {
             assert!(
                 !occluded::<Watertight, _>(&view, &s.ray, &mut NoProbe, &mut RayCounters::default()),

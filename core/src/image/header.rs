@@ -147,11 +147,15 @@ pub enum SectionKind {
     /// PRIM_LISTS entries `4j` to `4j + 3` (optional; single rays test a leaf's
     /// triangles four at a time from it).
     TriBlocks = 18,
+    /// The area lights' power distribution as an alias table,
+    /// [`crate::image::LightAlias`], 16 bytes each, one per area light in LIGHTS order
+    /// (optional; without it the path tracer picks area lights uniformly).
+    LightAlias = 19,
 }
 
 impl SectionKind {
     /// Every kind, in table order.
-    pub const ALL: [SectionKind; 18] = [
+    pub const ALL: [SectionKind; 19] = [
         SectionKind::Positions,
         SectionKind::Triangles,
         SectionKind::Grid,
@@ -170,6 +174,7 @@ impl SectionKind {
         SectionKind::Texels,
         SectionKind::Bvh8Nodes,
         SectionKind::TriBlocks,
+        SectionKind::LightAlias,
     ];
 
     /// Decodes a section-table kind.
@@ -190,6 +195,7 @@ impl SectionKind {
             SectionKind::Bvh8Nodes => 256,
             SectionKind::WaldTriangles => 48,
             SectionKind::TriBlocks => 144,
+            SectionKind::LightAlias => 16,
         }
     }
 
@@ -214,6 +220,7 @@ impl SectionKind {
             SectionKind::Textures => "TEXTURES",
             SectionKind::Texels => "TEXELS",
             SectionKind::TriBlocks => "TRI_BLOCKS",
+            SectionKind::LightAlias => "LIGHT_ALIAS",
         }
     }
 }

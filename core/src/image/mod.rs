@@ -15,7 +15,7 @@ pub use crc32::{crc32, Crc32};
 pub use embed::Aligned64;
 pub use header::{AccelKind, Header, SectionEntry, SectionKind, FORMAT_VERSION, MAGIC};
 pub use records::{
-    Bvh4Node, Bvh8Node, BvhNode, CameraRecord, GridRecord, KdNode, LightRecord, MaterialRecord, Position,
+    Bvh4Node, Bvh8Node, BvhNode, CameraRecord, GridRecord, KdNode, LightAlias, LightRecord, MaterialRecord, Position,
     ShadingVertex, TextureRecord, TriBlock4, TriangleRecord, WaldTriangle, WideNode, NULL_INDEX,
 };
 pub use view::{

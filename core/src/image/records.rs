@@ -107,16 +107,20 @@ impl MaterialRecord {
     };
 }
 
-/// A light, 32 bytes.
+/// A light, 32 bytes. Area lights come last in LIGHTS: the shaders of ray casting, the
+/// shadow caster and Whitted read only the lights before them.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
 pub struct LightRecord {
-    /// Position (point lights); unused otherwise.
+    /// Position (point lights); the unit direction towards the light (directional);
+    /// the horizon's radiance (environment); unused otherwise.
     pub position: [f32; 3],
-    /// [`LightRecord::POINT`], [`LightRecord::AMBIENT`], [`LightRecord::AREA`] or
-    /// [`LightRecord::EMITTERS`].
+    /// [`LightRecord::POINT`], [`LightRecord::AMBIENT`], [`LightRecord::AREA`],
+    /// [`LightRecord::EMITTERS`], [`LightRecord::DIRECTIONAL`] or
+    /// [`LightRecord::ENVIRONMENT`].
     pub kind: u32,
-    /// Colour times intensity (area lights: the emitted radiance `Ke`).
+    /// Colour times intensity (area lights: the emitted radiance `Ke`; directional: the
+    /// irradiance it gives a surface facing it; environment: the zenith's radiance).
     pub color: [f32; 3],
     /// The emitting triangle of an area light; zero otherwise.
     pub triangle: u32,
@@ -134,6 +138,27 @@ impl LightRecord {
     /// A point light standing in for the emissive triangles in ray casting, the shadow
     /// caster and Whitted ray tracing (path tracing samples the area lights instead).
     pub const EMITTERS: u32 = 3;
+    /// A light at infinity (the sun): parallel rays from direction `position`.
+    pub const DIRECTIONAL: u32 = 4;
+    /// Light from every direction of the sky: radiance blending from the horizon's
+    /// (`position`) at and below the horizon to the zenith's (`color`) straight up (+y).
+    /// Path tracing samples it; the other algorithms add its mean as ambient light.
+    pub const ENVIRONMENT: u32 = 5;
+    /// The largest kind.
+    pub const MAX_KIND: u32 = 5;
+
+    /// The environment's radiance along unit direction `dir`.
+    pub fn sky(&self, dir: glam::Vec3) -> glam::Vec3 {
+        let t = dir.y.clamp(0.0, 1.0);
+        glam::Vec3::from(self.position) * (1.0 - t) + glam::Vec3::from(self.color) * t
+    }
+
+    /// The mean radiance of the environment over the upper hemisphere, cosine-weighted
+    /// about +y: what a surface facing up receives, over π (used as ambient light).
+    pub fn sky_mean(&self) -> glam::Vec3 {
+        // ∫ L(cos θ) cos θ dω / π with L linear in cos θ: (horizon + 2 zenith) / 3.
+        (glam::Vec3::from(self.position) + glam::Vec3::from(self.color) * 2.0) / 3.0
+    }
 
     /// True for the lights the point-light shaders use (cast, shadow caster, Whitted).
     pub fn is_point(&self) -> bool {
@@ -164,6 +189,24 @@ pub struct CameraRecord {
 }
 const _: () = assert!(core::mem::size_of::<CameraRecord>() == 64);
 const _: () = assert!(core::mem::align_of::<CameraRecord>() == 4);
+
+/// One entry of the area lights' alias table (Walker 1977), 16 bytes: entry `i` keeps
+/// area light `i` with probability `keep`, else gives area light `alias`; `pdf` and
+/// `alias_pdf` are the probabilities with which the table picks each of the two.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct LightAlias {
+    /// Probability of keeping this entry's own light, in `[0, 1]`.
+    pub keep: f32,
+    /// The other light of the entry (an area-light number).
+    pub alias: u32,
+    /// Probability that the table picks this entry's own light.
+    pub pdf: f32,
+    /// Probability that the table picks `alias`.
+    pub alias_pdf: f32,
+}
+const _: () = assert!(core::mem::size_of::<LightAlias>() == 16);
+const _: () = assert!(core::mem::align_of::<LightAlias>() == 4);
 
 /// A BVH node, 32 bytes: the "traditional" layout Ingo Wald proposed (as in tinybvh and
 /// pbrt's `LinearBVHNode`), two 16-byte rows of box corner plus one word.

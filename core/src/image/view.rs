@@ -8,7 +8,7 @@ use glam::Vec3;
 use super::crc32::Crc32;
 use super::header::{AccelKind, Header, SectionEntry, SectionKind, CHECKSUM_OFFSET, FORMAT_VERSION, MAGIC};
 use super::records::{
-    Bvh4Node, Bvh8Node, BvhNode, CameraRecord, GridRecord, KdNode, LightRecord, MaterialRecord, Position,
+    Bvh4Node, Bvh8Node, BvhNode, CameraRecord, GridRecord, KdNode, LightAlias, LightRecord, MaterialRecord, Position,
     ShadingVertex, TextureRecord, TriBlock4, TriangleRecord, WaldTriangle, WideNode, NULL_INDEX,
 };
 use crate::probe::{DataClass, MemoryProbe};
@@ -139,6 +139,15 @@ pub enum SceneError {
         /// Record number.
         record: u32,
     },
+    /// A light record is out of place or impossible: an area light before another kind,
+    /// a direction of zero length, an alias-table entry whose probabilities are not
+    /// probabilities.
+    BadLight {
+        /// LIGHTS or LIGHT_ALIAS.
+        section: SectionKind,
+        /// The record.
+        record: u32,
+    },
     /// The grid's dimensions, cell count or cell size are impossible.
     BadGrid,
     /// The last primitive list is not terminated by a null entry.
@@ -234,6 +243,11 @@ impl fmt::Display for SceneError {
             OutOfBounds { section, record } => write!(
                 f,
                 "section {} record {record} lies outside the declared bounds",
+                section.name()
+            ),
+            BadLight { section, record } => write!(
+                f,
+                "section {} record {record} is an impossible light (area lights come last; directions are not zero; alias probabilities lie in [0, 1])",
                 section.name()
             ),
             BadGrid => write!(f, "grid dimensions, cell count or cell size are invalid"),
@@ -535,6 +549,7 @@ pub struct SceneView<'a> {
     texels: &'a [u32],
     lights: &'a [LightRecord],
     area_lights: u32,
+    light_alias: &'a [LightAlias],
     camera: Option<&'a CameraRecord>,
     positions_addr: u32,
     triangles_addr: u32,
@@ -543,6 +558,7 @@ pub struct SceneView<'a> {
     materials_addr: u32,
     texels_addr: u32,
     lights_addr: u32,
+    light_alias_addr: u32,
     prim_lists_addr: u32,
     wald_addr: u32,
     tri_blocks_addr: u32,
@@ -810,13 +826,14 @@ impl<'a> SceneView<'a> {
         Self::validate_tri_blocks(tri_blocks, prim_lists, triangles, positions)?;
         let lights: &[LightRecord] = s.slice(K::Lights)?;
         let area_lights = lights.iter().filter(|l| l.kind == LightRecord::AREA).count() as u32;
+        let bad_light = |record: usize| SceneError::BadLight { section: K::Lights, record: record as u32 };
         for (i, l) in lights.iter().enumerate() {
-            if l.kind > LightRecord::EMITTERS {
+            if l.kind > LightRecord::MAX_KIND {
                 return Err(SceneError::IndexOutOfRange {
                     section: K::Lights,
                     record: i as u32,
                     value: l.kind,
-                    limit: 4,
+                    limit: LightRecord::MAX_KIND + 1,
                 });
             }
             if l.kind == LightRecord::AREA && l.triangle >= nt {
@@ -829,6 +846,27 @@ impl<'a> SceneView<'a> {
             }
             if !(l.position.iter().chain(&l.color).all(|v| v.is_finite())) {
                 return Err(SceneError::NonFinite { section: K::Lights, record: i as u32 });
+            }
+            // The area lights are the tail: the point-light shaders stop before them.
+            if l.kind != LightRecord::AREA && i >= lights.len() - area_lights as usize {
+                return Err(bad_light(i));
+            }
+            if l.kind == LightRecord::DIRECTIONAL && l.position == [0.0; 3] {
+                return Err(bad_light(i));
+            }
+        }
+        let light_alias: &[LightAlias] = s.slice(K::LightAlias)?;
+        if !light_alias.is_empty() && light_alias.len() != area_lights as usize {
+            return Err(SceneError::CountMismatch {
+                section: K::LightAlias,
+                expected: area_lights,
+                found: light_alias.len() as u32,
+            });
+        }
+        for (i, a) in light_alias.iter().enumerate() {
+            let probability = |p: f32| (0.0..=1.0).contains(&p);
+            if !(probability(a.keep) && probability(a.pdf) && probability(a.alias_pdf)) || a.alias >= area_lights {
+                return Err(SceneError::BadLight { section: K::LightAlias, record: i as u32 });
             }
         }
         let cameras: &[CameraRecord] = s.slice(K::Camera)?;
@@ -856,6 +894,7 @@ impl<'a> SceneView<'a> {
             texels,
             lights,
             area_lights,
+            light_alias,
             camera: cameras.first(),
             positions_addr: s.addr(K::Positions),
             triangles_addr: s.addr(K::Triangles),
@@ -864,6 +903,7 @@ impl<'a> SceneView<'a> {
             materials_addr: s.addr(K::Materials),
             texels_addr: s.addr(K::Texels),
             lights_addr: s.addr(K::Lights),
+            light_alias_addr: s.addr(K::LightAlias),
             wald_addr: s.addr(K::WaldTriangles),
             tri_blocks_addr: s.addr(K::TriBlocks),
             prim_lists_addr: s.addr(K::PrimLists),
@@ -1176,9 +1216,33 @@ impl<'a> SceneView<'a> {
         self.lights.len() as u32
     }
 
-    /// Number of area lights (emissive triangles), counted at parse.
+    /// Number of area lights (emissive triangles), counted at parse. They are the last
+    /// lights: area light `k` is light `shading_light_count() + k`.
     pub fn area_light_count(&self) -> u32 {
         self.area_lights
+    }
+
+    /// Number of lights before the area lights: all that ray casting, the shadow caster
+    /// and Whitted's shader read (their cost does not grow with the emitters).
+    pub fn shading_light_count(&self) -> u32 {
+        self.lights.len() as u32 - self.area_lights
+    }
+
+    /// Picks an area light with probability proportional to its power from two uniform
+    /// numbers in `[0, 1)` (one read of the alias table; uniformly without one): the
+    /// area-light number and the probability it had. `None` without area lights.
+    #[inline]
+    pub fn pick_area_light<P: MemoryProbe>(&self, u: f32, v: f32, probe: &mut P) -> Option<(u32, f32)> {
+        let n = self.area_lights;
+        if n == 0 {
+            return None;
+        }
+        let i = ((u * n as f32) as u32).min(n - 1);
+        let Some(entry) = self.light_alias.get(i as usize) else {
+            return Some((i, 1.0 / n as f32));
+        };
+        probe.read(DataClass::Shading, self.light_alias_addr.wrapping_add(i.wrapping_mul(16)), 16);
+        Some(if v < entry.keep { (i, entry.pdf) } else { (entry.alias, entry.alias_pdf) })
     }
 
     /// Reads light `index` (a default black ambient light if out of range).
@@ -1196,6 +1260,11 @@ impl<'a> SceneView<'a> {
     /// The materials.
     pub fn materials(&self) -> &'a [MaterialRecord] {
         self.materials
+    }
+
+    /// Number of textures.
+    pub fn texture_count(&self) -> u32 {
+        self.textures.len() as u32
     }
 
     /// Texture `index` (validated: its texels lie inside TEXELS).
@@ -1279,6 +1348,13 @@ impl<'a> SceneView<'a> {
         }
         probe.read(DataClass::Shading, self.shading_addr.wrapping_add(index.wrapping_mul(32)), 32);
         self.shading.get(index as usize).copied()
+    }
+
+    /// The material number of triangle `prim` (`None` without materials).
+    #[inline]
+    pub fn material_id<P: MemoryProbe>(&self, prim: u32, probe: &mut P) -> Option<u32> {
+        probe.read(DataClass::Shading, self.tri_materials_addr.wrapping_add(prim.wrapping_mul(4)), 4);
+        self.tri_materials.get(prim as usize).copied()
     }
 
     /// Reads the material of triangle `prim` ([`MaterialRecord::DEFAULT`] if none).

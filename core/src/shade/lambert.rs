@@ -1,6 +1,7 @@
 //! The shading kernel (Purcell 2002 §3.1.4, the ray caster's shader): interpolated
 //! per-vertex normal, material diffuse colour times vertex colour, Lambert shading from
-//! the point lights plus ambient light, plus emission; the background colour on a miss.
+//! the point and directional lights plus ambient light (an environment's mean counts
+//! as ambient), plus emission; the background colour on a miss.
 //! Shadows and secondary rays come with the later algorithms.
 
 use glam::Vec3;
@@ -23,14 +24,19 @@ pub fn shade<P: MemoryProbe>(
     let surface = Surface::at(scene, ray, &hit, probe);
     let (n, point) = (surface.normal, surface.point);
     let mut light = Vec3::ZERO;
-    for i in 0..scene.light_count() {
+    // The lights before the area lights: an image's emitters cost this kernel nothing.
+    for i in 0..scene.shading_light_count() {
         let l = scene.light(i, probe);
         let color = Vec3::from(l.color);
-        if l.kind == LightRecord::AMBIENT {
-            light += color;
-        } else if l.is_point() {
-            let to_light = (Vec3::from(l.position) - point).normalize_or_zero();
-            light += color * n.dot(to_light).max(0.0);
+        match l.kind {
+            LightRecord::AMBIENT => light += color,
+            LightRecord::ENVIRONMENT => light += l.sky_mean(),
+            LightRecord::DIRECTIONAL => light += color * n.dot(Vec3::from(l.position).normalize_or_zero()).max(0.0),
+            _ if l.is_point() => {
+                let to_light = (Vec3::from(l.position) - point).normalize_or_zero();
+                light += color * n.dot(to_light).max(0.0);
+            }
+            _ => {}
         }
     }
     Vec3::from(surface.material.diffuse) * surface.tint * light + Vec3::from(surface.material.emission)

@@ -7,10 +7,12 @@
 //! bounces. Random numbers come from [`crate::shade::rng`]: pixel, sample and bounce, so the
 //! image does not depend on the order rays are traced in.
 //!
-//! Emissive triangles are area lights: next-event estimation samples a point on each
-//! (or on one chosen at random when there are many), so a diffuse bounce that reaches
-//! one adds nothing, or its light would be counted twice; the point light that stands
-//! in for them in the other algorithms is not used. Ambient light records are ignored:
+//! Emissive triangles are area lights: next-event estimation picks one by power (the
+//! image's alias table, [`SceneView::pick_area_light`]) and samples a point on it, so a
+//! diffuse bounce that reaches one adds nothing, or its light would be counted twice; the
+//! point light that stands in for them in the other algorithms is not used. A sky
+//! (environment light) is sampled the same way, along a cosine-distributed shadow ray,
+//! and a diffuse bounce that escapes adds nothing. Ambient light records are ignored:
 //! the bounces replace them.
 
 use glam::Vec3;
@@ -22,9 +24,6 @@ use crate::shade::ray_record::{RayKind, RayRecord};
 use crate::shade::rng::uniform;
 use crate::shade::specular::specular_rays;
 use crate::shade::surface::Surface;
-
-/// Above this many emitting triangles, one chosen at random is sampled per hit.
-pub const MAX_AREA_SAMPLES: u32 = 8;
 
 /// Settings of the path tracer.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -50,6 +49,11 @@ pub fn cosine_direction(n: Vec3, u1: f32, u2: f32) -> Vec3 {
     t * x + b * y + n * z
 }
 
+/// The scene's sky light, if it has one.
+fn environment<P: MemoryProbe>(scene: &SceneView<'_>, probe: &mut P) -> Option<LightRecord> {
+    (0..scene.shading_light_count()).map(|i| scene.light(i, probe)).find(|l| l.kind == LightRecord::ENVIRONMENT)
+}
+
 /// Shades the end of `rec`: returns the radiance added now (times the record's weight)
 /// and passes new records to `emit`.
 pub fn shade_path<P: MemoryProbe>(
@@ -60,7 +64,15 @@ pub fn shade_path<P: MemoryProbe>(
     probe: &mut P,
     emit: &mut impl FnMut(RayRecord),
 ) -> Vec3 {
-    let Some(hit) = hit else { return rec.weight * opts.background };
+    let Some(hit) = hit else {
+        // The sky: seen directly along camera and specular paths; after a diffuse bounce
+        // next-event estimation has counted it already.
+        return match environment(scene, probe) {
+            Some(_) if rec.kind == RayKind::Path => Vec3::ZERO,
+            Some(sky) => rec.weight * sky.sky(rec.ray.dir.normalize_or_zero()),
+            None => rec.weight * opts.background,
+        };
+    };
     let s = Surface::at(scene, &rec.ray, &hit, probe);
     let m = s.material;
     let n = s.normal;
@@ -75,46 +87,48 @@ pub fn shade_path<P: MemoryProbe>(
         return now;
     }
     let diffuse = s.diffuse();
-    // Next-event estimation: point lights, and points sampled on the emitting triangles.
+    // Next-event estimation: the point, directional and sky lights, and one point on one
+    // emitting triangle picked by power.
     let depth = rec.depth as u32;
     let u = |dim: u32| uniform(rec.pixel, rec.sample, depth, dim);
     if diffuse.max_element() > 0.0 {
-        // Many emitters: one, chosen at random, stands for all of them.
-        let chosen = if areas > MAX_AREA_SAMPLES { Some((u(5) * areas as f32) as u32 % areas) } else { None };
-        let area_scale = if chosen.is_some() { areas as f32 } else { 1.0 };
-        let mut area_index = 0u32;
-        for i in 0..scene.light_count() {
+        for i in 0..scene.shading_light_count() {
             let l = scene.light(i, probe);
             match l.kind {
-                LightRecord::POINT => {
+                LightRecord::POINT | LightRecord::DIRECTIONAL => {
                     if let Some(shadow) = s.point_light_shadow(rec, &l, diffuse) {
                         emit(shadow);
                     }
                 }
-                LightRecord::AREA => {
-                    let k = area_index;
-                    area_index += 1;
-                    if chosen.is_some_and(|c| c != k) {
-                        continue;
-                    }
-                    let [a, b, c] = scene.triangle(l.triangle, probe);
-                    let (r1, r2) = (libm::sqrtf(u(6 + 2 * k)), u(7 + 2 * k));
-                    let q = a * (1.0 - r1) + b * (r1 * (1.0 - r2)) + c * (r1 * r2);
-                    let e = (b - a).cross(c - a);
-                    let to = q - s.point;
-                    let d2 = to.length_squared();
-                    let dir = to.normalize_or_zero();
-                    // Radiance Ke toward the side the triangle faces (its winding), area
-                    // |e|/2, Lambert BRDF kd/π.
-                    let cos_l = -e.normalize_or_zero().dot(dir);
-                    let g = n.dot(dir).max(0.0) * cos_l.max(0.0) * 0.5 * e.length() / (core::f32::consts::PI * d2);
-                    let weight = rec.weight * diffuse * Vec3::from(l.color) * (g * area_scale);
-                    if weight.max_element() > 0.0 && weight.is_finite() {
-                        // The sample lies on its triangle: stop just short of it.
-                        emit(rec.child(s.ray_toward(q, 1.0 - 1e-4), weight, RayKind::Shadow, rec.depth));
+                LightRecord::ENVIRONMENT => {
+                    // A cosine-distributed direction: the Lambert BRDF, the cosine and
+                    // the density cancel to diffuse × sky radiance.
+                    let dir = cosine_direction(n, u(3), u(4));
+                    let weight = rec.weight * diffuse * l.sky(dir);
+                    if weight.max_element() > 0.0 && weight.is_finite() && dir != Vec3::ZERO {
+                        emit(rec.child(s.ray_along(dir), weight, RayKind::Shadow, rec.depth));
                     }
                 }
                 _ => {}
+            }
+        }
+        if let Some((k, pdf)) = scene.pick_area_light(u(5), u(6), probe) {
+            let l = scene.light(scene.shading_light_count() + k, probe);
+            let [a, b, c] = scene.triangle(l.triangle, probe);
+            let (r1, r2) = (libm::sqrtf(u(7)), u(8));
+            let q = a * (1.0 - r1) + b * (r1 * (1.0 - r2)) + c * (r1 * r2);
+            let e = (b - a).cross(c - a);
+            let to = q - s.point;
+            let d2 = to.length_squared();
+            let dir = to.normalize_or_zero();
+            // Radiance Ke toward the side the triangle faces (its winding), area |e|/2,
+            // Lambert BRDF kd/π; divided by the probability of picking this light.
+            let cos_l = -e.normalize_or_zero().dot(dir);
+            let g = n.dot(dir).max(0.0) * cos_l.max(0.0) * 0.5 * e.length() / (core::f32::consts::PI * d2);
+            let weight = rec.weight * diffuse * Vec3::from(l.color) * (g / pdf);
+            if pdf > 0.0 && weight.max_element() > 0.0 && weight.is_finite() {
+                // The sample lies on its triangle: stop just short of it.
+                emit(rec.child(s.ray_toward(q, 1.0 - 1e-4), weight, RayKind::Shadow, rec.depth));
             }
         }
     }

@@ -105,10 +105,32 @@ impl Surface {
     /// continuing `rec`, weighted by `diffuse` — `None` if the light is behind the
     /// surface or the weight is nothing.
     pub fn point_light_shadow(&self, rec: &RayRecord, light: &LightRecord, diffuse: Vec3) -> Option<RayRecord> {
-        let position = Vec3::from(light.position);
-        let cos = self.normal.dot((position - self.point).normalize_or_zero());
+        let (to_light, ray) = if light.kind == LightRecord::DIRECTIONAL {
+            // A light at infinity: anything along the direction blocks it.
+            let d = Vec3::from(light.position).normalize_or_zero();
+            (d, self.ray_along(d))
+        } else {
+            let position = Vec3::from(light.position);
+            ((position - self.point).normalize_or_zero(), self.ray_toward(position, 1.0))
+        };
+        let cos = self.normal.dot(to_light);
         let weight = rec.weight * diffuse * Vec3::from(light.color) * cos;
         (cos > 0.0 && weight.max_element() > 0.0 && weight.is_finite())
-            .then(|| rec.child(self.ray_toward(position, 1.0), weight, RayKind::Shadow, rec.depth))
+            .then(|| rec.child(ray, weight, RayKind::Shadow, rec.depth))
+    }
+
+    /// What a light adds without a shadow ray (ambient; an environment's mean), times
+    /// `diffuse`; zero for the lights that cast shadows.
+    pub fn unshadowed(&self, light: &LightRecord, diffuse: Vec3) -> Vec3 {
+        match light.kind {
+            LightRecord::AMBIENT => diffuse * Vec3::from(light.color),
+            LightRecord::ENVIRONMENT => diffuse * light.sky_mean(),
+            _ => Vec3::ZERO,
+        }
+    }
+
+    /// Whether `light` is reached by a shadow ray (point, stand-in, directional).
+    pub fn casts_shadows(light: &LightRecord) -> bool {
+        light.is_point() || light.kind == LightRecord::DIRECTIONAL
     }
 }

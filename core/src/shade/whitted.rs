@@ -11,7 +11,7 @@
 use glam::Vec3;
 
 use crate::hit::Hit;
-use crate::image::{LightRecord, SceneView};
+use crate::image::SceneView;
 use crate::probe::MemoryProbe;
 use crate::shade::ray_record::RayRecord;
 use crate::shade::specular::specular_rays;
@@ -42,18 +42,14 @@ pub fn shade_whitted<P: MemoryProbe>(
     let diffuse = s.diffuse();
     let mut now = Vec3::from(m.emission);
     let n = s.normal;
-    for i in 0..scene.light_count() {
+    // The lights before the area lights (Whitted's shader reads no emitter records).
+    for i in 0..scene.shading_light_count() {
         let l = scene.light(i, probe);
-        let color = Vec3::from(l.color);
-        if l.kind == LightRecord::AMBIENT {
-            now += diffuse * color;
-            continue;
-        }
-        if !l.is_point() {
-            continue;
-        }
-        if let Some(shadow) = s.point_light_shadow(rec, &l, diffuse) {
-            emit(shadow);
+        now += s.unshadowed(&l, diffuse);
+        if Surface::casts_shadows(&l) {
+            if let Some(shadow) = s.point_light_shadow(rec, &l, diffuse) {
+                emit(shadow);
+            }
         }
     }
     if rec.depth < opts.max_depth && n != Vec3::ZERO {

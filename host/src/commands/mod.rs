@@ -4,6 +4,7 @@
 mod bench;
 mod build;
 mod fixed_point;
+mod info;
 mod rays;
 mod render;
 mod simulate;
@@ -11,10 +12,10 @@ mod stats;
 mod stream;
 mod trace;
 
-use crate::cli::{CameraArgs, Cli, Command};
+use crate::cli::{CameraArgs, Cli, Command, StructureArgs};
 use crate::scene::{self, Accel, Scene};
 use anyhow::Result;
-use raypipe_core::image::CameraRecord;
+use raypipe_core::image::{CameraRecord, LightRecord};
 use std::path::Path;
 use std::process::ExitCode;
 
@@ -45,6 +46,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Simulate(a) => simulate::cmd_simulate(a),
         Command::FixedPoint(a) => fixed_point::cmd_fixed_point(a),
         Command::Stream(a) => stream::cmd_stream(a),
+        Command::Info(a) => info::cmd_info(a),
     }
 }
 
@@ -123,6 +125,47 @@ pub(crate) fn warn_range(view: &raypipe_core::SceneView<'_>, rays: &[raypipe_cor
     for w in crate::range_check::warnings(view, rays, what) {
         eprintln!("warning: {w}");
     }
+}
+
+/// Loads the scene the user named for a view: an OBJ is built for the camera that will
+/// render it (the default light is chosen for that camera); a built image gets the
+/// command line's lights in place of its own, with a note, and a warning for each
+/// structure flag it cannot apply.
+pub(crate) fn load_scene(path: Option<&Path>, structure: &StructureArgs, camera: &CameraArgs) -> Result<Scene> {
+    let mut opts = structure.options();
+    opts.camera = camera.spec()?;
+    let scene = scene::load(path, &opts)?;
+    if scene.report.is_some() {
+        return Ok(scene);
+    }
+    for flag in structure.flags_given() {
+        eprintln!(
+            "warning: {}: {flag} applies when building from an OBJ; the image keeps its {}",
+            scene.name,
+            structure_summary(&scene.view()?)
+        );
+    }
+    if opts.lights.is_empty() {
+        return Ok(scene);
+    }
+    eprintln!("note: {}: the given lights replace the image's (its emitters stay area lights)", scene.name);
+    scene::relight(&scene, &opts.lights)
+}
+
+/// One line on the scene's lights: what the build chose and why, or what an image holds.
+pub(crate) fn lights_summary(scene: &Scene) -> Result<String> {
+    if let Some(r) = scene.report.as_ref().filter(|r| !r.lights.is_empty()) {
+        return Ok(r.lights.clone());
+    }
+    let view = scene.view()?;
+    let mut counts = [0u32; LightRecord::MAX_KIND as usize + 1];
+    for i in 0..view.light_count() {
+        counts[view.light(i, &mut raypipe_core::NoProbe).kind as usize] += 1;
+    }
+    let names = ["point", "ambient", "area", "emitter stand-in", "directional", "sky"];
+    let parts: Vec<String> =
+        counts.iter().zip(names).filter(|(n, _)| **n > 0).map(|(n, name)| format!("{n} {name}")).collect();
+    Ok(if parts.is_empty() { "none".into() } else { parts.join(", ") })
 }
 
 pub(crate) fn check_image_path(p: &Path) -> Result<()> {

@@ -4,19 +4,18 @@ use crate::cli::RenderArgs;
 use crate::output;
 use crate::packets::PacketSize;
 use crate::render::{self, RenderOptions};
-use crate::scene;
 use crate::tracer::IntersectorKind;
 use anyhow::Result;
 use std::time::Instant;
 
-use super::{camera_for, check_image_path, warn};
+use super::{camera_for, check_image_path, lights_summary, load_scene, warn};
 
 pub(crate) fn cmd_render(a: RenderArgs) -> Result<()> {
     a.run.check()?;
     check_image_path(&a.output)?;
     let display = a.display.display()?;
     let loading = Instant::now();
-    let scene = scene::load(a.scene.as_deref(), &a.structure.options())?;
+    let scene = load_scene(a.scene.as_deref(), &a.structure, &a.camera)?;
     let load_secs = loading.elapsed().as_secs_f64();
     warn(&scene);
     let view = scene.view()?;
@@ -42,6 +41,7 @@ pub(crate) fn cmd_render(a: RenderArgs) -> Result<()> {
         if opts.samples == 1 { "" } else { "s" },
         a.output.display()
     );
+    println!("lights   {}", lights_summary(&scene)?);
     println!(
         "time     load {:.3} s, build {:.3} s, render {:.3} s",
         (load_secs - build_secs).max(0.0),

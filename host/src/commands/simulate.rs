@@ -3,13 +3,12 @@
 use crate::cli::SimulateArgs;
 use crate::output;
 use crate::render::{Algorithm, RenderOptions};
-use crate::scene;
 use crate::simulate;
 use crate::tracer::IntersectorKind;
 use anyhow::{bail, Result};
 use std::time::Instant;
 
-use super::{camera_for, check_image_path, structure_summary, warn};
+use super::{camera_for, check_image_path, load_scene, structure_summary, warn};
 
 pub(crate) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
     check_image_path(&a.output)?;
@@ -26,7 +25,7 @@ pub(crate) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
             cfg.datapath.name()
         );
     }
-    let scene = scene::load(a.scene.as_deref(), &a.structure.options())?;
+    let scene = load_scene(a.scene.as_deref(), &a.structure, &a.camera)?;
     warn(&scene);
     let view = scene.view()?;
     let cam = camera_for(&view, &a.camera)?;

@@ -3,17 +3,16 @@
 use crate::cli::StatsArgs;
 use crate::packets::PacketSize;
 use crate::render::{Algorithm, RenderOptions};
-use crate::scene;
 use crate::stats;
 use crate::tracer::IntersectorKind;
 use anyhow::Result;
 use raypipe_core::DataClass;
 
-use super::{camera_for, structure_summary, warn};
+use super::{camera_for, lights_summary, load_scene, structure_summary, warn};
 
 pub(crate) fn cmd_stats(a: StatsArgs) -> Result<()> {
     a.run.check()?;
-    let scene = scene::load(a.scene.as_deref(), &a.structure.options())?;
+    let scene = load_scene(a.scene.as_deref(), &a.structure, &a.camera)?;
     warn(&scene);
     let view = scene.view()?;
     let cam = camera_for(&view, &a.camera)?;
@@ -28,6 +27,7 @@ pub(crate) fn cmd_stats(a: StatsArgs) -> Result<()> {
     let s = stats::gather(&view, &cam, &opts)?;
     println!("scene                     {} ({} triangles)", scene.name, view.triangle_count());
     println!("structure                 {}", structure_summary(&view));
+    println!("lights                    {}", lights_summary(&scene)?);
     let (node, leaf) = if view.grid().is_some() { ("voxels", "non-empty voxels") } else { ("nodes", "leaves") };
     println!("view                      {}x{} = {} primary rays", cam.width, cam.height, s.rays);
     println!("rays that hit             {:.2}%", 100.0 * s.hits as f64 / s.rays.max(1) as f64);

@@ -3,12 +3,11 @@
 use crate::cli::{AlgoArgs, CameraArgs, StreamArgs};
 use crate::output;
 use crate::render::{self, Algorithm, RenderOptions};
-use crate::scene;
 use crate::tracer::IntersectorKind;
 use anyhow::{anyhow, bail, Result};
 use std::time::Instant;
 
-use super::{camera_for, check_image_path, structure_summary, warn};
+use super::{camera_for, check_image_path, load_scene, structure_summary, warn};
 
 pub(crate) fn cmd_stream(a: StreamArgs) -> Result<()> {
     use raypipe_hw::stream::{CostModel, StreamConfig};
@@ -44,7 +43,7 @@ pub(crate) fn cmd_stream(a: StreamArgs) -> Result<()> {
     };
     let mut opts = RenderOptions::default();
     algo.apply(&mut opts)?;
-    let scene = scene::load(a.scene.as_deref(), &a.structure.options())?;
+    let scene = load_scene(a.scene.as_deref(), &a.structure, &a.camera)?;
     warn(&scene);
     let view = scene.view()?;
     if view.grid().is_none() {

@@ -1,55 +1,198 @@
-//! `raypipe trace`: traces a batch of rays from a file and writes their hits.
+//! `raypipe trace`: traces a batch of rays from a file and writes their hits (or their
+//! occlusion), with the fields asked for.
 
+use crate::batch::{incoherent_share, rays_from_array};
 use crate::bench::median;
-use crate::cli::TraceArgs;
+use crate::cli::{Query, TraceArgs};
+use crate::packets::PacketSize;
 use crate::scene;
 use crate::tracer::IntersectorKind;
 use anyhow::{anyhow, bail, Result};
+use rayon::prelude::*;
+use raypipe_core::shade::surface::Surface;
+use raypipe_core::traverse::occlusion::occluded;
+use raypipe_core::{Hit, NoProbe, Ray, RayCounters, SceneView, Vec3};
 use std::time::Instant;
 
 use super::{structure_summary, warn, warn_range};
 
+/// An output field of a closest-hit query.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Field {
+    T,
+    U,
+    V,
+    Prim,
+    GeometricNormal,
+    ShadingNormal,
+    Material,
+}
+
+impl Field {
+    fn parse(s: &str) -> Result<Field> {
+        Ok(match s.trim() {
+            "t" => Field::T,
+            "u" => Field::U,
+            "v" => Field::V,
+            "prim" => Field::Prim,
+            "ng" => Field::GeometricNormal,
+            "ns" => Field::ShadingNormal,
+            "material" => Field::Material,
+            other => {
+                bail!("--fields: unknown field '{other}' (t, u, v, prim, ng, ns, material; any-hit queries: occluded)")
+            }
+        })
+    }
+
+    fn descr(self) -> (&'static str, &'static str) {
+        match self {
+            Field::T => ("t", "'<f4'"),
+            Field::U => ("u", "'<f4'"),
+            Field::V => ("v", "'<f4'"),
+            Field::Prim => ("prim", "'<i4'"),
+            Field::GeometricNormal => ("ng", "'<f4', (3,)"),
+            Field::ShadingNormal => ("ns", "'<f4', (3,)"),
+            Field::Material => ("material", "'<i4'"),
+        }
+    }
+}
+
 pub(crate) fn cmd_trace(a: TraceArgs) -> Result<()> {
     a.run.check()?;
-    let rays = crate::npy::read_f32_2d(&a.rays)?;
-    let name = a.rays.display();
-    let rays = crate::batch::rays_from_array(&rays).map_err(|e| anyhow!("{name}: {e}"))?;
-    let scene = scene::load(Some(&a.scene), &a.structure.options())?;
-    warn(&scene);
-    let view = scene.view()?;
     if a.runs == 0 {
         bail!("--runs must be at least 1");
     }
-    warn_range(&view, &rays, &format!("rays of {name}"));
-    let mut times = Vec::new();
-    // One output for all runs, as a caller tracing batch after batch keeps one: only the
-    // first run pays for touching fresh pages.
-    let mut hits = Vec::new();
-    for _ in 0..a.runs {
-        let start = Instant::now();
-        crate::batch::trace_batch_into(
-            &view,
-            &rays,
-            IntersectorKind::resolve(a.run.intersector, &view),
-            a.packet,
-            a.run.threads,
-            &mut hits,
-        )?;
-        times.push(start.elapsed().as_secs_f64());
+    let fields: Vec<Field> = match a.query {
+        Query::Closest if a.fields.is_empty() => vec![Field::T, Field::U, Field::V, Field::Prim],
+        Query::Closest => a.fields.iter().map(|f| Field::parse(f)).collect::<Result<_>>()?,
+        Query::Any => {
+            if let Some(f) = a.fields.iter().find(|f| f.trim() != "occluded") {
+                bail!("--fields {f}: an any-hit query gives only 'occluded'");
+            }
+            Vec::new()
+        }
+    };
+    let array = crate::npy::read_f32_2d(&a.rays)?;
+    let name = a.rays.display();
+    let (rays, invalid) = rays_from_array(&array).map_err(|e| anyhow!("{name}: {e}"))?;
+    let scene = scene::load(Some(&a.scene), &a.structure.options())?;
+    warn(&scene);
+    let view = scene.view()?;
+    let valid: Vec<Ray> = rays.iter().zip(&invalid).filter(|(_, bad)| !**bad).map(|(r, _)| *r).collect();
+    warn_range(&view, &valid, &format!("rays of {name}"));
+    let n_invalid = invalid.iter().filter(|b| **b).count();
+    if n_invalid > 0 {
+        eprintln!(
+            "warning: {name}: {n_invalid} rows are not rays (NaN or infinite values, a zero direction, an empty or negative interval): returned as misses"
+        );
     }
+    if a.packet != PacketSize::Single {
+        let share = incoherent_share(&rays, a.packet.lanes());
+        if share > 0.25 {
+            eprintln!(
+                "warning: {name}: {:.0}% of the packets of {} consecutive rays hold rays more than 60° from their mean direction: packets of incoherent rays split at once and trace slower than single rays (--packet 1)",
+                100.0 * share,
+                a.packet.lanes()
+            );
+        }
+    }
+    let kind = IntersectorKind::resolve(a.run.intersector, &view);
+    let mut times = Vec::new();
+    let (data, fields_out, n_hit) = match a.query {
+        Query::Closest => {
+            // One output for all runs, as a caller tracing batch after batch keeps one:
+            // only the first run pays for touching fresh pages.
+            let mut hits = Vec::new();
+            for _ in 0..a.runs {
+                let start = Instant::now();
+                crate::batch::trace_batch_into(&view, &rays, kind, a.packet, a.run.threads, &mut hits)?;
+                times.push(start.elapsed().as_secs_f64());
+            }
+            let data = closest_records(&view, &rays, &hits, &invalid, &fields);
+            let n_hit = hits.iter().zip(&invalid).filter(|(h, bad)| h.prim >= 0 && !**bad).count();
+            (data, fields.iter().map(|f| f.descr()).collect::<Vec<_>>(), n_hit)
+        }
+        Query::Any => {
+            let mut blocked = Vec::new();
+            for _ in 0..a.runs {
+                let start = Instant::now();
+                blocked = crate::render::in_pool(a.run.threads, || {
+                    crate::with_intersector!(kind, I => rays
+                        .par_iter()
+                        .zip(&invalid)
+                        .map(|(r, bad)| !bad && occluded::<I, _>(&view, r, &mut NoProbe, &mut RayCounters::default()))
+                        .collect::<Vec<bool>>())
+                })?;
+                times.push(start.elapsed().as_secs_f64());
+            }
+            let n_hit = blocked.iter().filter(|b| **b).count();
+            (blocked.iter().map(|&b| b as u8).collect(), vec![("occluded", "'u1'")], n_hit)
+        }
+    };
     let secs = median(&times);
-    crate::npy::write_hits(&a.hits, &hits)?;
-    let n_hit = hits.iter().filter(|h| h.prim >= 0).count();
+    crate::npy::write_records(&a.hits, &fields_out, rays.len(), &data)?;
     println!(
-        "traced {} rays through {} ({}): {} hits ({:.2}%) in {:.3} s ({:.2} Mrays/s) -> {}",
+        "traced {} rays ({} query{}) through {} ({}): {} {} ({:.2}%) in {:.3} s ({:.2} Mrays/s) -> {}",
         rays.len(),
+        if a.query == Query::Any { "any-hit" } else { "closest-hit" },
+        if n_invalid > 0 { format!(", {n_invalid} invalid rows as misses") } else { String::new() },
         scene.name,
         structure_summary(&view),
         n_hit,
+        if a.query == Query::Any { "occluded" } else { "hits" },
         100.0 * n_hit as f64 / rays.len().max(1) as f64,
         secs,
         rays.len() as f64 / secs / 1e6,
         a.hits.display()
     );
     Ok(())
+}
+
+/// The closest-hit records, packed field by field.
+fn closest_records(
+    view: &SceneView<'_>,
+    rays: &[Ray],
+    hits: &[crate::npy::HitRecord],
+    invalid: &[bool],
+    fields: &[Field],
+) -> Vec<u8> {
+    let per_ray: Vec<Vec<u8>> = hits
+        .par_iter()
+        .zip(rays)
+        .zip(invalid)
+        .map(|((h, ray), bad)| {
+            let hit = (h.prim >= 0 && !bad).then_some(Hit { t: h.t, u: h.u, v: h.v, prim: h.prim as u32 });
+            let mut out = Vec::with_capacity(16);
+            let surface = match (&hit, fields.contains(&Field::ShadingNormal)) {
+                (Some(hit), true) => Some(Surface::at(view, ray, hit, &mut NoProbe)),
+                _ => None,
+            };
+            for f in fields {
+                match (f, &hit) {
+                    (Field::T, Some(h)) => out.extend(h.t.to_le_bytes()),
+                    (Field::T, None) => out.extend(f32::INFINITY.to_le_bytes()),
+                    (Field::U, h) => out.extend(h.map_or(0.0, |h| h.u).to_le_bytes()),
+                    (Field::V, h) => out.extend(h.map_or(0.0, |h| h.v).to_le_bytes()),
+                    (Field::Prim, h) => out.extend(h.map_or(-1, |h| h.prim as i32).to_le_bytes()),
+                    (Field::GeometricNormal, h) => {
+                        let n = h.map_or(Vec3::ZERO, |h| {
+                            let [a, b, c] = view.triangle(h.prim, &mut NoProbe);
+                            (b - a).cross(c - a).normalize_or_zero()
+                        });
+                        n.to_array().iter().for_each(|c| out.extend(c.to_le_bytes()));
+                    }
+                    (Field::ShadingNormal, _) => {
+                        let n = surface.as_ref().map_or(Vec3::ZERO, |s| s.normal);
+                        n.to_array().iter().for_each(|c| out.extend(c.to_le_bytes()));
+                    }
+                    (Field::Material, h) => {
+                        let id = h.and_then(|h| view.material_id(h.prim, &mut NoProbe)).map_or(-1, |m| m as i32);
+                        out.extend(id.to_le_bytes());
+                    }
+                }
+            }
+            out
+        })
+        .collect();
+    per_ray.concat()
 }
