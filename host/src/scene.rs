@@ -179,6 +179,21 @@ pub fn load_source(path: Option<&Path>) -> Result<Source> {
     };
     let name = path.display().to_string();
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    let file_name = path.file_name().and_then(|f| f.to_str()).unwrap_or("").to_ascii_lowercase();
+    if file_name.ends_with(".ply") || file_name.ends_with(".ply.gz") {
+        let (mesh, notes) = crate::ply::load_ply_file(path)?;
+        let camera = sidecar_camera(path).map(|p| CameraSpec::load(&p)).transpose()?.unwrap_or_default();
+        return Ok(Source::Mesh { name, mesh, warnings: notes.warnings, camera });
+    }
+    if ext == "gltf" || ext == "glb" {
+        let (mesh, notes, own) = crate::gltf_loader::load_gltf_file(path)?;
+        // A camera file beside it wins over the file's own camera.
+        let camera = match sidecar_camera(path) {
+            Some(p) => own.merged(CameraSpec::load(&p)?),
+            None => own,
+        };
+        return Ok(Source::Mesh { name, mesh, warnings: notes.warnings, camera });
+    }
     let is_image = match ext.as_str() {
         "obj" | "gz" => false,
         "rpsi" => true,

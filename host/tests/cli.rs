@@ -964,3 +964,66 @@ fn lights_on_obj_and_image_and_info() {
     assert!(String::from_utf8_lossy(&o.stdout).contains("LIGHT_ALIAS"), "the Cornell box's emitters have a table");
     assert_one_line_error(&raypipe(d, &["info", "missing.obj"]), "missing.obj");
 }
+
+/// glTF 2.0 and PLY inputs (issue 20, D7): built, rendered and described like an OBJ;
+/// the glTF's node transform, material and camera are used; malformed files are one-line
+/// errors.
+#[test]
+fn gltf_and_ply_inputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // A unit quad in z = 0, moved by its node to z = -5, emitting, seen by the file's
+    // camera at the origin looking down -z.
+    let mut bin = Vec::new();
+    for p in [[-1.0f32, -1.0, 0.0], [1.0, -1.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 1.0, 0.0]] {
+        p.iter().for_each(|c| bin.extend(c.to_le_bytes()));
+    }
+    for i in [0u16, 1, 2, 0, 2, 3] {
+        bin.extend(i.to_le_bytes());
+    }
+    std::fs::write(d.join("quad.bin"), &bin).unwrap();
+    let gltf = r#"{
+      "asset": {"version": "2.0"},
+      "scene": 0,
+      "scenes": [{"nodes": [0, 1]}],
+      "nodes": [
+        {"mesh": 0, "translation": [0, 0, -5]},
+        {"camera": 0, "translation": [0, 0, 0]}
+      ],
+      "cameras": [{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.1}}],
+      "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "material": 0}]}],
+      "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [0.2, 0.8, 0.2, 1]}, "emissiveFactor": [0.5, 0.1, 0.1]}],
+      "buffers": [{"uri": "quad.bin", "byteLength": 60}],
+      "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 48}, {"buffer": 0, "byteOffset": 48, "byteLength": 12}],
+      "accessors": [
+        {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [-1, -1, 0], "max": [1, 1, 0]},
+        {"bufferView": 1, "componentType": 5123, "count": 6, "type": "SCALAR"}
+      ]
+    }"#;
+    std::fs::write(d.join("quad.gltf"), gltf).unwrap();
+    let o = raypipe(d, &["info", "quad.gltf"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("triangles   2") && out.contains("1 emissive"), "{out}");
+    assert!(out.contains("-5"), "the node's translation is applied: {out}");
+    assert!(out.contains("eye [0.0, 0.0, 0.0]"), "the file's camera: {out}");
+    let o = raypipe(d, &["render", "quad.gltf", "--size", "32x32", "-o", "quad.png"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (_, _, px) = decode(&d.join("quad.png"));
+    let centre = &px[(16 * 32 + 16) * 3..(16 * 32 + 16) * 3 + 3];
+    assert!(centre[1] > centre[2] && centre[0] > centre[2], "the green, red-glowing quad fills the view: {centre:?}");
+    std::fs::write(d.join("bad.gltf"), "{\"asset\": {\"version\": \"2.0\"}, \"meshes\": [{]}").unwrap();
+    assert_one_line_error(&raypipe(d, &["render", "bad.gltf", "-o", "x.png"]), "malformed glTF");
+
+    let ply = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n";
+    std::fs::write(d.join("quad.ply"), ply).unwrap();
+    let o = raypipe(d, &["build", "quad.ply", "-o", "quad.rpsi", "--accel", "bvh"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("triangles    2"));
+    let o = raypipe(d, &["render", "quad.ply", "--size", "16x16", "-o", "ply.png"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    std::fs::write(d.join("bad.ply"), "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n0\n")
+        .unwrap();
+    assert_one_line_error(&raypipe(d, &["render", "bad.ply", "-o", "x.png"]), "bad.ply");
+    assert!(!d.join("x.png").exists());
+}
