@@ -38,6 +38,7 @@ pub mod raster;
 pub mod ray_stream;
 pub mod render;
 pub mod scene;
+pub mod scene_file;
 pub mod simulate;
 pub mod spatial_split;
 pub mod stats;

@@ -180,6 +180,10 @@ pub fn load_source(path: Option<&Path>) -> Result<Source> {
     let name = path.display().to_string();
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
     let file_name = path.file_name().and_then(|f| f.to_str()).unwrap_or("").to_ascii_lowercase();
+    if crate::scene_file::is_scene_file(path) {
+        let (mesh, warnings, camera) = crate::scene_file::load_scene_file(path)?;
+        return Ok(Source::Mesh { name, mesh, warnings, camera });
+    }
     if file_name.ends_with(".ply") || file_name.ends_with(".ply.gz") {
         let (mesh, notes) = crate::ply::load_ply_file(path)?;
         let camera = sidecar_camera(path).map(|p| CameraSpec::load(&p)).transpose()?.unwrap_or_default();

@@ -23,6 +23,13 @@ use clap::Parser;
 
 /// Parses the process arguments, runs, and turns any error into one line on stderr.
 pub fn main() -> ExitCode {
+    // Output piped into `head` and closed early ends the process quietly, as for any
+    // Unix tool, instead of a panic in `println!`.
+    #[cfg(unix)]
+    // SAFETY: restoring the default action of SIGPIPE, before any thread starts.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     let cli = Cli::parse();
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
