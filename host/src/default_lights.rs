@@ -16,6 +16,7 @@
 
 use glam::{DVec3, Vec3};
 use raypipe_core::image::{CameraRecord, LightRecord};
+use raypipe_core::traverse::aabb::clip_ray;
 use raypipe_core::{Intersector, Ray, Watertight};
 
 use crate::light_distribution::{area_light_power, luminance};
@@ -124,7 +125,7 @@ pub fn light_for_camera(mesh: &Mesh, camera: &CameraRecord) -> Vec3 {
             continue;
         }
         let ray = Ray::new(eye, dir);
-        let Some((enter, exit)) = slab(&ray, lo, hi) else { continue };
+        let Some((enter, exit)) = clip_ray(&ray, lo, hi) else { continue };
         let free_end = first_hit(mesh, &ray).unwrap_or(f32::INFINITY).min(exit);
         let start = enter.max(0.0);
         if free_end <= start {
@@ -141,15 +142,6 @@ pub fn light_for_camera(mesh: &Mesh, camera: &CameraRecord) -> Vec3 {
         // Nothing free inside the bounds in front of the eye: the old headlight above it.
         None => eye + up * (eye - (lo + hi) * 0.5).length() * 0.25,
     }
-}
-
-/// Where `ray` enters and leaves the box, if it meets it in front of its origin.
-fn slab(ray: &Ray, lo: Vec3, hi: Vec3) -> Option<(f32, f32)> {
-    let inv = ray.dir.recip();
-    let (t0, t1) = ((lo - ray.origin) * inv, (hi - ray.origin) * inv);
-    let near = t0.min(t1).max_element();
-    let far = t0.max(t1).min_element();
-    (far >= near.max(0.0) && far.is_finite()).then_some((near, far))
 }
 
 /// The nearest triangle along `ray`, by core's watertight test over every triangle (a

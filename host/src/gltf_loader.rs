@@ -135,6 +135,7 @@ pub fn load_gltf_file(path: &Path) -> Result<(Mesh, LoadNotes, CameraSpec)> {
         notes.warnings.push(format!("{name}: {skipped_modes} primitives of points, lines or strips left out"));
     }
     mesh.validate(&name)?;
+    notes.warnings.extend(mesh.degenerate_warning(&name));
     Ok((mesh, notes, camera))
 }
 

@@ -77,6 +77,12 @@ impl Mesh {
         self.triangles.iter().filter(|&&t| self.is_degenerate(t)).count()
     }
 
+    /// The warning a loader gives for zero-area triangles, if there are any.
+    pub fn degenerate_warning(&self, name: &str) -> Option<String> {
+        let n = self.degenerate_count();
+        (n > 0).then(|| format!("{name}: {n} degenerate (zero-area) triangles kept; they can never be hit"))
+    }
+
     /// The box around all vertices.
     pub fn bounds(&self) -> ([f32; 3], [f32; 3]) {
         let mut lo = [f32::INFINITY; 3];

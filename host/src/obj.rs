@@ -209,12 +209,7 @@ fn convert(name: &str, dir: Option<&Path>, result: tobj::LoadResult) -> Result<(
         }
     }
     mesh.validate(name)?;
-    let degenerate = mesh.degenerate_count();
-    if degenerate > 0 {
-        notes
-            .warnings
-            .push(format!("{name}: {degenerate} degenerate (zero-area) triangles kept; they can never be hit"));
-    }
+    notes.warnings.extend(mesh.degenerate_warning(name));
     Ok((mesh, notes))
 }
 

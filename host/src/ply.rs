@@ -108,12 +108,7 @@ pub fn parse_ply(name: &str, bytes: &[u8]) -> Result<(Mesh, LoadNotes)> {
     mesh.materials.push(MaterialRecord::DEFAULT);
     mesh.material_names.push("default".into());
     mesh.validate(name)?;
-    let degenerate = mesh.degenerate_count();
-    if degenerate > 0 {
-        notes
-            .warnings
-            .push(format!("{name}: {degenerate} degenerate (zero-area) triangles kept; they can never be hit"));
-    }
+    notes.warnings.extend(mesh.degenerate_warning(name));
     Ok((mesh, notes))
 }
 

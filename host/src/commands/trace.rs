@@ -163,7 +163,8 @@ fn closest_records(
         .map(|((h, ray), bad)| {
             let hit = (h.prim >= 0 && !bad).then_some(Hit { t: h.t, u: h.u, v: h.v, prim: h.prim as u32 });
             let mut out = Vec::with_capacity(16);
-            let surface = match (&hit, fields.contains(&Field::ShadingNormal)) {
+            let normals = fields.contains(&Field::ShadingNormal) || fields.contains(&Field::GeometricNormal);
+            let surface = match (&hit, normals) {
                 (Some(hit), true) => Some(Surface::at(view, ray, hit, &mut NoProbe)),
                 _ => None,
             };
@@ -174,11 +175,8 @@ fn closest_records(
                     (Field::U, h) => out.extend(h.map_or(0.0, |h| h.u).to_le_bytes()),
                     (Field::V, h) => out.extend(h.map_or(0.0, |h| h.v).to_le_bytes()),
                     (Field::Prim, h) => out.extend(h.map_or(-1, |h| h.prim as i32).to_le_bytes()),
-                    (Field::GeometricNormal, h) => {
-                        let n = h.map_or(Vec3::ZERO, |h| {
-                            let [a, b, c] = view.triangle(h.prim, &mut NoProbe);
-                            (b - a).cross(c - a).normalize_or_zero()
-                        });
+                    (Field::GeometricNormal, _) => {
+                        let n = surface.as_ref().map_or(Vec3::ZERO, |s| s.geometric.normalize_or_zero());
                         n.to_array().iter().for_each(|c| out.extend(c.to_le_bytes()));
                     }
                     (Field::ShadingNormal, _) => {
