@@ -142,6 +142,7 @@ fn convert(name: &str, dir: Option<&Path>, result: tobj::LoadResult) -> Result<(
         mesh.materials.push(record);
         mesh.material_names.push(m.name.clone());
     }
+    unsupported_features(name, &materials, &mut notes);
     for (e, users) in failed {
         let who = match users.as_slice() {
             [one] => format!("material '{one}' keeps its"),
@@ -211,6 +212,48 @@ fn convert(name: &str, dir: Option<&Path>, result: tobj::LoadResult) -> Result<(
     mesh.validate(name)?;
     notes.warnings.extend(mesh.degenerate_warning(name));
     Ok((mesh, notes))
+}
+
+/// One warning per MTL feature raypipe does not render, naming how many materials use it
+/// (rather than silently rendering them otherwise).
+fn unsupported_features(name: &str, materials: &[tobj::Material], notes: &mut LoadNotes) {
+    let mut seen: Vec<(&str, usize)> = Vec::new();
+    let mut note = |feature: &'static str| match seen.iter_mut().find(|(f, _)| *f == feature) {
+        Some((_, n)) => *n += 1,
+        None => seen.push((feature, 1)),
+    };
+    for m in materials {
+        let glossy = m.specular.is_some_and(|k| k.iter().any(|&c| c > 0.0)) && m.illumination_model == Some(2);
+        if glossy {
+            note("glossy highlights (illum 2 with Ks, Ns): rendered matte");
+        }
+        for (given, feature) in [
+            (m.ambient_texture.is_some(), "map_Ka (ambient texture): ignored"),
+            (m.specular_texture.is_some(), "map_Ks (specular texture): ignored"),
+            (m.normal_texture.is_some(), "bump or normal maps: ignored"),
+            (m.shininess_texture.is_some(), "map_Ns (shininess texture): ignored"),
+            (m.dissolve_texture.is_some(), "map_d (opacity texture): ignored"),
+        ] {
+            if given {
+                note(feature);
+            }
+        }
+        for (key, value) in &m.unknown_param {
+            match key.as_str() {
+                // Exporters write the identity filter everywhere; only another one is lost.
+                "Tf" if value.split_whitespace().all(|v| v.parse::<f32>().is_ok_and(|x| x == 1.0)) => {}
+                "map_bump" | "bump" | "map_Bump" | "norm" => note("bump or normal maps: ignored"),
+                "disp" => note("disp (displacement maps): ignored"),
+                "refl" => note("refl (reflection maps): ignored"),
+                "Tf" => note("Tf (transmission filter): ignored"),
+                _ => {}
+            }
+        }
+    }
+    for (feature, n) in seen {
+        let who = if n == 1 { "1 material".to_string() } else { format!("{n} materials") };
+        notes.warnings.push(format!("{name}: {feature} ({who})"));
+    }
 }
 
 /// The MTL material as a record; `Mesh::validate` checks its values.
@@ -284,6 +327,20 @@ mod tests {
         assert_eq!(gone.len(), 1, "{:?}", notes.warnings);
         assert!(gone[0].contains("2 materials"), "{}", gone[0]);
         assert_eq!(notes.warnings.iter().filter(|w| w.contains("other.png")).count(), 1);
+    }
+
+    /// Features raypipe does not render are one warning each, however many materials
+    /// use them.
+    #[test]
+    fn unsupported_mtl_features_are_one_warning_each() {
+        let obj = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\nusemtl b\nf 1 2 3\n";
+        let mtl = "newmtl a\nKd 1 1 1\nKs 0.5 0.5 0.5\nNs 50\nillum 2\nmap_Bump n.png\nnewmtl b\nKs 1 1 1\nillum 2\nbump n.png\ndisp d.png\n";
+        let (_, notes) = load_obj_str("t.obj", obj, &|_| Some(mtl.to_string())).unwrap();
+        let glossy: Vec<_> = notes.warnings.iter().filter(|w| w.contains("glossy")).collect();
+        assert_eq!(glossy.len(), 1, "{:?}", notes.warnings);
+        assert!(glossy[0].contains("2 materials"), "{}", glossy[0]);
+        assert_eq!(notes.warnings.iter().filter(|w| w.contains("bump")).count(), 1, "{:?}", notes.warnings);
+        assert_eq!(notes.warnings.iter().filter(|w| w.contains("disp")).count(), 1, "{:?}", notes.warnings);
     }
 
     /// Found by the `obj_mtl` fuzz target: tobj panics on a colour of fewer than three
