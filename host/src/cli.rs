@@ -92,21 +92,10 @@ pub struct StreamArgs {
     /// Machine rates "INSTR_PER_S,BYTES_PER_S" (default: Radeon 9700 Pro, 2.6e9,19.84e9).
     #[arg(long, value_name = "I,B")]
     pub machine: Option<raypipe_hw::stream::Machine>,
-    /// Rendering algorithm.
-    #[arg(long, value_enum, default_value_t = Algorithm::Cast)]
-    pub algo: Algorithm,
-    /// Whitted: largest number of reflection/refraction bounces.
-    #[arg(long, value_name = "N", default_value_t = 5)]
-    pub max_depth: u32,
-    /// Path tracing: bounces after the first hit.
-    #[arg(long, value_name = "N", default_value_t = 2)]
-    pub bounces: u32,
-    /// Eye rays per pixel (anti-aliasing; path tracing: one path each).
-    #[arg(long, value_name = "N", default_value_t = 1)]
-    pub samples: u32,
-    /// Reconstruction filter the eye rays' offsets follow: box, tent or gaussian.
-    #[arg(long, value_name = "FILTER", default_value = "box", value_parser = parse_filter)]
-    pub filter: Filter,
+    /// The algorithm and its settings (here --samples defaults to 1 for every algorithm:
+    /// Purcell's frames trace one eye ray per pixel).
+    #[command(flatten)]
+    pub algo: AlgoArgs,
     /// Ray–triangle test (default: the one the image's triangle layout is for).
     #[arg(long, value_enum)]
     pub intersector: Option<IntersectorKind>,

@@ -33,14 +33,7 @@ pub(crate) fn cmd_stream(a: StreamArgs) -> Result<()> {
         }
         None => CostModel::default(),
     };
-    let algo = AlgoArgs {
-        algo: a.algo,
-        max_depth: a.max_depth,
-        bounces: a.bounces,
-        samples: Some(a.samples),
-        filter: a.filter,
-        roulette: false,
-    };
+    let algo = AlgoArgs { samples: Some(a.algo.samples.unwrap_or(1)), ..a.algo.clone() };
     let mut opts = RenderOptions::default();
     algo.apply(&mut opts)?;
     let scene = load_scene(a.scene.as_deref(), &a.structure, &a.camera)?;
