@@ -147,6 +147,19 @@ impl LightRecord {
     /// The largest kind.
     pub const MAX_KIND: u32 = 5;
 
+    /// The name of a light kind, for reports (`"?"` for an unknown one).
+    pub const fn kind_name(kind: u32) -> &'static str {
+        match kind {
+            LightRecord::POINT => "point",
+            LightRecord::AMBIENT => "ambient",
+            LightRecord::AREA => "area",
+            LightRecord::EMITTERS => "emitter stand-in",
+            LightRecord::DIRECTIONAL => "directional",
+            LightRecord::ENVIRONMENT => "sky",
+            _ => "?",
+        }
+    }
+
     /// The environment's radiance along unit direction `dir`.
     pub fn sky(&self, dir: glam::Vec3) -> glam::Vec3 {
         let t = dir.y.clamp(0.0, 1.0);

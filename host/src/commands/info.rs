@@ -3,7 +3,7 @@
 
 use crate::cli::InfoArgs;
 use anyhow::Result;
-use raypipe_core::image::{SectionEntry, SectionKind};
+use raypipe_core::image::{LightRecord, SectionEntry, SectionKind};
 use raypipe_core::NoProbe;
 
 use super::{lights_summary, load_scene, structure_summary, warn};
@@ -36,8 +36,7 @@ pub(crate) fn cmd_info(a: InfoArgs) -> Result<()> {
     println!("lights      {}", lights_summary(&scene)?);
     for i in 0..view.shading_light_count() {
         let l = view.light(i, &mut NoProbe);
-        let kind = ["point", "ambient", "area", "emitter stand-in", "directional", "sky"].get(l.kind as usize);
-        println!("  light {i}   {} position {:?} colour {:?}", kind.unwrap_or(&"?"), l.position, l.color);
+        println!("  light {i}   {} position {:?} colour {:?}", LightRecord::kind_name(l.kind), l.position, l.color);
     }
     match view.camera() {
         Some(c) => println!(

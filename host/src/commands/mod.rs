@@ -169,9 +169,11 @@ pub(crate) fn lights_summary(scene: &Scene) -> Result<String> {
     for i in 0..view.light_count() {
         counts[view.light(i, &mut raypipe_core::NoProbe).kind as usize] += 1;
     }
-    let names = ["point", "ambient", "area", "emitter stand-in", "directional", "sky"];
-    let parts: Vec<String> =
-        counts.iter().zip(names).filter(|(n, _)| **n > 0).map(|(n, name)| format!("{n} {name}")).collect();
+    let parts: Vec<String> = (0..)
+        .zip(counts)
+        .filter(|(_, n)| *n > 0)
+        .map(|(kind, n)| format!("{n} {}", LightRecord::kind_name(kind)))
+        .collect();
     Ok(if parts.is_empty() { "none".into() } else { parts.join(", ") })
 }
 

@@ -44,6 +44,14 @@ impl Field {
         })
     }
 
+    /// Bytes of the field in a record.
+    fn size(self) -> usize {
+        match self {
+            Field::GeometricNormal | Field::ShadingNormal => 12,
+            _ => 4,
+        }
+    }
+
     fn descr(self) -> (&'static str, &'static str) {
         match self {
             Field::T => ("t", "'<f4'"),
@@ -156,41 +164,43 @@ fn closest_records(
     invalid: &[bool],
     fields: &[Field],
 ) -> Vec<u8> {
-    let per_ray: Vec<Vec<u8>> = hits
-        .par_iter()
-        .zip(rays)
-        .zip(invalid)
-        .map(|((h, ray), bad)| {
-            let hit = (h.prim >= 0 && !bad).then_some(Hit { t: h.t, u: h.u, v: h.v, prim: h.prim as u32 });
-            let mut out = Vec::with_capacity(16);
-            let normals = fields.contains(&Field::ShadingNormal) || fields.contains(&Field::GeometricNormal);
-            let surface = match (&hit, normals) {
-                (Some(hit), true) => Some(Surface::at(view, ray, hit, &mut NoProbe)),
-                _ => None,
-            };
-            for f in fields {
-                match (f, &hit) {
-                    (Field::T, Some(h)) => out.extend(h.t.to_le_bytes()),
-                    (Field::T, None) => out.extend(f32::INFINITY.to_le_bytes()),
-                    (Field::U, h) => out.extend(h.map_or(0.0, |h| h.u).to_le_bytes()),
-                    (Field::V, h) => out.extend(h.map_or(0.0, |h| h.v).to_le_bytes()),
-                    (Field::Prim, h) => out.extend(h.map_or(-1, |h| h.prim as i32).to_le_bytes()),
-                    (Field::GeometricNormal, _) => {
-                        let n = surface.as_ref().map_or(Vec3::ZERO, |s| s.geometric.normalize_or_zero());
-                        n.to_array().iter().for_each(|c| out.extend(c.to_le_bytes()));
-                    }
-                    (Field::ShadingNormal, _) => {
-                        let n = surface.as_ref().map_or(Vec3::ZERO, |s| s.normal);
-                        n.to_array().iter().for_each(|c| out.extend(c.to_le_bytes()));
-                    }
-                    (Field::Material, h) => {
-                        let id = h.and_then(|h| view.material_id(h.prim, &mut NoProbe)).map_or(-1, |m| m as i32);
-                        out.extend(id.to_le_bytes());
-                    }
+    // Every record has the same size: each ray writes its own slice of one buffer.
+    let size: usize = fields.iter().map(|f| f.size()).sum();
+    let mut data = vec![0u8; size * hits.len()];
+    data.par_chunks_mut(size.max(1)).zip(hits).zip(rays).zip(invalid).for_each(|(((out, h), ray), bad)| {
+        let hit = (h.prim >= 0 && !bad).then_some(Hit { t: h.t, u: h.u, v: h.v, prim: h.prim as u32 });
+        let normals = fields.contains(&Field::ShadingNormal) || fields.contains(&Field::GeometricNormal);
+        let surface = match (&hit, normals) {
+            (Some(hit), true) => Some(Surface::at(view, ray, hit, &mut NoProbe)),
+            _ => None,
+        };
+        let mut at = 0;
+        let mut put = |bytes: &[u8]| {
+            out[at..at + bytes.len()].copy_from_slice(bytes);
+            at += bytes.len();
+        };
+        for f in fields {
+            match f {
+                Field::T => put(&hit.map_or(f32::INFINITY, |h| h.t).to_le_bytes()),
+                Field::U => put(&hit.map_or(0.0, |h| h.u).to_le_bytes()),
+                Field::V => put(&hit.map_or(0.0, |h| h.v).to_le_bytes()),
+                Field::Prim => put(&hit.map_or(-1, |h| h.prim as i32).to_le_bytes()),
+                Field::GeometricNormal | Field::ShadingNormal => {
+                    let n = surface.as_ref().map_or(Vec3::ZERO, |s| {
+                        if *f == Field::GeometricNormal {
+                            s.geometric.normalize_or_zero()
+                        } else {
+                            s.normal
+                        }
+                    });
+                    n.to_array().iter().for_each(|c| put(&c.to_le_bytes()));
+                }
+                Field::Material => {
+                    let id = hit.and_then(|h| view.material_id(h.prim, &mut NoProbe)).map_or(-1, |m| m as i32);
+                    put(&id.to_le_bytes());
                 }
             }
-            out
-        })
-        .collect();
-    per_ray.concat()
+        }
+    });
+    data
 }
