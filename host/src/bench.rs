@@ -9,6 +9,7 @@ use rayon::prelude::*;
 use raypipe_core::camera::EyeRays;
 use raypipe_core::image::CameraRecord;
 use raypipe_core::packet::PacketCounters;
+use raypipe_core::shade::ray_record::RayKind;
 use raypipe_core::{Intersector, RayCounters, SceneView};
 
 use crate::packets::{trace_tile, PacketSize};
@@ -110,7 +111,7 @@ fn run<I: Intersector>(
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct AlgoBench {
     /// Rays per frame by kind (`RayKind as usize`).
-    pub rays: [u64; 5],
+    pub rays: [u64; RayKind::COUNT],
     /// Million rays per second, one thread (median of the runs).
     pub mrays_single: f64,
     /// Million rays per second, all threads.

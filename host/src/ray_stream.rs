@@ -20,7 +20,7 @@ use crate::tracer::trace;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct StreamCounts {
     /// Rays by kind (indexed by `RayKind as usize`; primary rays are the caller's).
-    pub rays: [u64; 5],
+    pub rays: [u64; RayKind::COUNT],
     /// Traversal steps (nodes or voxels) of the secondary and shadow rays.
     pub steps: u64,
     /// Their ray–triangle tests.

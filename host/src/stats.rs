@@ -181,7 +181,7 @@ pub struct AlgoCosts {
     /// Pixels.
     pub pixels: u64,
     /// Rays traced by kind (`RayKind as usize`; the shadow caster traces no primary ray).
-    pub rays: [u64; 5],
+    pub rays: [u64; RayKind::COUNT],
     /// Traversal steps (nodes or voxels).
     pub steps: u64,
     /// Ray–triangle tests.

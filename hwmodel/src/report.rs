@@ -254,7 +254,7 @@ pub struct Sources<'a> {
     /// Ray–triangle tests.
     pub tests: u64,
     /// Rays by kind, in `RayKind::ALL` order.
-    pub rays_by_kind: [u64; 5],
+    pub rays_by_kind: [u64; RayKind::COUNT],
     /// Peak of the shading unit's ray stream.
     pub stream_peak: usize,
 }

@@ -107,7 +107,7 @@ pub struct Rgs {
     /// Blocks whose hits came from the G-buffer, waiting for the shader.
     direct: VecDeque<Box<HitPacket>>,
     /// Rays sent to traversal, by kind (`RayKind as usize`).
-    pub rays_by_kind: [u64; 5],
+    pub rays_by_kind: [u64; RayKind::COUNT],
     /// Rays issued to traversal.
     pub rays_issued: u64,
     /// Rays shaded after traversal.
@@ -168,7 +168,7 @@ impl Rgs {
             stream_peak: 0,
             visibility: None,
             direct: VecDeque::new(),
-            rays_by_kind: [0; 5],
+            rays_by_kind: [0; RayKind::COUNT],
             rays_issued: 0,
             rays_retired: 0,
         }
@@ -549,7 +549,7 @@ impl Rgs {
 /// emission number so that the oldest kind goes first.
 #[derive(Default)]
 struct RayStream {
-    queues: [VecDeque<(u64, RayRecord)>; 5],
+    queues: [VecDeque<(u64, RayRecord)>; RayKind::COUNT],
     next: u64,
 }
 

@@ -368,9 +368,10 @@ fn impossible_configurations_are_rejected_before_the_run() {
 fn model_images_equal_the_host_for_every_algorithm() {
     use raypipe::render::{render, Algorithm, RenderOptions};
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    for accel in [Accel::Grid, Accel::Bvh4] {
+    // Mirrors and glass; Blinn–Phong lobes.
+    for (fixture, accel) in [("whitted.obj", Accel::Grid), ("whitted.obj", Accel::Bvh4), ("glossy.obj", Accel::Bvh)] {
         let scene = raypipe::scene::load(
-            Some(&root.join("fixtures/whitted.obj")),
+            Some(&root.join("fixtures").join(fixture)),
             &raypipe::scene::BuildOptions { accel, ..Default::default() },
         )
         .unwrap();
@@ -412,10 +413,10 @@ fn model_images_equal_the_host_for_every_algorithm() {
                     sim.set_visibility(hits);
                 }
                 sim.run(|_, _| {}).unwrap();
-                assert!(sim.framebuffer() == host.pixels, "{accel:?} {algo:?} {samples} samples config {k}");
+                assert!(sim.framebuffer() == host.pixels, "{fixture} {accel:?} {algo:?} {samples} samples config {k}");
                 assert!(
                     sim.radiance_image().iter().map(|c| c.to_array()).eq(host.radiance.iter().copied()),
-                    "linear radiance: {accel:?} {algo:?} {samples} samples config {k}"
+                    "linear radiance: {fixture} {accel:?} {algo:?} {samples} samples config {k}"
                 );
                 let r = sim.report();
                 assert_eq!(r.conservation.rays_issued, r.conservation.rays_retired);

@@ -17,7 +17,7 @@ use raypipe_core::pixel_filter::Filter;
 use raypipe_core::{NoProbe, RayCounters, SceneView, Vec3, Watertight};
 use raypipe_hw::stream::counters::PassKind;
 use raypipe_hw::stream::{Architecture, CostModel, Oracle, StreamConfig, StreamMachine, StreamReport, Unroll};
-use raypipe_tests::build_soup;
+use raypipe_tests::{build_soup, root};
 
 fn configs() -> Vec<StreamConfig> {
     let m = |oracle, unroll: (u32, u32), suppress| StreamConfig {
@@ -96,16 +96,21 @@ fn small_camera(view: &SceneView<'_>, w: u32, h: u32) -> CameraRecord {
 
 #[test]
 fn the_image_is_the_hosts_for_every_architecture_oracle_and_algorithm() {
-    let scene = scene::load(None, &BuildOptions { accel: Accel::Grid, ..Default::default() }).unwrap();
-    let view = scene.view().unwrap();
-    let cam = small_camera(&view, 40, 32);
-    for (algo, samples, filter) in [
-        (Algorithm::Cast, 1, Filter::Box),
-        (Algorithm::Cast, 4, Filter::Gaussian),
-        (Algorithm::Shadow, 4, Filter::Box),
-        (Algorithm::Whitted, 2, Filter::Tent),
-        (Algorithm::Path, 2, Filter::Box),
+    let glossy = root().join("fixtures/glossy.obj");
+    for (input, algo, samples, filter) in [
+        (None, Algorithm::Cast, 1, Filter::Box),
+        (None, Algorithm::Cast, 4, Filter::Gaussian),
+        (None, Algorithm::Shadow, 4, Filter::Box),
+        (None, Algorithm::Whitted, 2, Filter::Tent),
+        (None, Algorithm::Path, 2, Filter::Box),
+        // Blinn–Phong highlights and glossy bounces.
+        (Some(&glossy), Algorithm::Whitted, 1, Filter::Box),
+        (Some(&glossy), Algorithm::Path, 2, Filter::Tent),
     ] {
+        let scene = scene::load(input.map(|p| p.as_path()), &BuildOptions { accel: Accel::Grid, ..Default::default() })
+            .unwrap();
+        let view = scene.view().unwrap();
+        let cam = small_camera(&view, 40, 32);
         let opts =
             RenderOptions { algo, samples, filter, bounces: 2, max_depth: 3, threads: Some(2), ..Default::default() };
         let host = render(&view, &cam, &opts).unwrap();
@@ -123,8 +128,8 @@ fn the_image_is_the_hosts_for_every_architecture_oracle_and_algorithm() {
                 false,
             )
             .unwrap();
-            assert!(frame.pixels == host.pixels, "{algo:?} {samples} samples {cfg:?}");
-            assert!(frame.radiance == host.radiance, "linear radiance: {algo:?} {samples} samples {cfg:?}");
+            assert!(frame.pixels == host.pixels, "{input:?} {algo:?} {samples} samples {cfg:?}");
+            assert!(frame.radiance == host.radiance, "linear radiance: {input:?} {algo:?} {samples} samples {cfg:?}");
             check_conservation(&report, 40 * 32);
             if algo != Algorithm::Cast {
                 assert!(report.rays_by_wave.len() > 1, "{algo:?} emitted no rays");

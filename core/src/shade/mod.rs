@@ -2,7 +2,9 @@
 //! path tracer's shaders as stream kernels that emit weighted ray records, exact radiance
 //! sums, counter-based random numbers, colours, and the shadow caster's rasterizer.
 
+pub mod blinn_phong;
 pub mod color;
+pub mod hemisphere;
 pub mod lambert;
 pub mod path;
 pub mod radiance_sum;

@@ -7,6 +7,15 @@
 //! bounces. Random numbers come from [`crate::shade::rng`]: pixel, sample and bounce, so the
 //! image does not depend on the order rays are traced in.
 //!
+//! A glossy material (`illum 2` with `Ks`) adds its Blinn–Phong lobe: the point lights'
+//! shadow rays carry its highlight, and the bounce picks the diffuse or the glossy lobe
+//! in proportion to their reflectance, the glossy one sampled by its half-vector
+//! distribution ([`crate::shade::blinn_phong`]). A glossy bounce sees the sky
+//! as a mirror ray does, since next-event estimation samples it for the diffuse lobe
+//! only; emitters it leaves to next-event estimation, which covers both lobes (no
+//! multiple importance sampling: a sharp lobe reflecting a large emitter converges
+//! slowly).
+//!
 //! Emissive triangles are area lights: next-event estimation picks one by power (the
 //! image's alias table, [`SceneView::pick_area_light`]) and samples a point on it, so a
 //! diffuse bounce that reaches one adds nothing, or its light would be counted twice; the
@@ -20,6 +29,7 @@ use glam::Vec3;
 use crate::hit::Hit;
 use crate::image::{LightRecord, SceneView};
 use crate::probe::MemoryProbe;
+use crate::shade::hemisphere::cosine_direction;
 use crate::shade::ray_record::{RayKind, RayRecord};
 use crate::shade::rng::uniform;
 use crate::shade::specular::specular_rays;
@@ -35,18 +45,6 @@ pub struct PathOptions {
     pub roulette: bool,
     /// Radiance of rays that hit nothing.
     pub background: Vec3,
-}
-
-/// A direction around unit `n` with density `cos θ / π` from two uniform numbers.
-pub fn cosine_direction(n: Vec3, u1: f32, u2: f32) -> Vec3 {
-    let r = libm::sqrtf(u1);
-    let phi = 2.0 * core::f32::consts::PI * u2;
-    let (sin, cos) = crate::trig::sin_cos(phi);
-    let (x, y, z) = (r * cos, r * sin, libm::sqrtf((1.0 - u1).max(0.0)));
-    let helper = if n.x.abs() > 0.9 { Vec3::Y } else { Vec3::X };
-    let t = helper.cross(n).normalize_or_zero();
-    let b = n.cross(t);
-    t * x + b * y + n * z
 }
 
 /// The scene's sky light, if it has one.
@@ -78,40 +76,47 @@ pub fn shade_path<P: MemoryProbe>(
     let n = s.normal;
     let areas = scene.area_light_count();
     let mut now = Vec3::ZERO;
-    // Emission seen along a camera or specular path; after a diffuse bounce only when no
-    // area light samples the emitters already.
-    if rec.kind != RayKind::Path || areas == 0 {
+    // Emission seen along a camera or specular path; after a diffuse or glossy bounce
+    // only when no area light samples the emitters already.
+    if !matches!(rec.kind, RayKind::Path | RayKind::Glossy) || areas == 0 {
         now += rec.weight * Vec3::from(m.emission);
     }
     if n == Vec3::ZERO {
         return now;
     }
-    let diffuse = s.diffuse();
-    // Next-event estimation: the point, directional and sky lights, and one point on one
-    // emitting triangle picked by power.
+    let (diffuse, glossy) = s.lobes();
+    // Next-event estimation through both lobes: the point and directional lights and one
+    // point on one emitting triangle picked by power. The sky through the diffuse lobe
+    // only (its cosine-distributed direction rarely falls in a narrow glossy lobe): the
+    // glossy bounce sees the sky itself.
     let depth = rec.depth as u32;
     let u = |dim: u32| uniform(rec.pixel, rec.sample, depth, dim);
+    let lit = diffuse.max_element() > 0.0 || glossy.is_some();
+    if lit {
+        for i in 0..scene.shading_light_count() {
+            let l = scene.light(i, probe);
+            if matches!(l.kind, LightRecord::POINT | LightRecord::DIRECTIONAL) {
+                if let Some(shadow) = s.point_light_shadow(rec, &l, diffuse, glossy.as_ref()) {
+                    emit(shadow);
+                }
+            }
+        }
+    }
     if diffuse.max_element() > 0.0 {
         for i in 0..scene.shading_light_count() {
             let l = scene.light(i, probe);
-            match l.kind {
-                LightRecord::POINT | LightRecord::DIRECTIONAL => {
-                    if let Some(shadow) = s.point_light_shadow(rec, &l, diffuse) {
-                        emit(shadow);
-                    }
+            if l.kind == LightRecord::ENVIRONMENT {
+                // A cosine-distributed direction: the Lambert BRDF, the cosine and the
+                // density cancel to diffuse × sky radiance.
+                let dir = cosine_direction(n, u(3), u(4));
+                let weight = rec.weight * diffuse * l.sky(dir);
+                if weight.max_element() > 0.0 && weight.is_finite() && dir != Vec3::ZERO {
+                    emit(rec.child(s.ray_along(dir), weight, RayKind::Shadow, rec.depth));
                 }
-                LightRecord::ENVIRONMENT => {
-                    // A cosine-distributed direction: the Lambert BRDF, the cosine and
-                    // the density cancel to diffuse × sky radiance.
-                    let dir = cosine_direction(n, u(3), u(4));
-                    let weight = rec.weight * diffuse * l.sky(dir);
-                    if weight.max_element() > 0.0 && weight.is_finite() && dir != Vec3::ZERO {
-                        emit(rec.child(s.ray_along(dir), weight, RayKind::Shadow, rec.depth));
-                    }
-                }
-                _ => {}
             }
         }
+    }
+    if lit {
         if let Some((k, pdf)) = scene.pick_area_light(u(5), u(6), probe) {
             let l = scene.light(scene.shading_light_count() + k, probe);
             let [a, b, c] = scene.triangle(l.triangle, probe);
@@ -122,10 +127,15 @@ pub fn shade_path<P: MemoryProbe>(
             let d2 = to.length_squared();
             let dir = to.normalize_or_zero();
             // Radiance Ke toward the side the triangle faces (its winding), area |e|/2,
-            // Lambert BRDF kd/π; divided by the probability of picking this light.
+            // BRDF (kd + the glossy lobe's π f)/π; divided by the probability of picking
+            // this light.
             let cos_l = -e.normalize_or_zero().dot(dir);
             let g = n.dot(dir).max(0.0) * cos_l.max(0.0) * 0.5 * e.length() / (core::f32::consts::PI * d2);
-            let weight = rec.weight * diffuse * Vec3::from(l.color) * (g / pdf);
+            let reflectance = match glossy {
+                Some(gl) => diffuse + gl.eval_pi(n, dir, -rec.ray.dir.normalize_or_zero()),
+                None => diffuse,
+            };
+            let weight = rec.weight * reflectance * Vec3::from(l.color) * (g / pdf);
             if pdf > 0.0 && weight.max_element() > 0.0 && weight.is_finite() {
                 // The sample lies on its triangle: stop just short of it.
                 emit(rec.child(s.ray_toward(q, 1.0 - 1e-4), weight, RayKind::Shadow, rec.depth));
@@ -140,38 +150,45 @@ pub fn shade_path<P: MemoryProbe>(
             emit(rec.child(s.ray_along(dir), weight, kind, rec.depth + 1));
         }
     };
-    // The diffuse bounce.
-    if diffuse.max_element() > 0.0 {
-        let mut weight = rec.weight * diffuse;
-        let survive = if opts.roulette && rec.depth >= 1 { diffuse.max_element().clamp(0.05, 0.95) } else { 1.0 };
-        if u(2) < survive {
-            weight /= survive;
-            bounce(cosine_direction(n, u(0), u(1)), weight, RayKind::Path);
+    // One bounce off the diffuse or the glossy lobe, picked in proportion to their
+    // reflectance and reweighted by that probability.
+    let roulette = |factor: Vec3| {
+        if opts.roulette && rec.depth >= 1 {
+            factor.max_element().clamp(0.05, 0.95)
+        } else {
+            1.0
         }
+    };
+    let to_eye = -rec.ray.dir.normalize_or_zero();
+    let glossy_share = glossy.map_or(0.0, |g| {
+        let (kd, ks) = (diffuse.element_sum(), g.ks.element_sum());
+        if kd + ks > 0.0 {
+            ks / (kd + ks)
+        } else {
+            0.0
+        }
+    });
+    match glossy {
+        Some(g) if u(9) < glossy_share => {
+            if let Some((dir, factor)) = g.sample(n, to_eye, u(0), u(1)) {
+                let factor = factor / glossy_share;
+                let survive = roulette(factor);
+                if u(2) < survive {
+                    bounce(dir, rec.weight * factor / survive, RayKind::Glossy);
+                }
+            }
+        }
+        _ if diffuse.max_element() > 0.0 => {
+            let factor = if glossy.is_some() { diffuse / (1.0 - glossy_share) } else { diffuse };
+            let survive = roulette(factor);
+            if u(2) < survive {
+                bounce(cosine_direction(n, u(0), u(1)), rec.weight * factor / survive, RayKind::Path);
+            }
+        }
+        _ => {}
     }
     // Mirrors and glass, as in Whitted's shader.
     let d = rec.ray.dir.normalize_or_zero();
     specular_rays(&m, d, n, s.entering, |dir, factor, kind| bounce(dir, rec.weight * factor, kind));
     now
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn cosine_directions_stay_in_the_hemisphere_and_follow_the_cosine() {
-        for n in [Vec3::Z, Vec3::new(1.0, 2.0, -0.5).normalize(), Vec3::X, -Vec3::Y] {
-            let mut mean_cos = 0.0;
-            let k = 4096;
-            for i in 0..k {
-                let d = cosine_direction(n, uniform(i, 0, 0, 0), uniform(i, 0, 0, 1));
-                assert!((d.length() - 1.0).abs() < 1e-4);
-                assert!(d.dot(n) >= -1e-6);
-                mean_cos += d.dot(n) / k as f32;
-            }
-            // E[cos θ] under the cosine density is 2/3.
-            assert!((mean_cos - 2.0 / 3.0).abs() < 0.02, "{mean_cos}");
-        }
-    }
 }

@@ -21,14 +21,20 @@ pub enum RayKind {
     Reflection = 2,
     /// Refraction into or out of a transparent material.
     Refraction = 3,
-    /// A sampled bounce of a path.
+    /// A sampled diffuse bounce of a path.
     Path = 4,
+    /// A sampled bounce off a glossy lobe (it sees emitters and the sky, as a mirror
+    /// ray does: next-event estimation covers only the diffuse part of area lights).
+    Glossy = 5,
 }
 
 impl RayKind {
     /// Every kind, in a fixed order (for reports).
-    pub const ALL: [RayKind; 5] =
-        [RayKind::Primary, RayKind::Shadow, RayKind::Reflection, RayKind::Refraction, RayKind::Path];
+    pub const ALL: [RayKind; RayKind::COUNT] =
+        [RayKind::Primary, RayKind::Shadow, RayKind::Reflection, RayKind::Refraction, RayKind::Path, RayKind::Glossy];
+
+    /// How many kinds there are.
+    pub const COUNT: usize = 6;
 
     /// Lower-case name for reports.
     pub const fn name(self) -> &'static str {
@@ -38,6 +44,7 @@ impl RayKind {
             RayKind::Reflection => "reflection",
             RayKind::Refraction => "refraction",
             RayKind::Path => "path",
+            RayKind::Glossy => "glossy",
         }
     }
 }

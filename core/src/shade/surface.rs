@@ -8,6 +8,7 @@ use crate::hit::Hit;
 use crate::image::{LightRecord, MaterialRecord, SceneView, NULL_INDEX};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
+use crate::shade::blinn_phong::{lobes, BlinnPhong};
 use crate::shade::ray_record::{RayKind, RayRecord};
 use crate::shade::texture;
 
@@ -78,6 +79,12 @@ impl Surface {
             * crate::shade::specular::opacity(&self.material)
     }
 
+    /// The diffuse reflectance and the glossy lobe, scaled together to conserve energy
+    /// ([`crate::shade::blinn_phong::lobes`]).
+    pub fn lobes(&self) -> (Vec3, Option<BlinnPhong>) {
+        lobes(&self.material, self.diffuse())
+    }
+
     /// A point just off the surface on the side `dir` leaves toward, so that a new ray
     /// from it does not hit this triangle again: the offset grows with the coordinates'
     /// magnitude (their rounding) and the scene's size.
@@ -102,9 +109,15 @@ impl Surface {
     }
 
     /// The shadow ray of a point light (Lambert, no fall-off: the ray caster's light)
-    /// continuing `rec`, weighted by `diffuse` — `None` if the light is behind the
-    /// surface or the weight is nothing.
-    pub fn point_light_shadow(&self, rec: &RayRecord, light: &LightRecord, diffuse: Vec3) -> Option<RayRecord> {
+    /// continuing `rec`, weighted by `diffuse` and the `glossy` lobe's highlight seen along
+    /// `rec`'s ray — `None` if the light is behind the surface or the weight is nothing.
+    pub fn point_light_shadow(
+        &self,
+        rec: &RayRecord,
+        light: &LightRecord,
+        diffuse: Vec3,
+        glossy: Option<&BlinnPhong>,
+    ) -> Option<RayRecord> {
         let (to_light, ray) = if light.kind == LightRecord::DIRECTIONAL {
             // A light at infinity: anything along the direction blocks it.
             let d = Vec3::from(light.position).normalize_or_zero();
@@ -114,7 +127,11 @@ impl Surface {
             ((position - self.point).normalize_or_zero(), self.ray_toward(position, 1.0))
         };
         let cos = self.normal.dot(to_light);
-        let weight = rec.weight * diffuse * Vec3::from(light.color) * cos;
+        let reflectance = match glossy {
+            Some(g) => diffuse + g.eval_pi(self.normal, to_light, -rec.ray.dir.normalize_or_zero()),
+            None => diffuse,
+        };
+        let weight = rec.weight * reflectance * Vec3::from(light.color) * cos;
         (cos > 0.0 && weight.max_element() > 0.0 && weight.is_finite())
             .then(|| rec.child(ray, weight, RayKind::Shadow, rec.depth))
     }

@@ -6,7 +6,9 @@
 //! refracted ray (Fresnel, total internal reflection) while the depth allows.
 //!
 //! Mirrors and glass follow the MTL illumination models ([`crate::shade::specular`]); the
-//! diffuse part keeps the fraction `d` of a dissolved material.
+//! diffuse part keeps the fraction `d` of a dissolved material. A glossy material (`illum
+//! 2` with `Ks`) adds each point light's Blinn–Phong highlight to its shadow ray's weight
+//! ([`crate::shade::blinn_phong`]).
 
 use glam::Vec3;
 
@@ -39,7 +41,7 @@ pub fn shade_whitted<P: MemoryProbe>(
     let Some(hit) = hit else { return rec.weight * opts.background };
     let s = Surface::at(scene, &rec.ray, &hit, probe);
     let m = s.material;
-    let diffuse = s.diffuse();
+    let (diffuse, glossy) = s.lobes();
     let mut now = Vec3::from(m.emission);
     let n = s.normal;
     // The lights before the area lights (Whitted's shader reads no emitter records).
@@ -47,7 +49,7 @@ pub fn shade_whitted<P: MemoryProbe>(
         let l = scene.light(i, probe);
         now += s.unshadowed(&l, diffuse);
         if Surface::casts_shadows(&l) {
-            if let Some(shadow) = s.point_light_shadow(rec, &l, diffuse) {
+            if let Some(shadow) = s.point_light_shadow(rec, &l, diffuse, glossy.as_ref()) {
                 emit(shadow);
             }
         }

@@ -40,6 +40,10 @@ pub enum Kernel {
     Shade,
     /// One light evaluated by the shading kernel.
     ShadeLight,
+    /// A glossy surface's lobes: Kd and Ks scaled together (per glossy hit).
+    Glossy,
+    /// One light's Blinn–Phong highlight at a glossy hit.
+    GlossyLight,
     /// One ray record emitted by a shader (shadow, reflection, refraction, bounce).
     Spawn,
     /// A shadow ray's end: its weight added to the pixel if nothing was in the way.
@@ -47,14 +51,19 @@ pub enum Kernel {
 }
 
 impl Kernel {
+    /// How many kernels there are.
+    pub const COUNT: usize = 10;
+
     /// Every kernel, in table order.
-    pub const ALL: [Kernel; 8] = [
+    pub const ALL: [Kernel; Kernel::COUNT] = [
         Kernel::Generate,
         Kernel::Setup,
         Kernel::Traverse,
         Kernel::Intersect,
         Kernel::Shade,
         Kernel::ShadeLight,
+        Kernel::Glossy,
+        Kernel::GlossyLight,
         Kernel::Spawn,
         Kernel::ShadowAdd,
     ];
@@ -68,6 +77,8 @@ impl Kernel {
             Kernel::Intersect => "intersect",
             Kernel::Shade => "shade",
             Kernel::ShadeLight => "shade_light",
+            Kernel::Glossy => "glossy",
+            Kernel::GlossyLight => "glossy_light",
             Kernel::Spawn => "spawn",
             Kernel::ShadowAdd => "shadow_add",
         }
@@ -146,6 +157,19 @@ pub mod counted {
     /// dot 5, clamp 1, × colour 3, accumulate 3, kind tests 2 (an ambient light: 6 of
     /// these 29).
     pub const SHADE_LIGHT: u64 = 3 + 12 + 5 + 1 + 3 + 3 + 2;
+    /// `blinn_phong::lobes` at a glossy hit: `Ks` clamped 6, `Ns` tests and clamp 3,
+    /// `Kd + Ks` 3, its largest channel 2 and the max with 1: 3, reciprocal 1, both
+    /// lobes scaled 6.
+    pub const GLOSSY: u64 = 6 + 3 + 3 + 3 + 1 + 6;
+    /// `BlinnPhong::eval_pi` for one light (core/src/shade/blinn_phong.rs) and its share
+    /// of `Surface::point_light_shadow`:
+    /// - the eye direction: normalize 12, negate 3; hemisphere tests: 2 dots 10, 2
+    ///   compares;
+    /// - half vector: add 3, normalize 12; N·H 5, max 1; `powf` as exp2(n·log2 x): 3;
+    /// - normalisation `(n+2)(n+4) / (8 (2^(−n/2) + n))`: 2 adds, 1 product, exp2 of a
+    ///   product 2, add, ×8, divide 2: 9;
+    /// - × the power and × `Ks`: 4; added to the diffuse reflectance 3.
+    pub const GLOSSY_LIGHT: u64 = 12 + 3 + 10 + 2 + 3 + 12 + 5 + 1 + 3 + 9 + 4 + 3;
     /// One emitted record: `Surface::offset_point` (normalize 12, dot and flip 8,
     /// scale 8, offset 6) and the direction 3, the weight (3 products of 3) 9, its
     /// tests (max, finite) 6: 52.
@@ -171,6 +195,8 @@ impl Default for CostModel {
             // Reads ray and hit; writes the colour.
             (Kernel::Shade, k(counted::SHADE, ray + hit, color)),
             (Kernel::ShadeLight, k(counted::SHADE_LIGHT, 0, 0)),
+            (Kernel::Glossy, k(counted::GLOSSY, 0, 0)),
+            (Kernel::GlossyLight, k(counted::GLOSSY_LIGHT, 0, 0)),
             // Writes the new ray and its weight (a colour).
             (Kernel::Spawn, k(counted::SPAWN, 0, ray + color)),
             // Reads the hit, writes the colour.
@@ -240,7 +266,7 @@ mod tests {
         // Changing a kernel in core means recounting it here, on purpose.
         let m = CostModel::default();
         let i: Vec<u64> = Kernel::ALL.iter().map(|&k| m.get(k).instructions).collect();
-        assert_eq!(i, [79, 121, 30, 85, 100, 29, 52, 4]);
+        assert_eq!(i, [79, 121, 30, 85, 100, 29, 22, 67, 52, 4]);
         assert_eq!(m.get(Kernel::Intersect).r, words::RAY + words::HIT + words::LIST);
     }
 

@@ -80,7 +80,7 @@ pub struct KernelTotals {
 
 /// Totals by kernel, in [`Kernel::ALL`] order.
 #[derive(Clone, Debug, Default, Serialize)]
-pub struct ByKernel(pub [KernelTotals; 8]);
+pub struct ByKernel(pub [KernelTotals; Kernel::COUNT]);
 
 impl ByKernel {
     /// The totals of `k`.

@@ -4,9 +4,12 @@
 //! shaders, whose new records form the next wave; a shadow ray adds its weight if
 //! nothing was in the way. Radiance goes to the pixel the record carries.
 
+use raypipe_core::shade::blinn_phong::is_glossy;
 use raypipe_core::shade::lambert::shade;
 use raypipe_core::shade::ray_record::{RayKind, RayRecord};
-use raypipe_core::Intersector;
+use raypipe_core::shade::shader::Shader;
+use raypipe_core::shade::surface::Surface;
+use raypipe_core::{Intersector, NoProbe};
 
 use crate::stream::config::Architecture;
 use crate::stream::cost_model::Kernel;
@@ -31,8 +34,15 @@ impl<I: Intersector> StreamMachine<'_, I> {
         if self.cfg.arch == Architecture::Multipass {
             p.stencil = StencilCounts { reads: covered_fragments(frags.len(), width), writes: 0 };
         }
-        let lights = self.scene.light_count() as u64;
+        // The lights the shader reads at a hit: those before the area lights, and for the
+        // path tracer one emitter picked by power.
+        let shadowing = (0..self.scene.shading_light_count())
+            .filter(|&i| Surface::casts_shadows(&self.scene.light(i, &mut NoProbe)))
+            .count() as u64;
+        let picks_emitter = matches!(self.shader, Some(Shader::Path(_))) && self.scene.area_light_count() > 0;
+        let lights = self.scene.shading_light_count() as u64 + picks_emitter as u64;
         let (mut shaded, mut lit, mut shadows, emitted_before) = (0u64, 0u64, 0u64, next.len());
+        let mut glossy = 0u64;
         let (scene, background, shader) = (self.scene, self.background, self.shader);
         let (sums, miss) = (self.sums_radiance(), background * (1.0 / self.samples() as f32));
         let mut probe = StreamProbe::new(&mut self.cache, false);
@@ -80,6 +90,8 @@ impl<I: Intersector> StreamMachine<'_, I> {
                 Some(s) => {
                     shaded += 1;
                     lit += hit.is_some() as u64;
+                    // The highlight is the shader's (the ray caster's Lambert has none).
+                    glossy += hit.is_some_and(|h| is_glossy(&scene.material_of(h.prim, &mut NoProbe))) as u64;
                     let c = s.shade(&scene, &rec, hit, &mut probe, &mut |r| next.push(r));
                     if let Some(r) = self.radiance.get_mut(pixel) {
                         r.add(c);
@@ -94,6 +106,8 @@ impl<I: Intersector> StreamMachine<'_, I> {
         p.useful = p.processed;
         self.charge(Kernel::Shade, shaded, shaded, words, &mut p);
         self.charge(Kernel::ShadeLight, lit * lights, 0, [0; 4], &mut p);
+        self.charge(Kernel::Glossy, glossy, 0, [0; 4], &mut p);
+        self.charge(Kernel::GlossyLight, glossy * shadowing, 0, [0; 4], &mut p);
         self.charge(Kernel::Spawn, emitted, emitted, [0; 4], &mut p);
         self.charge(Kernel::ShadowAdd, shadows, shadows, [0; 4], &mut p);
         p
