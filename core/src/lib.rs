@@ -82,6 +82,8 @@ pub mod camera;
 #[forbid(unsafe_code)]
 pub mod counters;
 #[forbid(unsafe_code)]
+pub mod exp_log;
+#[forbid(unsafe_code)]
 pub mod fixed_point;
 #[forbid(unsafe_code)]
 pub mod fixed_ray;
@@ -109,7 +111,6 @@ pub mod simd;
 mod test_lcg;
 #[forbid(unsafe_code)]
 pub mod traverse;
-#[forbid(unsafe_code)]
 pub mod trig;
 
 pub use camera::{Camera, CameraError};
