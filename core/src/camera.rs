@@ -7,6 +7,7 @@ use glam::{Vec3, Vec4};
 use crate::image::CameraRecord;
 use crate::pixel_filter::PixelSampler;
 use crate::ray::Ray;
+use crate::shade::ray_cone::RayCone;
 use crate::traverse::aabb::{clip_ray, clip_rays4};
 
 /// A pinhole camera: where it is, what it looks at, which way is up, and the image size.
@@ -142,6 +143,14 @@ impl EyeRays {
     /// The same view with `sampler`'s eye rays per pixel.
     pub fn with_sampler(self, sampler: PixelSampler) -> EyeRays {
         EyeRays { sampler: PixelSampler { samples: sampler.samples.max(1), ..sampler }, ..self }
+    }
+
+    /// The cone of an eye ray: no width at the eye, one pixel's angle of spread (the
+    /// height of a pixel at unit distance; Akenine-Möller et al. 2019, eq. 30 in its
+    /// small-angle form). Texture filtering reads it ([`crate::shade::ray_cone`]).
+    #[inline]
+    pub fn cone(&self) -> RayCone {
+        RayCone { width: 0.0, spread: 2.0 * self.half_h * self.inv_h }
     }
 
     /// Eye rays per pixel.

@@ -131,7 +131,7 @@ pub fn rays(view: &SceneView<'_>, eye: &EyeRays) -> (Vec<Ray>, Vec<Ray>) {
         .par_iter()
         .filter_map(|&(pixel, ray)| {
             let hit = trace::<Watertight, _>(view, &ray, &mut NoProbe, &mut RayCounters::default())?;
-            let s = Surface::at(view, &ray, &hit, &mut NoProbe);
+            let s = Surface::at(view, &ray, &hit, eye.cone(), &mut NoProbe);
             if s.normal == raypipe_core::Vec3::ZERO {
                 return None;
             }

@@ -74,8 +74,10 @@ impl ImageWriter {
                     height: t.height,
                     first: texels.len() as u32,
                     wrap: t.wrap,
+                    levels: TextureRecord::full_chain(t.width, t.height),
+                    _pad: [0; 3],
                 });
-                texels.extend(t.rgba.chunks_exact(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])));
+                texels.extend(crate::mipmap::chain(t));
             }
             w.add(SectionKind::Textures, &records);
             w.add(SectionKind::Texels, &texels);

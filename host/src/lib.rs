@@ -24,6 +24,7 @@ pub mod isa;
 pub mod kd_builder;
 pub mod light_distribution;
 pub mod mesh;
+pub mod mipmap;
 pub mod npy;
 pub mod obj;
 pub mod obj_indices;

@@ -9,6 +9,7 @@
 use std::collections::VecDeque;
 
 use raypipe_core::shade::radiance_sum::RadianceSum;
+use raypipe_core::shade::ray_cone::RayCone;
 use raypipe_core::shade::ray_record::{RayKind, RayRecord};
 use raypipe_core::shade::shader::Shader;
 use raypipe_core::traverse::occlusion::occluded;
@@ -77,6 +78,7 @@ pub fn shade_tile<I: Intersector, P: MemoryProbe>(
     background: Vec3,
     tile: TileGeometry,
     samples: u32,
+    cone: RayCone,
     primaries: &[(Option<Ray>, Option<Hit>)],
     probe: &mut P,
     counts: &mut StreamCounts,
@@ -94,7 +96,7 @@ pub fn shade_tile<I: Intersector, P: MemoryProbe>(
                 counts.shades += hit.is_some() as u64;
                 shader.shade_primary(
                     scene,
-                    RayRecord::eye_sample(*ray, tile.global(p), s, samples),
+                    RayRecord::eye_sample(*ray, tile.global(p), s, samples, cone),
                     *hit,
                     &mut radiance[p],
                     probe,

@@ -10,6 +10,7 @@ use raypipe_core::image::CameraRecord;
 use raypipe_core::packet::PacketCounters;
 use raypipe_core::shade::color::rgb8;
 use raypipe_core::shade::lambert::shade;
+use raypipe_core::shade::ray_cone::RayCone;
 use raypipe_core::{Intersector, NoProbe, Ray, RayCounters, SceneView};
 
 use crate::packets::{trace_tile, PacketSize};
@@ -244,7 +245,7 @@ fn render_with<I: Intersector>(
                     }
                 }
                 let radiance = match opts.shader(background) {
-                    None => cast_tile(scene, background, samples, &primaries),
+                    None => cast_tile(scene, background, samples, eye.cone(), &primaries),
                     Some(shader) => {
                         let geometry = TileGeometry { x0, y0, width: tw as u32, image_width: w };
                         let mut counts = StreamCounts::default();
@@ -254,6 +255,7 @@ fn render_with<I: Intersector>(
                             background,
                             geometry,
                             samples,
+                            eye.cone(),
                             &primaries,
                             &mut NoProbe,
                             &mut counts,
@@ -288,10 +290,11 @@ fn cast_tile(
     scene: &SceneView<'_>,
     background: Vec3,
     samples: u32,
+    cone: RayCone,
     primaries: &[(Option<Ray>, Option<raypipe_core::Hit>)],
 ) -> Vec<Vec3> {
     let color = |(ray, hit): &(Option<Ray>, Option<raypipe_core::Hit>)| match ray {
-        Some(ray) => shade(scene, ray, *hit, background, &mut NoProbe),
+        Some(ray) => shade(scene, ray, cone, *hit, background, &mut NoProbe),
         None => background,
     };
     if samples <= 1 {

@@ -256,7 +256,7 @@ fn costs_with<I: Intersector>(
                         for (ray, hit) in &primaries {
                             if let Some(ray) = ray {
                                 c.shades += hit.is_some() as u64;
-                                std::hint::black_box(shade(scene, ray, *hit, background, &mut probe));
+                                std::hint::black_box(shade(scene, ray, eye.cone(), *hit, background, &mut probe));
                             }
                         }
                     }
@@ -264,7 +264,15 @@ fn costs_with<I: Intersector>(
                         let geometry = TileGeometry { x0, y0, width: x1 - x0, image_width: eye.width };
                         let mut s = StreamCounts::default();
                         std::hint::black_box(shade_tile::<I, _>(
-                            scene, shader, background, geometry, samples, &primaries, &mut probe, &mut s,
+                            scene,
+                            shader,
+                            background,
+                            geometry,
+                            samples,
+                            eye.cone(),
+                            &primaries,
+                            &mut probe,
+                            &mut s,
                         ));
                         for (a, b) in c.rays.iter_mut().zip(s.rays) {
                             *a += b;

@@ -444,7 +444,7 @@ impl Rgs {
             let share = 1.0 / samples as f32;
             match (&self.shader, ray) {
                 (None, Some(ray)) => {
-                    let color = shade(scene, &ray, packet.hits[j], self.background, &mut probe);
+                    let color = shade(scene, &ray, self.eye.cone(), packet.hits[j], self.background, &mut probe);
                     match self.radiance.get_mut(pixel) {
                         Some(sum) => sum.add(color * share),
                         None => self.framebuffer[pixel] = color,
@@ -458,7 +458,7 @@ impl Rgs {
                     let sum = &mut self.radiance[pixel];
                     shader.shade_primary(
                         scene,
-                        RayRecord::eye_sample(ray, pixel as u32, s, samples),
+                        RayRecord::eye_sample(ray, pixel as u32, s, samples, self.eye.cone()),
                         packet.hits[j],
                         sum,
                         &mut probe,

@@ -31,6 +31,7 @@ use core::hint::black_box;
 
 use raypipe_core::camera::{Camera, EyeRays};
 use raypipe_core::shade::lambert::shade;
+use raypipe_core::shade::ray_cone::RayCone;
 use raypipe_core::traverse::brute_force::trace_brute_force;
 use raypipe_core::{Hit, NoProbe, Ray, RayCounters, SceneView, Vec3};
 
@@ -124,7 +125,7 @@ fn trace_structure(view: &SceneView<'_>, ray: &Ray) -> Option<Hit> {
 /// Lambert shading of a hit (a call of its own, so that its stack is measured apart).
 #[inline(never)]
 fn shade_hit(view: &SceneView<'_>, ray: &Ray, hit: Option<Hit>) -> Vec3 {
-    shade(view, ray, hit, Vec3::ZERO, &mut NoProbe)
+    shade(view, ray, RayCone::POINT, hit, Vec3::ZERO, &mut NoProbe)
 }
 
 /// The rest of the kernels, in the full build.

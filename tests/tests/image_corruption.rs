@@ -52,7 +52,8 @@ fn misaligned_buffers_are_rejected_with_a_clear_error() {
 #[test]
 fn header_corruptions() {
     assert_eq!(corrupt(|b| b[0] = b'X'), SceneError::BadMagic);
-    assert_eq!(corrupt(|b| put_u32(b, 8, 2)), SceneError::UnsupportedVersion { found: 2, supported: 1 });
+    assert_eq!(corrupt(|b| put_u32(b, 8, 1)), SceneError::UnsupportedVersion { found: 1, supported: 2 });
+    assert_eq!(corrupt(|b| put_u32(b, 8, 3)), SceneError::UnsupportedVersion { found: 3, supported: 2 });
     assert_eq!(corrupt(|b| put_u32(b, 12, 1)), SceneError::UnknownFlags(1));
     assert_eq!(corrupt(|b| put_u32(b, 16, 9)), SceneError::UnknownAccel(9));
     assert!(matches!(

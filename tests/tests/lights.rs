@@ -9,6 +9,7 @@ use raypipe_core::image::{LightRecord, MaterialRecord};
 use raypipe_core::probe::ByteCounter;
 use raypipe_core::shade::lambert::shade;
 use raypipe_core::shade::path::{shade_path, PathOptions};
+use raypipe_core::shade::ray_cone::RayCone;
 use raypipe_core::shade::ray_record::{RayKind, RayRecord};
 use raypipe_core::{Hit, NoProbe, Ray, Vec3};
 
@@ -124,7 +125,7 @@ fn casting_reads_no_area_light_record() {
         let ray = Ray::new(Vec3::new(0.1, 2.0, 0.05), Vec3::new(0.0, -1.0, 0.0));
         let hit = Hit { t: 2.0, u: 0.2, v: 0.3, prim: 0 };
         let mut probe = ByteCounter::default();
-        let c = shade(&view, &ray, Some(hit), Vec3::ZERO, &mut probe);
+        let c = shade(&view, &ray, RayCone::POINT, Some(hit), Vec3::ZERO, &mut probe);
         assert!(c.max_element() > 0.0);
         probe.bytes.iter().sum::<u64>()
     };
@@ -145,7 +146,7 @@ fn a_built_image_can_be_relit() {
     assert_eq!(view.shading_light_count(), 2, "the sun and the ambient term");
     // Shading sees the sun: the floor facing it is lit by 2 × cos.
     let ray = Ray::new(Vec3::new(0.1, 2.0, 0.05), Vec3::new(0.0, -1.0, 0.0));
-    let c = shade(&view, &ray, Some(Hit { t: 2.0, u: 0.2, v: 0.3, prim: 0 }), Vec3::ZERO, &mut NoProbe);
+    let c = shade(&view, &ray, RayCone::POINT, Some(Hit { t: 2.0, u: 0.2, v: 0.3, prim: 0 }), Vec3::ZERO, &mut NoProbe);
     let cos = Vec3::new(0.0, 1.0, 0.2).normalize().y;
     assert!((c.x - (2.0 * cos + 0.1)).abs() < 1e-4, "{c}");
     let zero = LightRecord { position: [0.0; 3], ..sun };

@@ -16,6 +16,7 @@ use core::mem::{align_of, size_of, MaybeUninit};
 use raypipe_core::camera::{Camera, EyeRays};
 use raypipe_core::packet::step::trace_packet_steps;
 use raypipe_core::shade::lambert::shade;
+use raypipe_core::shade::ray_cone::RayCone;
 use raypipe_core::traverse::brute_force::trace_brute_force;
 use raypipe_core::traverse::occlusion::occluded;
 use raypipe_core::traverse::walk::trace_walk;
@@ -270,7 +271,8 @@ pub unsafe extern "C" fn rp_trace_packet(
 }
 
 /// Lambert shading of a ray's hit (`hit` null: the background) in linear RGB, written
-/// to `rgb[0..3]`.
+/// to `rgb[0..3]`. Textures are read at their finest mipmap level (the ray carries no
+/// cone).
 ///
 /// # Safety
 /// `scene` is null or filled by `rp_scene_parse`; `ray` is null or readable; `hit` is
@@ -293,7 +295,7 @@ pub unsafe extern "C" fn rp_shade(
     let h = unsafe { hit.as_ref() }.map(|h| Hit { t: h.t, u: h.u, v: h.v, prim: h.prim });
     // A hit on a triangle the image does not have is no hit.
     let h = h.filter(|h| h.prim < v.triangle_count());
-    *out = shade(v, &ray_of(r), h, Vec3::from(*bg), &mut NoProbe).to_array();
+    *out = shade(v, &ray_of(r), RayCone::POINT, h, Vec3::from(*bg), &mut NoProbe).to_array();
     RP_OK
 }
 

@@ -5,7 +5,7 @@ use bytemuck::{Pod, Zeroable};
 /// The eight bytes every scene image starts with.
 pub const MAGIC: [u8; 8] = *b"RPSCENE\0";
 /// The format version this crate reads and writes.
-pub const FORMAT_VERSION: u32 = 1;
+pub const FORMAT_VERSION: u32 = 2;
 
 /// Image header, 64 bytes at offset 0.
 ///
@@ -13,7 +13,7 @@ pub const FORMAT_VERSION: u32 = 1;
 /// |---|---|
 /// | 0  | magic `"RPSCENE\0"` |
 /// | 8  | version |
-/// | 12 | flags (must be 0 in version 1) |
+/// | 12 | flags (must be 0 in version 2) |
 /// | 16 | acceleration structure kind |
 /// | 20 | number of sections |
 /// | 24 | total image size in bytes |
@@ -29,7 +29,7 @@ pub struct Header {
     pub magic: [u8; 8],
     /// [`FORMAT_VERSION`].
     pub version: u32,
-    /// Reserved feature flags; zero in version 1.
+    /// Reserved feature flags; zero in version 2.
     pub flags: u32,
     /// [`AccelKind`] as a number.
     pub accel: u32,
@@ -136,7 +136,7 @@ pub enum SectionKind {
     /// Wald's precomputed projection triangles, [`crate::image::WaldTriangle`], 48 bytes
     /// each, one per triangle (an optional intersection layout).
     WaldTriangles = 14,
-    /// Diffuse textures, [`crate::image::TextureRecord`], 16 bytes each.
+    /// Diffuse textures, [`crate::image::TextureRecord`], 32 bytes each.
     Textures = 15,
     /// Texels of all textures, one `u32` each: RGBA, 8-bit sRGB, red in the low byte.
     Texels = 16,
@@ -188,7 +188,7 @@ impl SectionKind {
             SectionKind::Positions | SectionKind::Triangles => 12,
             SectionKind::Grid | SectionKind::Materials | SectionKind::Camera => 64,
             SectionKind::GridCells | SectionKind::PrimLists | SectionKind::TriangleMaterials | SectionKind::Texels => 4,
-            SectionKind::Textures => 16,
+            SectionKind::Textures => 32,
             SectionKind::ShadingVertices | SectionKind::Lights | SectionKind::BvhNodes => 32,
             SectionKind::KdNodes => 8,
             SectionKind::Bvh4Nodes => 128,

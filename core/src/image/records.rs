@@ -498,21 +498,27 @@ impl TriBlock4 {
     pub const LANES: usize = 4;
 }
 
-/// A diffuse texture, 16 bytes: its size, where its texels start in TEXELS (row-major,
-/// the top row first), and how coordinates outside `[0, 1]` wrap.
+/// A diffuse texture, 32 bytes: its size, where its texels start in TEXELS (row-major,
+/// the top row first), how coordinates outside `[0, 1]` wrap, and how many mipmap levels
+/// it has. Level `k` is `max(1, width >> k)` by `max(1, height >> k)` texels and follows
+/// level `k − 1` in TEXELS.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq)]
 pub struct TextureRecord {
-    /// Width in texels.
+    /// Width in texels (level 0).
     pub width: u32,
-    /// Height in texels.
+    /// Height in texels (level 0).
     pub height: u32,
-    /// First texel in TEXELS.
+    /// First texel in TEXELS (level 0's top-left).
     pub first: u32,
     /// [`TextureRecord::REPEAT`] or [`TextureRecord::CLAMP`].
     pub wrap: u32,
+    /// Mipmap levels, 1 to [`TextureRecord::full_chain`].
+    pub levels: u32,
+    /// Unused, zero.
+    pub _pad: [u32; 3],
 }
-const _: () = assert!(core::mem::size_of::<TextureRecord>() == 16);
+const _: () = assert!(core::mem::size_of::<TextureRecord>() == 32);
 const _: () = assert!(core::mem::align_of::<TextureRecord>() == 4);
 
 impl TextureRecord {
@@ -520,4 +526,34 @@ impl TextureRecord {
     pub const REPEAT: u32 = 0;
     /// Coordinates clamp to the edge (MTL `-clamp on`).
     pub const CLAMP: u32 = 1;
+
+    /// The levels of a complete mipmap chain down to 1 × 1 for a `width` × `height`
+    /// texture: 1 + ⌊log₂ max(width, height)⌋.
+    pub const fn full_chain(width: u32, height: u32) -> u32 {
+        let side = if width > height { width } else { height };
+        if side == 0 {
+            0
+        } else {
+            32 - side.leading_zeros()
+        }
+    }
+
+    /// Level `k`'s size in texels (at least 1 × 1).
+    pub const fn level_size(width: u32, height: u32, k: u32) -> (u32, u32) {
+        let (w, h) = if k >= 32 { (0, 0) } else { (width >> k, height >> k) };
+        (if w == 0 { 1 } else { w }, if h == 0 { 1 } else { h })
+    }
+
+    /// Texels in levels `0..levels` together (u64: no overflow for any record).
+    pub fn chain_texels(width: u32, height: u32, levels: u32) -> u64 {
+        (0..levels.min(32)).map(|k| TextureRecord::level_size(width, height, k)).map(|(w, h)| w as u64 * h as u64).sum()
+    }
+
+    /// Level `k` (clamped to the last) as a one-level texture of its own.
+    pub fn level(&self, k: u32) -> TextureRecord {
+        let k = k.min(self.levels.saturating_sub(1));
+        let (width, height) = TextureRecord::level_size(self.width, self.height, k);
+        let before = TextureRecord::chain_texels(self.width, self.height, k);
+        TextureRecord { width, height, first: self.first.wrapping_add(before as u32), levels: 1, ..*self }
+    }
 }

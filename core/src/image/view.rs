@@ -159,7 +159,8 @@ pub enum SceneError {
         /// The cell.
         cell: u32,
     },
-    /// A texture's size or texel range is impossible, or its wrap mode unknown.
+    /// A texture's size, mipmap levels or texel range is impossible, or its wrap mode
+    /// unknown.
     BadTexture {
         /// The texture.
         texture: u32,
@@ -208,7 +209,7 @@ impl fmt::Display for SceneError {
                 "section {} record {record} does not match the data it copies",
                 section.name()
             ),
-            BadTexture { texture } => write!(f, "scene image texture {texture} has an impossible size, texel range or wrap mode"),
+            BadTexture { texture } => write!(f, "scene image texture {texture} has an impossible size, mipmap levels, texel range or wrap mode"),
             DuplicateSection(s) => write!(f, "scene image has section {} twice", s.name()),
             MissingSection(s) => write!(f, "scene image lacks required section {}", s.name()),
             SectionMisaligned { section, offset } => write!(
@@ -791,9 +792,10 @@ impl<'a> SceneView<'a> {
         let textures: &[TextureRecord] = s.slice(K::Textures)?;
         let texels: &[u32] = s.slice(K::Texels)?;
         for (i, t) in textures.iter().enumerate() {
-            let n = (t.width as u64) * (t.height as u64);
-            let end = t.first as u64 + n;
-            if t.width == 0 || t.height == 0 || end > texels.len() as u64 || t.wrap > TextureRecord::CLAMP {
+            let levels_ok = t.levels >= 1 && t.levels <= TextureRecord::full_chain(t.width, t.height);
+            let end = t.first as u64 + TextureRecord::chain_texels(t.width, t.height, t.levels);
+            if t.width == 0 || t.height == 0 || !levels_ok || end > texels.len() as u64 || t.wrap > TextureRecord::CLAMP
+            {
                 return Err(SceneError::BadTexture { texture: i as u32 });
             }
         }

@@ -10,18 +10,20 @@ use crate::hit::Hit;
 use crate::image::{LightRecord, SceneView};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
+use crate::shade::ray_cone::RayCone;
 use crate::shade::surface::Surface;
 
-/// The linear RGB radiance seen along `ray`.
+/// The linear RGB radiance seen along `ray`, whose cone is `cone` (it filters textures).
 pub fn shade<P: MemoryProbe>(
     scene: &SceneView<'_>,
     ray: &Ray,
+    cone: RayCone,
     hit: Option<Hit>,
     background: Vec3,
     probe: &mut P,
 ) -> Vec3 {
     let Some(hit) = hit else { return background };
-    let surface = Surface::at(scene, ray, &hit, probe);
+    let surface = Surface::at(scene, ray, &hit, cone, probe);
     let (n, point) = (surface.normal, surface.point);
     let mut light = Vec3::ZERO;
     // The lights before the area lights: an image's emitters cost this kernel nothing.

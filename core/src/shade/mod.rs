@@ -9,6 +9,7 @@ pub mod lambert;
 pub mod path;
 pub mod radiance_sum;
 pub mod raster;
+pub mod ray_cone;
 pub mod ray_record;
 pub mod rng;
 pub mod shader;

@@ -71,7 +71,7 @@ pub fn shade_path<P: MemoryProbe>(
             None => rec.weight * opts.background,
         };
     };
-    let s = Surface::at(scene, &rec.ray, &hit, probe);
+    let s = Surface::at(scene, &rec.ray, &hit, rec.cone, probe);
     let m = s.material;
     let n = s.normal;
     let areas = scene.area_light_count();
@@ -111,7 +111,7 @@ pub fn shade_path<P: MemoryProbe>(
                 let dir = cosine_direction(n, u(3), u(4));
                 let weight = rec.weight * diffuse * l.sky(dir);
                 if weight.max_element() > 0.0 && weight.is_finite() && dir != Vec3::ZERO {
-                    emit(rec.child(s.ray_along(dir), weight, RayKind::Shadow, rec.depth));
+                    emit(rec.child(s.ray_along(dir), weight, RayKind::Shadow, rec.depth, s.cone));
                 }
             }
         }
@@ -138,7 +138,7 @@ pub fn shade_path<P: MemoryProbe>(
             let weight = rec.weight * reflectance * Vec3::from(l.color) * (g / pdf);
             if pdf > 0.0 && weight.max_element() > 0.0 && weight.is_finite() {
                 // The sample lies on its triangle: stop just short of it.
-                emit(rec.child(s.ray_toward(q, 1.0 - 1e-4), weight, RayKind::Shadow, rec.depth));
+                emit(rec.child(s.ray_toward(q, 1.0 - 1e-4), weight, RayKind::Shadow, rec.depth, s.cone));
             }
         }
     }
@@ -147,7 +147,7 @@ pub fn shade_path<P: MemoryProbe>(
     }
     let mut bounce = |dir: Vec3, weight: Vec3, kind: RayKind| {
         if weight.max_element() > 0.0 && dir != Vec3::ZERO && weight.is_finite() {
-            emit(rec.child(s.ray_along(dir), weight, kind, rec.depth + 1));
+            emit(rec.child(s.ray_along(dir), weight, kind, rec.depth + 1, s.cone));
         }
     };
     // One bounce off the diffuse or the glossy lobe, picked in proportion to their

@@ -8,6 +8,7 @@ use glam::Vec3;
 use heapless::Deque;
 
 use crate::ray::Ray;
+use crate::shade::ray_cone::RayCone;
 
 /// What a ray is for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -65,23 +66,25 @@ pub struct RayRecord {
     /// Sample number within the pixel (path tracing's random numbers are drawn from
     /// pixel, sample and bounce).
     pub sample: u32,
+    /// The cone of space the ray stands for, for texture filtering.
+    pub cone: RayCone,
 }
 
 impl RayRecord {
-    /// A primary ray of weight one.
+    /// A primary ray of weight one, of no cone width (textures at their finest level).
     pub fn primary(ray: Ray, pixel: u32) -> RayRecord {
-        RayRecord { ray, pixel, weight: Vec3::ONE, kind: RayKind::Primary, depth: 0, sample: 0 }
+        RayRecord { ray, pixel, weight: Vec3::ONE, kind: RayKind::Primary, depth: 0, sample: 0, cone: RayCone::POINT }
     }
 
-    /// Eye ray `sample` of `samples` through pixel `pixel`: weight `1 / samples`, so the
-    /// pixel's records add up to the mean of its samples.
-    pub fn eye_sample(ray: Ray, pixel: u32, sample: u32, samples: u32) -> RayRecord {
-        RayRecord { weight: Vec3::splat(1.0 / samples.max(1) as f32), sample, ..RayRecord::primary(ray, pixel) }
+    /// Eye ray `sample` of `samples` through pixel `pixel`, with the eye's `cone`: weight
+    /// `1 / samples`, so the pixel's records add up to the mean of its samples.
+    pub fn eye_sample(ray: Ray, pixel: u32, sample: u32, samples: u32, cone: RayCone) -> RayRecord {
+        RayRecord { weight: Vec3::splat(1.0 / samples.max(1) as f32), sample, cone, ..RayRecord::primary(ray, pixel) }
     }
 
-    /// A record continuing from `self` (same pixel and sample).
-    pub fn child(&self, ray: Ray, weight: Vec3, kind: RayKind, depth: u8) -> RayRecord {
-        RayRecord { ray, pixel: self.pixel, weight, kind, depth, sample: self.sample }
+    /// A record continuing from `self` (same pixel and sample) with `cone`.
+    pub fn child(&self, ray: Ray, weight: Vec3, kind: RayKind, depth: u8, cone: RayCone) -> RayRecord {
+        RayRecord { ray, pixel: self.pixel, weight, kind, depth, sample: self.sample, cone }
     }
 }
 

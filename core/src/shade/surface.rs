@@ -9,6 +9,7 @@ use crate::image::{LightRecord, MaterialRecord, SceneView, NULL_INDEX};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::shade::blinn_phong::{lobes, BlinnPhong};
+use crate::shade::ray_cone::RayCone;
 use crate::shade::ray_record::{RayKind, RayRecord};
 use crate::shade::texture;
 
@@ -30,11 +31,14 @@ pub struct Surface {
     pub tint: Vec3,
     /// The scene's largest extent (new rays start off the surface in proportion to it).
     pub scene_extent: f32,
+    /// The arriving ray's cone at the hit: what rays leaving the surface continue.
+    pub cone: RayCone,
 }
 
 impl Surface {
-    /// Reads the shading data of `hit` along `ray`.
-    pub fn at<P: MemoryProbe>(scene: &SceneView<'_>, ray: &Ray, hit: &Hit, probe: &mut P) -> Surface {
+    /// Reads the shading data of `hit` along `ray`, whose cone is `cone` (it filters the
+    /// texture).
+    pub fn at<P: MemoryProbe>(scene: &SceneView<'_>, ray: &Ray, hit: &Hit, cone: RayCone, probe: &mut P) -> Surface {
         let material = scene.material_of(hit.prim, probe);
         let [p0, p1, p2] = scene.triangle(hit.prim, probe);
         let geometric = (p1 - p0).cross(p2 - p0);
@@ -51,9 +55,15 @@ impl Surface {
                 normal = n;
             }
             tint = Vec3::from(a.color) * w0 + Vec3::from(b.color) * w1 + Vec3::from(c.color) * w2;
-            if material.texture != NULL_INDEX {
+            if let Some(t) = scene.texture(material.texture).filter(|_| material.texture != NULL_INDEX) {
                 let uv = [a.uv[0] * w0 + b.uv[0] * w1 + c.uv[0] * w2, a.uv[1] * w0 + b.uv[1] * w1 + c.uv[1] * w2];
-                if let Some(t) = texture::sample(scene, material.texture, uv, probe) {
+                // The footprint's mipmap level: the triangle's texels per unit of area,
+                // the cone's width at the hit and the incidence.
+                let (e1, e2) = ([b.uv[0] - a.uv[0], b.uv[1] - a.uv[1]], [c.uv[0] - a.uv[0], c.uv[1] - a.uv[1]]);
+                let texel_area = (e1[0] * e2[1] - e1[1] * e2[0]).abs() * t.width as f32 * t.height as f32;
+                let cos = geometric.normalize_or_zero().dot(ray.dir.normalize_or_zero());
+                let level = RayCone::level(cone.width_at(hit.t, ray.dir), cos, texel_area, geometric.length());
+                if let Some(t) = texture::sample(scene, material.texture, uv, level, probe) {
                     tint *= t;
                 }
             }
@@ -69,7 +79,8 @@ impl Surface {
         }
         let (lo, hi) = scene.bounds();
         let scene_extent = (hi - lo).max_element();
-        Surface { point: ray.at(hit.t), normal: n, entering, geometric, material, tint, scene_extent }
+        let cone = cone.at_hit(hit.t, ray.dir);
+        Surface { point: ray.at(hit.t), normal: n, entering, geometric, material, tint, scene_extent, cone }
     }
 
     /// The diffuse reflectance: `Kd` times the vertex colour (and texture), clamped to
@@ -133,7 +144,7 @@ impl Surface {
         };
         let weight = rec.weight * reflectance * Vec3::from(light.color) * cos;
         (cos > 0.0 && weight.max_element() > 0.0 && weight.is_finite())
-            .then(|| rec.child(ray, weight, RayKind::Shadow, rec.depth))
+            .then(|| rec.child(ray, weight, RayKind::Shadow, rec.depth, self.cone))
     }
 
     /// What a light adds without a shadow ray (ambient; an environment's mean), times

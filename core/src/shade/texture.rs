@@ -1,6 +1,7 @@
-//! Diffuse texture lookup: bilinear filtering of the four nearest texels in linear
-//! colour (texels are stored as 8-bit sRGB), with repeat or clamp wrapping. OBJ's `v`
-//! runs upwards, the texture's rows downwards.
+//! Diffuse texture lookup: trilinear mipmap filtering — bilinear filtering of the four
+//! nearest texels in linear colour (texels are stored as 8-bit sRGB) on the two levels
+//! nearest the footprint's, blended — with repeat or clamp wrapping. OBJ's `v` runs
+//! upwards, the texture's rows downwards.
 
 use glam::Vec3;
 
@@ -31,24 +32,52 @@ fn axis(u: f32, n: u32, mode: u32) -> (i64, f32) {
     (x0 as i64, x - x0)
 }
 
-/// The linear RGB colour of texture `index` at texture coordinates `uv`, or `None` when
-/// the image has no such texture or the coordinates are not finite.
-pub fn sample<P: MemoryProbe>(scene: &SceneView<'_>, index: u32, uv: [f32; 2], probe: &mut P) -> Option<Vec3> {
+/// The linear RGB colour of texture `index` at texture coordinates `uv`, filtered for a
+/// footprint of mipmap level `level` (from [`crate::shade::ray_cone::RayCone::level`]):
+/// bilinear on level 0 at or below 0, trilinear between the two nearest levels above it
+/// (Williams 1983), the coarsest level beyond the chain. `None` when the image has no
+/// such texture or the coordinates are not finite.
+pub fn sample<P: MemoryProbe>(
+    scene: &SceneView<'_>,
+    index: u32,
+    uv: [f32; 2],
+    level: f32,
+    probe: &mut P,
+) -> Option<Vec3> {
     let t = scene.texture(index)?;
     if !(uv[0].is_finite() && uv[1].is_finite()) {
         return None;
     }
+    // Not above 0 (NaN included): the finest level alone.
+    if level.is_nan() || level <= 0.0 {
+        return Some(bilinear(scene, &t.level(0), uv, probe));
+    }
+    let last = t.levels.saturating_sub(1) as f32;
+    let level = level.min(last);
+    let k = libm::floorf(level);
+    let f = level - k;
+    let fine = bilinear(scene, &t.level(k as u32), uv, probe);
+    if f > 0.0 {
+        let coarse = bilinear(scene, &t.level(k as u32 + 1), uv, probe);
+        Some(fine * (1.0 - f) + coarse * f)
+    } else {
+        Some(fine)
+    }
+}
+
+/// Bilinear filtering of the four texels nearest `uv` on one level.
+fn bilinear<P: MemoryProbe>(scene: &SceneView<'_>, t: &TextureRecord, uv: [f32; 2], probe: &mut P) -> Vec3 {
     // Rows from the top: the row coordinate is 1 − v, or −v where it wraps (the same
     // modulo 1, and exact).
     let row = if t.wrap == TextureRecord::CLAMP { 1.0 - uv[1] } else { -uv[1] };
     let ((x0, fx), (y0, fy)) = (axis(uv[0], t.width, t.wrap), axis(row, t.height, t.wrap));
     let mut texel = |dx: i64, dy: i64| {
-        let c = scene.texel(&t, wrap(x0 + dx, t.width, t.wrap), wrap(y0 + dy, t.height, t.wrap), probe);
+        let c = scene.texel(t, wrap(x0 + dx, t.width, t.wrap), wrap(y0 + dy, t.height, t.wrap), probe);
         Vec3::new(srgb8_to_linear(c[0]), srgb8_to_linear(c[1]), srgb8_to_linear(c[2]))
     };
     let top = texel(0, 0) * (1.0 - fx) + texel(1, 0) * fx;
     let bottom = texel(0, 1) * (1.0 - fx) + texel(1, 1) * fx;
-    Some(top * (1.0 - fy) + bottom * fy)
+    top * (1.0 - fy) + bottom * fy
 }
 
 #[cfg(test)]

@@ -39,7 +39,7 @@ pub fn shade_whitted<P: MemoryProbe>(
     emit: &mut impl FnMut(RayRecord),
 ) -> Vec3 {
     let Some(hit) = hit else { return rec.weight * opts.background };
-    let s = Surface::at(scene, &rec.ray, &hit, probe);
+    let s = Surface::at(scene, &rec.ray, &hit, rec.cone, probe);
     let m = s.material;
     let (diffuse, glossy) = s.lobes();
     let mut now = Vec3::from(m.emission);
@@ -58,7 +58,7 @@ pub fn shade_whitted<P: MemoryProbe>(
         let d = rec.ray.dir.normalize_or_zero();
         specular_rays(&m, d, n, s.entering, |dir, factor, kind| {
             if factor.max_element() > 0.0 && dir != Vec3::ZERO {
-                emit(rec.child(s.ray_along(dir), rec.weight * factor, kind, rec.depth + 1));
+                emit(rec.child(s.ray_along(dir), rec.weight * factor, kind, rec.depth + 1, s.cone));
             }
         });
     }

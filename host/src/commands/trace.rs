@@ -9,6 +9,7 @@ use crate::scene;
 use crate::tracer::IntersectorKind;
 use anyhow::{anyhow, bail, Result};
 use rayon::prelude::*;
+use raypipe_core::shade::ray_cone::RayCone;
 use raypipe_core::shade::surface::Surface;
 use raypipe_core::traverse::occlusion::occluded;
 use raypipe_core::{Hit, NoProbe, Ray, RayCounters, SceneView, Vec3};
@@ -171,7 +172,7 @@ fn closest_records(
         let hit = (h.prim >= 0 && !bad).then_some(Hit { t: h.t, u: h.u, v: h.v, prim: h.prim as u32 });
         let normals = fields.contains(&Field::ShadingNormal) || fields.contains(&Field::GeometricNormal);
         let surface = match (&hit, normals) {
-            (Some(hit), true) => Some(Surface::at(view, ray, hit, &mut NoProbe)),
+            (Some(hit), true) => Some(Surface::at(view, ray, hit, RayCone::POINT, &mut NoProbe)),
             _ => None,
         };
         let mut at = 0;

@@ -124,6 +124,7 @@ impl<'s, I: Intersector> StreamMachine<'s, I> {
         let samples = self.eye.samples() as usize;
         let (w, h) = (self.eye.width, self.eye.height);
         let (lo, hi) = self.scene.test_bounds();
+        let cone = self.eye.cone();
         // Wave 0: one screen of eye rays per sample (Purcell's path tracer traces one
         // eye ray per sample).
         let mut wave: Vec<Vec<Fragment>> = Vec::with_capacity(samples);
@@ -132,7 +133,7 @@ impl<'s, I: Intersector> StreamMachine<'s, I> {
             for y in 0..h {
                 for x in 0..w {
                     let p = y * w + x;
-                    let record = |ray| RayRecord::eye_sample(ray, p, s as u32, samples as u32);
+                    let record = |ray| RayRecord::eye_sample(ray, p, s as u32, samples as u32, cone);
                     let frag = match &self.visibility {
                         Some(v) => match v.get(s * (w * h) as usize + p as usize) {
                             Some(&(Some(ray), hit)) => Fragment::Visible(record(ray), hit),

@@ -70,7 +70,7 @@ impl<I: Intersector> StreamMachine<'_, I> {
                 None => {
                     shaded += 1;
                     lit += hit.is_some() as u64;
-                    let color = shade(&scene, &rec.ray, hit, background, &mut probe);
+                    let color = shade(&scene, &rec.ray, rec.cone, hit, background, &mut probe);
                     if sums {
                         if let Some(r) = self.radiance.get_mut(pixel) {
                             r.add(color * rec.weight);

@@ -9,6 +9,7 @@ use raypipe::aligned::AlignedBytes;
 use raypipe::tracer::trace;
 use raypipe_core::packet::step::trace_packet_steps;
 use raypipe_core::shade::lambert::shade;
+use raypipe_core::shade::ray_cone::RayCone;
 use raypipe_core::traverse::occlusion::occluded;
 use raypipe_core::traverse::walk::trace_walk;
 use raypipe_core::{NoProbe, Ray, RayCounters, SceneView, Vec3, Watertight, Q12_12};
@@ -41,7 +42,7 @@ fuzz_target!(|data: &[u8]| {
         assert_eq!(hit.map(|h| (h.t.to_bits(), h.prim)), generic.map(|h| (h.t.to_bits(), h.prim)));
         let any = occluded::<Watertight, _>(&view, ray, &mut NoProbe, &mut RayCounters::default());
         assert_eq!(any, hit.is_some());
-        let _ = shade(&view, ray, hit, Vec3::ZERO, &mut NoProbe);
+        let _ = shade(&view, ray, RayCone::POINT, hit, Vec3::ZERO, &mut NoProbe);
         // The fixed-point datapath: bounded and panic-free on any image; on a BVH (or
         // none) its walk agrees with its own single-ray kernel.
         let fixed = trace_walk::<Q12_12, _>(&view, ray, &mut NoProbe);
