@@ -29,7 +29,7 @@ fn checker_floor() -> Scene {
         .map(|p| ShadingVertex { normal: [0.0, 1.0, 0.0], uv: [p[0] / 5.0, p[2] / 5.0], color: [1.0; 3] })
         .collect();
     let rgba = (0..SIDE * SIDE)
-        .flat_map(|i| if (i % SIDE + i / SIDE) % 2 == 0 { [255u8; 4] } else { [0, 0, 0, 255] })
+        .flat_map(|i| if (i % SIDE + i / SIDE).is_multiple_of(2) { [255u8; 4] } else { [0, 0, 0, 255] })
         .collect();
     let mesh = Mesh {
         positions,
