@@ -113,7 +113,12 @@ fn emitters_centre(mesh: &Mesh, areas: &[LightRecord]) -> Vec3 {
 /// direction (light from above and ahead shows shapes and casts visible shadows).
 pub fn light_for_camera(mesh: &Mesh, camera: &CameraRecord) -> Vec3 {
     let (lo, hi) = mesh.bounds();
-    let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
+    light_in_view(Vec3::from(lo), Vec3::from(hi), camera, |ray| first_hit(mesh, ray))
+}
+
+/// [`light_for_camera`] for a scene of bounds `lo`..`hi` whose nearest hit along a ray
+/// `first_hit` gives (a mesh before building, or a built image's structure).
+pub fn light_in_view(lo: Vec3, hi: Vec3, camera: &CameraRecord, first_hit: impl Fn(&Ray) -> Option<f32>) -> Vec3 {
     let eye = Vec3::from(camera.eye);
     let forward = (Vec3::from(camera.look_at) - eye).normalize_or_zero();
     let right = forward.cross(Vec3::from(camera.up)).normalize_or_zero();
@@ -126,7 +131,7 @@ pub fn light_for_camera(mesh: &Mesh, camera: &CameraRecord) -> Vec3 {
         }
         let ray = Ray::new(eye, dir);
         let Some((enter, exit)) = clip_ray(&ray, lo, hi) else { continue };
-        let free_end = first_hit(mesh, &ray).unwrap_or(f32::INFINITY).min(exit);
+        let free_end = first_hit(&ray).unwrap_or(f32::INFINITY).min(exit);
         let start = enter.max(0.0);
         if free_end <= start {
             continue;

@@ -24,6 +24,8 @@ pub struct ImageWriter {
     bounds: ([f32; 3], [f32; 3]),
     counts: (u32, u32),
     sections: Vec<(SectionKind, Vec<u8>, u32)>,
+    /// Header flags.
+    pub flags: u32,
 }
 
 /// The vertex indices written for triangle `t`. A zero-area triangle is written with
@@ -46,6 +48,7 @@ impl ImageWriter {
             bounds: mesh.bounds(),
             counts: (mesh.triangles.len() as u32, mesh.positions.len() as u32),
             sections: Vec::new(),
+            flags: 0,
         };
         let positions: Vec<Position> = mesh.positions.iter().map(|&p| Position(p)).collect();
         let triangles: Vec<TriangleRecord> = mesh.triangles.iter().map(|&t| TriangleRecord(stored(mesh, t))).collect();
@@ -163,16 +166,21 @@ impl ImageWriter {
         self
     }
 
-    /// Lays the sections out and computes the checksum.
-    /// A copy of the valid image `image` with LIGHTS and LIGHT_ALIAS replaced: every
-    /// other section's bytes as they are, laid out anew.
-    pub fn replace_lights(image: &[u8], lights: &[LightRecord], alias: &[LightAlias]) -> Result<AlignedBytes> {
+    /// A copy of the valid image `image` with LIGHTS and LIGHT_ALIAS replaced and the
+    /// header flags `flags`: every other section's bytes as they are, laid out anew.
+    pub fn replace_lights(
+        image: &[u8],
+        lights: &[LightRecord],
+        alias: &[LightAlias],
+        flags: u32,
+    ) -> Result<AlignedBytes> {
         let header: Header = bytemuck::pod_read_unaligned(&image[..64]);
         let mut w = ImageWriter {
             accel: header.accel,
             bounds: (header.bounds_min, header.bounds_max),
             counts: (header.triangle_count, header.vertex_count),
             sections: Vec::new(),
+            flags,
         };
         for k in 0..header.section_count as usize {
             let e: SectionEntry = bytemuck::pod_read_unaligned(&image[64 + 16 * k..80 + 16 * k]);
@@ -193,6 +201,7 @@ impl ImageWriter {
         w.finish()
     }
 
+    /// Lays the sections out and computes the checksum.
     pub fn finish(&self) -> Result<AlignedBytes> {
         let align = SECTION_ALIGN as u64;
         let table_end = 64 + 16 * self.sections.len() as u64;
@@ -214,7 +223,7 @@ impl ImageWriter {
         let header = Header {
             magic: MAGIC,
             version: FORMAT_VERSION,
-            flags: 0,
+            flags: self.flags,
             accel: self.accel,
             section_count: self.sections.len() as u32,
             total_size: total as u32,

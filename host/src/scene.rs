@@ -6,7 +6,9 @@ use std::time::Instant;
 
 use anyhow::{anyhow, bail, Result};
 use glam::Vec3;
-use raypipe_core::image::{Bvh4Node, Bvh8Node, CameraRecord, LightRecord, TriBlock4, WideNode, MAGIC};
+use raypipe_core::image::{
+    Bvh4Node, Bvh8Node, CameraRecord, LightRecord, TriBlock4, WideNode, FLAG_DEFAULT_LIGHT, MAGIC,
+};
 use raypipe_core::{NoProbe, Ray, RayCounters, SceneView, Watertight};
 
 use crate::tracer::trace;
@@ -270,11 +272,15 @@ pub fn framing_camera(lo: [f32; 3], hi: [f32; 3]) -> CameraRecord {
 /// user's (`--light`, `--sun`, `--sky`) plus a dim ambient term and the emitters as area
 /// lights, else the defaults for `camera` ([`crate::default_lights`]). Area lights go
 /// last. Returns one line describing them.
-fn choose_lights(name: &str, mesh: &mut Mesh, camera: &CameraRecord, user: &[LightRecord]) -> Result<String> {
+/// The mesh's lights: the user's, the input's, or the default; also whether the default
+/// point light was placed for `camera` (then the image says so: another view may place
+/// it again).
+fn choose_lights(name: &str, mesh: &mut Mesh, camera: &CameraRecord, user: &[LightRecord]) -> Result<(String, bool)> {
     if user.is_empty() && mesh.lights.is_empty() {
         let (lights, note) = crate::default_lights::default_lights(mesh, camera);
+        let for_camera = lights.iter().any(|l| l.kind == LightRecord::POINT);
         mesh.lights = lights;
-        return Ok(note);
+        return Ok((note, for_camera));
     }
     if !user.is_empty() {
         check_user_lights(name, user)?;
@@ -283,10 +289,11 @@ fn choose_lights(name: &str, mesh: &mut Mesh, camera: &CameraRecord, user: &[Lig
         mesh.lights.push(LightRecord { position: [0.0; 3], kind: LightRecord::AMBIENT, color: [0.1; 3], triangle: 0 });
         let n = areas.len();
         mesh.lights.extend(areas);
-        return Ok(format!("{} given light{}{}", user.len(), if user.len() == 1 { "" } else { "s" }, area_note(n)));
+        let note = format!("{} given light{}{}", user.len(), if user.len() == 1 { "" } else { "s" }, area_note(n));
+        return Ok((note, false));
     }
     mesh.lights.sort_by_key(|l| l.kind == LightRecord::AREA);
-    Ok(format!("{} lights from the input", mesh.lights.len()))
+    Ok((format!("{} lights from the input", mesh.lights.len()), false))
 }
 
 fn area_note(n: usize) -> String {
@@ -311,6 +318,33 @@ fn check_user_lights(name: &str, user: &[LightRecord]) -> Result<()> {
 /// `user`'s (its emitters stay area lights): `--light` and friends on a built image.
 pub fn relight(scene: &Scene, user: &[LightRecord]) -> Result<Scene> {
     check_user_lights(&scene.name, user)?;
+    replace_shading_lights(scene, user, 0)
+}
+
+/// The image `scene`, whose point light is raypipe's default ([`FLAG_DEFAULT_LIGHT`]),
+/// with that light placed again for `camera` (another view than the image's); `None`
+/// when the image's light is not a default one. The note says where it went.
+pub fn relight_for_camera(scene: &Scene, camera: &CameraRecord) -> Result<Option<(Scene, String)>> {
+    let view = scene.view()?;
+    if !view.has_default_light() {
+        return Ok(None);
+    }
+    let (lo, hi) = view.bounds();
+    let p = crate::default_lights::light_in_view(lo, hi, camera, |ray| {
+        trace::<Watertight, _>(&view, ray, &mut NoProbe, &mut RayCounters::default()).map(|h| h.t)
+    });
+    let lights: Vec<LightRecord> = (0..view.shading_light_count())
+        .map(|i| view.light(i, &mut NoProbe))
+        .map(|l| if l.kind == LightRecord::POINT { LightRecord { position: p.to_array(), ..l } } else { l })
+        .filter(|l| l.kind != LightRecord::AMBIENT)
+        .collect();
+    let out = replace_shading_lights(scene, &lights, FLAG_DEFAULT_LIGHT)?;
+    Ok(Some((out, format!("point light at ({:.3}, {:.3}, {:.3}), chosen for the camera", p.x, p.y, p.z))))
+}
+
+/// The image `scene` with `lights`, a dim ambient term and its own area lights, and the
+/// header flags `flags`.
+fn replace_shading_lights(scene: &Scene, user: &[LightRecord], flags: u32) -> Result<Scene> {
     let view = scene.view()?;
     let first_area = view.shading_light_count();
     let areas: Vec<LightRecord> = (first_area..view.light_count()).map(|i| view.light(i, &mut NoProbe)).collect();
@@ -324,8 +358,9 @@ pub fn relight(scene: &Scene, user: &[LightRecord]) -> Result<Scene> {
             crate::light_distribution::triangle_power(a, b, c, l.color)
         })
         .collect();
-    let image = ImageWriter::replace_lights(&scene.image, &lights, &crate::light_distribution::alias_table(&power))
-        .map_err(|e| anyhow!("{}: {e}", scene.name))?;
+    let image =
+        ImageWriter::replace_lights(&scene.image, &lights, &crate::light_distribution::alias_table(&power), flags)
+            .map_err(|e| anyhow!("{}: {e}", scene.name))?;
     let out = Scene { name: scene.name.clone(), image, report: scene.report.clone() };
     out.view().map_err(|e| anyhow!("internal error: relit an invalid image: {e}"))?;
     Ok(out)
@@ -358,7 +393,7 @@ pub fn build(
     mesh.validate(&name)?;
     let (lo, hi) = mesh.bounds();
     let camera = camera.merged(opts.camera).apply(&framing_camera(lo, hi));
-    let lights_note = choose_lights(&name, &mut mesh, &camera, &opts.lights)?;
+    let (lights_note, default_light) = choose_lights(&name, &mut mesh, &camera, &opts.lights)?;
     let mut report = BuildReport {
         triangles: mesh.triangles.len(),
         vertices: mesh.positions.len(),
@@ -374,6 +409,9 @@ pub fn build(
         );
     }
     let mut writer = ImageWriter::new(&mesh);
+    if default_light {
+        writer.flags |= FLAG_DEFAULT_LIGHT;
+    }
     if opts.triangles == TriangleLayout::Wald {
         writer.wald_triangles(&mesh);
     }

@@ -954,6 +954,23 @@ fn lights_on_obj_and_image_and_info() {
     assert!(err.contains("warning:") && err.contains("--accel applies when building"), "{err}");
     assert_ne!(decode(&d.join("image.png")).2, decode(&d.join("relit.png")).2, "the new light is used");
 
+    // The image's default light was placed for its own camera: seen from elsewhere it is
+    // placed again, as for the OBJ built for that view.
+    assert!(!err.contains("placed again"), "{err}");
+    let moved = ["--eye", "2.5,2,2.5", "--size", "48x36"];
+    let o = raypipe(d, &[&["render", image][..], &moved, &["-o", "moved.png"]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("default light is placed again for this camera"), "{}", stderr(&o));
+    let obj = fixtures().join("tetra.obj");
+    let o = raypipe(
+        d,
+        &[&["render", obj.to_str().unwrap()][..], &moved, &["--grid-min-dim", "4", "-o", "obj.png"]].concat(),
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(decode(&d.join("moved.png")).2, decode(&d.join("obj.png")).2, "the same light as built for that view");
+    let o = raypipe(d, &["render", image, "--size", "48x36", "-o", "again.png"]);
+    assert!(!stderr(&o).contains("placed again"), "its own camera keeps its light: {}", stderr(&o));
+
     let o = raypipe(d, &["info", image]);
     assert!(o.status.success(), "{}", stderr(&o));
     let out = String::from_utf8_lossy(&o.stdout);

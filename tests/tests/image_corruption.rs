@@ -54,7 +54,8 @@ fn header_corruptions() {
     assert_eq!(corrupt(|b| b[0] = b'X'), SceneError::BadMagic);
     assert_eq!(corrupt(|b| put_u32(b, 8, 1)), SceneError::UnsupportedVersion { found: 1, supported: 2 });
     assert_eq!(corrupt(|b| put_u32(b, 8, 3)), SceneError::UnsupportedVersion { found: 3, supported: 2 });
-    assert_eq!(corrupt(|b| put_u32(b, 12, 1)), SceneError::UnknownFlags(1));
+    assert_eq!(corrupt(|b| put_u32(b, 12, 2)), SceneError::UnknownFlags(2));
+    assert_eq!(corrupt(|b| put_u32(b, 12, 0x8000_0001)), SceneError::UnknownFlags(0x8000_0000));
     assert_eq!(corrupt(|b| put_u32(b, 16, 9)), SceneError::UnknownAccel(9));
     assert!(matches!(
         corrupt(|b| put_u32(b, 56, 31)),

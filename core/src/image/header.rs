@@ -7,13 +7,19 @@ pub const MAGIC: [u8; 8] = *b"RPSCENE\0";
 /// The format version this crate reads and writes.
 pub const FORMAT_VERSION: u32 = 2;
 
+/// Header flag: the image's point light is raypipe's default, placed for the image's
+/// camera (not the author's); a driver rendering another view may place it again.
+pub const FLAG_DEFAULT_LIGHT: u32 = 1;
+/// Every flag this version defines.
+pub const KNOWN_FLAGS: u32 = FLAG_DEFAULT_LIGHT;
+
 /// Image header, 64 bytes at offset 0.
 ///
 /// | offset | field |
 /// |---|---|
 /// | 0  | magic `"RPSCENE\0"` |
 /// | 8  | version |
-/// | 12 | flags (must be 0 in version 2) |
+/// | 12 | flags ([`FLAG_DEFAULT_LIGHT`]; no other bit may be set) |
 /// | 16 | acceleration structure kind |
 /// | 20 | number of sections |
 /// | 24 | total image size in bytes |
@@ -29,7 +35,7 @@ pub struct Header {
     pub magic: [u8; 8],
     /// [`FORMAT_VERSION`].
     pub version: u32,
-    /// Reserved feature flags; zero in version 2.
+    /// Feature flags: [`FLAG_DEFAULT_LIGHT`] or none.
     pub flags: u32,
     /// [`AccelKind`] as a number.
     pub accel: u32,

@@ -13,7 +13,9 @@ mod view;
 
 pub use crc32::{crc32, Crc32};
 pub use embed::Aligned64;
-pub use header::{AccelKind, Header, SectionEntry, SectionKind, FORMAT_VERSION, MAGIC};
+pub use header::{
+    AccelKind, Header, SectionEntry, SectionKind, FLAG_DEFAULT_LIGHT, FORMAT_VERSION, KNOWN_FLAGS, MAGIC,
+};
 pub use records::{
     Bvh4Node, Bvh8Node, BvhNode, CameraRecord, GridRecord, KdNode, LightAlias, LightRecord, MaterialRecord, Position,
     ShadingVertex, TextureRecord, TriBlock4, TriangleRecord, WaldTriangle, WideNode, NULL_INDEX,

@@ -6,7 +6,10 @@ use bytemuck::Pod;
 use glam::Vec3;
 
 use super::crc32::Crc32;
-use super::header::{AccelKind, Header, SectionEntry, SectionKind, CHECKSUM_OFFSET, FORMAT_VERSION, MAGIC};
+use super::header::{
+    AccelKind, Header, SectionEntry, SectionKind, CHECKSUM_OFFSET, FLAG_DEFAULT_LIGHT, FORMAT_VERSION, KNOWN_FLAGS,
+    MAGIC,
+};
 use super::records::{
     Bvh4Node, Bvh8Node, BvhNode, CameraRecord, GridRecord, KdNode, LightAlias, LightRecord, MaterialRecord, Position,
     ShadingVertex, TextureRecord, TriBlock4, TriangleRecord, WaldTriangle, WideNode, NULL_INDEX,
@@ -637,8 +640,8 @@ impl<'a> SceneView<'a> {
         if computed != header.checksum {
             return Err(SceneError::ChecksumMismatch { stored: header.checksum, computed });
         }
-        if header.flags != 0 {
-            return Err(SceneError::UnknownFlags(header.flags));
+        if header.flags & !KNOWN_FLAGS != 0 {
+            return Err(SceneError::UnknownFlags(header.flags & !KNOWN_FLAGS));
         }
         let accel = AccelKind::from_u32(header.accel).ok_or(SceneError::UnknownAccel(header.accel))?;
 
@@ -1262,6 +1265,12 @@ impl<'a> SceneView<'a> {
     /// The materials.
     pub fn materials(&self) -> &'a [MaterialRecord] {
         self.materials
+    }
+
+    /// True when the image's point light is raypipe's default, placed for the image's
+    /// camera ([`FLAG_DEFAULT_LIGHT`]).
+    pub fn has_default_light(&self) -> bool {
+        self.header.flags & FLAG_DEFAULT_LIGHT != 0
     }
 
     /// Number of textures.

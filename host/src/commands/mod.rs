@@ -109,7 +109,8 @@ pub(crate) fn fmt_bytes(b: usize) -> String {
     }
 }
 
-pub(crate) fn camera_for(view: &raypipe_core::SceneView<'_>, args: &CameraArgs) -> Result<CameraRecord> {
+/// The camera `args` make of the image's own (or the framing camera), unchecked.
+fn camera_of(view: &raypipe_core::SceneView<'_>, args: &CameraArgs) -> Result<CameraRecord> {
     let base = match view.camera() {
         Some(c) => *c,
         None => {
@@ -117,7 +118,11 @@ pub(crate) fn camera_for(view: &raypipe_core::SceneView<'_>, args: &CameraArgs) 
             scene::framing_camera(lo.to_array(), hi.to_array())
         }
     };
-    let cam = args.resolve(&base)?;
+    args.resolve(&base)
+}
+
+pub(crate) fn camera_for(view: &raypipe_core::SceneView<'_>, args: &CameraArgs) -> Result<CameraRecord> {
+    let cam = camera_of(view, args)?;
     // Each image's own rays are not checked one by one; its corners and centre stand
     // for them (they bound the directions, and share the eye).
     let eye = crate::render::eye_rays(&cam, "camera")?;
@@ -137,7 +142,8 @@ pub(crate) fn warn_range(view: &raypipe_core::SceneView<'_>, rays: &[raypipe_cor
 /// Loads the scene the user named for a view: an OBJ is built for the camera that will
 /// render it (the default light is chosen for that camera); a built image gets the
 /// command line's lights in place of its own, with a note, and a warning for each
-/// structure flag it cannot apply.
+/// structure flag it cannot apply; a built image whose default light was placed for its
+/// own camera, rendered from another, gets it placed again, with a note.
 pub(crate) fn load_scene(path: Option<&Path>, structure: &StructureArgs, camera: &CameraArgs) -> Result<Scene> {
     let mut opts = structure.options();
     opts.camera = camera.spec()?;
@@ -153,6 +159,18 @@ pub(crate) fn load_scene(path: Option<&Path>, structure: &StructureArgs, camera:
         );
     }
     if opts.lights.is_empty() {
+        // An image whose point light raypipe placed for the image's own camera, rendered
+        // from another view: place it again for this one.
+        let view = scene.view()?;
+        let own = view.camera().copied();
+        let cam = camera_of(&view, camera)?;
+        let moved = own.is_none_or(|c| (c.eye, c.look_at, c.up) != (cam.eye, cam.look_at, cam.up));
+        if moved && view.has_default_light() {
+            if let Some((relit, where_)) = scene::relight_for_camera(&scene, &cam)? {
+                eprintln!("note: {}: the image's default light is placed again for this camera: {where_}", scene.name);
+                return Ok(relit);
+            }
+        }
         return Ok(scene);
     }
     eprintln!("note: {}: the given lights replace the image's (its emitters stay area lights)", scene.name);
