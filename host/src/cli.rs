@@ -197,7 +197,8 @@ pub struct TraceArgs {
     pub query: Query,
     /// Output fields, comma-separated. Closest: t, u, v, prim, ng (geometric normal,
     /// winding order, unit), ns (shading normal facing the ray, unit), material (id, -1
-    /// without); default t,u,v,prim. Any: occluded.
+    /// on a miss), object (OBJ o/g name, glTF node or scene-file mesh, in input order; -1
+    /// on a miss); default t,u,v,prim. Any: occluded.
     #[arg(long, value_name = "LIST", value_delimiter = ',')]
     pub fields: Vec<String>,
     #[command(flatten)]

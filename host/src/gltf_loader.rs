@@ -69,6 +69,7 @@ pub fn load_gltf_file(path: &Path) -> Result<(Mesh, LoadNotes, CameraSpec)> {
     let mut stack: Vec<(gltf::Node, Mat4)> = scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
     let mut skipped_modes = 0usize;
     let mut visited = 0usize;
+    let mut objects = 0u32;
     while let Some((node, parent)) = stack.pop() {
         visited += 1;
         if visited > doc.nodes().len() * 4 + 16 {
@@ -86,6 +87,9 @@ pub fn load_gltf_file(path: &Path) -> Result<(Mesh, LoadNotes, CameraSpec)> {
             }
         }
         if let Some(m) = node.mesh() {
+            // Each node that places a mesh is an object.
+            let object = objects;
+            objects += 1;
             let normal_matrix = Mat3::from_mat4(world).inverse().transpose();
             for prim in m.primitives() {
                 if prim.mode() != gltf::mesh::Mode::Triangles {
@@ -126,6 +130,7 @@ pub fn load_gltf_file(path: &Path) -> Result<(Mesh, LoadNotes, CameraSpec)> {
                 for t in indices.chunks_exact(3) {
                     mesh.triangles.push([t[0] + base, t[1] + base, t[2] + base]);
                     mesh.tri_materials.push(material);
+                    mesh.objects.push(object);
                 }
             }
         }

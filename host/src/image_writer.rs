@@ -61,6 +61,10 @@ impl ImageWriter {
             w.add(SectionKind::Materials, &mesh.materials);
             w.add(SectionKind::TriangleMaterials, &mesh.tri_materials);
         }
+        // One object needs no table.
+        if mesh.objects.iter().any(|&o| o != 0) {
+            w.add(SectionKind::TriangleObjects, &mesh.objects);
+        }
         if !mesh.lights.is_empty() {
             w.add(SectionKind::Lights, &mesh.lights);
             let alias = crate::light_distribution::mesh_alias_table(mesh);

@@ -27,6 +27,9 @@ pub struct Mesh {
     pub lights: Vec<LightRecord>,
     /// Diffuse textures, indexed by `MaterialRecord::texture`.
     pub textures: Vec<crate::texture_loader::TextureImage>,
+    /// Object id per triangle (same length as `triangles`: OBJ `o`/`g` names in order,
+    /// glTF nodes with a mesh, a scene file's meshes), or empty (one object).
+    pub objects: Vec<u32>,
 }
 
 impl Mesh {
@@ -50,6 +53,9 @@ impl Mesh {
         }
         if !self.shading.is_empty() && self.shading.len() != self.positions.len() {
             bail!("{name}: shading data does not match the vertices");
+        }
+        if !self.objects.is_empty() && self.objects.len() != self.triangles.len() {
+            bail!("{name}: object ids do not match the triangles");
         }
         for (i, m) in self.materials.iter().enumerate() {
             let mut vals =

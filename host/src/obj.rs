@@ -156,8 +156,16 @@ fn convert(name: &str, dir: Option<&Path>, result: tobj::LoadResult) -> Result<(
     let any_uv = models.iter().any(|m| !m.mesh.texcoords.is_empty());
     let shading = any_normals || any_colors || any_uv;
 
+    // Objects: a new `o`/`g` name starts one (tobj also splits an object where its
+    // material changes, keeping the name).
+    let mut object = 0u32;
+    let mut last_name: Option<&str> = None;
     for model in &models {
         let m = &model.mesh;
+        if last_name.is_some_and(|n| n != model.name) {
+            object += 1;
+        }
+        last_name = Some(&model.name);
         let arities_cover = m.face_arities.iter().map(|&a| a as usize).sum::<usize>() == m.indices.len();
         if m.positions.len() % 3 != 0 || !(m.face_arities.is_empty() && m.indices.len() % 3 == 0 || arities_cover) {
             bail!("{name}: malformed OBJ: object '{}' has incomplete data", model.name);
@@ -197,6 +205,7 @@ fn convert(name: &str, dir: Option<&Path>, result: tobj::LoadResult) -> Result<(
         let mut add = |t: [u32; 3]| {
             mesh.triangles.push(t.map(|v| v + base));
             mesh.tri_materials.push(material);
+            mesh.objects.push(object);
         };
         if m.face_arities.is_empty() {
             m.indices.chunks_exact(3).for_each(|t| add([t[0], t[1], t[2]]));

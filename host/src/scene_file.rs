@@ -255,6 +255,11 @@ fn append(merged: &mut Mesh, mut mesh: Mesh, m: Mat4, material: Option<(String, 
         normal: (normal_matrix * Vec3::from(s.normal)).normalize_or_zero().to_array(),
         ..*s
     }));
+    // Each listed mesh's objects follow the ones before it.
+    let object_base = merged.objects.iter().max().map_or(0, |&o| o + 1);
+    let objects =
+        if mesh.objects.len() == mesh.triangles.len() { mesh.objects.clone() } else { vec![0; mesh.triangles.len()] };
+    merged.objects.extend(objects.iter().map(|&o| o + object_base));
     merged.triangles.extend(mesh.triangles.iter().map(|t| t.map(|v| v + base)));
     let material_base = merged.materials.len() as u32;
     match material {

@@ -407,6 +407,15 @@ fn ray_queries_fields_and_invalid_rays() {
     assert!(i32::from_le_bytes(rec[28..32].try_into().unwrap()) >= 0);
     assert_eq!(f.len() - 10 - hl, 5 * 32);
 
+    // Object ids: the OBJ's `o` names in order (floor, light, ceiling, back_wall, …).
+    let o = raypipe(d, &["trace", obj, "--rays", "rays.npy", "--hits", "o.npy", "--fields", "object"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let f = std::fs::read(d.join("o.npy")).unwrap();
+    let hl = u16::from_le_bytes([f[8], f[9]]) as usize;
+    assert!(String::from_utf8_lossy(&f[10..10 + hl]).contains("('object', '<i4')"));
+    let ids: Vec<i32> = f[10 + hl..].chunks_exact(4).map(|c| i32::from_le_bytes(c.try_into().unwrap())).collect();
+    assert_eq!(ids, [3, -1, -1, -1, -1], "the back wall is the fourth object");
+
     let o = raypipe(d, &["trace", obj, "--rays", "rays.npy", "--hits", "x.npy", "--fields", "t,colour"]);
     assert_one_line_error(&o, "unknown field 'colour'");
     let o = raypipe(d, &["trace", obj, "--rays", "rays.npy", "--hits", "x.npy", "--query", "any", "--fields", "t"]);
@@ -1087,6 +1096,7 @@ color = [1.5, 1.5, 1.5]
     assert!(o.status.success(), "{}", stderr(&o));
     let out = String::from_utf8_lossy(&o.stdout);
     assert!(out.contains("triangles   8"), "6 of the tetra + 2 of the floor: {out}");
+    assert!(out.contains("3 objects"), "the tetra's two and the floor: {out}");
     assert!(out.contains("directional"), "the file's sun: {out}");
     assert!(out.contains("40x30"), "the file's camera: {out}");
     let o = raypipe(d, &["render", "scene.toml", "-o", "scene.png"]);

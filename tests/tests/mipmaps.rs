@@ -45,6 +45,7 @@ fn checker_floor() -> Scene {
             triangle: 0,
         }],
         textures: vec![TextureImage { width: SIDE, height: SIDE, rgba, wrap: TextureRecord::REPEAT }],
+        objects: Vec::new(),
     };
     scene::build("checker".into(), mesh, Vec::new(), Default::default(), &BuildOptions::default()).unwrap()
 }

@@ -157,11 +157,14 @@ pub enum SectionKind {
     /// [`crate::image::LightAlias`], 16 bytes each, one per area light in LIGHTS order
     /// (optional; without it the path tracer picks area lights uniformly).
     LightAlias = 19,
+    /// The object each triangle came from (an OBJ `o`/`g` name, a glTF node, a scene
+    /// file's mesh), u32 each, one per triangle (optional; hit queries report it).
+    TriangleObjects = 20,
 }
 
 impl SectionKind {
     /// Every kind, in table order.
-    pub const ALL: [SectionKind; 19] = [
+    pub const ALL: [SectionKind; 20] = [
         SectionKind::Positions,
         SectionKind::Triangles,
         SectionKind::Grid,
@@ -181,6 +184,7 @@ impl SectionKind {
         SectionKind::Bvh8Nodes,
         SectionKind::TriBlocks,
         SectionKind::LightAlias,
+        SectionKind::TriangleObjects,
     ];
 
     /// Decodes a section-table kind.
@@ -193,7 +197,11 @@ impl SectionKind {
         match self {
             SectionKind::Positions | SectionKind::Triangles => 12,
             SectionKind::Grid | SectionKind::Materials | SectionKind::Camera => 64,
-            SectionKind::GridCells | SectionKind::PrimLists | SectionKind::TriangleMaterials | SectionKind::Texels => 4,
+            SectionKind::GridCells
+            | SectionKind::PrimLists
+            | SectionKind::TriangleMaterials
+            | SectionKind::Texels
+            | SectionKind::TriangleObjects => 4,
             SectionKind::Textures => 32,
             SectionKind::ShadingVertices | SectionKind::Lights | SectionKind::BvhNodes => 32,
             SectionKind::KdNodes => 8,
@@ -227,6 +235,7 @@ impl SectionKind {
             SectionKind::Texels => "TEXELS",
             SectionKind::TriBlocks => "TRI_BLOCKS",
             SectionKind::LightAlias => "LIGHT_ALIAS",
+            SectionKind::TriangleObjects => "TRIANGLE_OBJECTS",
         }
     }
 }

@@ -549,6 +549,7 @@ pub struct SceneView<'a> {
     tri_blocks: &'a [TriBlock4],
     tri_materials: &'a [u32],
     materials: &'a [MaterialRecord],
+    tri_objects: &'a [u32],
     textures: &'a [TextureRecord],
     texels: &'a [u32],
     lights: &'a [LightRecord],
@@ -792,6 +793,14 @@ impl<'a> SceneView<'a> {
                 });
             }
         }
+        let tri_objects: &[u32] = s.slice(K::TriangleObjects)?;
+        if !tri_objects.is_empty() && tri_objects.len() as u32 != nt {
+            return Err(SceneError::CountMismatch {
+                section: K::TriangleObjects,
+                expected: nt,
+                found: tri_objects.len() as u32,
+            });
+        }
         let textures: &[TextureRecord] = s.slice(K::Textures)?;
         let texels: &[u32] = s.slice(K::Texels)?;
         for (i, t) in textures.iter().enumerate() {
@@ -894,6 +903,7 @@ impl<'a> SceneView<'a> {
             wald,
             tri_blocks,
             tri_materials,
+            tri_objects,
             materials,
             textures,
             texels,
@@ -1366,6 +1376,17 @@ impl<'a> SceneView<'a> {
     pub fn material_id<P: MemoryProbe>(&self, prim: u32, probe: &mut P) -> Option<u32> {
         probe.read(DataClass::Shading, self.tri_materials_addr.wrapping_add(prim.wrapping_mul(4)), 4);
         self.tri_materials.get(prim as usize).copied()
+    }
+
+    /// The object triangle `prim` came from (0 without TRIANGLE_OBJECTS).
+    pub fn object_of(&self, prim: u32) -> u32 {
+        self.tri_objects.get(prim as usize).copied().unwrap_or(0)
+    }
+
+    /// The number of objects: one more than the largest object id (1 without
+    /// TRIANGLE_OBJECTS: the whole scene is object 0).
+    pub fn object_count(&self) -> u32 {
+        self.tri_objects.iter().max().map_or(1, |&m| m.saturating_add(1))
     }
 
     /// Reads the material of triangle `prim` ([`MaterialRecord::DEFAULT`] if none).

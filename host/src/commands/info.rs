@@ -20,7 +20,13 @@ pub(crate) fn cmd_info(a: InfoArgs) -> Result<()> {
         "bounds      ({}, {}, {}) .. ({}, {}, {}), size {} x {} x {}",
         lo.x, lo.y, lo.z, hi.x, hi.y, hi.z, size.x, size.y, size.z
     );
-    println!("triangles   {} ({} vertices)", view.triangle_count(), view.vertex_count());
+    println!(
+        "triangles   {} ({} vertices, {} object{})",
+        view.triangle_count(),
+        view.vertex_count(),
+        view.object_count(),
+        if view.object_count() == 1 { "" } else { "s" }
+    );
     let materials = view.materials();
     let emissive = materials.iter().filter(|m| m.emission.iter().any(|&e| e > 0.0)).count();
     let textured = materials.iter().filter(|m| m.texture != raypipe_core::image::NULL_INDEX).count();

@@ -27,6 +27,7 @@ enum Field {
     GeometricNormal,
     ShadingNormal,
     Material,
+    Object,
 }
 
 impl Field {
@@ -39,8 +40,11 @@ impl Field {
             "ng" => Field::GeometricNormal,
             "ns" => Field::ShadingNormal,
             "material" => Field::Material,
+            "object" => Field::Object,
             other => {
-                bail!("--fields: unknown field '{other}' (t, u, v, prim, ng, ns, material; any-hit queries: occluded)")
+                bail!(
+                    "--fields: unknown field '{other}' (t, u, v, prim, ng, ns, material, object; any-hit queries: occluded)"
+                )
             }
         })
     }
@@ -62,6 +66,7 @@ impl Field {
             Field::GeometricNormal => ("ng", "'<f4', (3,)"),
             Field::ShadingNormal => ("ns", "'<f4', (3,)"),
             Field::Material => ("material", "'<i4'"),
+            Field::Object => ("object", "'<i4'"),
         }
     }
 }
@@ -196,6 +201,7 @@ fn closest_records(
                     });
                     n.to_array().iter().for_each(|c| put(&c.to_le_bytes()));
                 }
+                Field::Object => put(&hit.map_or(-1, |h| view.object_of(h.prim) as i32).to_le_bytes()),
                 Field::Material => {
                     let id = hit.and_then(|h| view.material_id(h.prim, &mut NoProbe)).map_or(-1, |m| m as i32);
                     put(&id.to_le_bytes());
