@@ -3,7 +3,8 @@
 # with every algorithm, from their cameras, with no hand-placed light (each scene's
 # default light is chosen for its camera), and the stats --algo shadow mismatch of each.
 # Needs ../shared/models and ImageMagick's `convert` (to put each scene's four images in
-# one row). Usage: bench/images.sh [size] [path samples]   (defaults 384, 16)
+# one row; CONVERT names another binary). Usage: bench/images.sh [size] [path samples]
+# (defaults 384, 16)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 size=${1:-384}
@@ -34,6 +35,6 @@ for entry in "${scenes[@]}"; do
       --algo "$algo" --samples "$samples" --bounces 3 -o "$tmp/$name-$algo.png" 2>&1 | grep -E "s$|lights" | tail -2
     row+=("$tmp/$name-$algo.png")
   done
-  convert "${row[@]}" +append "$out/$name.png"
+  "${CONVERT:-convert}" "${row[@]}" +append "$out/$name.png"
   echo "$name shadow-caster mismatch: $($R stats "$tmp/$name.rpsi" "${camera[@]}" --size 1024x1024 --algo shadow 2>/dev/null | grep -i "disagree\|mismatch" | head -1)"
 done

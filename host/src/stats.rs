@@ -289,31 +289,52 @@ fn costs_with<I: Intersector>(
     })
 }
 
-/// Pixels where the rasterizer's nearest triangle differs from ray casting's (the shadow
-/// caster's coverage disagreements at triangle edges), and the triangles it clipped at the near plane.
+/// Where the rasterizer's nearest triangle differs from ray casting's (the shadow
+/// caster's coverage disagreements at triangle edges): the pixels that differ, those of
+/// them where both found the same depth (within 1e-5 relative — overlapping coplanar
+/// triangles, the same surface point either way), the pixel count, and the triangles
+/// clipped at the near plane.
 pub fn coverage_mismatch(
     scene: &SceneView<'_>,
     camera: &CameraRecord,
     opts: &RenderOptions,
-) -> Result<(u64, u64, u32)> {
+) -> Result<CoverageMismatch> {
     let eye = eye_rays(camera, "camera")?;
     let g = rasterize(scene, &eye, 0);
     let (lo, hi) = scene.test_bounds();
-    let differ = with_intersector!(opts.intersector, I => {
+    let (differ, coplanar) = with_intersector!(opts.intersector, I => {
         (0..eye.height)
             .into_par_iter()
             .map(|y| {
-                (0..eye.width)
-                    .filter(|&x| {
-                        let cast = eye
-                            .ray_in_scene(x, y, lo, hi)
-                            .and_then(|r| trace::<I, _>(scene, &r, &mut NoProbe, &mut RayCounters::default()))
-                            .map_or(NULL_INDEX, |h| h.prim);
-                        cast != g.prim[(y * eye.width + x) as usize]
-                    })
-                    .count() as u64
+                let (mut differ, mut coplanar) = (0u64, 0u64);
+                for x in 0..eye.width {
+                    let i = (y * eye.width + x) as usize;
+                    let hit = eye
+                        .ray_in_scene(x, y, lo, hi)
+                        .and_then(|r| trace::<I, _>(scene, &r, &mut NoProbe, &mut RayCounters::default()));
+                    if hit.map_or(NULL_INDEX, |h| h.prim) != g.prim[i] {
+                        differ += 1;
+                        let depth = hit.map(|h| h.t * eye.depth_per_distance(x, y));
+                        let same = depth.is_some_and(|d| g.prim[i] != NULL_INDEX && (d - g.depth[i]).abs() <= 1e-5 * d.abs());
+                        coplanar += same as u64;
+                    }
+                }
+                (differ, coplanar)
             })
-            .sum::<u64>()
+            .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1))
     });
-    Ok((differ, eye.width as u64 * eye.height as u64, g.clipped))
+    Ok(CoverageMismatch { differ, coplanar, pixels: eye.width as u64 * eye.height as u64, clipped: g.clipped })
+}
+
+/// What [`coverage_mismatch`] found.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CoverageMismatch {
+    /// Pixels whose nearest triangle differs.
+    pub differ: u64,
+    /// Of those, pixels where both found the same depth (overlapping coplanar triangles).
+    pub coplanar: u64,
+    /// Pixels compared.
+    pub pixels: u64,
+    /// Triangles clipped at the near plane.
+    pub clipped: u32,
 }

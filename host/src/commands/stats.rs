@@ -78,10 +78,16 @@ pub(crate) fn cmd_stats(a: StatsArgs) -> Result<()> {
             ratio(c.bytes, cast.bytes)
         );
         if a.algo.algo == Algorithm::Shadow {
-            let (differ, pixels, clipped) = stats::coverage_mismatch(&view, &cam, &algo_opts)?;
+            let m = stats::coverage_mismatch(&view, &cam, &algo_opts)?;
+            let pct = |n: u64| 100.0 * n as f64 / m.pixels.max(1) as f64;
             println!(
-                "shadow caster coverage    rasterization and ray casting disagree at {:.4}% of pixels ({differ} of {pixels}); {clipped} triangles clipped at the near plane",
-                100.0 * differ as f64 / pixels.max(1) as f64
+                "shadow caster coverage    rasterization and ray casting disagree at {:.4}% of pixels ({} of {}); {:.4}% at another depth, {} where both see the same point of overlapping coplanar triangles; {} triangles clipped at the near plane",
+                pct(m.differ),
+                m.differ,
+                m.pixels,
+                pct(m.differ - m.coplanar),
+                m.coplanar,
+                m.clipped
             );
         }
     }
