@@ -191,7 +191,8 @@ uint64_t rp_trace_packet(const struct RpScene *scene,
 
 /**
  * Lambert shading of a ray's hit (`hit` null: the background) in linear RGB, written
- * to `rgb[0..3]`.
+ * to `rgb[0..3]`. Textures are read at their finest mipmap level (the ray carries no
+ * cone).
  *
  * # Safety
  * `scene` is null or filled by `rp_scene_parse`; `ray` is null or readable; `hit` is
