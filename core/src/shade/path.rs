@@ -91,32 +91,29 @@ pub fn shade_path<P: MemoryProbe>(
     // glossy bounce sees the sky itself.
     let depth = rec.depth as u32;
     let u = |dim: u32| uniform(rec.pixel, rec.sample, depth, dim);
+    let to_eye = -rec.ray.dir.normalize_or_zero();
     let lit = diffuse.max_element() > 0.0 || glossy.is_some();
     if lit {
         for i in 0..scene.shading_light_count() {
             let l = scene.light(i, probe);
-            if matches!(l.kind, LightRecord::POINT | LightRecord::DIRECTIONAL) {
-                if let Some(shadow) = s.point_light_shadow(rec, &l, diffuse, glossy.as_ref()) {
-                    emit(shadow);
+            match l.kind {
+                LightRecord::POINT | LightRecord::DIRECTIONAL => {
+                    if let Some(shadow) = s.point_light_shadow(rec, &l, diffuse, glossy.as_ref()) {
+                        emit(shadow);
+                    }
                 }
+                LightRecord::ENVIRONMENT if diffuse.max_element() > 0.0 => {
+                    // A cosine-distributed direction: the Lambert BRDF, the cosine and
+                    // the density cancel to diffuse × sky radiance.
+                    let dir = cosine_direction(n, u(3), u(4));
+                    let weight = rec.weight * diffuse * l.sky(dir);
+                    if weight.max_element() > 0.0 && weight.is_finite() && dir != Vec3::ZERO {
+                        emit(rec.child(s.ray_along(dir), weight, RayKind::Shadow, rec.depth, s.cone));
+                    }
+                }
+                _ => {}
             }
         }
-    }
-    if diffuse.max_element() > 0.0 {
-        for i in 0..scene.shading_light_count() {
-            let l = scene.light(i, probe);
-            if l.kind == LightRecord::ENVIRONMENT {
-                // A cosine-distributed direction: the Lambert BRDF, the cosine and the
-                // density cancel to diffuse × sky radiance.
-                let dir = cosine_direction(n, u(3), u(4));
-                let weight = rec.weight * diffuse * l.sky(dir);
-                if weight.max_element() > 0.0 && weight.is_finite() && dir != Vec3::ZERO {
-                    emit(rec.child(s.ray_along(dir), weight, RayKind::Shadow, rec.depth, s.cone));
-                }
-            }
-        }
-    }
-    if lit {
         if let Some((k, pdf)) = scene.pick_area_light(u(5), u(6), probe) {
             let l = scene.light(scene.shading_light_count() + k, probe);
             let [a, b, c] = scene.triangle(l.triangle, probe);
@@ -132,7 +129,7 @@ pub fn shade_path<P: MemoryProbe>(
             let cos_l = -e.normalize_or_zero().dot(dir);
             let g = n.dot(dir).max(0.0) * cos_l.max(0.0) * 0.5 * e.length() / (core::f32::consts::PI * d2);
             let reflectance = match glossy {
-                Some(gl) => diffuse + gl.eval_pi(n, dir, -rec.ray.dir.normalize_or_zero()),
+                Some(gl) => diffuse + gl.eval_pi(n, dir, to_eye),
                 None => diffuse,
             };
             let weight = rec.weight * reflectance * Vec3::from(l.color) * (g / pdf);
@@ -159,7 +156,6 @@ pub fn shade_path<P: MemoryProbe>(
             1.0
         }
     };
-    let to_eye = -rec.ray.dir.normalize_or_zero();
     let glossy_share = glossy.map_or(0.0, |g| {
         let (kd, ks) = (diffuse.element_sum(), g.ks.element_sum());
         if kd + ks > 0.0 {

@@ -40,6 +40,8 @@ pub enum Kernel {
     Shade,
     /// One light evaluated by the shading kernel.
     ShadeLight,
+    /// A textured hit's mipmap level and trilinear filter (per textured hit).
+    Texture,
     /// A glossy surface's lobes: Kd and Ks scaled together (per glossy hit).
     Glossy,
     /// One light's Blinn–Phong highlight at a glossy hit.
@@ -52,7 +54,7 @@ pub enum Kernel {
 
 impl Kernel {
     /// How many kernels there are.
-    pub const COUNT: usize = 10;
+    pub const COUNT: usize = 11;
 
     /// Every kernel, in table order.
     pub const ALL: [Kernel; Kernel::COUNT] = [
@@ -62,6 +64,7 @@ impl Kernel {
         Kernel::Intersect,
         Kernel::Shade,
         Kernel::ShadeLight,
+        Kernel::Texture,
         Kernel::Glossy,
         Kernel::GlossyLight,
         Kernel::Spawn,
@@ -77,6 +80,7 @@ impl Kernel {
             Kernel::Intersect => "intersect",
             Kernel::Shade => "shade",
             Kernel::ShadeLight => "shade_light",
+            Kernel::Texture => "texture",
             Kernel::Glossy => "glossy",
             Kernel::GlossyLight => "glossy_light",
             Kernel::Spawn => "spawn",
@@ -157,6 +161,18 @@ pub mod counted {
     /// dot 5, clamp 1, × colour 3, accumulate 3, kind tests 2 (an ambient light: 6 of
     /// these 29).
     pub const SHADE_LIGHT: u64 = 3 + 12 + 5 + 1 + 3 + 3 + 2;
+    /// The texture part of `Surface::at` and `texture::sample` (core/src/shade/surface.rs,
+    /// texture.rs, ray_cone.rs), charged as the trilinear case (two levels; a magnified
+    /// hit reads one):
+    /// - uv interpolation 10; uv edges 4, their cross product 3, abs 1, × width × height
+    ///   with conversions 4; incidence: normalize both 24, dot 5; cone width: |d| 6,
+    ///   multiply-add 3; level: divide 1, three log2 3, half, sub, add 3, NaN test 1: 68;
+    /// - level clamp, floor, fraction 4; each level's record (size shifts, the chain's
+    ///   offset) 10;
+    /// - per level: two axes (wrap, scale, floor, fraction) 12, four wrapped texel
+    ///   coordinates 8, four sRGB decodes (3 lookups each) 12, three Vec3 blends 27: 59,
+    ///   × 2 = 118; the blend of the two levels 9.
+    pub const TEXTURE: u64 = 68 + 4 + 10 + 118 + 9;
     /// `blinn_phong::lobes` at a glossy hit: `Ks` clamped 6, `Ns` tests and clamp 3,
     /// `Kd + Ks` 3, its largest channel 2 and the max with 1: 3, reciprocal 1, both
     /// lobes scaled 6.
@@ -195,6 +211,7 @@ impl Default for CostModel {
             // Reads ray and hit; writes the colour.
             (Kernel::Shade, k(counted::SHADE, ray + hit, color)),
             (Kernel::ShadeLight, k(counted::SHADE_LIGHT, 0, 0)),
+            (Kernel::Texture, k(counted::TEXTURE, 0, 0)),
             (Kernel::Glossy, k(counted::GLOSSY, 0, 0)),
             (Kernel::GlossyLight, k(counted::GLOSSY_LIGHT, 0, 0)),
             // Writes the new ray and its weight (a colour).
@@ -266,7 +283,7 @@ mod tests {
         // Changing a kernel in core means recounting it here, on purpose.
         let m = CostModel::default();
         let i: Vec<u64> = Kernel::ALL.iter().map(|&k| m.get(k).instructions).collect();
-        assert_eq!(i, [79, 121, 30, 85, 100, 29, 22, 67, 52, 4]);
+        assert_eq!(i, [79, 121, 30, 85, 100, 29, 209, 22, 67, 52, 4]);
         assert_eq!(m.get(Kernel::Intersect).r, words::RAY + words::HIT + words::LIST);
     }
 

@@ -4,6 +4,7 @@
 //! shaders, whose new records form the next wave; a shadow ray adds its weight if
 //! nothing was in the way. Radiance goes to the pixel the record carries.
 
+use raypipe_core::image::NULL_INDEX;
 use raypipe_core::shade::blinn_phong::is_glossy;
 use raypipe_core::shade::lambert::shade;
 use raypipe_core::shade::ray_record::{RayKind, RayRecord};
@@ -42,8 +43,15 @@ impl<I: Intersector> StreamMachine<'_, I> {
         let picks_emitter = matches!(self.shader, Some(Shader::Path(_))) && self.scene.area_light_count() > 0;
         let lights = self.scene.shading_light_count() as u64 + picks_emitter as u64;
         let (mut shaded, mut lit, mut shadows, emitted_before) = (0u64, 0u64, 0u64, next.len());
-        let mut glossy = 0u64;
+        let (mut glossy, mut textured) = (0u64, 0u64);
         let (scene, background, shader) = (self.scene, self.background, self.shader);
+        // Whether a hit's surface reads a texture (what `Surface::at` tests).
+        let reads_texture = |prim: u32| {
+            let m = scene.material_of(prim, &mut NoProbe);
+            m.texture != NULL_INDEX
+                && scene.texture(m.texture).is_some()
+                && scene.triangle_indices(prim).iter().all(|&v| scene.shading_vertex(v, &mut NoProbe).is_some())
+        };
         let (sums, miss) = (self.sums_radiance(), background * (1.0 / self.samples() as f32));
         let mut probe = StreamProbe::new(&mut self.cache, false);
         for (i, f) in frags.iter().enumerate() {
@@ -70,6 +78,7 @@ impl<I: Intersector> StreamMachine<'_, I> {
                 None => {
                     shaded += 1;
                     lit += hit.is_some() as u64;
+                    textured += hit.is_some_and(|h| reads_texture(h.prim)) as u64;
                     let color = shade(&scene, &rec.ray, rec.cone, hit, background, &mut probe);
                     if sums {
                         if let Some(r) = self.radiance.get_mut(pixel) {
@@ -90,6 +99,7 @@ impl<I: Intersector> StreamMachine<'_, I> {
                 Some(s) => {
                     shaded += 1;
                     lit += hit.is_some() as u64;
+                    textured += hit.is_some_and(|h| reads_texture(h.prim)) as u64;
                     // The highlight is the shader's (the ray caster's Lambert has none).
                     glossy += hit.is_some_and(|h| is_glossy(&scene.material_of(h.prim, &mut NoProbe))) as u64;
                     let c = s.shade(&scene, &rec, hit, &mut probe, &mut |r| next.push(r));
@@ -106,6 +116,7 @@ impl<I: Intersector> StreamMachine<'_, I> {
         p.useful = p.processed;
         self.charge(Kernel::Shade, shaded, shaded, words, &mut p);
         self.charge(Kernel::ShadeLight, lit * lights, 0, [0; 4], &mut p);
+        self.charge(Kernel::Texture, textured, 0, [0; 4], &mut p);
         self.charge(Kernel::Glossy, glossy, 0, [0; 4], &mut p);
         self.charge(Kernel::GlossyLight, glossy * shadowing, 0, [0; 4], &mut p);
         self.charge(Kernel::Spawn, emitted, emitted, [0; 4], &mut p);
