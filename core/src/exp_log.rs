@@ -90,11 +90,7 @@ pub fn pow(x: f32, y: f32) -> f32 {
 mod tests {
     use super::*;
 
-    fn ulps(got: f32, want: f64) -> f64 {
-        let w = want as f32;
-        let ulp = (w.abs().next_up() - w.abs()) as f64;
-        (got as f64 - want).abs() / ulp
-    }
+    use crate::test_lcg::ulps;
 
     #[test]
     fn log2_and_exp2_are_within_four_ulp_of_f64() {

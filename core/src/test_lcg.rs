@@ -21,3 +21,11 @@ impl Lcg {
         lo + (hi - lo) * self.unit()
     }
 }
+
+/// The distance in ulps between an f32 and the true value (f64), for the tests of the
+/// single-precision maths ([`crate::trig`], [`crate::exp_log`]).
+pub(crate) fn ulps(got: f32, want: f64) -> f64 {
+    let w = want as f32;
+    let ulp = (w.abs().next_up() - w.abs()) as f64;
+    (got as f64 - want).abs() / ulp
+}

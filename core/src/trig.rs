@@ -86,12 +86,7 @@ mod tests {
     use super::*;
     extern crate std;
 
-    /// The distance in ulps between an f32 and the true value (f64).
-    fn ulps(got: f32, want: f64) -> f64 {
-        let w = want as f32;
-        let ulp = (w.abs().next_up() - w.abs()) as f64;
-        (got as f64 - want).abs() / ulp
-    }
+    use crate::test_lcg::ulps;
 
     #[test]
     fn sine_and_cosine_are_within_two_ulps() {

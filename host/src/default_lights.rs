@@ -86,8 +86,8 @@ pub fn emitters(mesh: &Mesh) -> (f64, Vec<LightRecord>) {
 }
 
 fn triangle_area(mesh: &Mesh, t: [u32; 3]) -> f64 {
-    let [a, b, c] = t.map(|i| DVec3::from(mesh.positions[i as usize].map(f64::from)));
-    0.5 * (b - a).cross(c - a).length()
+    let [a, b, c] = t.map(|i| Vec3::from(mesh.positions[i as usize]));
+    crate::light_distribution::triangle_area(a, b, c)
 }
 
 /// The emitters' power-weighted centre, nudged off them towards the middle of the scene.

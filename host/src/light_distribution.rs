@@ -18,8 +18,13 @@ pub fn area_light_power(mesh: &Mesh, light: &LightRecord) -> f64 {
 
 /// The power of a triangle `a b c` emitting radiance `ke` (see [`area_light_power`]).
 pub fn triangle_power(a: Vec3, b: Vec3, c: Vec3, ke: [f32; 3]) -> f64 {
+    luminance(ke) * triangle_area(a, b, c)
+}
+
+/// The area of triangle `a b c`, in f64.
+pub fn triangle_area(a: Vec3, b: Vec3, c: Vec3) -> f64 {
     let [a, b, c] = [a, b, c].map(|p| p.as_dvec3());
-    luminance(ke) * 0.5 * (b - a).cross(c - a).length()
+    0.5 * (b - a).cross(c - a).length()
 }
 
 /// The alias table of `mesh`'s area lights (in LIGHTS order), empty without any.

@@ -765,23 +765,18 @@ impl<'a> SceneView<'a> {
         }
 
         // Shading data: optional, but when present it must match the geometry.
+        // An optional section with one record per vertex or triangle: absent, or all.
+        let one_each = |section: SectionKind, found: usize, expected: u32| {
+            if found != 0 && found as u32 != expected {
+                return Err(SceneError::CountMismatch { section, expected, found: found as u32 });
+            }
+            Ok(())
+        };
         let shading: &[ShadingVertex] = s.slice(K::ShadingVertices)?;
-        if !shading.is_empty() && shading.len() as u32 != nv {
-            return Err(SceneError::CountMismatch {
-                section: K::ShadingVertices,
-                expected: nv,
-                found: shading.len() as u32,
-            });
-        }
+        one_each(K::ShadingVertices, shading.len(), nv)?;
         let materials: &[MaterialRecord] = s.slice(K::Materials)?;
         let tri_materials: &[u32] = s.slice(K::TriangleMaterials)?;
-        if !tri_materials.is_empty() && tri_materials.len() as u32 != nt {
-            return Err(SceneError::CountMismatch {
-                section: K::TriangleMaterials,
-                expected: nt,
-                found: tri_materials.len() as u32,
-            });
-        }
+        one_each(K::TriangleMaterials, tri_materials.len(), nt)?;
         let nm = materials.len() as u32;
         for (i, &m) in tri_materials.iter().enumerate() {
             if m >= nm {
@@ -794,13 +789,7 @@ impl<'a> SceneView<'a> {
             }
         }
         let tri_objects: &[u32] = s.slice(K::TriangleObjects)?;
-        if !tri_objects.is_empty() && tri_objects.len() as u32 != nt {
-            return Err(SceneError::CountMismatch {
-                section: K::TriangleObjects,
-                expected: nt,
-                found: tri_objects.len() as u32,
-            });
-        }
+        one_each(K::TriangleObjects, tri_objects.len(), nt)?;
         let textures: &[TextureRecord] = s.slice(K::Textures)?;
         let texels: &[u32] = s.slice(K::Texels)?;
         for (i, t) in textures.iter().enumerate() {
@@ -1275,6 +1264,11 @@ impl<'a> SceneView<'a> {
     /// The materials.
     pub fn materials(&self) -> &'a [MaterialRecord] {
         self.materials
+    }
+
+    /// True when the image has shading vertices (normals, texture coordinates, colours).
+    pub fn has_shading_vertices(&self) -> bool {
+        !self.shading.is_empty()
     }
 
     /// True when the image's point light is raypipe's default, placed for the image's

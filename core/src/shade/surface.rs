@@ -5,7 +5,7 @@
 use glam::Vec3;
 
 use crate::hit::Hit;
-use crate::image::{LightRecord, MaterialRecord, SceneView, NULL_INDEX};
+use crate::image::{LightRecord, MaterialRecord, SceneView};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::shade::blinn_phong::{lobes, BlinnPhong};
@@ -55,7 +55,7 @@ impl Surface {
                 normal = n;
             }
             tint = Vec3::from(a.color) * w0 + Vec3::from(b.color) * w1 + Vec3::from(c.color) * w2;
-            if let Some(t) = scene.texture(material.texture).filter(|_| material.texture != NULL_INDEX) {
+            if let Some(t) = texture::surface_texture(scene, &material) {
                 let uv = [a.uv[0] * w0 + b.uv[0] * w1 + c.uv[0] * w2, a.uv[1] * w0 + b.uv[1] * w1 + c.uv[1] * w2];
                 // The footprint's mipmap level: the triangle's texels per unit of area,
                 // the cone's width at the hit and the incidence.
@@ -63,7 +63,7 @@ impl Surface {
                 let texel_area = (e1[0] * e2[1] - e1[1] * e2[0]).abs() * t.width as f32 * t.height as f32;
                 let cos = geometric.normalize_or_zero().dot(ray.dir.normalize_or_zero());
                 let level = RayCone::level(cone.width_at(hit.t, ray.dir), cos, texel_area, geometric.length());
-                if let Some(t) = texture::sample(scene, material.texture, uv, level, probe) {
+                if let Some(t) = texture::sample(scene, &t, uv, level, probe) {
                     tint *= t;
                 }
             }

@@ -5,7 +5,7 @@
 
 use glam::Vec3;
 
-use crate::image::{SceneView, TextureRecord};
+use crate::image::{MaterialRecord, SceneView, TextureRecord, NULL_INDEX};
 use crate::probe::MemoryProbe;
 use crate::shade::color::srgb8_to_linear;
 
@@ -32,19 +32,28 @@ fn axis(u: f32, n: u32, mode: u32) -> (i64, f32) {
     (x0 as i64, x - x0)
 }
 
-/// The linear RGB colour of texture `index` at texture coordinates `uv`, filtered for a
+/// The texture a hit on a triangle of material `m` reads: the material's, when it has one
+/// and the image has shading vertices (their texture coordinates). Shared by
+/// [`crate::shade::surface::Surface::at`] and the drivers that count its work.
+pub fn surface_texture(scene: &SceneView<'_>, m: &MaterialRecord) -> Option<TextureRecord> {
+    if m.texture == NULL_INDEX || !scene.has_shading_vertices() {
+        return None;
+    }
+    scene.texture(m.texture)
+}
+
+/// The linear RGB colour of texture `t` at texture coordinates `uv`, filtered for a
 /// footprint of mipmap level `level` (from [`crate::shade::ray_cone::RayCone::level`]):
 /// bilinear on level 0 at or below 0, trilinear between the two nearest levels above it
-/// (Williams 1983), the coarsest level beyond the chain. `None` when the image has no
-/// such texture or the coordinates are not finite.
+/// (Williams 1983), the coarsest level beyond the chain. `None` when the coordinates are
+/// not finite.
 pub fn sample<P: MemoryProbe>(
     scene: &SceneView<'_>,
-    index: u32,
+    t: &TextureRecord,
     uv: [f32; 2],
     level: f32,
     probe: &mut P,
 ) -> Option<Vec3> {
-    let t = scene.texture(index)?;
     if !(uv[0].is_finite() && uv[1].is_finite()) {
         return None;
     }

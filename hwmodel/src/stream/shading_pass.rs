@@ -4,12 +4,13 @@
 //! shaders, whose new records form the next wave; a shadow ray adds its weight if
 //! nothing was in the way. Radiance goes to the pixel the record carries.
 
-use raypipe_core::image::NULL_INDEX;
+use raypipe_core::image::MaterialRecord;
 use raypipe_core::shade::blinn_phong::is_glossy;
 use raypipe_core::shade::lambert::shade;
 use raypipe_core::shade::ray_record::{RayKind, RayRecord};
 use raypipe_core::shade::shader::Shader;
 use raypipe_core::shade::surface::Surface;
+use raypipe_core::shade::texture::surface_texture;
 use raypipe_core::{Intersector, NoProbe};
 
 use crate::stream::config::Architecture;
@@ -45,13 +46,10 @@ impl<I: Intersector> StreamMachine<'_, I> {
         let (mut shaded, mut lit, mut shadows, emitted_before) = (0u64, 0u64, 0u64, next.len());
         let (mut glossy, mut textured) = (0u64, 0u64);
         let (scene, background, shader) = (self.scene, self.background, self.shader);
-        // Whether a hit's surface reads a texture (what `Surface::at` tests).
-        let reads_texture = |prim: u32| {
-            let m = scene.material_of(prim, &mut NoProbe);
-            m.texture != NULL_INDEX
-                && scene.texture(m.texture).is_some()
-                && scene.triangle_indices(prim).iter().all(|&v| scene.shading_vertex(v, &mut NoProbe).is_some())
-        };
+        // A hit's material (read again without a probe: the kernel's own read is counted)
+        // and whether its surface reads a texture (core's test, that of `Surface::at`).
+        let material = |hit: Option<raypipe_core::Hit>| hit.map(|h| scene.material_of(h.prim, &mut NoProbe));
+        let reads_texture = |m: &MaterialRecord| surface_texture(&scene, m).is_some();
         let (sums, miss) = (self.sums_radiance(), background * (1.0 / self.samples() as f32));
         let mut probe = StreamProbe::new(&mut self.cache, false);
         for (i, f) in frags.iter().enumerate() {
@@ -78,7 +76,7 @@ impl<I: Intersector> StreamMachine<'_, I> {
                 None => {
                     shaded += 1;
                     lit += hit.is_some() as u64;
-                    textured += hit.is_some_and(|h| reads_texture(h.prim)) as u64;
+                    textured += material(hit).as_ref().is_some_and(reads_texture) as u64;
                     let color = shade(&scene, &rec.ray, rec.cone, hit, background, &mut probe);
                     if sums {
                         if let Some(r) = self.radiance.get_mut(pixel) {
@@ -99,9 +97,10 @@ impl<I: Intersector> StreamMachine<'_, I> {
                 Some(s) => {
                     shaded += 1;
                     lit += hit.is_some() as u64;
-                    textured += hit.is_some_and(|h| reads_texture(h.prim)) as u64;
+                    let m = material(hit);
+                    textured += m.as_ref().is_some_and(reads_texture) as u64;
                     // The highlight is the shader's (the ray caster's Lambert has none).
-                    glossy += hit.is_some_and(|h| is_glossy(&scene.material_of(h.prim, &mut NoProbe))) as u64;
+                    glossy += m.as_ref().is_some_and(is_glossy) as u64;
                     let c = s.shade(&scene, &rec, hit, &mut probe, &mut |r| next.push(r));
                     if let Some(r) = self.radiance.get_mut(pixel) {
                         r.add(c);
