@@ -56,6 +56,59 @@ pub enum Command {
     /// Describe a scene: bounds, triangles, materials, lights, camera, structure and the
     /// image's sections.
     Info(InfoArgs),
+    /// Run `simulate` over a grid of parameters (a TOML spec) on local cores, in shards
+    /// for a cluster: one row per point (CSV and JSON lines), resumable; `sweep merge`
+    /// joins shards.
+    Sweep(SweepArgs),
+}
+
+/// `raypipe sweep`.
+#[derive(Args, Debug)]
+#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
+pub struct SweepArgs {
+    /// Join shards' outputs.
+    #[command(subcommand)]
+    pub merge: Option<SweepCommand>,
+    /// The spec: [fixed] parameters, a [grid] of lists (their cartesian product) and
+    /// [[points]] (each crossed with the grid); keys are simulate flags or --set keys.
+    #[arg(required = true, value_name = "SPEC.toml")]
+    pub spec: Option<PathBuf>,
+    /// Output prefix: PREFIX.jsonl and PREFIX.csv. Points already in PREFIX.jsonl are
+    /// not run again (resume).
+    #[arg(short, long, value_name = "PREFIX", default_value = "sweep")]
+    pub output: PathBuf,
+    /// Run only shard I of N (points whose number is I modulo N, I from 0): one task of a
+    /// Slurm job array or of GNU parallel.
+    #[arg(long, value_name = "I/N")]
+    pub shard: Option<crate::sweep::Shard>,
+    /// Points run at once (default: all cores).
+    #[arg(long, value_name = "N")]
+    pub jobs: Option<usize>,
+    /// Also write each point's full report, DIR/point-<index>.json (the stand-alone
+    /// `simulate --report` file).
+    #[arg(long, value_name = "DIR")]
+    pub reports: Option<PathBuf>,
+    /// Run every point again, ignoring rows already in PREFIX.jsonl.
+    #[arg(long)]
+    pub restart: bool,
+}
+
+/// `raypipe sweep merge`.
+#[derive(Subcommand, Debug)]
+pub enum SweepCommand {
+    /// Join the JSON-lines outputs of shards into the files one run would have written.
+    Merge(SweepMergeArgs),
+}
+
+/// `raypipe sweep merge`.
+#[derive(Args, Debug)]
+pub struct SweepMergeArgs {
+    /// The shards' .jsonl files.
+    #[arg(required = true, value_name = "SHARD.jsonl")]
+    pub inputs: Vec<PathBuf>,
+    /// Output prefix: PREFIX.jsonl and PREFIX.csv.
+    #[arg(short, long, value_name = "PREFIX", default_value = "sweep")]
+    pub output: PathBuf,
 }
 
 /// `raypipe stream`.
@@ -144,7 +197,7 @@ pub struct FixedPointArgs {
 }
 
 /// `raypipe simulate`.
-#[derive(Args, Debug)]
+#[derive(Args, Debug, Clone)]
 pub struct SimulateArgs {
     /// An OBJ file or a scene image; the built-in Cornell box when omitted.
     pub scene: Option<PathBuf>,

@@ -45,6 +45,8 @@ pub mod spatial_split;
 pub mod stats;
 pub mod stream;
 pub mod stream_charts;
+pub mod sweep;
+pub mod sweep_table;
 pub mod texture_loader;
 pub mod tone_map;
 pub mod tracer;

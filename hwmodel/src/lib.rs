@@ -26,6 +26,7 @@ pub mod intersection_unit;
 pub mod jobs;
 pub mod mem_port;
 pub mod memory;
+pub mod metrics;
 pub mod report;
 pub mod rgs;
 pub mod simulator;

@@ -10,6 +10,7 @@ mod render;
 mod simulate;
 mod stats;
 mod stream;
+mod sweep;
 mod trace;
 
 use crate::cli::{CameraArgs, Cli, Command, StructureArgs};
@@ -54,6 +55,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::FixedPoint(a) => fixed_point::cmd_fixed_point(a),
         Command::Stream(a) => stream::cmd_stream(a),
         Command::Info(a) => info::cmd_info(a),
+        Command::Sweep(a) => sweep::cmd_sweep(a),
     }
 }
 

@@ -1,0 +1,153 @@
+//! `raypipe sweep`: `simulate` over a design space, points in parallel on local cores,
+//! one row per point; resumable (finished points are read back from the output and not
+//! run again) and shardable (`--shard i/n`); `raypipe sweep merge` joins shards into the
+//! files one run would have written.
+
+use std::collections::HashSet;
+use std::io::Write;
+use std::path::Path;
+use std::sync::Mutex;
+
+use anyhow::{anyhow, bail, Result};
+use rayon::prelude::*;
+
+use crate::cli::{SweepArgs, SweepCommand, SweepMergeArgs};
+use crate::sweep::{Point, Spec};
+use crate::sweep_table::{self, Row};
+use crate::{output, progress, simulate};
+
+use super::simulate::{simulate_args, SceneCache};
+
+pub(crate) fn cmd_sweep(a: SweepArgs) -> Result<()> {
+    if let Some(SweepCommand::Merge(m)) = a.merge {
+        return merge(m);
+    }
+    let Some(spec_path) = a.spec.as_deref() else { bail!("sweep: a spec file is needed") };
+    if a.jobs == Some(0) {
+        bail!("--jobs must be at least 1");
+    }
+    let spec = Spec::load(spec_path)?;
+    let points = spec.shard(a.shard);
+    // Every point's configuration and files are checked before any point runs.
+    for p in &points {
+        let args = p.simulate_args(&spec.dir)?;
+        simulate::load_config(args.preset.as_deref(), args.config.as_deref(), &args.set)
+            .map_err(|e| anyhow!("sweep point {} ({}): {e:#}", p.index, p.id()))?;
+        for path in [&args.scene, &args.camera.camera].into_iter().flatten() {
+            if !path.exists() {
+                bail!("sweep point {} ({}): {}: no such file", p.index, p.id(), path.display());
+            }
+        }
+    }
+    let (jsonl, _) = sweep_table::outputs(&a.output);
+    output::check_dir(&jsonl)?;
+    if let Some(dir) = &a.reports {
+        if !dir.is_dir() {
+            bail!("--reports {}: no such directory", dir.display());
+        }
+    }
+    // Resume: rows already written for points of this spec are kept, not run again.
+    let mut done: Vec<Row> = Vec::new();
+    if jsonl.exists() && !a.restart {
+        let ours: HashSet<(usize, String)> = points.iter().map(|p| (p.index, p.id())).collect();
+        let (keep, other): (Vec<Row>, Vec<Row>) =
+            sweep_table::read_rows(&jsonl)?.into_iter().partition(|r| ours.contains(&(r.index, r.point.clone())));
+        if !other.is_empty() {
+            eprintln!(
+                "note: {}: {} rows are not points of this spec{} and are dropped",
+                jsonl.display(),
+                other.len(),
+                if a.shard.is_some() { " and shard" } else { "" }
+            );
+        }
+        done = sweep_table::normalize(keep);
+    }
+    let finished: HashSet<usize> = done.iter().map(|r| r.index).collect();
+    let todo: Vec<&Point> = points.iter().copied().filter(|p| !finished.contains(&p.index)).collect();
+    println!(
+        "sweep {}: {} points{}, {} already done, {} to run",
+        spec_path.display(),
+        points.len(),
+        a.shard.map_or(String::new(), |s| format!(" (shard {}/{} of {})", s.index, s.count, spec.points.len())),
+        done.len(),
+        todo.len()
+    );
+    // The journal: the rows written so far, one line appended as each point finishes,
+    // so a stopped sweep resumes where it was.
+    output::write_atomic(&jsonl, |w| {
+        for r in &done {
+            writeln!(w, "{}", r.to_line())?;
+        }
+        Ok(())
+    })?;
+    let journal = Mutex::new(
+        std::fs::OpenOptions::new().append(true).open(&jsonl).map_err(|e| anyhow!("{}: {e}", jsonl.display()))?,
+    );
+    let cache = SceneCache::default();
+    let bar = progress::bar(todo.len() as u64, "sweep", true);
+    let jobs = a.jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(jobs).build().map_err(|e| anyhow!("sweep: {e}"))?;
+    let new_rows: Vec<Row> = pool.install(|| {
+        todo.par_iter()
+            .map(|p| -> Result<Row> {
+                let row = run_point(p, &spec.dir, &cache, a.reports.as_deref())?;
+                let mut f = journal.lock().map_err(|_| anyhow!("sweep journal poisoned"))?;
+                f.write_all(format!("{}\n", row.to_line()).as_bytes())
+                    .map_err(|e| anyhow!("{}: {e}", jsonl.display()))?;
+                bar.inc(1);
+                Ok(row)
+            })
+            .collect::<Result<Vec<Row>>>()
+    })?;
+    bar.finish_and_clear();
+    let mut failed = 0;
+    for r in new_rows.iter().filter(|r| r.error.is_some()) {
+        eprintln!("warning: sweep point {} ({}): {}", r.index, r.point, r.error.as_deref().unwrap_or(""));
+        failed += 1;
+    }
+    let rows = sweep_table::normalize(done.into_iter().chain(new_rows).collect());
+    sweep_table::write(&a.output, &rows)?;
+    let (jsonl, csv) = sweep_table::outputs(&a.output);
+    println!("{} rows ({} failed) -> {} and {}", rows.len(), failed, jsonl.display(), csv.display());
+    Ok(())
+}
+
+/// Runs one point as `raypipe simulate` would; a point that fails becomes a row with
+/// its error (a deadlocked corner of the space must not stop the others).
+fn run_point(p: &Point, dir: &Path, cache: &SceneCache, reports: Option<&Path>) -> Result<Row> {
+    let args = p.simulate_args(dir)?;
+    match simulate_args(&args, Some(cache), false) {
+        Ok(run) => {
+            if let Some(d) = reports {
+                output::write_bytes(&d.join(format!("point-{}.json", p.index)), run.report.to_json().as_bytes())?;
+            }
+            Ok(Row::of(p, &run.report))
+        }
+        Err(e) => Ok(Row::failed(p, format!("{e:#}").replace('\n', " "))),
+    }
+}
+
+fn merge(m: SweepMergeArgs) -> Result<()> {
+    let mut rows = Vec::new();
+    for path in &m.inputs {
+        rows.extend(sweep_table::read_rows(path)?);
+    }
+    let n = rows.len();
+    let rows = sweep_table::normalize(rows);
+    for w in rows.windows(2) {
+        if w[0].index + 1 != w[1].index {
+            eprintln!("warning: sweep merge: points {} to {} are missing", w[0].index + 1, w[1].index - 1);
+        }
+    }
+    sweep_table::write(&m.output, &rows)?;
+    let (jsonl, csv) = sweep_table::outputs(&m.output);
+    println!(
+        "merged {} rows from {} files ({} duplicates dropped) -> {} and {}",
+        rows.len(),
+        m.inputs.len(),
+        n - rows.len(),
+        jsonl.display(),
+        csv.display()
+    );
+    Ok(())
+}
