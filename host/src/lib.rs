@@ -46,6 +46,7 @@ pub mod stats;
 pub mod stream;
 pub mod stream_charts;
 pub mod sweep;
+pub mod sweep_plot;
 pub mod sweep_table;
 pub mod texture_loader;
 pub mod tone_map;

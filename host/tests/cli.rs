@@ -1237,3 +1237,70 @@ fn sweep_rejects_bad_specs_before_running_anything() {
     let o = raypipe(d, &["sweep", "bad.toml", "--shard", "3/3"]);
     assert!(!o.status.success());
 }
+
+#[test]
+fn plots_of_a_small_sweep_decode() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    sweep_spec(d);
+    let o = raypipe(d, &["sweep", "spec.toml", "-o", "s"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let plots: [&[&str]; 4] = [
+        &["--x", "traversal.units", "--y", "fps", "--series", "packet_size", "--where", "accel=kd", "-o", "line.png"],
+        &[
+            "--x",
+            "traversal.units",
+            "--y",
+            "packet_size",
+            "--value",
+            "bytes_per_ray",
+            "--where",
+            "accel=bvh4",
+            "-o",
+            "heat.svg",
+        ],
+        &[
+            "--x",
+            "packet_size",
+            "--stack",
+            "stall.traversal",
+            "--where",
+            "accel=kd",
+            "--where",
+            "traversal.units=2",
+            "-o",
+            "bars.png",
+        ],
+        &[
+            "--x",
+            "traversal.units",
+            "--stack",
+            "bytes_per_ray",
+            "--where",
+            "accel=kd",
+            "--where",
+            "packet_size=16",
+            "-o",
+            "bytes.svg",
+        ],
+    ];
+    for args in plots {
+        let mut all = vec!["plot", "s.jsonl"];
+        all.extend_from_slice(args);
+        let o = raypipe(d, &all);
+        assert!(o.status.success(), "{args:?}: {}", stderr(&o));
+    }
+    for png in ["line.png", "bars.png"] {
+        let (w, h, _) = decode(&d.join(png));
+        assert!(w > 100 && h > 100, "{png}");
+    }
+    for svg in ["heat.svg", "bytes.svg"] {
+        let text = std::fs::read_to_string(d.join(svg)).unwrap();
+        let png = raypipe::stream_charts::to_png(&text).expect("the SVG parses and renders");
+        assert!(png.starts_with(b"\x89PNG"), "{svg}");
+    }
+    // Rows the plot cannot tell apart are refused, naming what differs.
+    let o = raypipe(d, &["plot", "s.jsonl", "--x", "traversal.units", "--y", "fps", "-o", "x.svg"]);
+    assert_one_line_error(&o, "differ in packet_size");
+    assert!(!d.join("x.svg").exists());
+}

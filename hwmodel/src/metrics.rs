@@ -6,7 +6,7 @@
 
 use crate::report::{Report, UnitReport};
 use crate::stall::Stall;
-use crate::traffic::CLASS_NAMES;
+use crate::traffic::{CLASS_NAMES, FRAMEBUFFER};
 
 /// The kinds of unit the metrics aggregate over, with the report's name prefix.
 pub const UNIT_KINDS: [(&str, &str); 4] = [
@@ -33,10 +33,11 @@ pub fn metrics(r: &Report) -> Vec<(String, f64)> {
         let b = r.memory.bytes.get(name).copied().unwrap_or(0);
         m.push((format!("bytes_per_ray.{name}"), b as f64 / rays));
     }
-    for name in CLASS_NAMES {
+    // Framebuffer writes are posted straight to memory: no cache sees them.
+    for name in &CLASS_NAMES[..FRAMEBUFFER] {
         let (mut hits, mut all) = (0u64, 0u64);
         for c in &r.caches {
-            if let Some(k) = c.classes.get(name) {
+            if let Some(k) = c.classes.get(*name) {
                 hits += k.hits;
                 all += k.hits + k.merged + k.misses;
             }

@@ -5,6 +5,7 @@ mod bench;
 mod build;
 mod fixed_point;
 mod info;
+mod plot;
 mod rays;
 mod render;
 mod simulate;
@@ -56,6 +57,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Stream(a) => stream::cmd_stream(a),
         Command::Info(a) => info::cmd_info(a),
         Command::Sweep(a) => sweep::cmd_sweep(a),
+        Command::Plot(a) => plot::cmd_plot(a),
     }
 }
 

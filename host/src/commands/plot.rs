@@ -1,0 +1,49 @@
+//! `raypipe plot`: a sweep's rows as a line plot, a heatmap or stacked bars.
+
+use anyhow::{anyhow, bail, Result};
+
+use crate::cli::PlotArgs;
+use crate::output;
+use crate::sweep_plot::{self, Plot};
+use crate::sweep_table::{self, label};
+
+pub(crate) fn cmd_plot(a: PlotArgs) -> Result<()> {
+    let png = match a.output.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+        Some("svg") => false,
+        Some("png") => true,
+        _ => bail!("{}: the plot is written as .svg or .png", a.output.display()),
+    };
+    output::check_dir(&a.output)?;
+    let mut filters = Vec::new();
+    for f in &a.filters {
+        let (k, v) = f.split_once('=').ok_or_else(|| anyhow!("--where {f:?}: expected KEY=VALUE"))?;
+        filters.push((k.trim().to_string(), v.trim().trim_matches('"').to_string()));
+    }
+    let rows: Vec<_> = sweep_table::read_rows(&a.rows)?
+        .into_iter()
+        .filter(|r| filters.iter().all(|(k, v)| label(r, k).as_deref() == Some(v.as_str())))
+        .collect();
+    let (plot, what) = match (&a.value, &a.stack, &a.y) {
+        (Some(value), _, Some(y)) => (
+            Plot::Heatmap { x: a.x.clone(), y: y.clone(), value: value.clone() },
+            format!("{value} over {} × {y}", a.x),
+        ),
+        (None, Some(prefix), _) => {
+            (Plot::Stacked { x: a.x.clone(), prefix: prefix.clone() }, format!("{prefix} by {}", a.x))
+        }
+        (None, None, Some(y)) => (
+            Plot::Line { x: a.x.clone(), y: y.clone(), series: a.series.clone(), log_x: a.log_x },
+            format!("{y} against {}", a.x),
+        ),
+        _ => bail!("plot: give --y METRIC (a line), --y PARAM --value METRIC (a heatmap) or --stack PREFIX (bars)"),
+    };
+    let title = a.title.clone().unwrap_or(what);
+    let svg = sweep_plot::draw(&plot, &rows, &title).map_err(|e| anyhow!("{}: {e:#}", a.rows.display()))?;
+    if png {
+        output::write_bytes(&a.output, &crate::stream_charts::to_png(&svg)?)?;
+    } else {
+        output::write_bytes(&a.output, svg.as_bytes())?;
+    }
+    println!("{title}: {} rows -> {}", rows.len(), a.output.display());
+    Ok(())
+}
