@@ -63,6 +63,36 @@ pub enum Command {
     /// Plot a sweep's rows as SVG or PNG: a metric against a parameter (one line per value
     /// of --series), a heatmap over two parameters (--value), or stacked bars (--stack).
     Plot(PlotArgs),
+    /// Work with JSON reports: `report diff A.json B.json` says what changed.
+    Report(ReportArgs),
+}
+
+/// `raypipe report`.
+#[derive(Args, Debug)]
+pub struct ReportArgs {
+    /// What to do with reports.
+    #[command(subcommand)]
+    pub command: ReportCommand,
+}
+
+/// `raypipe report …`.
+#[derive(Subcommand, Debug)]
+pub enum ReportCommand {
+    /// What changed between two reports: the configuration keys, then every number with
+    /// its ratio, largest effect first.
+    Diff(ReportDiffArgs),
+}
+
+/// `raypipe report diff`.
+#[derive(Args, Debug)]
+pub struct ReportDiffArgs {
+    /// The first report (the baseline).
+    pub a: PathBuf,
+    /// The second report.
+    pub b: PathBuf,
+    /// Show only the N largest changes (default: all).
+    #[arg(long, value_name = "N")]
+    pub top: Option<usize>,
 }
 
 /// `raypipe plot`.

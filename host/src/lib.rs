@@ -38,6 +38,7 @@ pub mod range_check;
 pub mod raster;
 pub mod ray_stream;
 pub mod render;
+pub mod report_diff;
 pub mod scene;
 pub mod scene_file;
 pub mod simulate;

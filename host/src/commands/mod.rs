@@ -8,6 +8,7 @@ mod info;
 mod plot;
 mod rays;
 mod render;
+mod report;
 mod simulate;
 mod stats;
 mod stream;
@@ -58,6 +59,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Info(a) => info::cmd_info(a),
         Command::Sweep(a) => sweep::cmd_sweep(a),
         Command::Plot(a) => plot::cmd_plot(a),
+        Command::Report(a) => report::cmd_report(a),
     }
 }
 

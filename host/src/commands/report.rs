@@ -1,0 +1,67 @@
+//! `raypipe report diff`: what changed between two runs.
+
+use std::path::Path;
+
+use anyhow::{anyhow, Result};
+use serde_json::Value;
+
+use crate::cli::{ReportArgs, ReportCommand, ReportDiffArgs};
+use crate::report_diff::{diff, is_headline, show, Change};
+
+pub(crate) fn cmd_report(a: ReportArgs) -> Result<()> {
+    match a.command {
+        ReportCommand::Diff(d) => cmd_diff(d),
+    }
+}
+
+fn read(path: &Path) -> Result<Value> {
+    let text = std::fs::read_to_string(path).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+    let v: Value = serde_json::from_str(&text).map_err(|e| anyhow!("{}: not a JSON report: {e}", path.display()))?;
+    if !v.is_object() {
+        return Err(anyhow!("{}: not a JSON report (not an object)", path.display()));
+    }
+    Ok(v)
+}
+
+fn cmd_diff(a: ReportDiffArgs) -> Result<()> {
+    let d = diff(&read(&a.a)?, &read(&a.b)?);
+    println!("A = {}\nB = {}", a.a.display(), a.b.display());
+    if d.settings.is_empty() {
+        println!("settings: the same");
+    } else {
+        println!("settings that differ ({}):", d.settings.len());
+        let w = d.settings.iter().map(|s| s.0.len()).max().unwrap_or(0);
+        for (path, x, y) in &d.settings {
+            let (x, y) = (x.as_deref().unwrap_or("(absent)"), y.as_deref().unwrap_or("(absent)"));
+            println!("  {path:<w$}  {x} -> {y}");
+        }
+    }
+    for (side, name) in [(0, "A"), (1, "B")] {
+        if !d.only[side].is_empty() {
+            println!("only in {name}: {}", d.only[side].join(", "));
+        }
+    }
+    println!(
+        "numbers that differ: {} of {}, largest effect first (B/A: \"new\" where A is 0)",
+        d.changes.len(),
+        d.changes.len() + d.unchanged
+    );
+    let (head, rest): (Vec<&Change>, Vec<&Change>) = d.changes.iter().partition(|c| is_headline(&c.path));
+    let limit = a.top.unwrap_or(usize::MAX);
+    for (title, list) in [("headline", head), ("every other number", rest)] {
+        if list.is_empty() {
+            continue;
+        }
+        let shown = limit.min(list.len());
+        let more = if shown < list.len() { format!(" (the first {shown} of {})", list.len()) } else { String::new() };
+        println!("{title}{more}:");
+        let w = list[..shown].iter().map(|c| c.path.len()).max().unwrap_or(0).max(4);
+        println!("  {:<w$}  {:>14}  {:>14}  {:>9}", "path", "A", "B", "B/A");
+        for c in &list[..shown] {
+            let r = c.ratio();
+            let ratio = if r.is_finite() { format!("{r:.3}") } else { "new".to_string() };
+            println!("  {:<w$}  {:>14}  {:>14}  {:>9}", c.path, show(c.a), show(c.b), ratio);
+        }
+    }
+    Ok(())
+}
