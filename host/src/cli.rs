@@ -297,6 +297,66 @@ pub struct SimulateArgs {
     pub intersector: Option<IntersectorKind>,
     #[command(flatten)]
     pub algo: AlgoArgs,
+    #[command(flatten)]
+    pub walk: WalkArgs,
+    #[command(flatten)]
+    pub measure: MeasureArgs,
+}
+
+/// Walkthroughs: several frames along a camera path.
+#[derive(Args, Debug, Clone, Default)]
+pub struct WalkArgs {
+    /// A camera path (keyframes interpolated into frames; see docs/hw-model.md): one image
+    /// per frame, named OUT-0000.png, OUT-0001.png, …
+    #[arg(long, value_name = "FILE", conflicts_with = "orbit")]
+    pub camera_path: Option<PathBuf>,
+    /// A walkthrough of N frames orbiting the look-at point.
+    #[arg(long, value_name = "N")]
+    pub orbit: Option<usize>,
+}
+
+impl WalkArgs {
+    /// The frames' cameras over `base`, or `None` for a single frame.
+    pub fn cameras(&self, base: &CameraRecord) -> Result<Option<Vec<CameraRecord>>> {
+        let cams = match (&self.camera_path, self.orbit) {
+            (Some(p), _) => crate::camera_path::CameraPath::load(p)?.cameras(base),
+            (None, Some(n)) => crate::camera_path::orbit(base, n)?,
+            (None, None) => return Ok(None),
+        };
+        for (k, c) in cams.iter().enumerate() {
+            render::eye_rays(c, &format!("camera of frame {k}"))?;
+        }
+        Ok(Some(cams))
+    }
+}
+
+/// What `simulate` measures: warm-up, region of interest, intervals.
+#[derive(Args, Debug, Clone, Default)]
+pub struct MeasureArgs {
+    /// Simulate the view this many times first, caches and DRAM rows kept warm, and
+    /// measure the next (a walkthrough: its first K frames are warm-up).
+    #[arg(long, value_name = "K", default_value_t = 0)]
+    pub warmup_frames: usize,
+    /// Region of interest: the report covers cycles A..B of each measured frame (from its
+    /// start) only.
+    #[arg(long, value_name = "A..B", value_parser = parse_roi)]
+    pub roi: Option<(u64, u64)>,
+    /// Write the report's counters every N cycles of the measured part, as JSON lines
+    /// (--intervals); the rows of a frame sum to its report.
+    #[arg(long, value_name = "N")]
+    pub interval: Option<u64>,
+    /// Where --interval writes.
+    #[arg(long, value_name = "JSONL", default_value = "raypipe-sim.intervals.jsonl")]
+    pub intervals: PathBuf,
+    /// Walkthroughs: one JSON line per frame (cycles, frames/s, bytes loaded, hit rates).
+    #[arg(long, value_name = "JSONL", default_value = "raypipe-sim.frames.jsonl")]
+    pub frames: PathBuf,
+}
+
+fn parse_roi(s: &str) -> Result<(u64, u64), String> {
+    let (a, b) = s.split_once("..").ok_or_else(|| format!("{s:?}: expected A..B (cycles)"))?;
+    let parse = |t: &str| t.trim().parse::<u64>().map_err(|_| format!("{s:?}: {t:?} is not a cycle number"));
+    Ok((parse(a)?, parse(b)?))
 }
 
 /// `raypipe trace`.
@@ -757,6 +817,8 @@ pub struct RenderArgs {
     pub structure: StructureArgs,
     #[command(flatten)]
     pub run: RunArgs,
+    #[command(flatten)]
+    pub walk: WalkArgs,
 }
 
 /// `raypipe stats`.

@@ -10,6 +10,7 @@ pub mod batch;
 pub mod bench;
 pub mod bvh_builder;
 pub mod camera_file;
+pub mod camera_path;
 pub mod cli;
 pub mod commands;
 pub mod default_lights;

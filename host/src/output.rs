@@ -155,3 +155,14 @@ pub fn write_png(path: &Path, width: u32, height: u32, rgb: &[[u8; 3]]) -> Resul
 pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
     write_atomic(path, |w| w.write_all(bytes).map_err(|e| anyhow!("cannot write: {e}")))
 }
+
+/// The file of frame `k` of a walkthrough written to `path`: `OUT-0007.png` for
+/// `OUT.png`.
+pub fn frame_path(path: &Path, k: usize) -> std::path::PathBuf {
+    let stem = path.file_stem().map_or_else(|| "frame".into(), |s| s.to_string_lossy().into_owned());
+    let name = match path.extension() {
+        Some(ext) => format!("{stem}-{k:04}.{}", ext.to_string_lossy()),
+        None => format!("{stem}-{k:04}"),
+    };
+    path.with_file_name(name)
+}

@@ -9,6 +9,7 @@ use raypipe_core::image::CameraRecord;
 use raypipe_core::pixel_filter::PixelSampler;
 use raypipe_core::shade::shader::Shader;
 use raypipe_core::{Intersector, SceneView};
+use raypipe_hw::counters::{counters, delta};
 use raypipe_hw::{Datapath, HwConfig, Report, Simulator};
 
 use crate::progress;
@@ -35,6 +36,43 @@ pub fn load_config(preset: Option<&str>, file: Option<&Path>, sets: &[String]) -
     Ok(cfg)
 }
 
+/// How a run is measured (gem5's warm-up and `resetstats`/`dumpstats`, ChampSim's
+/// warm-up instructions): the frames, how many of them only warm the chip, the region of
+/// interest within each measured frame, and interval statistics.
+#[derive(Clone, Debug, Default)]
+pub struct Measure {
+    /// Leading frames whose statistics are dropped (caches, DRAM rows and the chip's
+    /// clock carry over into the next frame).
+    pub warmup_frames: usize,
+    /// Cycles `a..b` of each measured frame (from its start): its report covers them only.
+    pub roi: Option<(u64, u64)>,
+    /// Counters every this many cycles of the measured part.
+    pub interval: Option<u64>,
+}
+
+/// One frame of a run.
+pub struct FrameRun {
+    /// The image.
+    pub frame: Frame,
+    /// The report of its measured part.
+    pub report: Report,
+    /// A warm-up frame (its report is not part of the totals).
+    pub warmup: bool,
+    /// The counters of each interval: first and end cycle (from the measured part's
+    /// start), then the counters' increase.
+    pub intervals: Vec<Interval>,
+}
+
+/// One interval's counters.
+pub struct Interval {
+    /// First cycle (from the measured part's start).
+    pub start: u64,
+    /// End cycle (exclusive).
+    pub end: u64,
+    /// How much each counter grew.
+    pub counters: Vec<(String, u64)>,
+}
+
 /// Simulates one frame with `sampler`'s eye rays per pixel; the image and the report.
 #[allow(clippy::too_many_arguments)]
 pub fn simulate(
@@ -47,7 +85,41 @@ pub fn simulate(
     sampler: PixelSampler,
     show_progress: bool,
 ) -> Result<(Frame, Report)> {
-    let eye = eye_rays(camera, "camera")?.with_sampler(sampler);
+    let mut runs = simulate_frames(
+        scene,
+        std::slice::from_ref(camera),
+        &Measure::default(),
+        cfg,
+        intersector,
+        shader,
+        shadow_caster,
+        sampler,
+        show_progress,
+    )?;
+    let run = runs.pop().ok_or_else(|| anyhow!("no frame simulated"))?;
+    Ok((run.frame, run.report))
+}
+
+/// Simulates the frames `views` one after the other on one chip — a walkthrough, or one
+/// view repeated for warm-up — measured as `measure` says.
+#[allow(clippy::too_many_arguments)]
+pub fn simulate_frames(
+    scene: &SceneView<'_>,
+    views: &[CameraRecord],
+    measure: &Measure,
+    cfg: &HwConfig,
+    intersector: IntersectorKind,
+    shader: Option<Shader>,
+    shadow_caster: bool,
+    sampler: PixelSampler,
+    show_progress: bool,
+) -> Result<Vec<FrameRun>> {
+    let eyes = views
+        .iter()
+        .enumerate()
+        .map(|(i, c)| Ok(eye_rays(c, &format!("camera of frame {i}"))?.with_sampler(sampler)))
+        .collect::<Result<Vec<_>>>()?;
+    let Some(first) = views.first() else { bail!("no frame to simulate") };
     if cfg.datapath != Datapath::F32 {
         if let Some(why) = fixed_point_unsupported(scene) {
             bail!(
@@ -56,10 +128,17 @@ pub fn simulate(
             );
         }
     }
+    if let Some(n) = measure.interval.filter(|&n| n == 0) {
+        bail!("--interval {n}: an interval is at least one cycle");
+    }
+    if let Some((a, b)) = measure.roi.filter(|(a, b)| a >= b) {
+        bail!("--roi {a}..{b}: the region of interest is empty");
+    }
     let run = Run {
         scene,
-        eye,
-        background: raypipe_core::Vec3::from(camera.background),
+        eyes: &eyes,
+        measure,
+        background: raypipe_core::Vec3::from(first.background),
         cfg,
         shader,
         shadow_caster,
@@ -71,7 +150,8 @@ pub fn simulate(
 /// One simulation's inputs, run with the triangle test `I` (and its box tests).
 struct Run<'a, 's> {
     scene: &'a SceneView<'s>,
-    eye: raypipe_core::camera::EyeRays,
+    eyes: &'a [raypipe_core::camera::EyeRays],
+    measure: &'a Measure,
     background: raypipe_core::Vec3,
     cfg: &'a HwConfig,
     shader: Option<Shader>,
@@ -80,24 +160,72 @@ struct Run<'a, 's> {
 }
 
 impl Run<'_, '_> {
-    fn go<I: Intersector>(&self) -> Result<(Frame, Report)> {
-        let Run { scene, eye, background, cfg, shader, shadow_caster, show_progress } = *self;
-        let (width, height) = (eye.width, eye.height);
-        let mut sim = Simulator::<I>::with_shader(*scene, eye, background, shader, cfg)
+    fn go<I: Intersector>(&self) -> Result<Vec<FrameRun>> {
+        let Run { scene, eyes, measure, background, cfg, shader, shadow_caster, show_progress } = *self;
+        let mut sim = Simulator::<I>::with_shader(*scene, eyes[0], background, shader, cfg)
             .map_err(|e| anyhow!("hardware configuration: {e}"))?;
-        if shadow_caster {
-            // Visibility from the host's rasterizer (the G-buffer pass), as on the host.
-            let hits = (0..eye.samples()).flat_map(|s| gbuffer_visibility::<I>(scene, &eye, s)).map(|(_, hit)| hit);
-            sim.set_visibility(hits.collect());
-        }
         let bar = progress::bar(0, "simulate", show_progress);
-        sim.run(|done, total| {
-            bar.set_length(total as u64);
-            bar.set_position(done as u64);
-        })
-        .map_err(|e| anyhow!(e))?;
+        let mut out = Vec::new();
+        let mut before = 0;
+        for (f, eye) in eyes.iter().enumerate() {
+            if f > 0 {
+                sim.next_frame(*eye).map_err(|e| anyhow!(e))?;
+            }
+            if shadow_caster {
+                // Visibility from the host's rasterizer (the G-buffer pass), as on the host.
+                let hits = (0..eye.samples()).flat_map(|s| gbuffer_visibility::<I>(scene, eye, s)).map(|(_, hit)| hit);
+                sim.set_visibility(hits.collect());
+            }
+            let mut tick = |done: usize, total: usize| {
+                bar.set_length((total * eyes.len()) as u64);
+                bar.set_position((before + done) as u64);
+            };
+            let warmup = f < measure.warmup_frames;
+            let start = sim.now();
+            let mut intervals = Vec::new();
+            let report = if warmup {
+                sim.run(&mut tick).map_err(|e| anyhow!(e))?;
+                sim.report()
+            } else {
+                // The region of interest: statistics from its first cycle to its end.
+                let (roi_start, roi_end) = match measure.roi {
+                    Some((a, b)) => (Some(start + a), Some(start + b)),
+                    None => (None, None),
+                };
+                if let Some(a) = roi_start {
+                    sim.run_until(Some(a), &mut tick).map_err(|e| anyhow!(e))?;
+                    sim.reset_stats();
+                }
+                let mut last: Vec<(String, u64)> = Vec::new();
+                let mut done = sim.is_done();
+                while !done && roi_end.is_none_or(|e| sim.now() < e) {
+                    let next = match measure.interval {
+                        Some(n) => Some(roi_end.map_or(sim.now() + n, |e| e.min(sim.now() + n))),
+                        None => roi_end,
+                    };
+                    done = sim.run_until(next, &mut tick).map_err(|e| anyhow!(e))?;
+                    if measure.interval.is_some() {
+                        let now = counters(&sim.report());
+                        let cycles = |c: &[(String, u64)]| c.first().map_or(0, |(_, v)| *v);
+                        intervals.push(Interval {
+                            start: cycles(&last),
+                            end: cycles(&now),
+                            counters: delta(&now, &last),
+                        });
+                        last = now;
+                    }
+                }
+                let report = sim.report();
+                // The rest of the frame, for the image.
+                sim.run(&mut tick).map_err(|e| anyhow!(e))?;
+                report
+            };
+            before += sim.packet_count();
+            let (width, height) = (eye.width, eye.height);
+            let frame = Frame::from_radiance(width, height, sim.radiance_image());
+            out.push(FrameRun { frame, report, warmup, intervals });
+        }
         bar.finish_and_clear();
-        let frame = Frame::from_radiance(width, height, sim.radiance_image());
-        Ok((frame, sim.report()))
+        Ok(out)
     }
 }

@@ -1336,3 +1336,46 @@ fn report_diff_names_the_changed_keys_and_every_ratio() {
     assert_one_line_error(&raypipe(d, &["report", "diff", "a.json", "bad.json"]), "bad.json: not a JSON report");
     assert_one_line_error(&raypipe(d, &["report", "diff", "a.json", "missing.json"]), "missing.json");
 }
+
+#[test]
+fn walkthroughs_write_every_frame_on_the_host_and_the_model() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write(d, "walk.path", "size 24 16\nframes 3\nkey 278 273 -800 278 273 0\nkey 300 273 -700 278 273 0\n");
+    let o = raypipe(d, &["render", "--camera-path", "walk.path", "-o", "host.png"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("3 frames in"));
+    let o = raypipe(
+        d,
+        &["simulate", "--camera-path", "walk.path", "--warmup-frames", "1", "--interval", "500", "-o", "sim.png"],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("steady state   2 frames after 1 warm-up"));
+    for k in 0..3 {
+        let (host, sim) = (d.join(format!("host-000{k}.png")), d.join(format!("sim-000{k}.png")));
+        assert_eq!(decode(&host), decode(&sim), "frame {k}");
+        assert_eq!(decode(&host).0, 24);
+    }
+    let frames = std::fs::read_to_string(d.join("raypipe-sim.frames.jsonl")).unwrap();
+    let rows: Vec<serde_json::Value> = frames.lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    assert_eq!(rows.len(), 3);
+    assert_eq!(rows.iter().map(|r| r["warmup"].as_bool().unwrap()).collect::<Vec<_>>(), [true, false, false]);
+    // Interval rows for the measured frames only, each frame's summing to its cycles.
+    let intervals = std::fs::read_to_string(d.join("raypipe-sim.intervals.jsonl")).unwrap();
+    let rows: Vec<serde_json::Value> = intervals.lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    for k in [1u64, 2] {
+        let sum: u64 = rows.iter().filter(|r| r["frame"] == k).map(|r| r["counters"]["cycles"].as_u64().unwrap()).sum();
+        let cycles = serde_json::from_str::<serde_json::Value>(&frames.lines().nth(k as usize).unwrap()).unwrap()
+            ["cycles"]
+            .as_u64()
+            .unwrap();
+        assert_eq!(sum, cycles, "frame {k}");
+    }
+    assert!(rows.iter().all(|r| r["frame"] != 0));
+    // Bad paths and measures are one line of error.
+    write(d, "bad.path", "frames 2\nkey 0 0 0 0 0\n");
+    assert_one_line_error(&raypipe(d, &["simulate", "--camera-path", "bad.path"]), "bad.path:2: 'key' takes");
+    assert_one_line_error(&raypipe(d, &["simulate", "--roi", "50..10"]), "empty");
+    assert_one_line_error(&raypipe(d, &["simulate", "--orbit", "2", "--warmup-frames", "2"]), "only 2 frames");
+    assert_one_line_error(&raypipe(d, &["simulate", "--interval", "0"]), "at least one cycle");
+}

@@ -53,6 +53,12 @@ pub struct Dram {
 }
 
 impl Dram {
+    /// Zeroes the statistics (open rows and timing state stay).
+    pub fn reset_stats(&mut self) {
+        self.stats.iter_mut().for_each(|b| *b = BankStats::default());
+        self.bus_busy = 0;
+    }
+
     /// An idle DRAM behind a chip clocked at `chip_mhz`.
     pub fn new(cfg: &DramConfig, chip_mhz: f64) -> Dram {
         let n = (cfg.channels * cfg.banks) as usize;

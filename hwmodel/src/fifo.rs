@@ -150,6 +150,11 @@ impl<T> Fifo<T> {
         self.stats.empty_stall_cycles += cycles * self.last_stalls.1 as u64;
     }
 
+    /// Zeroes the statistics (the entries stay).
+    pub fn reset_stats(&mut self) {
+        self.stats = FifoStats { occupancy: vec![0; self.depth + 1], ..FifoStats::default() };
+    }
+
     /// Committed entries.
     pub fn len(&self) -> usize {
         self.committed_len
@@ -180,6 +185,8 @@ pub trait AnyFifo {
     fn commit(&mut self) -> bool;
     /// See [`Fifo::repeat_last`].
     fn repeat_last(&mut self, cycles: u64);
+    /// Zeroes the statistics.
+    fn reset_stats(&mut self);
 }
 
 impl<T> AnyFifo for Fifo<T> {
@@ -200,6 +207,9 @@ impl<T> AnyFifo for Fifo<T> {
     }
     fn repeat_last(&mut self, cycles: u64) {
         Fifo::repeat_last(self, cycles)
+    }
+    fn reset_stats(&mut self) {
+        Fifo::reset_stats(self)
     }
 }
 

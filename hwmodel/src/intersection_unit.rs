@@ -66,6 +66,13 @@ pub struct IntersectionUnit<I: Intersector> {
 }
 
 impl<I: Intersector> IntersectionUnit<I> {
+    /// Zeroes the statistics (jobs, caches and memory keep their state).
+    pub fn reset_stats(&mut self) {
+        self.stats.reset();
+        self.tests = 0;
+        self.port.reset_stats();
+    }
+
     /// An idle unit.
     pub fn new(id: usize, cfg: &HwConfig) -> IntersectionUnit<I> {
         let q = cfg.memory.queue_depth;

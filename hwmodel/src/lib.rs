@@ -19,6 +19,7 @@
 
 pub mod cache;
 pub mod config;
+pub mod counters;
 pub mod datapath;
 pub mod dram;
 pub mod fifo;

@@ -200,6 +200,16 @@ pub struct MemPort {
 }
 
 impl MemPort {
+    /// Zeroes the port's and its caches' statistics (lines, fills and requests stay).
+    pub fn reset_stats(&mut self) {
+        self.requested = [0; CLASSES];
+        self.delivered = [0; CLASSES];
+        self.latency = Default::default();
+        for (_, c) in &mut self.caches {
+            c.stats = Default::default();
+        }
+    }
+
     /// A port whose reads all go through one cache (`size_bytes = 0`: none).
     pub fn new(name: String, cache: &CacheConfig, staged_limit: u32) -> MemPort {
         MemPort::with_caches(name.clone(), &[(name, cache, &[0, 1, 2, 3, 4])], staged_limit)

@@ -86,6 +86,14 @@ impl Memory {
         }
     }
 
+    /// Zeroes the statistics (queue, lines, rows and timing state stay).
+    pub fn reset_stats(&mut self) {
+        self.stats = ChannelStats::default();
+        if let Some(d) = self.dram.as_mut() {
+            d.reset_stats();
+        }
+    }
+
     /// The DRAM, if that is the model.
     pub fn dram(&self) -> Option<&Dram> {
         self.dram.as_ref()

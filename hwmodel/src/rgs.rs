@@ -174,6 +174,27 @@ impl Rgs {
         }
     }
 
+    /// Starts the frame `eye` (a walkthrough's next view, or the same one again) when the
+    /// last one is done: the shading cache keeps its lines, everything else starts over.
+    pub fn next_frame(&mut self, eye: EyeRays, cfg: &HwConfig) {
+        let port = std::mem::replace(&mut self.port, MemPort::new(String::new(), &cfg.cache.shading, 1));
+        let last = (self.gen_stats.last, self.shade_stats.last);
+        *self = Rgs::new(eye, self.bounds, self.background, self.shader, cfg);
+        self.port = port;
+        (self.gen_stats.last, self.shade_stats.last) = last;
+    }
+
+    /// Zeroes the statistics (work in flight and the cache's lines stay).
+    pub fn reset_stats(&mut self) {
+        self.gen_stats.reset();
+        self.shade_stats.reset();
+        self.port.reset_stats();
+        self.rays_by_kind = [0; RayKind::COUNT];
+        self.rays_issued = 0;
+        self.rays_retired = 0;
+        self.stream_peak = self.stream.len();
+    }
+
     /// Number of packets in the frame.
     pub fn packet_count(&self) -> usize {
         self.blocks.len()

@@ -50,6 +50,9 @@ pub struct Simulator<'s, I: Intersector> {
     shuffle: Option<u64>,
     skip: bool,
     now: u64,
+    /// The cycle statistics were last zeroed at (warm-up, region of interest, a new
+    /// frame): the report covers `stats_from..`.
+    stats_from: u64,
 }
 
 impl<'s, I: Intersector> Simulator<'s, I> {
@@ -91,6 +94,7 @@ impl<'s, I: Intersector> Simulator<'s, I> {
             shuffle: None,
             skip: true,
             now: 0,
+            stats_from: 0,
         })
     }
 
@@ -114,13 +118,39 @@ impl<'s, I: Intersector> Simulator<'s, I> {
 
     /// Runs the frame to the end; `progress(done, total)` is called now and then with
     /// packets shaded.
-    pub fn run(&mut self, mut progress: impl FnMut(usize, usize)) -> Result<(), String> {
+    pub fn run(&mut self, progress: impl FnMut(usize, usize)) -> Result<(), String> {
+        self.run_until(None, progress).map(|_| ())
+    }
+
+    /// True when the frame is done: every packet shaded and every request (the last
+    /// framebuffer writes) gone from its port.
+    pub fn is_done(&self) -> bool {
+        self.rgs.is_done() && !self.any_staged()
+    }
+
+    /// Packets of primary rays in the frame.
+    pub fn packet_count(&self) -> usize {
+        self.rgs.packet_count()
+    }
+
+    /// The current cycle.
+    pub fn now(&self) -> u64 {
+        self.now
+    }
+
+    /// Runs until the frame is done or, with `stop`, until cycle `stop` (the cycles
+    /// before it ticked, none after): true when the frame is done. The clock never skips
+    /// past `stop`, so statistics taken there cover exactly `..stop`.
+    pub fn run_until(&mut self, stop: Option<u64>, mut progress: impl FnMut(usize, usize)) -> Result<bool, String> {
         let mut quiet = 0u64;
         let total = self.rgs.packet_count();
         let mut last_done = usize::MAX;
-        // Until every packet is shaded and every request (the last framebuffer writes)
-        // has left its port.
-        while !self.rgs.is_done() || self.any_staged() {
+        while !self.is_done() {
+            if stop.is_some_and(|s| self.now >= s) {
+                return Ok(false);
+            }
+            // The last cycle the clock may account before stopping.
+            let room = stop.map_or(u64::MAX, |s| s - self.now - 1);
             let moved = self.cycle();
             let wake = if moved { None } else { self.next_wake() };
             let mut skipped = 0;
@@ -129,13 +159,13 @@ impl<'s, I: Intersector> Simulator<'s, I> {
             } else if let Some(w) = wake {
                 quiet = 0;
                 if self.skip {
-                    skipped = w.saturating_sub(self.now + 1);
+                    skipped = w.saturating_sub(self.now + 1).min(room);
                 }
             } else {
                 // Nothing moved and nothing is awaited: nothing can ever move again.
                 quiet += 1;
                 if self.skip {
-                    skipped = self.cfg.watchdog_cycles.saturating_sub(quiet) + 1;
+                    skipped = (self.cfg.watchdog_cycles.saturating_sub(quiet) + 1).min(room);
                     quiet += skipped;
                 }
                 if quiet > self.cfg.watchdog_cycles {
@@ -152,6 +182,34 @@ impl<'s, I: Intersector> Simulator<'s, I> {
             }
         }
         progress(total, total);
+        Ok(true)
+    }
+
+    /// Zeroes every statistic — units, FIFOs, caches, memory, the distinct-data map —
+    /// while the chip keeps its state (work in flight, cache lines, open rows): gem5's
+    /// `resetstats`, for warm-up and regions of interest. The report then covers the
+    /// cycles from now on.
+    pub fn reset_stats(&mut self) {
+        self.rgs.reset_stats();
+        self.tus.iter_mut().for_each(|t| t.reset_stats());
+        self.ius.iter_mut().for_each(|i| i.reset_stats());
+        self.fifos_mut().for_each(|f| f.reset_stats());
+        self.memory.reset_stats();
+        self.touched.iter_mut().for_each(|w| *w = 0);
+        self.stats_from = self.now;
+    }
+
+    /// Starts the next frame of a walkthrough (`eye`: its view; the same view again for
+    /// a warm-up frame) once this one is done. Caches keep their lines and the DRAM its
+    /// open rows; statistics start over.
+    pub fn next_frame(&mut self, eye: EyeRays) -> Result<(), String> {
+        if !self.is_done() {
+            return Err("next_frame: the current frame is not done".into());
+        }
+        // The next frame starts once the last one's data is in (the report's end).
+        self.now = self.now.max(self.memory.drained_at());
+        self.rgs.next_frame(eye, &self.cfg);
+        self.reset_stats();
         Ok(())
     }
 
@@ -288,9 +346,11 @@ impl<'s, I: Intersector> Simulator<'s, I> {
         self.order.retain(|u| *u != UnitRef::Traversal(unit));
     }
 
-    /// Total cycles of the frame: until the last pixel was shaded and the memory drained.
+    /// Cycles of the frame so far (of the statistics, since they were last zeroed):
+    /// at the end, until the last pixel was shaded and the memory drained.
     pub fn cycles(&self) -> u64 {
-        self.now.max(self.memory.drained_at())
+        let end = if self.is_done() { self.now.max(self.memory.drained_at()) } else { self.now };
+        end.saturating_sub(self.stats_from)
     }
 
     /// The report of the run so far.

@@ -493,6 +493,13 @@ impl<D: NodeTests> TraversalUnit<D> {
         }
     }
 
+    /// Zeroes the statistics (threads, caches and memory keep their state).
+    pub fn reset_stats(&mut self) {
+        self.stats.reset();
+        self.tstats = TraversalStats::default();
+        self.port.reset_stats();
+    }
+
     /// Accounts `n` more cycles like the last one (the clock skipped them).
     pub fn repeat_last(&mut self, n: u64) {
         self.stats.repeat_last(n);

@@ -65,6 +65,11 @@ impl UnitStats {
         }
     }
 
+    /// Zeroes the counters (the activity of the last cycle stays, for a skip that follows).
+    pub fn reset(&mut self) {
+        *self = UnitStats { last: self.last, ..UnitStats::default() };
+    }
+
     /// Counts one issue with `active` of `slots` lanes.
     pub fn issue(&mut self, active: u64, slots: u64) {
         self.issues += 1;

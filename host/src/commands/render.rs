@@ -25,6 +25,9 @@ pub(crate) fn cmd_render(a: RenderArgs) -> Result<()> {
     let mut opts =
         RenderOptions { threads: a.run.threads, intersector: kind, progress: true, packet, ..Default::default() };
     a.algo.apply(&mut opts)?;
+    if let Some(cams) = a.walk.cameras(&cam)? {
+        return walkthrough(&a, &scene, &view, &cams, &opts, &display);
+    }
     let start = Instant::now();
     let (frame, rays) = render::render_counted(&view, &cam, &opts)?;
     let secs = start.elapsed().as_secs_f64();
@@ -54,6 +57,49 @@ pub(crate) fn cmd_render(a: RenderArgs) -> Result<()> {
         rays.primary,
         rays.secondary,
         rays.total() as f64 / secs.max(1e-9) / 1e6
+    );
+    Ok(())
+}
+
+/// A walkthrough on the host: every frame rendered and written, its time and frame rate
+/// printed, then the whole path's.
+fn walkthrough(
+    a: &RenderArgs,
+    scene: &crate::scene::Scene,
+    view: &raypipe_core::SceneView<'_>,
+    cams: &[raypipe_core::image::CameraRecord],
+    opts: &RenderOptions,
+    display: &crate::tone_map::Display,
+) -> Result<()> {
+    println!("walkthrough of {} ({} triangles): {} frames", scene.name, view.triangle_count(), cams.len());
+    println!("lights   {}", lights_summary(scene)?);
+    println!("frame      seconds   frames/s   Mrays/s  image");
+    let mut times = Vec::with_capacity(cams.len());
+    let mut all_rays = 0u64;
+    for (k, cam) in cams.iter().enumerate() {
+        let start = Instant::now();
+        let (frame, rays) = render::render_counted(view, cam, opts)?;
+        let secs = start.elapsed().as_secs_f64().max(1e-9);
+        let path = output::frame_path(&a.output, k);
+        output::write_frame(&path, &frame, display)?;
+        println!(
+            "{k:>5}  {secs:>10.4}  {:>9.2}  {:>8.2}  {}",
+            1.0 / secs,
+            rays.total() as f64 / secs / 1e6,
+            path.display()
+        );
+        times.push(secs);
+        all_rays += rays.total();
+    }
+    let total: f64 = times.iter().sum();
+    times.sort_by(f64::total_cmp);
+    println!(
+        "path     {} frames in {:.3} s: {:.2} frames/s on average, median frame {:.4} s, {:.2} Mrays/s",
+        cams.len(),
+        total,
+        cams.len() as f64 / total,
+        times[times.len() / 2],
+        all_rays as f64 / total / 1e6
     );
     Ok(())
 }

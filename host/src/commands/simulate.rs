@@ -6,9 +6,9 @@ use std::time::Instant;
 
 use crate::cli::SimulateArgs;
 use crate::output;
-use crate::render::{Algorithm, Frame, RenderOptions};
+use crate::render::{Algorithm, RenderOptions};
 use crate::scene::Scene;
-use crate::simulate;
+use crate::simulate::{self, FrameRun, Measure};
 use crate::tracer::IntersectorKind;
 use anyhow::{bail, Result};
 use raypipe_hw::Report;
@@ -18,26 +18,140 @@ use super::{camera_for, check_image_path, load_scene, structure_summary, warn};
 pub(crate) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
     check_image_path(&a.output)?;
     let display = a.display.display()?;
-    // Both outputs' directories before anything is written: never one without the other.
+    // Every output's directory before anything is written: never one without the other.
     output::check_dir(&a.output)?;
     output::check_dir(&a.report)?;
+    if a.measure.interval.is_some() {
+        output::check_dir(&a.measure.intervals)?;
+    }
+    let walk = a.walk.camera_path.is_some() || a.walk.orbit.is_some();
+    if walk {
+        output::check_dir(&a.measure.frames)?;
+    }
     let run = simulate_args(&a, None, true)?;
-    output::write_frame(&a.output, &run.frame, &display)?;
+    let measured: Vec<&FrameRun> = run.frames.iter().filter(|f| !f.warmup).collect();
+    if walk {
+        for (k, f) in run.frames.iter().enumerate() {
+            output::write_frame(&output::frame_path(&a.output, k), &f.frame, &display)?;
+        }
+        let lines: Vec<String> = run.frames.iter().enumerate().map(|(k, f)| frame_line(k, f)).collect();
+        output::write_bytes(&a.measure.frames, (lines.join("\n") + "\n").as_bytes())?;
+    } else if let Some(last) = run.frames.last() {
+        output::write_frame(&a.output, &last.frame, &display)?;
+    }
+    if a.measure.interval.is_some() {
+        let mut text = String::new();
+        for (k, f) in run.frames.iter().enumerate().filter(|(_, f)| !f.warmup) {
+            for crate::simulate::Interval { start, end, counters } in &f.intervals {
+                let c: serde_json::Map<String, serde_json::Value> =
+                    counters.iter().map(|(n, v)| (n.clone(), serde_json::Value::from(*v))).collect();
+                let row = serde_json::json!({ "frame": k, "start": start, "end": end, "counters": c });
+                text.push_str(&row.to_string());
+                text.push('\n');
+            }
+        }
+        output::write_bytes(&a.measure.intervals, text.as_bytes())?;
+    }
     output::write_bytes(&a.report, run.report.to_json().as_bytes())?;
-    println!("simulated {} ({}, {} triangles) -> {}", run.scene, run.structure, run.triangles, a.output.display());
+    let target = if walk {
+        format!("{} frames, {}", run.frames.len(), output::frame_path(&a.output, 0).display())
+    } else {
+        a.output.display().to_string()
+    };
+    println!("simulated {} ({}, {} triangles) -> {target}", run.scene, run.structure, run.triangles);
+    if walk {
+        print_walkthrough(&run.frames, a.measure.warmup_frames);
+        println!("last frame:");
+    } else if a.measure.warmup_frames > 0 {
+        println!("after {} warm-up frame(s), caches warm:", a.measure.warmup_frames);
+    }
     print!("{}", run.report.summary());
+    let rays: u64 = measured.iter().map(|f| f.report.rays).sum();
     println!(
-        "simulator      {:.2} s wall, {:.3} Mrays/s simulated; report -> {}",
+        "simulator      {:.2} s wall, {:.3} Mrays/s simulated; report -> {}{}{}",
         run.seconds,
-        run.report.rays as f64 / run.seconds / 1e6,
-        a.report.display()
+        rays as f64 / run.seconds / 1e6,
+        a.report.display(),
+        if a.measure.interval.is_some() {
+            format!(", intervals -> {}", a.measure.intervals.display())
+        } else {
+            String::new()
+        },
+        if walk { format!(", frames -> {}", a.measure.frames.display()) } else { String::new() }
     );
     Ok(())
 }
 
+/// A walkthrough frame's line: Wald & Slusallek's walkthrough figures (frame rate and
+/// data loaded over time) and the caches' hit rates.
+fn frame_line(k: usize, f: &FrameRun) -> String {
+    let r = &f.report;
+    let hit: serde_json::Map<String, serde_json::Value> = raypipe_hw::metrics::metrics(r)
+        .into_iter()
+        .filter(|(n, _)| n.starts_with("hit_rate."))
+        .map(|(n, v)| {
+            (
+                n["hit_rate.".len()..].to_string(),
+                serde_json::Number::from_f64(v).map_or(serde_json::Value::Null, serde_json::Value::Number),
+            )
+        })
+        .collect();
+    serde_json::json!({
+        "frame": k,
+        "warmup": f.warmup,
+        "cycles": r.cycles,
+        "fps": r.frames_per_second,
+        "rays": r.rays,
+        "memory_bytes": r.memory.total_bytes,
+        "distinct_scene_bytes": r.memory.distinct_scene_bytes,
+        "hit_rate": hit,
+        "bottleneck": r.bottleneck,
+    })
+    .to_string()
+}
+
+/// Each frame of a walkthrough, then the steady state (the measured frames).
+fn print_walkthrough(frames: &[FrameRun], warmup: usize) {
+    println!("frame     cycles   frames/s   memory bytes   scene bytes read   node hits   triangle hits");
+    let pct = |r: &Report, m: &str| {
+        raypipe_hw::metrics::metric(r, m)
+            .filter(|v| v.is_finite())
+            .map_or("-".to_string(), |v| format!("{:.1}%", 100.0 * v))
+    };
+    for (k, f) in frames.iter().enumerate() {
+        let r = &f.report;
+        println!(
+            "{k:>5}{} {:>10} {:>10.2} {:>14} {:>18} {:>11} {:>15}",
+            if f.warmup { "w" } else { " " },
+            r.cycles,
+            r.frames_per_second,
+            r.memory.total_bytes,
+            r.memory.distinct_scene_bytes,
+            pct(r, "hit_rate.nodes"),
+            pct(r, "hit_rate.triangles")
+        );
+    }
+    let measured: Vec<&Report> = frames.iter().filter(|f| !f.warmup).map(|f| &f.report).collect();
+    if let Some(first) = measured.first() {
+        let cycles: u64 = measured.iter().map(|r| r.cycles).sum();
+        let bytes: u64 = measured.iter().map(|r| r.memory.total_bytes).sum();
+        let secs = cycles as f64 / (first.config.clock_mhz * 1e6);
+        println!(
+            "steady state   {} frames after {} warm-up: {:.2} frames/s, {:.0} cycles and {:.0} memory bytes per frame",
+            measured.len(),
+            warmup.min(frames.len()),
+            measured.len() as f64 / secs,
+            cycles as f64 / measured.len() as f64,
+            bytes as f64 / measured.len() as f64
+        );
+    }
+}
+
 /// One simulation's results.
 pub(crate) struct Simulated {
-    pub frame: Frame,
+    /// Every frame (one unless a walkthrough or warm-up).
+    pub frames: Vec<FrameRun>,
+    /// The last frame's report, with the run's identity.
     pub report: Report,
     /// The scene's name, its structure and triangle count (for the summary line).
     pub scene: String,
@@ -93,28 +207,49 @@ pub(crate) fn simulate_args(a: &SimulateArgs, cache: Option<&SceneCache>, show_p
     let mut opts = RenderOptions::default();
     a.algo.apply(&mut opts)?;
     let shader = opts.shader(raypipe_core::Vec3::from(cam.background));
+    let views = match a.walk.cameras(&cam)? {
+        Some(cams) => cams,
+        // One view: repeated for its warm-up frames, then measured.
+        None => vec![cam; a.measure.warmup_frames.saturating_add(1).min(crate::camera_path::MAX_FRAMES)],
+    };
+    let measure = Measure { warmup_frames: a.measure.warmup_frames, roi: a.measure.roi, interval: a.measure.interval };
+    if measure.warmup_frames >= views.len() {
+        bail!("--warmup-frames {}: the walkthrough has only {} frames", measure.warmup_frames, views.len());
+    }
     let start = Instant::now();
     let shadow_caster = opts.algo == Algorithm::Shadow;
-    let (frame, mut report) =
-        simulate::simulate(&view, &cam, &cfg, kind, shader, shadow_caster, opts.sampler(), show_progress)?;
+    let mut frames = simulate::simulate_frames(
+        &view,
+        &views,
+        &measure,
+        &cfg,
+        kind,
+        shader,
+        shadow_caster,
+        opts.sampler(),
+        show_progress,
+    )?;
     let seconds = start.elapsed().as_secs_f64();
-    report.run = raypipe_hw::report::RunIdentity {
-        scene: a.scene.as_ref().map_or("built-in Cornell box".to_string(), |p| p.display().to_string()),
-        scene_hash: format!("{:016x}", raypipe_hw::report::fnv1a64(view.bytes())),
-        structure: structure_summary(&view),
-        algorithm: format!("{:?}", opts.algo).to_lowercase(),
-        intersector: match cfg.datapath {
-            raypipe_hw::Datapath::F32 => kind.name().to_string(),
-            d => format!("fixed-watertight {}", d.name()),
-        },
-        camera: format!(
-            "eye {:?} look_at {:?} up {:?} vfov {} deg, {}x{}",
-            cam.eye, cam.look_at, cam.up, cam.vfov_deg, cam.width, cam.height
-        ),
-        raypipe_version: env!("CARGO_PKG_VERSION").to_string(),
-    };
+    for (f, cam) in frames.iter_mut().zip(&views) {
+        f.report.run = raypipe_hw::report::RunIdentity {
+            scene: a.scene.as_ref().map_or("built-in Cornell box".to_string(), |p| p.display().to_string()),
+            scene_hash: format!("{:016x}", raypipe_hw::report::fnv1a64(view.bytes())),
+            structure: structure_summary(&view),
+            algorithm: format!("{:?}", opts.algo).to_lowercase(),
+            intersector: match cfg.datapath {
+                raypipe_hw::Datapath::F32 => kind.name().to_string(),
+                d => format!("fixed-watertight {}", d.name()),
+            },
+            camera: format!(
+                "eye {:?} look_at {:?} up {:?} vfov {} deg, {}x{}",
+                cam.eye, cam.look_at, cam.up, cam.vfov_deg, cam.width, cam.height
+            ),
+            raypipe_version: env!("CARGO_PKG_VERSION").to_string(),
+        };
+    }
+    let report = frames.last().map(|f| f.report.clone()).ok_or_else(|| anyhow::anyhow!("no frame simulated"))?;
     Ok(Simulated {
-        frame,
+        frames,
         report,
         scene: scene.name.clone(),
         structure: structure_summary(&view),

@@ -1,0 +1,144 @@
+//! Measuring the hardware model the way architects do (issue 21): interval statistics
+//! that sum to the frame, warm-up frames left out of the totals, regions of interest,
+//! and walkthroughs whose frames are each the host's image while the caches stay warm.
+
+use raypipe::render::{render, Algorithm, RenderOptions};
+use raypipe::scene::{Accel, BuildOptions};
+use raypipe::simulate::{simulate_frames, FrameRun, Measure};
+use raypipe::tracer::IntersectorKind;
+use raypipe_core::image::CameraRecord;
+use raypipe_core::Vec3;
+use raypipe_hw::config::MemoryModel;
+use raypipe_hw::counters::counters;
+use raypipe_hw::metrics::metric;
+use raypipe_hw::HwConfig;
+
+fn whitted_scene(accel: Accel) -> raypipe::scene::Scene {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    raypipe::scene::load(Some(&root.join("fixtures/whitted.obj")), &BuildOptions { accel, ..Default::default() })
+        .unwrap()
+}
+
+fn frames(
+    scene: &raypipe::scene::Scene,
+    views: &[CameraRecord],
+    measure: &Measure,
+    cfg: &HwConfig,
+    algo: Algorithm,
+) -> Vec<FrameRun> {
+    let view = scene.view().unwrap();
+    let opts = RenderOptions { algo, max_depth: 2, ..Default::default() };
+    let shader = opts.shader(Vec3::from(views[0].background));
+    simulate_frames(&view, views, measure, cfg, IntersectorKind::Watertight, shader, false, opts.sampler(), false)
+        .unwrap()
+}
+
+fn dram() -> HwConfig {
+    let mut cfg = HwConfig::default();
+    cfg.memory.model = MemoryModel::Dram;
+    cfg
+}
+
+#[test]
+fn interval_rows_sum_to_the_frame_and_each_spans_its_cycles() {
+    let scene = whitted_scene(Accel::Kd);
+    let cam = CameraRecord { width: 32, height: 24, ..*scene.view().unwrap().camera().unwrap() };
+    for (cfg, n) in [(HwConfig::default(), 700), (dram(), 1999), (HwConfig::preset("saarcor").unwrap(), 64)] {
+        let run =
+            frames(&scene, &[cam], &Measure { interval: Some(n), ..Default::default() }, &cfg, Algorithm::Whitted);
+        let f = &run[0];
+        let totals = counters(&f.report);
+        assert!(f.intervals.len() >= 2, "interval {n}: {} rows", f.intervals.len());
+        for (name, total) in &totals {
+            let sum: u64 =
+                f.intervals.iter().map(|i| i.counters.iter().find(|(k, _)| k == name).map_or(0, |(_, v)| *v)).sum();
+            assert_eq!(sum, *total, "interval {n}: {name}");
+        }
+        // Back to back from 0 to the frame's end, every row but the last exactly N
+        // cycles (the clock never skips across a boundary).
+        let mut at = 0;
+        for (k, i) in f.intervals.iter().enumerate() {
+            assert_eq!(i.start, at);
+            assert_eq!(i.counters[0], ("cycles".to_string(), i.end - i.start));
+            if k + 1 < f.intervals.len() {
+                assert_eq!(i.end - i.start, n);
+            }
+            at = i.end;
+        }
+        assert_eq!(at, f.report.cycles);
+        // Intervals observe; they change neither the image nor the report.
+        let plain = frames(&scene, &[cam], &Measure::default(), &cfg, Algorithm::Whitted);
+        assert_eq!(plain[0].report.to_json(), f.report.to_json());
+        assert!(plain[0].frame.pixels == f.frame.pixels);
+    }
+}
+
+#[test]
+fn warm_up_frames_are_left_out_and_warm_the_caches() {
+    let scene = whitted_scene(Accel::Bvh4);
+    let cam = CameraRecord { width: 32, height: 32, ..*scene.view().unwrap().camera().unwrap() };
+    let cfg = dram();
+    let cold = frames(&scene, &[cam], &Measure::default(), &cfg, Algorithm::Cast);
+    let warm = frames(&scene, &[cam, cam], &Measure { warmup_frames: 1, ..Default::default() }, &cfg, Algorithm::Cast);
+    assert!(warm[0].warmup && !warm[1].warmup);
+    // The warm-up frame is the cold frame; the measured frame counts itself only.
+    assert_eq!(warm[0].report.to_json(), cold[0].report.to_json());
+    let (c, w) = (&cold[0].report, &warm[1].report);
+    assert_eq!(w.rays, c.rays);
+    assert_eq!(w.rays_by_kind, c.rays_by_kind);
+    assert_eq!(w.conservation.rays_issued, w.conservation.rays_retired);
+    assert_eq!(w.conservation.bytes_requested, w.conservation.bytes_delivered);
+    let units = |r: &raypipe_hw::Report| r.units.iter().map(|u| u.busy_cycles + u.stall_cycles + u.idle_cycles).max();
+    assert!(units(w) <= Some(w.cycles), "units tick only the measured frame's cycles");
+    // A static camera's second frame hits at least as often, and loads less.
+    for class in ["hit_rate.nodes", "hit_rate.triangles", "hit_rate.prim_lists", "hit_rate.shading"] {
+        let (a, b) = (metric(c, class).unwrap(), metric(w, class).unwrap());
+        assert!(a.is_nan() || b >= a, "{class}: {a} then {b}");
+    }
+    assert!(w.memory.total_bytes < c.memory.total_bytes);
+    assert!(w.cycles < c.cycles);
+    assert!(warm[1].frame.pixels == cold[0].frame.pixels);
+}
+
+#[test]
+fn a_region_of_interest_covers_its_cycles_only() {
+    let scene = whitted_scene(Accel::Grid);
+    let cam = CameraRecord { width: 32, height: 32, ..*scene.view().unwrap().camera().unwrap() };
+    let cfg = HwConfig::default();
+    let whole = frames(&scene, &[cam], &Measure::default(), &cfg, Algorithm::Whitted);
+    let (a, b) = (whole[0].report.cycles / 4, whole[0].report.cycles / 2);
+    let roi = frames(
+        &scene,
+        &[cam],
+        &Measure { roi: Some((a, b)), interval: Some(100), ..Default::default() },
+        &cfg,
+        Algorithm::Whitted,
+    );
+    let r = &roi[0].report;
+    assert_eq!(r.cycles, b - a);
+    for u in &r.units {
+        assert_eq!(u.busy_cycles + u.stall_cycles + u.idle_cycles, b - a, "{}", u.name);
+    }
+    for f in &r.fifos {
+        assert_eq!(f.stats.occupancy.iter().sum::<u64>(), b - a, "{}", f.name);
+    }
+    assert!(r.rays > 0 && r.rays < whole[0].report.rays);
+    assert_eq!(roi[0].intervals.last().map(|i| i.end), Some(b - a));
+    // The image is still the whole frame's.
+    assert!(roi[0].frame.pixels == whole[0].frame.pixels);
+}
+
+#[test]
+fn walkthrough_frames_are_the_hosts_images() {
+    let scene = whitted_scene(Accel::Kd);
+    let view = scene.view().unwrap();
+    let cam = CameraRecord { width: 24, height: 24, ..*view.camera().unwrap() };
+    let views = raypipe::camera_path::orbit(&cam, 3).unwrap();
+    let run = frames(&scene, &views, &Measure::default(), &HwConfig::preset("saarcor").unwrap(), Algorithm::Whitted);
+    for (k, (f, c)) in run.iter().zip(&views).enumerate() {
+        let opts = RenderOptions { algo: Algorithm::Whitted, max_depth: 2, ..Default::default() };
+        let host = render(&view, c, &opts).unwrap();
+        assert!(f.frame.pixels == host.pixels, "frame {k}");
+        assert_eq!(f.report.conservation.rays_issued, f.report.conservation.rays_retired, "frame {k}");
+    }
+}
