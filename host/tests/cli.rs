@@ -1365,7 +1365,7 @@ fn walkthroughs_write_every_frame_on_the_host_and_the_model() {
     let rows: Vec<serde_json::Value> = intervals.lines().map(|l| serde_json::from_str(l).unwrap()).collect();
     for k in [1u64, 2] {
         let sum: u64 = rows.iter().filter(|r| r["frame"] == k).map(|r| r["counters"]["cycles"].as_u64().unwrap()).sum();
-        let cycles = serde_json::from_str::<serde_json::Value>(&frames.lines().nth(k as usize).unwrap()).unwrap()
+        let cycles = serde_json::from_str::<serde_json::Value>(frames.lines().nth(k as usize).unwrap()).unwrap()
             ["cycles"]
             .as_u64()
             .unwrap();
