@@ -46,6 +46,8 @@ pub struct HwConfig {
     pub cache: CachesConfig,
     /// The memory channel.
     pub memory: MemoryConfig,
+    /// Energy and area figures (docs/hw-model.md, "Energy and area").
+    pub energy: crate::energy::EnergyConfig,
 }
 
 /// The ray generation & shading unit.
@@ -237,6 +239,7 @@ impl Default for HwConfig {
             fifo: FifoConfig::default(),
             cache: CachesConfig::default(),
             memory: MemoryConfig::default(),
+            energy: crate::energy::EnergyConfig::default(),
         }
     }
 }
@@ -529,6 +532,26 @@ impl HwConfig {
         }
         if self.watchdog_cycles == 0 {
             return err("watchdog_cycles must be at least 1".to_string());
+        }
+        let e = &self.energy;
+        for (key, v) in [
+            ("process_nm", e.process_nm),
+            ("fp_add_pj", e.fp_add_pj),
+            ("fp_mul_pj", e.fp_mul_pj),
+            ("fp_add_um2", e.fp_add_um2),
+            ("fp_mul_um2", e.fp_mul_um2),
+            ("sram_8k_pj", e.sram_8k_pj),
+            ("sram_32k_pj", e.sram_32k_pj),
+            ("sram_1m_pj", e.sram_1m_pj),
+            ("sram_mm2_per_kib", e.sram_mm2_per_kib),
+            ("dram_access_pj", e.dram_access_pj),
+            ("dram_activate_pj", e.dram_activate_pj),
+            ("leakage_mw_per_mm2", e.leakage_mw_per_mm2),
+            ("ray_state_bytes", e.ray_state_bytes),
+        ] {
+            if !(v.is_finite() && (0.0..=1e12).contains(&v)) {
+                return err(format!("energy.{key} must be a finite number from 0 to 1e12 (got {v})"));
+            }
         }
         Ok(())
     }

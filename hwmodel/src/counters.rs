@@ -22,6 +22,7 @@ pub fn counters(r: &Report) -> Vec<(String, u64)> {
         c.push((format!("units.{n}.stall_cycles"), u.stall_cycles));
         c.push((format!("units.{n}.idle_cycles"), u.idle_cycles));
         c.push((format!("units.{n}.issues"), u.issues));
+        c.push((format!("units.{n}.active_lanes"), u.active_lanes));
         c.push((format!("units.{n}.bytes"), u.bytes));
         c.extend(u.stall_reasons.iter().map(|(k, v)| (format!("units.{n}.stall_reasons.{k}"), *v)));
     }

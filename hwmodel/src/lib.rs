@@ -22,6 +22,7 @@ pub mod config;
 pub mod counters;
 pub mod datapath;
 pub mod dram;
+pub mod energy;
 pub mod fifo;
 pub mod intersection_unit;
 pub mod jobs;

@@ -1,7 +1,7 @@
 //! A report's headline figures as one flat list of named numbers — what a sweep row, a
 //! plot axis or a report diff speaks of: frame rate and cycles, the bottleneck's
 //! ingredients (busy share and stall reasons per kind of unit), bytes per ray by data
-//! class, cache hit rates by class, and SIMD efficiency. Names are stable: they
+//! class, cache hit rates by class, SIMD efficiency, and energy. Names are stable: they
 //! are CSV column names and `--y` arguments of `raypipe plot`.
 
 use crate::report::{Report, UnitReport};
@@ -66,6 +66,13 @@ pub fn metrics(r: &Report) -> Vec<(String, f64)> {
             let n: u64 = units.iter().map(|u| u.stall_reasons.get(s.name()).copied().unwrap_or(0)).sum();
             m.push((format!("stall.{kind}.{}", s.name()), share(n)));
         }
+    }
+    if let Some(e) = &r.energy {
+        m.push(("energy_per_frame_mj".into(), e.joules_per_frame * 1e3));
+        m.push(("energy_per_ray_nj".into(), e.joules_per_ray * 1e9));
+        m.push(("power_w".into(), e.watts));
+        m.push(("area_mm2".into(), e.area_mm2));
+        m.extend(e.joules.iter().map(|(k, j)| (format!("energy_mj.{k}"), j * 1e3)));
     }
     m
 }

@@ -35,6 +35,9 @@ pub struct UnitReport {
     pub issues: u64,
     /// Active lanes over lane slots of those issues.
     pub simd_efficiency: f64,
+    /// Lanes that took part, summed over issues (ray–node tests, ray–triangle tests in
+    /// leaf jobs, rays generated or shaded).
+    pub active_lanes: u64,
     /// Stall cycles by reason; they sum to `stall_cycles`.
     pub stall_reasons: BTreeMap<String, u64>,
     /// Traversal units: node records read per packet step (1 for a packet's shared walk).
@@ -215,6 +218,9 @@ pub struct Report {
     pub memory: MemoryReport,
     /// Conservation checks.
     pub conservation: Conservation,
+    /// Energy and area estimates (`config.energy`'s figures over the counters).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub energy: Option<crate::energy::EnergyReport>,
 }
 
 /// Everything [`Report::gather`] reads.
@@ -286,6 +292,7 @@ impl Report {
                     idle_cycles: u.idle_cycles,
                     issues: u.issues,
                     simd_efficiency: u.simd_efficiency(),
+                    active_lanes: u.active_lanes,
                     stall_reasons: Stall::ALL
                         .iter()
                         .map(|r| (r.name().to_string(), u.stall_reasons[*r as usize]))
@@ -396,6 +403,7 @@ impl Report {
                 bytes_requested: s.requested,
                 bytes_delivered: s.delivered,
             },
+            energy: None,
         }
     }
 
@@ -481,6 +489,22 @@ impl Report {
             "scene traffic  {:.2}x the {} distinct bytes read",
             m.traffic_over_compulsory, m.distinct_scene_bytes
         ));
+        if let Some(e) = &self.energy {
+            let mut parts: Vec<(&String, &f64)> = e.joules.iter().filter(|(_, j)| **j > 0.0).collect();
+            parts.sort_by(|a, b| b.1.total_cmp(a.1));
+            let parts: Vec<String> =
+                parts.iter().map(|(k, j)| format!("{k} {:.0}%", 100.0 * **j / e.joules_per_frame.max(1e-30))).collect();
+            line(format!(
+                "energy         {:.4} mJ/frame, {:.2} nJ/ray, {:.3} W at {} MHz ({}); area {:.2} mm² ({} nm figures)",
+                e.joules_per_frame * 1e3,
+                e.joules_per_ray * 1e9,
+                e.watts,
+                self.config.clock_mhz,
+                parts.join(", "),
+                e.area_mm2,
+                e.process_nm
+            ));
+        }
         out
     }
 }

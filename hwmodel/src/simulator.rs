@@ -14,6 +14,7 @@ use raypipe_core::shade::shader::Shader;
 use raypipe_core::{SceneView, Vec3};
 
 use crate::config::HwConfig;
+use crate::energy::NodeTest;
 use crate::fifo::{AnyFifo, Fifo};
 use crate::intersection_unit::IntersectionUnit;
 use crate::jobs::{HitPacket, LeafJob, RayPacketJob};
@@ -377,8 +378,21 @@ impl<'s, I: Intersector> Simulator<'s, I> {
                 }
             }
         }
+        let node = if self.scene.grid().is_some() {
+            NodeTest::Grid
+        } else if self.scene.bvh4().is_some() {
+            NodeTest::Boxes(4)
+        } else if self.scene.bvh8().is_some() {
+            NodeTest::Boxes(8)
+        } else if self.scene.bvh().is_some() {
+            NodeTest::Boxes(2)
+        } else if self.scene.kdtree().is_some() {
+            NodeTest::Kd
+        } else {
+            NodeTest::None
+        };
         let port_name = |p: &MemPort| if p.name == "shading" { "rgs.shade".to_string() } else { p.name.clone() };
-        Report::gather(Sources {
+        let mut report = Report::gather(Sources {
             cfg: &self.cfg,
             size: self.rgs.size(),
             cycles: self.cycles(),
@@ -398,7 +412,9 @@ impl<'s, I: Intersector> Simulator<'s, I> {
             tests: self.ius.iter().map(|i| i.tests).sum(),
             rays_by_kind: self.rgs.rays_by_kind,
             stream_peak: self.rgs.stream_peak,
-        })
+        });
+        report.energy = Some(self.cfg.energy.estimate(&self.cfg, &report, node));
+        report
     }
 }
 

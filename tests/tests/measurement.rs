@@ -142,3 +142,33 @@ fn walkthrough_frames_are_the_hosts_images() {
         assert_eq!(f.report.conservation.rays_issued, f.report.conservation.rays_retired, "frame {k}");
     }
 }
+
+#[test]
+fn energy_is_the_counters_times_the_published_figures() {
+    let scene = whitted_scene(Accel::Bvh4);
+    let cam = CameraRecord { width: 32, height: 24, ..*scene.view().unwrap().camera().unwrap() };
+    let mut cfg = dram();
+    let r = frames(&scene, &[cam], &Measure::default(), &cfg, Algorithm::Whitted).remove(0).report;
+    let e = r.energy.as_ref().expect("every run is estimated");
+    let pj = 1e-12;
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b.abs().max(1e-30);
+    // Ray–triangle tests at Möller–Trumbore's 27 multiplies and 23 additions, Horowitz's
+    // 3.7 and 0.9 pJ; BVH4 node tests as four slab tests.
+    assert!(close(e.joules["intersection"], r.triangle_tests as f64 * (27.0 * 3.7 + 23.0 * 0.9) * pj));
+    let node_tests: u64 = r.units.iter().filter(|u| u.name.starts_with("traversal")).map(|u| u.active_lanes).sum();
+    assert!(close(e.joules["traversal"], node_tests as f64 * 4.0 * (6.0 * 3.7 + 12.0 * 0.9) * pj));
+    let rows: u64 = r.memory.dram.as_ref().unwrap().banks.iter().map(|b| b.row_empty + b.row_conflicts).sum();
+    assert!(close(e.joules["dram"], (r.memory.total_bytes as f64 / 8.0 * 1300.0 + rows as f64 * 1300.0) * pj));
+    assert!(close(e.joules_per_frame, e.joules.values().sum()));
+    assert!(close(e.joules_per_ray * r.rays as f64, e.joules_per_frame));
+    assert!(close(e.watts, e.joules_per_frame * r.frames_per_second));
+    // The figures are parameters: doubling the multiply energy changes energy only.
+    cfg.set("energy.fp_mul_pj=7.4").unwrap();
+    cfg.set("energy.leakage_mw_per_mm2=100").unwrap();
+    let r2 = frames(&scene, &[cam], &Measure::default(), &cfg, Algorithm::Whitted).remove(0).report;
+    let e2 = r2.energy.as_ref().unwrap();
+    assert_eq!(r2.cycles, r.cycles);
+    assert!(close(e2.joules["intersection"], r.triangle_tests as f64 * (27.0 * 7.4 + 23.0 * 0.9) * pj));
+    assert!(close(e2.joules["leakage"], e2.area_mm2 * 0.1 * r.cycles as f64 / (cfg.clock_mhz * 1e6)));
+    assert!(cfg.set("energy.fp_add_pj=-1").is_ok() && cfg.validate().is_err());
+}
