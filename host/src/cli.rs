@@ -348,6 +348,20 @@ pub struct MeasureArgs {
     /// Where --interval writes.
     #[arg(long, value_name = "JSONL", default_value = "raypipe-sim.intervals.jsonl")]
     pub intervals: PathBuf,
+    /// Waveforms as VCD (GTKWave, Surfer): FIFO occupancies, unit activities, traversal
+    /// threads by state, requests waiting in ports and the memory's queue, per cycle.
+    #[arg(long, value_name = "FILE.vcd")]
+    pub vcd: Option<PathBuf>,
+    /// Only cycles A..B of the run in the VCD.
+    #[arg(long, value_name = "A..B", value_parser = parse_roi, requires = "vcd")]
+    pub vcd_window: Option<(u64, u64)>,
+    /// Only the signals whose names start with these (e.g. traversal0,fifos.rays,memory).
+    #[arg(long, value_name = "LIST", value_delimiter = ',', requires = "vcd")]
+    pub vcd_units: Vec<String>,
+    /// A Chrome/Perfetto trace (JSON): packet lifetimes (issue, traversal, intersection,
+    /// shading) and memory transactions.
+    #[arg(long, value_name = "FILE.json")]
+    pub trace: Option<PathBuf>,
     /// Walkthroughs: one JSON line per frame (cycles, frames/s, bytes loaded, hit rates).
     #[arg(long, value_name = "JSONL", default_value = "raypipe-sim.frames.jsonl")]
     pub frames: PathBuf,

@@ -52,6 +52,8 @@ pub mod sweep_plot;
 pub mod sweep_table;
 pub mod texture_loader;
 pub mod tone_map;
+pub mod trace_file;
 pub mod tracer;
 pub mod tri_box;
 pub mod tri_clip;
+pub mod waveform;

@@ -47,7 +47,7 @@ pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut dyn Write) -> Result<()>
 
 /// Gives `file` the permissions a newly created file gets: 0666 less the umask.
 #[cfg(unix)]
-fn set_default_permissions(file: &std::fs::File) -> std::io::Result<()> {
+pub(crate) fn set_default_permissions(file: &std::fs::File) -> std::io::Result<()> {
     use std::os::unix::fs::PermissionsExt;
     // The umask can only be read by setting it; put it straight back.
     // SAFETY: umask has no memory-safety preconditions.
@@ -60,7 +60,7 @@ fn set_default_permissions(file: &std::fs::File) -> std::io::Result<()> {
 }
 
 #[cfg(not(unix))]
-fn set_default_permissions(_: &std::fs::File) -> std::io::Result<()> {
+pub(crate) fn set_default_permissions(_: &std::fs::File) -> std::io::Result<()> {
     Ok(())
 }
 
@@ -165,4 +165,36 @@ pub fn frame_path(path: &Path, k: usize) -> std::path::PathBuf {
         None => format!("{stem}-{k:04}"),
     };
     path.with_file_name(name)
+}
+
+/// A file written as it goes, that appears under its name only when complete: a
+/// temporary file beside the target, renamed over it by [`Streamed::commit`].
+pub struct Streamed {
+    path: std::path::PathBuf,
+    tmp: tempfile::NamedTempFile,
+}
+
+impl Streamed {
+    /// Starts `path`.
+    pub fn create(path: &Path) -> Result<Streamed> {
+        check_dir(path)?;
+        let tmp = tempfile::Builder::new()
+            .prefix(".raypipe-")
+            .tempfile_in(dir_of(path))
+            .map_err(|e| anyhow!("{}: cannot create a file in {}: {e}", path.display(), dir_of(path).display()))?;
+        Ok(Streamed { path: path.to_path_buf(), tmp })
+    }
+
+    /// The file to write to.
+    pub fn file(&mut self) -> &mut std::fs::File {
+        self.tmp.as_file_mut()
+    }
+
+    /// Gives the file its name.
+    pub fn commit(self) -> Result<()> {
+        let name = self.path.display().to_string();
+        set_default_permissions(self.tmp.as_file()).map_err(|e| anyhow!("{name}: cannot set permissions: {e}"))?;
+        self.tmp.persist(&self.path).map_err(|e| anyhow!("{name}: cannot write: {}", e.error))?;
+        Ok(())
+    }
 }

@@ -10,6 +10,7 @@ use raypipe_core::pixel_filter::PixelSampler;
 use raypipe_core::shade::shader::Shader;
 use raypipe_core::{Intersector, SceneView};
 use raypipe_hw::counters::{counters, delta};
+use raypipe_hw::observe::Waves;
 use raypipe_hw::{Datapath, HwConfig, Report, Simulator};
 
 use crate::progress;
@@ -48,6 +49,22 @@ pub struct Measure {
     pub roi: Option<(u64, u64)>,
     /// Counters every this many cycles of the measured part.
     pub interval: Option<u64>,
+    /// Waveforms.
+    pub vcd: Option<VcdSpec>,
+    /// A Chrome trace-event file of packet lifetimes and memory transactions.
+    pub trace: Option<std::path::PathBuf>,
+}
+
+/// Waveforms to write: the VCD file, its window of cycles (of the whole run) and the
+/// signal name prefixes kept (all when empty).
+#[derive(Clone, Debug, Default)]
+pub struct VcdSpec {
+    /// The file.
+    pub path: std::path::PathBuf,
+    /// Cycles `a..b` only.
+    pub window: Option<(u64, u64)>,
+    /// Signal name prefixes.
+    pub units: Vec<String>,
 }
 
 /// One frame of a run.
@@ -164,6 +181,22 @@ impl Run<'_, '_> {
         let Run { scene, eyes, measure, background, cfg, shader, shadow_caster, show_progress } = *self;
         let mut sim = Simulator::<I>::with_shader(*scene, eyes[0], background, shader, cfg)
             .map_err(|e| anyhow!("hardware configuration: {e}"))?;
+        // Observers only read the chip: the reports are the same without them.
+        let mut vcd_file = None;
+        if let Some(VcdSpec { path, window, units }) = &measure.vcd {
+            if let Some((a, b)) = window.filter(|(a, b)| a >= b) {
+                bail!("--vcd-window {a}..{b}: the window is empty");
+            }
+            let comment = format!("raypipe simulate: 1 time unit = 1 clock cycle at {} MHz", cfg.clock_mhz);
+            let (file, sink) = crate::waveform::create(path, comment)?;
+            let waves = Waves::new(Box::new(sink), &sim.signals(), units, window.unwrap_or((0, u64::MAX)))
+                .map_err(|e| anyhow!(e))?;
+            sim.set_waves(waves);
+            vcd_file = Some(file);
+        }
+        if measure.trace.is_some() {
+            sim.enable_trace();
+        }
         let bar = progress::bar(0, "simulate", show_progress);
         let mut out = Vec::new();
         let mut before = 0;
@@ -226,6 +259,15 @@ impl Run<'_, '_> {
             out.push(FrameRun { frame, report, warmup, intervals });
         }
         bar.finish_and_clear();
+        if let (Some(file), Some(mut waves)) = (vcd_file, sim.take_waves()) {
+            let path = measure.vcd.as_ref().map(|v| v.path.display().to_string()).unwrap_or_default();
+            waves.finish(sim.now()).map_err(|e| anyhow!("{path}: {e}"))?;
+            file.commit()?;
+        }
+        if let (Some(path), Some(log)) = (&measure.trace, sim.take_trace()) {
+            let doc = crate::trace_file::to_json(&log, cfg.clock_mhz);
+            crate::output::write_bytes(path, doc.to_string().as_bytes())?;
+        }
         Ok(out)
     }
 }

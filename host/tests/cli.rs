@@ -1379,3 +1379,116 @@ fn walkthroughs_write_every_frame_on_the_host_and_the_model() {
     assert_one_line_error(&raypipe(d, &["simulate", "--orbit", "2", "--warmup-frames", "2"]), "only 2 frames");
     assert_one_line_error(&raypipe(d, &["simulate", "--interval", "0"]), "at least one cycle");
 }
+
+/// A waveform read back: its dotted name and its (time, value) changes.
+type Wave = (String, Vec<(u64, u64)>);
+
+/// Reads a VCD back: every variable, and the last timestamp.
+fn read_vcd(path: &Path) -> (Vec<Wave>, u64) {
+    use vcd::{Command as Vcd, IdCode, ScopeItem};
+    let mut parser = vcd::Parser::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
+    let header = parser.parse_header().unwrap();
+    let mut vars: Vec<(IdCode, String)> = Vec::new();
+    fn walk(items: &[ScopeItem], prefix: &str, vars: &mut Vec<(IdCode, String)>) {
+        for item in items {
+            match item {
+                ScopeItem::Scope(s) => walk(&s.items, &format!("{prefix}{}.", s.identifier), vars),
+                ScopeItem::Var(v) => vars.push((v.code, format!("{prefix}{}", v.reference))),
+                _ => {}
+            }
+        }
+    }
+    walk(&header.items, "", &mut vars);
+    let mut changes: Vec<Vec<(u64, u64)>> = vec![Vec::new(); vars.len()];
+    let (mut t, mut end) = (0, 0);
+    for cmd in parser {
+        match cmd.unwrap() {
+            Vcd::Timestamp(ts) => {
+                t = ts;
+                end = ts;
+            }
+            Vcd::ChangeVector(id, v) => {
+                let k = vars.iter().position(|(c, _)| *c == id).unwrap();
+                let value = v.iter().fold(0u64, |acc, b| acc * 2 + u64::from(b == vcd::Value::V1));
+                changes[k].push((t, value));
+            }
+            Vcd::ChangeScalar(id, v) => {
+                let k = vars.iter().position(|(c, _)| *c == id).unwrap();
+                changes[k].push((t, u64::from(v == vcd::Value::V1)));
+            }
+            _ => {}
+        }
+    }
+    (vars.into_iter().map(|(_, n)| n).zip(changes).collect(), end)
+}
+
+#[test]
+fn waveforms_and_traces_observe_without_changing_the_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let base = ["simulate", "--size", "32x24", "--algo", "whitted", "--set", "memory.model=\"dram\"", "-o", "x.png"];
+    let o = raypipe(d, &[&base[..], &["--report", "plain.json"]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = raypipe(d, &[&base[..], &["--report", "watched.json", "--vcd", "w.vcd", "--trace", "t.json"]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let plain = std::fs::read_to_string(d.join("plain.json")).unwrap();
+    assert_eq!(plain, std::fs::read_to_string(d.join("watched.json")).unwrap(), "tracing changed the report");
+    let report: serde_json::Value = serde_json::from_str(&plain).unwrap();
+    // The VCD parses; each FIFO's occupancy averaged over time is the report's mean.
+    let (signals, end) = read_vcd(&d.join("w.vcd"));
+    let fifos = report["fifos"].as_array().unwrap();
+    assert_eq!(signals.iter().filter(|(n, _)| n.ends_with(".occupancy")).count(), fifos.len());
+    for f in fifos {
+        let name = format!("raypipe.fifos.{}.occupancy", f["name"].as_str().unwrap());
+        let (_, changes) = signals.iter().find(|(n, _)| *n == name).expect(&name);
+        let mut area = 0u64;
+        for (k, (t, v)) in changes.iter().enumerate() {
+            let next = changes.get(k + 1).map_or(end, |c| c.0);
+            area += v * (next - t);
+        }
+        let ticked: u64 = f["occupancy"].as_array().unwrap().iter().map(|c| c.as_u64().unwrap()).sum();
+        assert_eq!(end, ticked, "the VCD ends where the units stopped ticking");
+        let mean = f["mean_occupancy"].as_f64().unwrap();
+        assert!((area as f64 / end as f64 - mean).abs() < 1e-9, "{name}: {} vs {mean}", area as f64 / end as f64);
+    }
+    for n in [
+        "raypipe.traversal0.activity",
+        "raypipe.traversal0.threads.fetching",
+        "raypipe.memory.queue",
+        "raypipe.memory.requests",
+    ] {
+        assert!(signals.iter().any(|(s, _)| s == n), "{n}");
+    }
+    // The trace: valid JSON, one begin and one end per packet, begin first.
+    let trace: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(d.join("t.json")).unwrap()).unwrap();
+    let events = trace["traceEvents"].as_array().unwrap();
+    let mut packets: std::collections::BTreeMap<String, (u32, u32, u64, u64)> = Default::default();
+    for e in events.iter().filter(|e| e["name"].as_str().is_some_and(|n| n.starts_with("packet "))) {
+        let p = packets.entry(e["id"].as_str().unwrap().to_string()).or_default();
+        match e["ph"].as_str().unwrap() {
+            "b" => (p.0, p.2) = (p.0 + 1, e["ts"].as_u64().unwrap()),
+            "e" => (p.1, p.3) = (p.1 + 1, e["ts"].as_u64().unwrap()),
+            ph => panic!("{ph}"),
+        }
+    }
+    let primary = (32 / 4) * (24 / 4);
+    assert!(packets.len() > primary, "primary and secondary packets: {}", packets.len());
+    assert!(packets.values().all(|&(b, e, t0, t1)| b == 1 && e == 1 && t0 <= t1));
+    let memory = events.iter().filter(|e| e["cat"] == "memory").count() as u64;
+    assert_eq!(
+        memory,
+        report["memory"]["requests"].as_u64().unwrap() + report["memory"]["l2"]["hits"].as_u64().unwrap()
+    );
+    // A window and a unit filter narrow the VCD; an empty filter is an error.
+    let o =
+        raypipe(d, &[&base[..], &["--vcd", "n.vcd", "--vcd-window", "100..200", "--vcd-units", "traversal1"]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (narrow, end) = read_vcd(&d.join("n.vcd"));
+    assert!(narrow.iter().all(|(n, _)| n.starts_with("raypipe.traversal1.")) && !narrow.is_empty());
+    assert!(narrow.iter().all(|(_, c)| c.iter().all(|(t, _)| (100..200).contains(t))) && end <= 200);
+    assert_one_line_error(
+        &raypipe(d, &[&base[..], &["--vcd", "z.vcd", "--vcd-units", "nothing"]].concat()),
+        "no signal",
+    );
+    assert!(!d.join("z.vcd").exists());
+}

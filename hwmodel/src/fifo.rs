@@ -27,6 +27,9 @@ pub struct FifoStats {
     pub occupancy: Vec<u64>,
 }
 
+/// Tracing: how an entry is numbered, and what entered (true) or left.
+type EntryLog<T> = (fn(&T) -> u32, Vec<(bool, u32)>);
+
 /// A bounded FIFO of packets or jobs.
 #[derive(Debug)]
 pub struct Fifo<T> {
@@ -43,6 +46,9 @@ pub struct Fifo<T> {
     last_stalls: (bool, bool),
     /// Statistics.
     pub stats: FifoStats,
+    /// Tracing: the packet number of an entry, and what entered (true) or left since
+    /// the log was last taken.
+    log: Option<EntryLog<T>>,
 }
 
 impl<T> Fifo<T> {
@@ -60,7 +66,13 @@ impl<T> Fifo<T> {
             empty_noted: false,
             last_stalls: (false, false),
             stats: FifoStats { occupancy: vec![0; depth + 1], ..FifoStats::default() },
+            log: None,
         }
+    }
+
+    /// Logs what enters and leaves, as `tag` numbers it (tracing).
+    pub fn enable_log(&mut self, tag: fn(&T) -> u32) {
+        self.log = Some((tag, Vec::new()));
     }
 
     /// Ready: the producer may push this cycle.
@@ -97,8 +109,13 @@ impl<T> Fifo<T> {
             return None;
         }
         let item = self.items.pop_front();
-        match item {
-            Some(_) => self.popped = true,
+        match &item {
+            Some(it) => {
+                self.popped = true;
+                if let Some((tag, log)) = self.log.as_mut() {
+                    log.push((false, tag(it)));
+                }
+            }
             None if !self.empty_noted => {
                 self.empty_noted = true;
                 self.stats.empty_stall_cycles += 1;
@@ -125,6 +142,9 @@ impl<T> Fifo<T> {
             self.stats.pops += 1;
         }
         if let Some(item) = self.staged.take() {
+            if let Some((tag, log)) = self.log.as_mut() {
+                log.push((true, tag(&item)));
+            }
             // Cannot fail: `can_push` checked the committed occupancy.
             let _ = self.items.push_back(item);
             self.stats.pushes += 1;
@@ -187,6 +207,8 @@ pub trait AnyFifo {
     fn repeat_last(&mut self, cycles: u64);
     /// Zeroes the statistics.
     fn reset_stats(&mut self);
+    /// Moves what entered and left since the last call into `out` (tracing).
+    fn take_log(&mut self, out: &mut Vec<(bool, u32)>);
 }
 
 impl<T> AnyFifo for Fifo<T> {
@@ -210,6 +232,11 @@ impl<T> AnyFifo for Fifo<T> {
     }
     fn reset_stats(&mut self) {
         Fifo::reset_stats(self)
+    }
+    fn take_log(&mut self, out: &mut Vec<(bool, u32)>) {
+        if let Some((_, log)) = self.log.as_mut() {
+            out.append(log);
+        }
     }
 }
 

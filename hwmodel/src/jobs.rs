@@ -39,6 +39,8 @@ pub struct RayPacketJob {
 /// Traversal unit → intersection unit: a packet standing at leaves.
 #[derive(Clone, Debug)]
 pub struct LeafJob {
+    /// Packet number.
+    pub packet: u32,
     /// The traversal thread the packet belongs to.
     pub thread: u8,
     /// Lanes at a leaf.

@@ -29,6 +29,7 @@ pub mod jobs;
 pub mod mem_port;
 pub mod memory;
 pub mod metrics;
+pub mod observe;
 pub mod report;
 pub mod rgs;
 pub mod simulator;

@@ -197,6 +197,9 @@ pub struct MemPort {
     pub delivered: [u64; CLASSES],
     /// Latency of this port's read requests, per class.
     pub latency: [LatencyStats; CLASSES],
+    /// Tracing: requests the memory took since the log was last taken (request, cycle
+    /// its data arrives).
+    pub log: Option<Vec<(Request, u64)>>,
 }
 
 impl MemPort {
@@ -246,6 +249,7 @@ impl MemPort {
             requested: [0; CLASSES],
             delivered: [0; CLASSES],
             latency: Default::default(),
+            log: None,
         }
     }
 
@@ -264,6 +268,9 @@ impl MemPort {
 
     /// Called by the memory at the edge: request `id`'s data arrives at `cycle`.
     pub fn set_ready(&mut self, r: &Request, cycle: u64) {
+        if let Some(log) = self.log.as_mut() {
+            log.push((*r, cycle));
+        }
         if let Some(slot) = self.ready.get_mut(r.id as usize) {
             *slot = cycle;
         }

@@ -94,6 +94,11 @@ impl Memory {
         }
     }
 
+    /// Requests accepted and not yet started (as last updated at an edge).
+    pub fn queue_len(&self) -> usize {
+        self.queue.len()
+    }
+
     /// The DRAM, if that is the model.
     pub fn dram(&self) -> Option<&Dram> {
         self.dram.as_ref()

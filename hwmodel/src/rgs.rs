@@ -42,6 +42,8 @@ enum Stage {
 
 /// A packet being shaded.
 struct ShadeJob {
+    /// Packet number (for traces).
+    packet: u32,
     fetch: Fetch,
     stage: Stage,
     data_at: u64,
@@ -112,6 +114,8 @@ pub struct Rgs {
     pub rays_issued: u64,
     /// Rays shaded after traversal.
     pub rays_retired: u64,
+    /// Packets whose shading finished this cycle (when tracing).
+    pub done_log: Option<Vec<u32>>,
 }
 
 impl Rgs {
@@ -171,6 +175,7 @@ impl Rgs {
             rays_by_kind: [0; RayKind::COUNT],
             rays_issued: 0,
             rays_retired: 0,
+            done_log: None,
         }
     }
 
@@ -179,8 +184,10 @@ impl Rgs {
     pub fn next_frame(&mut self, eye: EyeRays, cfg: &HwConfig) {
         let port = std::mem::replace(&mut self.port, MemPort::new(String::new(), &cfg.cache.shading, 1));
         let last = (self.gen_stats.last, self.shade_stats.last);
+        let log = self.done_log.take();
         *self = Rgs::new(eye, self.bounds, self.background, self.shader, cfg);
         self.port = port;
+        self.done_log = log;
         (self.gen_stats.last, self.shade_stats.last) = last;
     }
 
@@ -366,6 +373,9 @@ impl Rgs {
         while k < self.shading.len() {
             if matches!(self.shading[k].stage, Stage::Shading(d) if d <= now) {
                 let j = self.shading.remove(k);
+                if let Some(log) = self.done_log.as_mut() {
+                    log.push(j.packet);
+                }
                 if j.primary {
                     self.packets_done += 1;
                 }
@@ -497,13 +507,15 @@ impl Rgs {
         }
         self.shade_stats.issue(lanes(packet.lanes), self.packet_size);
         let write = (FRAMEBUFFER_BASE + 4 * first_pixel.unwrap_or(0) as u64, 4 * pixels as u32);
-        self.push_job(now, probe, pixels, emitted, write, true);
+        self.push_job(now, packet.index, probe, pixels, emitted, write, true);
     }
 
     /// Starts a shading job for the reads `probe` recorded.
+    #[allow(clippy::too_many_arguments)]
     fn push_job(
         &mut self,
         now: u64,
+        packet: u32,
         probe: Recorder,
         rays: u64,
         emitted: Vec<RayRecord>,
@@ -511,6 +523,7 @@ impl Rgs {
         primary: bool,
     ) {
         self.shading.push(ShadeJob {
+            packet,
             fetch: Fetch::new(probe.into_levels()),
             stage: Stage::Fetching,
             data_at: now,
@@ -560,7 +573,7 @@ impl Rgs {
         self.rays_retired += lanes(packet.lanes);
         self.shade_stats.issue(lanes(packet.lanes), self.packet_size);
         let rays = records.len() as u64;
-        self.push_job(now, probe, rays, emitted, (0, 0), false);
+        self.push_job(now, packet.index, probe, rays, emitted, (0, 0), false);
     }
 }
 

@@ -382,6 +382,7 @@ impl<D: NodeTests> TraversalUnit<D> {
             if leaves.can_push() {
                 let t = &self.threads[k];
                 let mut job = Box::new(LeafJob {
+                    packet: t.index,
                     thread: k as u8,
                     lanes: t.at_leaf,
                     query: t.query,
@@ -491,6 +492,11 @@ impl<D: NodeTests> TraversalUnit<D> {
         } else {
             Stall::AtIntersection
         }
+    }
+
+    /// Threads in each state (`STATE_NAMES`) at the last tick.
+    pub fn thread_states(&self) -> [u64; STATES] {
+        self.last_states
     }
 
     /// Zeroes the statistics (threads, caches and memory keep their state).

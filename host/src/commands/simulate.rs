@@ -24,6 +24,9 @@ pub(crate) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
     if a.measure.interval.is_some() {
         output::check_dir(&a.measure.intervals)?;
     }
+    for p in a.measure.vcd.iter().chain(&a.measure.trace) {
+        output::check_dir(p)?;
+    }
     let walk = a.walk.camera_path.is_some() || a.walk.orbit.is_some();
     if walk {
         output::check_dir(&a.measure.frames)?;
@@ -212,7 +215,17 @@ pub(crate) fn simulate_args(a: &SimulateArgs, cache: Option<&SceneCache>, show_p
         // One view: repeated for its warm-up frames, then measured.
         None => vec![cam; a.measure.warmup_frames.saturating_add(1).min(crate::camera_path::MAX_FRAMES)],
     };
-    let measure = Measure { warmup_frames: a.measure.warmup_frames, roi: a.measure.roi, interval: a.measure.interval };
+    let measure = Measure {
+        warmup_frames: a.measure.warmup_frames,
+        roi: a.measure.roi,
+        interval: a.measure.interval,
+        vcd: a.measure.vcd.clone().map(|path| simulate::VcdSpec {
+            path,
+            window: a.measure.vcd_window,
+            units: a.measure.vcd_units.clone(),
+        }),
+        trace: a.measure.trace.clone(),
+    };
     if measure.warmup_frames >= views.len() {
         bail!("--warmup-frames {}: the walkthrough has only {} frames", measure.warmup_frames, views.len());
     }
