@@ -362,6 +362,11 @@ pub struct MeasureArgs {
     /// shading) and memory transactions.
     #[arg(long, value_name = "FILE.json")]
     pub trace: Option<PathBuf>,
+    /// Per-pixel cost heatmaps of the (last) frame: PREFIX-cycles.png (cycles its packets
+    /// were in flight), PREFIX-steps.png (ray–node tests), PREFIX-tests.png (ray–triangle
+    /// tests), PREFIX-bytes.png (scene bytes read for it).
+    #[arg(long, value_name = "PREFIX")]
+    pub cost_image: Option<PathBuf>,
     /// Walkthroughs: one JSON line per frame (cycles, frames/s, bytes loaded, hit rates).
     #[arg(long, value_name = "JSONL", default_value = "raypipe-sim.frames.jsonl")]
     pub frames: PathBuf,
@@ -853,6 +858,10 @@ pub struct StatsArgs {
     pub structure: StructureArgs,
     #[command(flatten)]
     pub run: RunArgs,
+    /// Per-pixel cost heatmaps of the primary rays: PREFIX-steps.png (nodes visited),
+    /// PREFIX-tests.png (triangle tests), PREFIX-bytes.png (scene bytes read).
+    #[arg(long, value_name = "PREFIX")]
+    pub cost_image: Option<PathBuf>,
 }
 
 /// `raypipe bench`.

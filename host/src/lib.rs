@@ -13,6 +13,7 @@ pub mod camera_file;
 pub mod camera_path;
 pub mod cli;
 pub mod commands;
+pub mod cost_image;
 pub mod default_lights;
 pub mod default_scene;
 pub mod fixed_point;

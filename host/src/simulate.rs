@@ -78,6 +78,8 @@ pub struct FrameRun {
     /// The counters of each interval: first and end cycle (from the measured part's
     /// start), then the counters' increase.
     pub intervals: Vec<Interval>,
+    /// Per pixel: cycles in flight, ray–node tests, ray–triangle tests, scene bytes.
+    pub cost: Vec<[f64; 4]>,
 }
 
 /// One interval's counters.
@@ -256,7 +258,7 @@ impl Run<'_, '_> {
             before += sim.packet_count();
             let (width, height) = (eye.width, eye.height);
             let frame = Frame::from_radiance(width, height, sim.radiance_image());
-            out.push(FrameRun { frame, report, warmup, intervals });
+            out.push(FrameRun { frame, report, warmup, intervals, cost: sim.cost_image().to_vec() });
         }
         bar.finish_and_clear();
         if let (Some(file), Some(mut waves)) = (vcd_file, sim.take_waves()) {

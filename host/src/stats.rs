@@ -129,6 +129,36 @@ fn gather_with<I: Intersector>(
     })
 }
 
+/// Each pixel's primary-ray cost, row-major: nodes visited, triangle tests and scene
+/// bytes read (the per-pixel counters behind [`gather`]'s totals).
+pub fn cost_image(scene: &SceneView<'_>, camera: &CameraRecord, opts: &RenderOptions) -> Result<Vec<[f64; 3]>> {
+    let eye = eye_rays(camera, "camera")?;
+    with_intersector!(opts.intersector, I => cost_image_with::<I>(scene, &eye, opts))
+}
+
+fn cost_image_with<I: Intersector>(
+    scene: &SceneView<'_>,
+    eye: &raypipe_core::camera::EyeRays,
+    opts: &RenderOptions,
+) -> Result<Vec<[f64; 3]>> {
+    let (lo, hi) = scene.test_bounds();
+    let w = eye.width;
+    in_pool(opts.threads, || {
+        (0..eye.height)
+            .into_par_iter()
+            .flat_map_iter(|y| {
+                (0..w).map(move |x| {
+                    let (mut c, mut bytes) = (RayCounters::default(), ByteCounter::default());
+                    if let Some(ray) = eye.ray_in_scene(x, y, lo, hi) {
+                        trace::<I, _>(scene, &ray, &mut bytes, &mut c);
+                    }
+                    [c.nodes as f64, c.tri_tests as f64, bytes.bytes.iter().sum::<u64>() as f64]
+                })
+            })
+            .collect()
+    })
+}
+
 /// What tracing the view as packets cost.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct PacketStats {

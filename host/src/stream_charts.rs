@@ -40,6 +40,11 @@ pub fn write_all(dir: &Path, r: &StreamReport) -> Result<usize> {
 
 /// Renders an SVG to PNG bytes.
 pub fn to_png(svg: &str) -> Result<Vec<u8>> {
+    to_pixmap(svg)?.encode_png().map_err(|e| anyhow!("cannot encode the PNG: {e}"))
+}
+
+/// Renders an SVG to pixels.
+pub fn to_pixmap(svg: &str) -> Result<resvg::tiny_skia::Pixmap> {
     let mut opt = resvg::usvg::Options::default();
     let db = opt.fontdb_mut();
     db.load_system_fonts();
@@ -58,7 +63,7 @@ pub fn to_png(svg: &str) -> Result<Vec<u8>> {
     let mut pixmap =
         resvg::tiny_skia::Pixmap::new(size.width(), size.height()).ok_or_else(|| anyhow!("empty chart"))?;
     resvg::render(&tree, resvg::tiny_skia::Transform::default(), &mut pixmap.as_mut());
-    pixmap.encode_png().map_err(|e| anyhow!("cannot encode the PNG: {e}"))
+    Ok(pixmap)
 }
 
 fn label(r: &StreamReport) -> String {

@@ -192,7 +192,7 @@ fn line(svg: &mut String, rows: &[&Row], x: &str, y: &str, series: Option<&str>,
 }
 
 /// Viridis at `t` in 0..=1 (five anchors, linear between them).
-fn viridis(t: f64) -> RGBColor {
+pub(crate) fn viridis(t: f64) -> RGBColor {
     const A: [(f64, f64, f64); 5] =
         [(68.0, 1.0, 84.0), (59.0, 82.0, 139.0), (33.0, 145.0, 140.0), (94.0, 201.0, 98.0), (253.0, 231.0, 37.0)];
     let t = if t.is_finite() { t.clamp(0.0, 1.0) } else { 0.0 } * 4.0;

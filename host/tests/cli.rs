@@ -1492,3 +1492,18 @@ fn waveforms_and_traces_observe_without_changing_the_run() {
     );
     assert!(!d.join("z.vcd").exists());
 }
+
+#[test]
+fn cost_images_are_written_by_simulate_and_stats() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let o = raypipe(d, &["simulate", "--size", "40x30", "--cost-image", "sim", "-o", "x.png"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = raypipe(d, &["stats", "--size", "40x30", "--cost-image", "host"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for f in ["sim-cycles", "sim-steps", "sim-tests", "sim-bytes", "host-steps", "host-tests", "host-bytes"] {
+        let (w, h, _) = decode(&d.join(format!("{f}.png")));
+        assert!(w > 40 * 9 && h > 30 * 9, "{f}: {w}x{h}");
+    }
+    assert_one_line_error(&raypipe(d, &["stats", "--cost-image", "nowhere/x"]), "does not exist");
+}

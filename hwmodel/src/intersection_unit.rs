@@ -176,6 +176,7 @@ impl<I: Intersector> IntersectionUnit<I> {
                 for &prim in &prims {
                     let Some((_, tri)) = tris.iter().find(|(p, _)| *p == prim) else { continue };
                     tests += 1;
+                    job.tests[i] += 1;
                     if test_fetched::<I>(&prep, &ray, any_hit, tri, prim, &mut job.best[i]) {
                         break;
                     }
@@ -183,6 +184,7 @@ impl<I: Intersector> IntersectionUnit<I> {
             }
         }
         self.tests += tests;
+        job.bytes = rec.reads().map(|a| a.bytes as u64).sum();
         self.stats.issue(lanes(job.lanes), self.packet_size);
         Job { job, fetch: Fetch::new(rec.into_levels()), stage: Stage::Fetching, tests, data_at: now }
     }

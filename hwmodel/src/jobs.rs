@@ -34,6 +34,28 @@ pub struct RayPacketJob {
     pub lanes: u64,
     /// The rays.
     pub rays: [Ray; LANES],
+    /// Cycle the generator started the packet (for cost images and traces).
+    pub issued: u64,
+}
+
+/// What one packet cost, lane by lane (the simulator's per-pixel cost images).
+#[derive(Clone, Debug)]
+pub struct PacketCost {
+    /// Cycle the generator started the packet.
+    pub issued: u64,
+    /// Ray–node tests of each lane.
+    pub steps: [u32; LANES],
+    /// Ray–triangle tests of each lane.
+    pub tests: [u32; LANES],
+    /// Scene bytes the kernels read for the packet (traversal and intersection).
+    pub bytes: u64,
+}
+
+impl PacketCost {
+    /// Nothing yet, for a packet started at `issued`.
+    pub fn new(issued: u64) -> PacketCost {
+        PacketCost { issued, steps: [0; LANES], tests: [0; LANES], bytes: 0 }
+    }
 }
 
 /// Traversal unit → intersection unit: a packet standing at leaves.
@@ -53,6 +75,10 @@ pub struct LeafJob {
     pub rays: [Ray; LANES],
     /// Each lane's best hit so far (updated by the intersection unit).
     pub best: [Option<Hit>; LANES],
+    /// Ray–triangle tests of each lane in this job.
+    pub tests: [u32; LANES],
+    /// Scene bytes the job's kernels read.
+    pub bytes: u64,
 }
 
 /// Traversal unit → shading: a finished packet.
@@ -64,6 +90,8 @@ pub struct HitPacket {
     pub lanes: u64,
     /// Their closest hits (any-hit packets: any hit, or `None` if unblocked).
     pub hits: [Option<Hit>; LANES],
+    /// What tracing it cost.
+    pub cost: Box<PacketCost>,
 }
 
 /// Lane count of a mask.

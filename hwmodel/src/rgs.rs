@@ -23,7 +23,7 @@ use raypipe_core::{SceneView, Vec3};
 
 use crate::config::HwConfig;
 use crate::fifo::Fifo;
-use crate::jobs::{lanes, HitPacket, Query, RayPacketJob, NO_RAY};
+use crate::jobs::{lanes, HitPacket, PacketCost, Query, RayPacketJob, NO_RAY};
 use crate::mem_port::{Fetch, MemPort, Recorder};
 use crate::stall::Stall;
 use crate::traffic::FRAMEBUFFER;
@@ -44,6 +44,11 @@ enum Stage {
 struct ShadeJob {
     /// Packet number (for traces).
     packet: u32,
+    /// Cycle the packet was started, and the pixels its lanes belong to (cost images).
+    issued: u64,
+    pixels: Vec<u32>,
+    /// Shading bytes the job reads.
+    bytes: u64,
     fetch: Fetch,
     stage: Stage,
     data_at: u64,
@@ -116,6 +121,11 @@ pub struct Rgs {
     pub rays_retired: u64,
     /// Packets whose shading finished this cycle (when tracing).
     pub done_log: Option<Vec<u32>>,
+    /// Per pixel: cycles its packets were in flight (from generation to the end of
+    /// shading, summed over its rays' packets), ray–node tests, ray–triangle tests, and
+    /// scene bytes the kernels read for it (a packet's shared reads split evenly among
+    /// its lanes).
+    pub cost: Vec<[f64; 4]>,
 }
 
 impl Rgs {
@@ -176,6 +186,7 @@ impl Rgs {
             rays_issued: 0,
             rays_retired: 0,
             done_log: None,
+            cost: vec![[0.0; 4]; pixels],
         }
     }
 
@@ -322,7 +333,8 @@ impl Rgs {
         if self.generated.is_none() {
             // Secondary rays first (so the stream stays short), then the next block.
             if !self.stream.is_empty() {
-                let job = self.pack_secondary();
+                let mut job = self.pack_secondary();
+                job.issued = now;
                 self.gen_stats.issue(lanes(job.lanes), self.packet_size);
                 let cycles = (lanes(job.lanes)).div_ceil(self.rays_per_cycle).max(1);
                 self.generated = Some((job, now + cycles));
@@ -331,7 +343,12 @@ impl Rgs {
             } else if self.next_block < self.blocks.len() && self.visibility.is_some() {
                 // The shadow caster: the block's hits are read from the G-buffer.
                 let b = self.next_block;
-                let mut packet = Box::new(HitPacket { index: b as u32, lanes: 0, hits: [None; 64] });
+                let mut packet = Box::new(HitPacket {
+                    index: b as u32,
+                    lanes: 0,
+                    hits: [None; 64],
+                    cost: Box::new(PacketCost::new(now)),
+                });
                 for j in 0..self.packet_size as usize {
                     if let (Some((x, y)), Some(vis)) = (self.pixel(b, j), &self.visibility) {
                         packet.lanes |= 1 << j;
@@ -346,8 +363,13 @@ impl Rgs {
                 gen_activity = Activity::Busy;
             } else if self.next_block < self.blocks.len() {
                 let b = self.next_block;
-                let mut job =
-                    Box::new(RayPacketJob { index: b as u32, query: Query::Closest, lanes: 0, rays: [NO_RAY; 64] });
+                let mut job = Box::new(RayPacketJob {
+                    index: b as u32,
+                    query: Query::Closest,
+                    lanes: 0,
+                    rays: [NO_RAY; 64],
+                    issued: now,
+                });
                 for j in 0..self.packet_size as usize {
                     if let Some((x, y)) = self.pixel(b, j) {
                         let s = self.sample_of(b);
@@ -375,6 +397,13 @@ impl Rgs {
                 let j = self.shading.remove(k);
                 if let Some(log) = self.done_log.as_mut() {
                     log.push(j.packet);
+                }
+                let share = j.bytes as f64 / j.pixels.iter().filter(|&&p| p != u32::MAX).count().max(1) as f64;
+                for &p in &j.pixels {
+                    if let Some(c) = self.cost.get_mut(p as usize) {
+                        c[0] += now.saturating_sub(j.issued) as f64;
+                        c[3] += share;
+                    }
                 }
                 if j.primary {
                     self.packets_done += 1;
@@ -453,6 +482,11 @@ impl Rgs {
         for (j, p) in where_.iter_mut().enumerate().take(self.packet_size as usize) {
             *p = self.pixel(b, j);
         }
+        // Lane → pixel, for the cost images (`u32::MAX`: no pixel).
+        let lane_pixels: Vec<u32> = where_[..self.packet_size as usize]
+            .iter()
+            .map(|p| p.map_or(u32::MAX, |(x, y)| y * self.eye.width + x))
+            .collect();
         let mut probe = Recorder::default();
         let mut emitted = Vec::new();
         let mut pixels = 0u64;
@@ -507,7 +541,7 @@ impl Rgs {
         }
         self.shade_stats.issue(lanes(packet.lanes), self.packet_size);
         let write = (FRAMEBUFFER_BASE + 4 * first_pixel.unwrap_or(0) as u64, 4 * pixels as u32);
-        self.push_job(now, packet.index, probe, pixels, emitted, write, true);
+        self.push_job(now, packet, lane_pixels, probe, pixels, emitted, write, true);
     }
 
     /// Starts a shading job for the reads `probe` recorded.
@@ -515,15 +549,29 @@ impl Rgs {
     fn push_job(
         &mut self,
         now: u64,
-        packet: u32,
+        packet: &HitPacket,
+        pixels: Vec<u32>,
         probe: Recorder,
         rays: u64,
         emitted: Vec<RayRecord>,
         write: (u64, u32),
         primary: bool,
     ) {
+        // The trace's cost: each lane's own tests, the shared reads split evenly.
+        let share = packet.cost.bytes as f64 / lanes(packet.lanes).max(1) as f64;
+        for (j, &p) in pixels.iter().enumerate() {
+            if let (Some(c), true) = (self.cost.get_mut(p as usize), packet.lanes & (1 << j) != 0) {
+                c[1] += packet.cost.steps[j] as f64;
+                c[2] += packet.cost.tests[j] as f64;
+                c[3] += share;
+            }
+        }
+        let bytes = probe.reads().map(|a| a.bytes as u64).sum();
         self.shading.push(ShadeJob {
-            packet,
+            packet: packet.index,
+            issued: packet.cost.issued,
+            pixels,
+            bytes,
             fetch: Fetch::new(probe.into_levels()),
             stage: Stage::Fetching,
             data_at: now,
@@ -542,7 +590,7 @@ impl Rgs {
         let query = if kind == RayKind::Shadow { Query::AnyHit } else { Query::Closest };
         let index = self.blocks.len() as u32 + self.next_secondary;
         self.next_secondary = self.next_secondary.wrapping_add(1);
-        let mut job = Box::new(RayPacketJob { index, query, lanes: 0, rays: [NO_RAY; 64] });
+        let mut job = Box::new(RayPacketJob { index, query, lanes: 0, rays: [NO_RAY; 64], issued: 0 });
         for (j, r) in records.iter().enumerate() {
             job.rays[j] = r.ray;
             job.lanes |= 1 << j;
@@ -573,7 +621,8 @@ impl Rgs {
         self.rays_retired += lanes(packet.lanes);
         self.shade_stats.issue(lanes(packet.lanes), self.packet_size);
         let rays = records.len() as u64;
-        self.push_job(now, packet.index, probe, rays, emitted, (0, 0), false);
+        let lane_pixels = records.iter().map(|r| r.pixel).collect();
+        self.push_job(now, packet, lane_pixels, probe, rays, emitted, (0, 0), false);
     }
 }
 

@@ -485,6 +485,12 @@ impl<'s, I: Intersector> Simulator<'s, I> {
         self.rgs.radiance_image()
     }
 
+    /// Each pixel's cost, row-major: cycles its packets were in flight, ray–node tests,
+    /// ray–triangle tests, scene bytes read for it (see `Rgs::cost`).
+    pub fn cost_image(&self) -> &[[f64; 4]] {
+        &self.rgs.cost
+    }
+
     /// Each pixel's closest hit, row-major.
     pub fn hits(&self) -> &[Option<raypipe_core::Hit>] {
         &self.rgs.hits

@@ -28,7 +28,7 @@ use serde::Serialize;
 
 use crate::config::HwConfig;
 use crate::fifo::Fifo;
-use crate::jobs::{lanes, HitPacket, LeafJob, Query, RayPacketJob, NO_RAY};
+use crate::jobs::{lanes, HitPacket, LeafJob, PacketCost, Query, RayPacketJob, NO_RAY};
 use crate::mem_port::{Fetch, MemPort, Recorder};
 use crate::stall::Stall;
 use crate::unit_stats::{Activity, UnitStats};
@@ -90,6 +90,8 @@ struct Thread<D: NodeTests> {
     fetch: Fetch,
     /// Ray–node tests of the step in flight.
     tested: u64,
+    /// What the packet has cost so far.
+    cost: Box<PacketCost>,
     data_at: u64,
     result_at: u64,
 }
@@ -156,6 +158,7 @@ impl<D: NodeTests> TraversalUnit<D> {
                 then: Next::Step,
                 fetch: Fetch::default(),
                 tested: 0,
+                cost: Box::new(PacketCost::new(0)),
                 data_at: 0,
                 result_at: 0,
             })
@@ -219,6 +222,7 @@ impl<D: NodeTests> TraversalUnit<D> {
     fn start(&mut self, k: usize, scene: &SceneView<'_>, job: &RayPacketJob) {
         let t = &mut self.threads[k];
         t.index = job.index;
+        *t.cost = PacketCost::new(job.issued);
         t.query = job.query;
         t.traced = job.lanes;
         t.live = job.lanes;
@@ -293,6 +297,10 @@ impl<D: NodeTests> TraversalUnit<D> {
             }
         }
         self.tstats.steps += 1;
+        for i in crate::lane_iter(tested) {
+            t.cost.steps[i] += 1;
+        }
+        t.cost.bytes += rec.reads().map(|a| a.bytes as u64).sum::<u64>();
         self.tstats.node_reads += rec.reads().filter(|a| a.class == DataClass::Nodes as usize).count() as u64;
         if tested != 0 {
             self.stats.issue(lanes(tested), self.packet_size);
@@ -329,6 +337,10 @@ impl<D: NodeTests> TraversalUnit<D> {
                 let k = job.thread as usize;
                 if k < self.threads.len() {
                     let t = &mut self.threads[k];
+                    for i in crate::lane_iter(job.lanes) {
+                        t.cost.tests[i] += job.tests[i];
+                    }
+                    t.cost.bytes += job.bytes;
                     match &mut t.regs {
                         Regs::Shared(w) => {
                             for i in crate::lane_iter(job.lanes) {
@@ -363,7 +375,8 @@ impl<D: NodeTests> TraversalUnit<D> {
         if let Some(k) = first_from(self.masks[State::Finished as usize], 0) {
             if hits.can_push() {
                 let t = &self.threads[k];
-                let mut out = Box::new(HitPacket { index: t.index, lanes: t.traced, hits: [None; 64] });
+                let cost = t.cost.clone();
+                let mut out = Box::new(HitPacket { index: t.index, lanes: t.traced, hits: [None; 64], cost });
                 for i in crate::lane_iter(t.traced) {
                     out.hits[i] = match &t.regs {
                         Regs::Shared(w) => w.best(i),
@@ -389,6 +402,8 @@ impl<D: NodeTests> TraversalUnit<D> {
                     leaves: *t.leaves,
                     rays: *t.rays,
                     best: [None; 64],
+                    tests: [0; 64],
+                    bytes: 0,
                 });
                 for i in crate::lane_iter(t.at_leaf) {
                     job.best[i] = match &t.regs {

@@ -172,3 +172,22 @@ fn energy_is_the_counters_times_the_published_figures() {
     assert!(close(e2.joules["leakage"], e2.area_mm2 * 0.1 * r.cycles as f64 / (cfg.clock_mhz * 1e6)));
     assert!(cfg.set("energy.fp_add_pj=-1").is_ok() && cfg.validate().is_err());
 }
+
+#[test]
+fn cost_images_add_up_to_the_report() {
+    let scene = whitted_scene(Accel::Kd);
+    let cam = CameraRecord { width: 32, height: 24, ..*scene.view().unwrap().camera().unwrap() };
+    for algo in [Algorithm::Cast, Algorithm::Whitted] {
+        let run = frames(&scene, &[cam], &Measure::default(), &HwConfig::default(), algo).remove(0);
+        let r = &run.report;
+        assert_eq!(run.cost.len(), 32 * 24);
+        let sum = |k: usize| run.cost.iter().map(|c| c[k]).sum::<f64>();
+        let node_tests: u64 = r.units.iter().filter(|u| u.name.starts_with("traversal")).map(|u| u.active_lanes).sum();
+        assert_eq!(sum(1), node_tests as f64, "{algo:?}: ray-node tests");
+        assert_eq!(sum(2), r.triangle_tests as f64, "{algo:?}: ray-triangle tests");
+        assert!(run.cost.iter().all(|c| c.iter().all(|v| v.is_finite() && *v >= 0.0)));
+        // Every pixel's packets were in flight for some cycles, none longer than the frame.
+        assert!(run.cost.iter().all(|c| c[0] > 0.0));
+        assert!(sum(3) > 0.0);
+    }
+}

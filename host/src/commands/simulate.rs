@@ -24,7 +24,7 @@ pub(crate) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
     if a.measure.interval.is_some() {
         output::check_dir(&a.measure.intervals)?;
     }
-    for p in a.measure.vcd.iter().chain(&a.measure.trace) {
+    for p in a.measure.vcd.iter().chain(&a.measure.trace).chain(&a.measure.cost_image) {
         output::check_dir(p)?;
     }
     let walk = a.walk.camera_path.is_some() || a.walk.orbit.is_some();
@@ -54,6 +54,21 @@ pub(crate) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
             }
         }
         output::write_bytes(&a.measure.intervals, text.as_bytes())?;
+    }
+    if let (Some(prefix), Some(last)) = (&a.measure.cost_image, run.frames.last()) {
+        let (w, h) = (last.frame.width, last.frame.height);
+        for (k, (what, title)) in [
+            ("cycles", "cycles in flight per pixel"),
+            ("steps", "ray-node tests per pixel"),
+            ("tests", "ray-triangle tests per pixel"),
+            ("bytes", "scene bytes read per pixel"),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let values: Vec<f64> = last.cost.iter().map(|c| c[k]).collect();
+            crate::cost_image::write(&crate::cost_image::path(prefix, what), w, h, &values, title)?;
+        }
     }
     output::write_bytes(&a.report, run.report.to_json().as_bytes())?;
     let target = if walk {

@@ -24,7 +24,24 @@ pub(crate) fn cmd_stats(a: StatsArgs) -> Result<()> {
         packet: a.packet,
         ..Default::default()
     };
+    if let Some(prefix) = &a.cost_image {
+        crate::output::check_dir(prefix)?;
+    }
     let s = stats::gather(&view, &cam, &opts)?;
+    if let Some(prefix) = &a.cost_image {
+        let c = stats::cost_image(&view, &cam, &opts)?;
+        for (k, (what, title)) in [
+            ("steps", "nodes visited per pixel"),
+            ("tests", "triangle tests per pixel"),
+            ("bytes", "scene bytes read per pixel"),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let values: Vec<f64> = c.iter().map(|v| v[k]).collect();
+            crate::cost_image::write(&crate::cost_image::path(prefix, what), cam.width, cam.height, &values, title)?;
+        }
+    }
     println!("scene                     {} ({} triangles)", scene.name, view.triangle_count());
     println!("structure                 {}", structure_summary(&view));
     println!("lights                    {}", lights_summary(&scene)?);
