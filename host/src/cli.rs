@@ -45,7 +45,7 @@ pub enum Command {
     Rays(RaysArgs),
     /// Run the cycle-level hardware model on a scene (the built-in Cornell box when none
     /// is given): image, summary and JSON report.
-    Simulate(SimulateArgs),
+    Simulate(Box<SimulateArgs>),
     /// Compare the fixed-point datapath's hits with f32's (same triangle, distance between
     /// the hit points, nodes visited) on scenes, per format.
     FixedPoint(FixedPointArgs),

@@ -124,7 +124,7 @@ impl Point {
             .map_err(|e| anyhow!("{}", e.to_string().lines().next().unwrap_or("").trim_start_matches("error: ")))
             .with_context(|| format!("sweep point {} ({})", self.index, self.id()))?;
         match cli.command {
-            crate::cli::Command::Simulate(a) => Ok(a),
+            crate::cli::Command::Simulate(a) => Ok(*a),
             _ => bail!("sweep point {}: not a simulate command", self.index),
         }
     }

@@ -53,7 +53,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Bench(a) => bench::cmd_bench(a),
         Command::Trace(a) => trace::cmd_trace(a),
         Command::Rays(a) => rays::cmd_rays(a),
-        Command::Simulate(a) => simulate::cmd_simulate(a),
+        Command::Simulate(a) => simulate::cmd_simulate(*a),
         Command::FixedPoint(a) => fixed_point::cmd_fixed_point(a),
         Command::Stream(a) => stream::cmd_stream(a),
         Command::Info(a) => info::cmd_info(a),
