@@ -123,7 +123,8 @@ pub struct PlotArgs {
     /// Line plot: a logarithmic x axis (cache sizes, thread counts).
     #[arg(long)]
     pub log_x: bool,
-    /// Only rows whose parameter KEY has VALUE (repeatable).
+    /// Only rows whose parameter KEY has VALUE (repeatable; `*` matches any run of
+    /// characters, e.g. `scene=*bunny.obj`).
     #[arg(long = "where", value_name = "KEY=VALUE")]
     pub filters: Vec<String>,
     /// The title (default: what is plotted against what).

@@ -21,7 +21,7 @@ pub(crate) fn cmd_plot(a: PlotArgs) -> Result<()> {
     }
     let rows: Vec<_> = sweep_table::read_rows(&a.rows)?
         .into_iter()
-        .filter(|r| filters.iter().all(|(k, v)| label(r, k).as_deref() == Some(v.as_str())))
+        .filter(|r| filters.iter().all(|(k, v)| label(r, k).is_some_and(|l| wildcard(v, &l))))
         .collect();
     let (plot, what) = match (&a.value, &a.stack, &a.y) {
         (Some(value), _, Some(y)) => (
@@ -46,4 +46,36 @@ pub(crate) fn cmd_plot(a: PlotArgs) -> Result<()> {
     }
     println!("{title}: {} rows -> {}", rows.len(), a.output.display());
     Ok(())
+}
+
+/// `pattern` matches `text`: equal, with `*` standing for any run of characters.
+fn wildcard(pattern: &str, text: &str) -> bool {
+    let parts: Vec<&str> = pattern.split('*').collect();
+    if parts.len() == 1 {
+        return pattern == text;
+    }
+    let (first, last) = (parts[0], parts[parts.len() - 1]);
+    if !text.starts_with(first) || !text[first.len()..].ends_with(last) {
+        return false;
+    }
+    let mut rest = &text[first.len()..text.len() - last.len()];
+    for part in &parts[1..parts.len() - 1] {
+        match rest.find(part) {
+            Some(i) => rest = &rest[i + part.len()..],
+            None => return false,
+        }
+    }
+    true
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn wildcards_match_runs_of_characters() {
+        use super::wildcard;
+        assert!(wildcard("*bunny.obj", "../models/stanford-bunny.obj"));
+        assert!(wildcard("kd", "kd") && !wildcard("kd", "kd2"));
+        assert!(wildcard("a*b*c", "axxbyyc") && !wildcard("a*b*c", "axxcyyb"));
+        assert!(!wildcard("ab*ba", "aba"));
+    }
 }
