@@ -36,11 +36,7 @@ pub fn write(path: &Path, width: u32, height: u32, values: &[f64], title: &str) 
         let c = viridis(1.0 - k as f64 / 10.0);
         stops.push_str(&format!("<stop offset=\"{}\" stop-color=\"rgb({},{},{})\"/>", k as f64 / 10.0, c.0, c.1, c.2));
     }
-    let label = |v: f64| match v {
-        v if v >= 1e4 => format!("{v:.3e}"),
-        v if v >= 10.0 => format!("{v:.1}"),
-        v => format!("{v:.3}"),
-    };
+    let label = |v: f64| crate::chart_numbers::si(v, 3);
     let svg = format!(
         r##"<svg xmlns="http://www.w3.org/2000/svg" width="{total_w}" height="{total_h}">
 <rect width="100%" height="100%" fill="white"/>

@@ -11,6 +11,7 @@ pub mod bench;
 pub mod bvh_builder;
 pub mod camera_file;
 pub mod camera_path;
+pub mod chart_numbers;
 pub mod cli;
 pub mod commands;
 pub mod cost_image;

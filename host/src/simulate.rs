@@ -92,33 +92,6 @@ pub struct Interval {
     pub counters: Vec<(String, u64)>,
 }
 
-/// Simulates one frame with `sampler`'s eye rays per pixel; the image and the report.
-#[allow(clippy::too_many_arguments)]
-pub fn simulate(
-    scene: &SceneView<'_>,
-    camera: &CameraRecord,
-    cfg: &HwConfig,
-    intersector: IntersectorKind,
-    shader: Option<Shader>,
-    shadow_caster: bool,
-    sampler: PixelSampler,
-    show_progress: bool,
-) -> Result<(Frame, Report)> {
-    let mut runs = simulate_frames(
-        scene,
-        std::slice::from_ref(camera),
-        &Measure::default(),
-        cfg,
-        intersector,
-        shader,
-        shadow_caster,
-        sampler,
-        show_progress,
-    )?;
-    let run = runs.pop().ok_or_else(|| anyhow!("no frame simulated"))?;
-    Ok((run.frame, run.report))
-}
-
 /// Simulates the frames `views` one after the other on one chip — a walkthrough, or one
 /// view repeated for warm-up — measured as `measure` says.
 #[allow(clippy::too_many_arguments)]

@@ -11,6 +11,7 @@ use plotters::prelude::*;
 use raypipe_hw::stream::counters::PassKind;
 use raypipe_hw::stream::StreamReport;
 
+use crate::chart_numbers::si;
 use crate::output;
 
 const SIZE: (u32, u32) = (900, 520);
@@ -95,7 +96,7 @@ fn bars(
             .configure_mesh()
             .disable_x_mesh()
             .y_desc(y_desc)
-            .y_label_formatter(&|v| short(*v))
+            .y_label_formatter(&|v| si(*v, 2))
             .x_label_formatter(&|v| match v {
                 SegmentValue::CenterOf(i) | SegmentValue::Exact(i) => {
                     names.get(*i as usize).cloned().unwrap_or_default()
@@ -129,19 +130,6 @@ fn bars(
     };
     draw(&mut svg).map_err(|e| anyhow!("{e}"))?;
     Ok(svg)
-}
-
-fn short(v: f64) -> String {
-    let a = v.abs();
-    if a >= 1e9 {
-        format!("{:.1}G", v / 1e9)
-    } else if a >= 1e6 {
-        format!("{:.1}M", v / 1e6)
-    } else if a >= 1e3 {
-        format!("{:.1}k", v / 1e3)
-    } else {
-        format!("{v:.0}")
-    }
 }
 
 /// Figure 7: instructions by kernel.
@@ -193,7 +181,7 @@ fn active_rays(r: &StreamReport) -> Result<String> {
             .x_label_area_size(42)
             .y_label_area_size(86)
             .build_cartesian_2d(0u32..n, 0f64..top)?;
-        chart.configure_mesh().x_desc("pass").y_desc("active rays").y_label_formatter(&|v| short(*v)).draw()?;
+        chart.configure_mesh().x_desc("pass").y_desc("active rays").y_label_formatter(&|v| si(*v, 2)).draw()?;
         chart.draw_series(LineSeries::new(
             r.passes.iter().enumerate().map(|(i, p)| (i as u32, p.active_after as f64)),
             BLACK.mix(0.4),

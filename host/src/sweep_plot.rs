@@ -6,6 +6,7 @@
 use anyhow::{anyhow, bail, Result};
 use plotters::prelude::*;
 
+use crate::chart_numbers::si;
 use crate::sweep_table::{label, number, Row};
 
 const SIZE: (u32, u32) = (960, 600);
@@ -144,7 +145,7 @@ fn line(svg: &mut String, rows: &[&Row], x: &str, y: &str, series: Option<&str>,
     builder.caption(title, ("sans-serif", 22)).margin(16).x_label_area_size(48).y_label_area_size(90);
     let labels = |v: &f64| -> String {
         if numeric {
-            short(*v)
+            si(*v, 3)
         } else {
             let i = v.round();
             if (v - i).abs() < 1e-6 && i >= 0.0 {
@@ -162,7 +163,7 @@ fn line(svg: &mut String, rows: &[&Row], x: &str, y: &str, series: Option<&str>,
                 .x_desc(x)
                 .y_desc(y)
                 .x_label_formatter(&labels)
-                .y_label_formatter(&|v| short(*v))
+                .y_label_formatter(&|v| si(*v, 3))
                 .x_labels(if numeric { 10 } else { xs.len() })
                 .draw()?;
             for (i, (name, pts)) in lines.iter().enumerate() {
@@ -249,7 +250,7 @@ fn heatmap(svg: &mut String, rows: &[&Row], x: &str, y: &str, value: &str, title
     chart.draw_series(cells.iter().map(|&(i, j, v)| {
         let dark = v.is_finite() && (v - lo) / span > 0.6;
         let style = ("sans-serif", 15).into_font().color(if dark { &BLACK } else { &WHITE });
-        Text::new(short_precise(v), (i as f64 + 0.38, j as f64 + 0.55), style)
+        Text::new(si(v, 3), (i as f64 + 0.38, j as f64 + 0.55), style)
     }))?;
     // The colour bar.
     let mut scale = ChartBuilder::on(&bar)
@@ -264,7 +265,7 @@ fn heatmap(svg: &mut String, rows: &[&Row], x: &str, y: &str, value: &str, title
         .disable_mesh()
         .disable_x_axis()
         .y_label_style(("sans-serif", 13))
-        .y_label_formatter(&|v| short_precise(*v))
+        .y_label_formatter(&|v| si(*v, 3))
         .draw()?;
     let steps = 64;
     scale.draw_series((0..steps).map(|k| {
@@ -323,7 +324,7 @@ fn stacked(svg: &mut String, rows: &[&Row], x: &str, prefix: &str, title: &str) 
                 String::new()
             }
         })
-        .y_label_formatter(&|v| short_precise(*v))
+        .y_label_formatter(&|v| si(*v, 3))
         .draw()?;
     for (p, name) in parts.iter().enumerate() {
         let c = PALETTE[p % PALETTE.len()];
@@ -344,40 +345,4 @@ fn stacked(svg: &mut String, rows: &[&Row], x: &str, prefix: &str, title: &str) 
         .draw()?;
     root.present()?;
     Ok(())
-}
-
-fn short(v: f64) -> String {
-    let a = v.abs();
-    if a >= 1e9 {
-        format!("{:.1}G", v / 1e9)
-    } else if a >= 1e6 {
-        format!("{:.1}M", v / 1e6)
-    } else if a >= 1e4 {
-        format!("{:.0}k", v / 1e3)
-    } else if a >= 10.0 || a == 0.0 {
-        format!("{v:.0}")
-    } else {
-        format!("{v:.2}")
-    }
-}
-
-/// Three significant figures (cell labels and the colour bar).
-fn short_precise(v: f64) -> String {
-    if !v.is_finite() {
-        return "–".into();
-    }
-    let a = v.abs();
-    if a >= 1e9 {
-        format!("{:.2}G", v / 1e9)
-    } else if a >= 1e6 {
-        format!("{:.2}M", v / 1e6)
-    } else if a >= 1e4 {
-        format!("{:.1}k", v / 1e3)
-    } else if a >= 100.0 {
-        format!("{v:.0}")
-    } else if a >= 1.0 {
-        format!("{v:.2}")
-    } else {
-        format!("{v:.3}")
-    }
 }

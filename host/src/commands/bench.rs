@@ -135,9 +135,20 @@ pub(crate) fn cmd_bench(a: BenchArgs) -> Result<()> {
                 let mut last = None;
                 for _ in 0..a.runs.min(3) {
                     let start = Instant::now();
-                    let out = simulate::simulate(&view, &cam, cfg, kind, None, false, Default::default(), false)?;
+                    let measure = simulate::Measure::default();
+                    let mut out = simulate::simulate_frames(
+                        &view,
+                        std::slice::from_ref(&cam),
+                        &measure,
+                        cfg,
+                        kind,
+                        None,
+                        false,
+                        Default::default(),
+                        false,
+                    )?;
                     walls.push(start.elapsed().as_secs_f64());
-                    last = Some(out.1);
+                    last = out.pop().map(|f| f.report);
                 }
                 let report = last.ok_or_else(|| anyhow!("no simulation"))?;
                 let wall = median(&walls);
