@@ -271,9 +271,13 @@ impl<'s, I: Intersector> Simulator<'s, I> {
         for port in ports.iter_mut() {
             mark_touched(&mut self.touched, port);
         }
-        let before: u64 = self.memory.stats.requests.iter().sum();
+        // Requests taken this cycle: a waveform signal, counted only when one is written.
+        let counting = self.waves.is_some();
+        let before: u64 = if counting { self.memory.stats.requests.iter().sum() } else { 0 };
         moved |= self.memory.accept(now, &mut ports);
-        self.accepted = self.memory.stats.requests.iter().sum::<u64>() - before;
+        if counting {
+            self.accepted = self.memory.stats.requests.iter().sum::<u64>() - before;
+        }
         if self.trace.is_some() {
             self.record_trace(now);
         }
