@@ -147,10 +147,13 @@ fn resolve(dir: &Path, p: &str) -> String {
     }
 }
 
-/// The long flags `raypipe simulate` takes.
-fn simulate_flags() -> Vec<String> {
-    let cmd = SimulateArgs::augment_args(clap::Command::new("simulate"));
-    cmd.get_arguments().filter_map(|a| a.get_long().map(str::to_string)).collect()
+/// The long flags `raypipe simulate` takes (read from its argument definition once).
+fn simulate_flags() -> &'static [String] {
+    static FLAGS: std::sync::OnceLock<Vec<String>> = std::sync::OnceLock::new();
+    FLAGS.get_or_init(|| {
+        let cmd = SimulateArgs::augment_args(clap::Command::new("simulate"));
+        cmd.get_arguments().filter_map(|a| a.get_long().map(str::to_string)).collect()
+    })
 }
 
 impl Spec {

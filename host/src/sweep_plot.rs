@@ -192,6 +192,17 @@ fn line(svg: &mut String, rows: &[&Row], x: &str, y: &str, series: Option<&str>,
     Ok(())
 }
 
+/// The label of a categorical axis at `v`: category `k` is drawn over `k..k + 1`, so
+/// its label sits at `k + 0.5`; other ticks are blank.
+fn category_at(vals: &[String], v: f64) -> String {
+    let i = v - 0.5;
+    if (i - i.round()).abs() < 1e-6 && i >= 0.0 {
+        vals.get(i.round() as usize).cloned().unwrap_or_default()
+    } else {
+        String::new()
+    }
+}
+
 /// Viridis at `t` in 0..=1 (five anchors, linear between them).
 pub(crate) fn viridis(t: f64) -> RGBColor {
     const A: [(f64, f64, f64); 5] =
@@ -225,14 +236,6 @@ fn heatmap(svg: &mut String, rows: &[&Row], x: &str, y: &str, value: &str, title
         .x_label_area_size(48)
         .y_label_area_size(100)
         .build_cartesian_2d(0f64..xs.len() as f64, 0f64..ys.len() as f64)?;
-    let at = |vals: &[String], v: f64| {
-        let i = v - 0.5;
-        if (i - i.round()).abs() < 1e-6 && i >= 0.0 {
-            vals.get(i.round() as usize).cloned().unwrap_or_default()
-        } else {
-            String::new()
-        }
-    };
     chart
         .configure_mesh()
         .disable_mesh()
@@ -240,8 +243,8 @@ fn heatmap(svg: &mut String, rows: &[&Row], x: &str, y: &str, value: &str, title
         .y_desc(y)
         .x_labels(xs.len() * 2 + 1)
         .y_labels(ys.len() * 2 + 1)
-        .x_label_formatter(&|v| at(&xs, *v))
-        .y_label_formatter(&|v| at(&ys, *v))
+        .x_label_formatter(&|v| category_at(&xs, *v))
+        .y_label_formatter(&|v| category_at(&ys, *v))
         .draw()?;
     chart.draw_series(cells.iter().map(|&(i, j, v)| {
         let c = if v.is_finite() { viridis((v - lo) / span) } else { RGBColor(0xdd, 0xdd, 0xdd) };
@@ -316,14 +319,7 @@ fn stacked(svg: &mut String, rows: &[&Row], x: &str, prefix: &str, title: &str) 
         .x_desc(x)
         .y_desc(prefix)
         .x_labels(xs.len() * 2 + 1)
-        .x_label_formatter(&|v| {
-            let i = v - 0.5;
-            if (i - i.round()).abs() < 1e-6 && i >= 0.0 {
-                xs.get(i.round() as usize).cloned().unwrap_or_default()
-            } else {
-                String::new()
-            }
-        })
+        .x_label_formatter(&|v| category_at(&xs, *v))
         .y_label_formatter(&|v| si(*v, 3))
         .draw()?;
     for (p, name) in parts.iter().enumerate() {

@@ -36,6 +36,7 @@ pub enum Lookup {
 /// The cache's tag and replacement state (data is read from the scene image itself).
 #[derive(Clone, Debug)]
 pub struct Cache {
+    size_bytes: u32,
     line_bytes: u32,
     sets: u64,
     ways: usize,
@@ -66,6 +67,7 @@ impl Cache {
         let ways = (cfg.ways as usize).clamp(1, lines);
         let sets = (lines / ways).max(1);
         Some(Cache {
+            size_bytes: cfg.size_bytes,
             line_bytes: cfg.line_bytes.max(4),
             sets: sets as u64,
             ways,
@@ -78,6 +80,11 @@ impl Cache {
             outstanding: Vec::new(),
             stats: CacheStats::default(),
         })
+    }
+
+    /// Capacity in bytes, as configured.
+    pub fn size_bytes(&self) -> u32 {
+        self.size_bytes
     }
 
     /// Line size in bytes.

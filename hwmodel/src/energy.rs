@@ -30,7 +30,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::config::{CacheConfig, HwConfig};
+use crate::config::HwConfig;
 use crate::report::Report;
 
 /// The energy and area parameters.
@@ -180,25 +180,12 @@ impl EnergyConfig {
         joules.insert("intersection".to_string(), r.triangle_tests as f64 * self.op_pj(TRIANGLE_TEST) * pj);
         joules.insert("shading".to_string(), lanes("rgs.shade") as f64 * self.op_pj(SHADE) * pj);
         // Caches: a lookup reads its line, a miss also writes it.
-        let cache_cfg = |name: &str| -> &CacheConfig {
-            let c = &cfg.cache;
-            if name == "shading" {
-                &c.shading
-            } else if name.starts_with("traversal") {
-                &c.nodes
-            } else if name.ends_with(".lists") {
-                &c.lists
-            } else {
-                &c.triangles
-            }
-        };
         let mut cache_j = 0.0;
         for c in &r.caches {
-            let cc = cache_cfg(&c.name);
-            let words = cc.line_bytes as f64 / 8.0;
+            let words = c.line_bytes as f64 / 8.0;
             let (lookups, misses) =
                 c.classes.values().fold((0, 0), |(l, m), k| (l + k.hits + k.merged + k.misses, m + k.misses));
-            cache_j += (lookups + misses) as f64 * words * self.sram_pj(cc.size_bytes) * pj;
+            cache_j += (lookups + misses) as f64 * words * self.sram_pj(c.size_bytes) * pj;
         }
         joules.insert("caches".to_string(), cache_j);
         let l2 = &cfg.cache.l2;

@@ -7,7 +7,7 @@ use serde::Serialize;
 
 use raypipe_core::shade::ray_record::RayKind;
 
-use crate::cache::CacheStats;
+use crate::cache::Cache;
 use crate::config::HwConfig;
 use crate::fifo::FifoStats;
 use crate::mem_port::LatencyStats;
@@ -82,6 +82,10 @@ pub struct CacheClassReport {
 pub struct CacheReport {
     /// Cache name (that of its port).
     pub name: String,
+    /// Capacity in bytes.
+    pub size_bytes: u32,
+    /// Line size in bytes.
+    pub line_bytes: u32,
     /// Per data class with any access.
     pub classes: BTreeMap<String, CacheClassReport>,
 }
@@ -248,7 +252,7 @@ pub struct Sources<'a> {
     /// FIFOs: name, depth, counters.
     pub fifos: Vec<(String, usize, &'a FifoStats)>,
     /// Caches by port name.
-    pub caches: Vec<(String, &'a CacheStats)>,
+    pub caches: Vec<(String, &'a Cache)>,
     /// The channel.
     pub channel: &'a ChannelStats,
     /// Bytes requested by all ports.
@@ -328,8 +332,11 @@ impl Report {
         let caches = s
             .caches
             .iter()
-            .map(|(name, c)| CacheReport {
+            .map(|(name, cache)| (name, &cache.stats, cache))
+            .map(|(name, c, cache)| CacheReport {
                 name: name.clone(),
+                size_bytes: cache.size_bytes(),
+                line_bytes: cache.line_bytes(),
                 classes: (0..CLASSES)
                     .filter(|&k| c.hits[k] + c.merged[k] + c.misses[k] > 0)
                     .map(|k| {

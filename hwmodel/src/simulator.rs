@@ -524,7 +524,7 @@ impl<'s, I: Intersector> Simulator<'s, I> {
             .chain(self.tus.iter().map(|t| &t.port))
             .chain(self.ius.iter().map(|i| &i.port))
             .collect();
-        let caches = ports.iter().flat_map(|p| p.caches.iter().map(|(name, c)| (name.clone(), &c.stats))).collect();
+        let caches = ports.iter().flat_map(|p| p.caches.iter().map(|(name, c)| (name.clone(), c))).collect();
         let requested = ports.iter().map(|p| p.requested.iter().sum::<u64>()).sum();
         let delivered = ports.iter().map(|p| p.delivered.iter().sum::<u64>()).sum();
         let mut latency: Vec<LatencyStats> = vec![LatencyStats::default(); CLASSES];
