@@ -8,15 +8,15 @@ use clap::{Args, Parser, Subcommand};
 use raypipe_core::image::{CameraRecord, LightRecord};
 use raypipe_core::pixel_filter::Filter;
 
-use crate::bvh_builder::BvhParams;
-use crate::camera_file::CameraSpec;
-use crate::grid_builder::{GridResolution, DEFAULT_CELLS_PER_TRIANGLE};
-use crate::kd_builder::KdParams;
-use crate::packets::PacketSize;
+use crate::build::bvh::BvhParams;
+use crate::build::grid::{GridResolution, DEFAULT_CELLS_PER_TRIANGLE};
+use crate::build::kdtree::KdParams;
+use crate::input::camera_file::CameraSpec;
+use crate::output::tone_map::{Display, ToneMap};
+use crate::render::packets::PacketSize;
+use crate::render::tracer::IntersectorKind;
 use crate::render::{self, Algorithm, RenderOptions};
 use crate::scene::{Accel, BuildOptions, TriangleLayout};
-use crate::tone_map::{Display, ToneMap};
-use crate::tracer::IntersectorKind;
 
 /// raypipe: a ray tracing engine whose no_std kernels drive both this host renderer and
 /// a cycle-level hardware model.
@@ -150,7 +150,7 @@ pub struct SweepArgs {
     /// Run only shard I of N (points whose number is I modulo N, I from 0): one task of a
     /// Slurm job array or of GNU parallel.
     #[arg(long, value_name = "I/N")]
-    pub shard: Option<crate::sweep::Shard>,
+    pub shard: Option<crate::study::sweep::Shard>,
     /// Points run at once (default: all cores).
     #[arg(long, value_name = "N")]
     pub jobs: Option<usize>,
@@ -320,8 +320,8 @@ impl WalkArgs {
     /// The frames' cameras over `base`, or `None` for a single frame.
     pub fn cameras(&self, base: &CameraRecord) -> Result<Option<Vec<CameraRecord>>> {
         let cams = match (&self.camera_path, self.orbit) {
-            (Some(p), _) => crate::camera_path::CameraPath::load(p)?.cameras(base),
-            (None, Some(n)) => crate::camera_path::orbit(base, n)?,
+            (Some(p), _) => crate::input::camera_path::CameraPath::load(p)?.cameras(base),
+            (None, Some(n)) => crate::input::camera_path::orbit(base, n)?,
             (None, None) => return Ok(None),
         };
         for (k, c) in cams.iter().enumerate() {

@@ -11,17 +11,17 @@ use raypipe_core::image::{
 };
 use raypipe_core::{NoProbe, Ray, RayCounters, SceneView, Watertight};
 
-use crate::tracer::trace;
+use crate::render::tracer::trace;
 
-use crate::aligned::AlignedBytes;
-use crate::bvh_builder::{align_leaves, build_bvh, build_wide_bvh, BvhParams};
-use crate::camera_file::CameraSpec;
-use crate::default_scene;
-use crate::grid_builder::{build_grid, GridResolution};
-use crate::image_writer::ImageWriter;
-use crate::kd_builder::{build_kdtree, KdParams};
-use crate::mesh::Mesh;
-use crate::obj;
+use crate::build::bvh::{align_leaves, build_bvh, build_wide_bvh, BvhParams};
+use crate::build::grid::{build_grid, GridResolution};
+use crate::build::image_writer::ImageWriter;
+use crate::build::kdtree::{build_kdtree, KdParams};
+use crate::input::camera_file::CameraSpec;
+use crate::input::default_scene;
+use crate::input::mesh::Mesh;
+use crate::input::obj;
+use crate::platform::aligned::AlignedBytes;
 
 /// Which acceleration structure to build.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
@@ -182,17 +182,17 @@ pub fn load_source(path: Option<&Path>) -> Result<Source> {
     let name = path.display().to_string();
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
     let file_name = path.file_name().and_then(|f| f.to_str()).unwrap_or("").to_ascii_lowercase();
-    if crate::scene_file::is_scene_file(path) {
-        let (mesh, warnings, camera) = crate::scene_file::load_scene_file(path)?;
+    if crate::input::scene_file::is_scene_file(path) {
+        let (mesh, warnings, camera) = crate::input::scene_file::load_scene_file(path)?;
         return Ok(Source::Mesh { name, mesh, warnings, camera });
     }
     if file_name.ends_with(".ply") || file_name.ends_with(".ply.gz") {
-        let (mesh, notes) = crate::ply::load_ply_file(path)?;
+        let (mesh, notes) = crate::input::ply::load_ply_file(path)?;
         let camera = sidecar_camera(path).map(|p| CameraSpec::load(&p)).transpose()?.unwrap_or_default();
         return Ok(Source::Mesh { name, mesh, warnings: notes.warnings, camera });
     }
     if ext == "gltf" || ext == "glb" {
-        let (mesh, notes, own) = crate::gltf_loader::load_gltf_file(path)?;
+        let (mesh, notes, own) = crate::input::gltf::load_gltf_file(path)?;
         // A camera file beside it wins over the file's own camera.
         let camera = match sidecar_camera(path) {
             Some(p) => own.merged(CameraSpec::load(&p)?),
@@ -270,21 +270,21 @@ pub fn framing_camera(lo: [f32; 3], hi: [f32; 3]) -> CameraRecord {
 
 /// Settles `mesh`'s lights: the input's own (an MTL cannot give any today), else the
 /// user's (`--light`, `--sun`, `--sky`) plus a dim ambient term and the emitters as area
-/// lights, else the defaults for `camera` ([`crate::default_lights`]). Area lights go
+/// lights, else the defaults for `camera` ([`crate::build::default_lights`]). Area lights go
 /// last. Returns one line describing them.
 /// The mesh's lights: the user's, the input's, or the default; also whether the default
 /// point light was placed for `camera` (then the image says so: another view may place
 /// it again).
 fn choose_lights(name: &str, mesh: &mut Mesh, camera: &CameraRecord, user: &[LightRecord]) -> Result<(String, bool)> {
     if user.is_empty() && mesh.lights.is_empty() {
-        let (lights, note) = crate::default_lights::default_lights(mesh, camera);
+        let (lights, note) = crate::build::default_lights::default_lights(mesh, camera);
         let for_camera = lights.iter().any(|l| l.kind == LightRecord::POINT);
         mesh.lights = lights;
         return Ok((note, for_camera));
     }
     if !user.is_empty() {
         check_user_lights(name, user)?;
-        let (_, areas) = crate::default_lights::emitters(mesh);
+        let (_, areas) = crate::build::default_lights::emitters(mesh);
         mesh.lights = user.to_vec();
         mesh.lights.push(LightRecord { position: [0.0; 3], kind: LightRecord::AMBIENT, color: [0.1; 3], triangle: 0 });
         let n = areas.len();
@@ -330,7 +330,7 @@ pub fn relight_for_camera(scene: &Scene, camera: &CameraRecord) -> Result<Option
         return Ok(None);
     }
     let (lo, hi) = view.bounds();
-    let p = crate::default_lights::light_in_view(lo, hi, camera, |ray| {
+    let p = crate::build::default_lights::light_in_view(lo, hi, camera, |ray| {
         trace::<Watertight, _>(&view, ray, &mut NoProbe, &mut RayCounters::default()).map(|h| h.t)
     });
     let lights: Vec<LightRecord> = (0..view.shading_light_count())
@@ -355,12 +355,16 @@ fn replace_shading_lights(scene: &Scene, user: &[LightRecord], flags: u32) -> Re
         .iter()
         .map(|l| {
             let [a, b, c] = view.triangle(l.triangle, &mut NoProbe);
-            crate::light_distribution::triangle_power(a, b, c, l.color)
+            crate::build::light_distribution::triangle_power(a, b, c, l.color)
         })
         .collect();
-    let image =
-        ImageWriter::replace_lights(&scene.image, &lights, &crate::light_distribution::alias_table(&power), flags)
-            .map_err(|e| anyhow!("{}: {e}", scene.name))?;
+    let image = ImageWriter::replace_lights(
+        &scene.image,
+        &lights,
+        &crate::build::light_distribution::alias_table(&power),
+        flags,
+    )
+    .map_err(|e| anyhow!("{}: {e}", scene.name))?;
     let out = Scene { name: scene.name.clone(), image, report: scene.report.clone() };
     out.view().map_err(|e| anyhow!("internal error: relit an invalid image: {e}"))?;
     Ok(out)

@@ -849,7 +849,7 @@ fn hdr_outputs_hold_the_linear_framebuffer() {
         algo: Algorithm::Whitted,
         samples: 4,
         filter: raypipe_core::pixel_filter::Filter::Tent,
-        packet: raypipe::packets::PacketSize::auto_for(&view),
+        packet: raypipe::render::packets::PacketSize::auto_for(&view),
         ..Default::default()
     };
     let frame = render(&view, &cam, &opts).unwrap();
@@ -1296,7 +1296,7 @@ fn plots_of_a_small_sweep_decode() {
     }
     for svg in ["heat.svg", "bytes.svg"] {
         let text = std::fs::read_to_string(d.join(svg)).unwrap();
-        let png = raypipe::stream_charts::to_png(&text).expect("the SVG parses and renders");
+        let png = raypipe::hw::stream_charts::to_png(&text).expect("the SVG parses and renders");
         assert!(png.starts_with(b"\x89PNG"), "{svg}");
     }
     // Rows the plot cannot tell apart are refused, naming what differs.

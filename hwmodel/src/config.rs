@@ -6,8 +6,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::datapath::Datapath;
-use crate::fifo::MAX_FIFO_DEPTH;
+use crate::chip::datapath::Datapath;
+use crate::chip::fifo::MAX_FIFO_DEPTH;
 
 /// Largest packet (the active mask is a `u64`).
 pub const MAX_PACKET: u32 = 64;
@@ -47,7 +47,7 @@ pub struct HwConfig {
     /// The memory channel.
     pub memory: MemoryConfig,
     /// Energy and area figures (docs/hw-model.md, "Energy and area").
-    pub energy: crate::energy::EnergyConfig,
+    pub energy: crate::observe::energy::EnergyConfig,
 }
 
 /// The ray generation & shading unit.
@@ -239,7 +239,7 @@ impl Default for HwConfig {
             fifo: FifoConfig::default(),
             cache: CachesConfig::default(),
             memory: MemoryConfig::default(),
-            energy: crate::energy::EnergyConfig::default(),
+            energy: crate::observe::energy::EnergyConfig::default(),
         }
     }
 }

@@ -17,32 +17,16 @@
 //! [`config::HwConfig`].
 #![forbid(unsafe_code)]
 
-pub mod cache;
+pub mod chip;
 pub mod config;
-pub mod counters;
-pub mod datapath;
-pub mod dram;
-pub mod energy;
-pub mod fifo;
-pub mod intersection_unit;
-pub mod jobs;
-pub mod mem_port;
 pub mod memory;
-pub mod metrics;
 pub mod observe;
-pub mod report;
-pub mod rgs;
-pub mod simulator;
-pub mod stall;
 pub mod stream;
-pub mod traffic;
-pub mod traversal_unit;
-pub mod unit_stats;
 
+pub use chip::datapath::Datapath;
+pub use chip::simulator::Simulator;
 pub use config::HwConfig;
-pub use datapath::Datapath;
-pub use report::Report;
-pub use simulator::Simulator;
+pub use observe::report::Report;
 
 /// The set lanes of a mask, lowest first.
 pub(crate) fn lane_iter(mask: u64) -> raypipe_core::packet::Lanes {

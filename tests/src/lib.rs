@@ -5,9 +5,9 @@
 
 use std::path::{Path, PathBuf};
 
-use raypipe::aligned::AlignedBytes;
-use raypipe::grid_builder::GridResolution;
-use raypipe::mesh::Mesh;
+use raypipe::build::grid::GridResolution;
+use raypipe::input::mesh::Mesh;
+use raypipe::platform::aligned::AlignedBytes;
 use raypipe::render::Frame;
 use raypipe::scene::{self, Accel, BuildOptions, Scene, TriangleLayout};
 use raypipe_core::image::{SectionEntry, SectionKind};

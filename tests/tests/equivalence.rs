@@ -3,9 +3,9 @@
 //! `t` and barycentrics — and the same misses, with either intersection kernel.
 
 use proptest::prelude::*;
+use raypipe::render::tracer::trace;
 use raypipe::scene::Accel;
 use raypipe::scene::TriangleLayout;
-use raypipe::tracer::trace;
 use raypipe_core::image::TriBlock4;
 use raypipe_core::traverse::brute_force::trace_brute_force;
 use raypipe_core::traverse::walk::trace_walk;
@@ -298,7 +298,7 @@ proptest! {
 
 /// Traces every ray both alone and in a packet of `N`, and demands identical hits.
 fn packet_matches_single<const N: usize>(view: &SceneView<'_>, rays: &[Ray]) -> Result<(), TestCaseError> {
-    use raypipe::tracer::trace_packet;
+    use raypipe::render::tracer::trace_packet;
     use raypipe_core::packet::step::trace_packet_steps;
     use raypipe_core::packet::{PacketCounters, RayPacket};
     for chunk in rays.chunks(N) {
@@ -342,10 +342,10 @@ fn packet_matches_single<const N: usize>(view: &SceneView<'_>, rays: &[Ray]) -> 
 /// into a fresh output and into one reused across batches (longer, and holding other
 /// records, before each).
 fn batch_matches_single(view: &SceneView<'_>, rays: &[Ray]) -> Result<(), TestCaseError> {
-    use raypipe::batch::{trace_batch, trace_batch_into};
-    use raypipe::npy::HitRecord;
-    use raypipe::packets::PacketSize;
-    use raypipe::tracer::IntersectorKind;
+    use raypipe::input::npy::HitRecord;
+    use raypipe::render::batch::{trace_batch, trace_batch_into};
+    use raypipe::render::packets::PacketSize;
+    use raypipe::render::tracer::IntersectorKind;
     let stale = HitRecord { t: 1.0, u: 0.25, v: 0.5, prim: 7 };
     let mut reused = vec![stale; rays.len() + 3];
     for packet in [PacketSize::Single, PacketSize::P64] {

@@ -8,8 +8,8 @@
 //! exact, and only has to stay bounded).
 
 use proptest::prelude::*;
+use raypipe::render::tracer::{trace, trace_packet};
 use raypipe::scene::{Accel, TriangleLayout};
-use raypipe::tracer::{trace, trace_packet};
 use raypipe_core::fixed_ray::FixedRay;
 use raypipe_core::packet::{PacketCounters, RayPacket};
 use raypipe_core::traverse::brute_force::trace_brute_force;

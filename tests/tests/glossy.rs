@@ -5,11 +5,11 @@
 
 use std::path::Path;
 
-use raypipe::mesh::Mesh;
-use raypipe::packets::PacketSize;
+use raypipe::input::mesh::Mesh;
+use raypipe::render::packets::PacketSize;
+use raypipe::render::tracer::trace;
 use raypipe::render::{render, Algorithm, Frame, RenderOptions};
 use raypipe::scene::{self, Accel, BuildOptions, Scene};
-use raypipe::tracer::trace;
 use raypipe_core::image::{CameraRecord, LightRecord, MaterialRecord};
 use raypipe_core::shade::path::{shade_path, PathOptions};
 use raypipe_core::shade::ray_record::{RayKind, RayRecord};

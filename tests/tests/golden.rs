@@ -3,11 +3,11 @@
 //! comparison is exact. After an intended change, regenerate with
 //! `RAYPIPE_BLESS=1 cargo test -p raypipe-tests --test golden` and look at the images.
 
-use raypipe::grid_builder::GridResolution;
-use raypipe::packets::PacketSize;
+use raypipe::build::grid::GridResolution;
+use raypipe::render::packets::PacketSize;
+use raypipe::render::tracer::IntersectorKind;
 use raypipe::render::{render, Frame, RenderOptions};
 use raypipe::scene::{self, Accel, BuildOptions};
-use raypipe::tracer::IntersectorKind;
 use raypipe_core::image::CameraRecord;
 use raypipe_tests::{check_golden, root};
 

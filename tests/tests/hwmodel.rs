@@ -5,8 +5,8 @@
 //! watchdog turns a stuck unit into an error naming the units and FIFOs.
 
 use proptest::prelude::*;
+use raypipe::render::tracer::trace;
 use raypipe::scene::{framing_camera, Accel};
-use raypipe::tracer::trace;
 use raypipe_core::camera::{Camera, EyeRays};
 use raypipe_core::image::CameraRecord;
 use raypipe_core::pixel_filter::Filter;
@@ -218,7 +218,7 @@ proptest! {
         prop_assert_eq!(r.conservation.bytes_requested, r.conservation.bytes_delivered);
         prop_assert!(r.memory.traffic_over_compulsory == 0.0 || r.memory.traffic_over_compulsory >= 1.0);
         // Every unit is busy, stalled or idle in each cycle it ticked (all of them).
-        let ticked = |u: &raypipe_hw::report::UnitReport| u.busy_cycles + u.stall_cycles + u.idle_cycles;
+        let ticked = |u: &raypipe_hw::observe::report::UnitReport| u.busy_cycles + u.stall_cycles + u.idle_cycles;
         for u in &r.units {
             prop_assert_eq!(ticked(u), ticked(&r.units[0]), "{}", u.name);
         }
@@ -403,12 +403,10 @@ fn model_images_equal_the_host_for_every_algorithm() {
                 if algo == Algorithm::Shadow {
                     let mut hits = Vec::new();
                     for s in 0..samples {
-                        let g = raypipe::raster::rasterize(&view, &eye, s);
-                        hits.extend(
-                            (0..cam.height)
-                                .flat_map(|y| (0..cam.width).map(move |x| (x, y)))
-                                .map(|(x, y)| raypipe::raster::gbuffer_hit::<Watertight>(&view, &eye, &g, x, y).1),
-                        );
+                        let g = raypipe::render::gbuffer::rasterize(&view, &eye, s);
+                        hits.extend((0..cam.height).flat_map(|y| (0..cam.width).map(move |x| (x, y))).map(|(x, y)| {
+                            raypipe::render::gbuffer::gbuffer_hit::<Watertight>(&view, &eye, &g, x, y).1
+                        }));
                     }
                     sim.set_visibility(hits);
                 }

@@ -2,9 +2,9 @@
 //! and no byte pattern makes it (or a kernel on what it accepts) panic.
 
 use proptest::prelude::*;
-use raypipe::aligned::AlignedBytes;
+use raypipe::platform::aligned::AlignedBytes;
+use raypipe::render::tracer::trace;
 use raypipe::scene::{self, Accel, BuildOptions, TriangleLayout};
-use raypipe::tracer::trace;
 use raypipe_core::image::{SectionKind, NULL_INDEX};
 use raypipe_core::{NoProbe, Ray, RayCounters, SceneError, SceneView, Vec3, Watertight};
 use raypipe_tests::{build_soup_layout, cornell_with, corrupt_image, put_u32, reseal, section_entry};

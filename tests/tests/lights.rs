@@ -3,7 +3,7 @@
 //! shaders read no area-light record however many emitters there are, and the lights of
 //! a built image can be replaced.
 
-use raypipe::mesh::Mesh;
+use raypipe::input::mesh::Mesh;
 use raypipe::scene::{self, Accel, BuildOptions, Scene};
 use raypipe_core::image::{LightRecord, MaterialRecord};
 use raypipe_core::probe::ByteCounter;
@@ -92,8 +92,13 @@ fn picking_one_emitter_by_power_is_unbiased() {
     let expected: Vec3 = emitters.iter().map(|&(t, ke)| reference(p, t, ke)).sum();
     // From just above the floor (below every emitter) straight down.
     let ray = Ray::new(Vec3::new(0.1, 0.5, 0.05), Vec3::new(0.0, -1.0, 0.0));
-    let hit = raypipe::tracer::trace::<raypipe_core::Watertight, _>(&view, &ray, &mut NoProbe, &mut Default::default())
-        .unwrap();
+    let hit = raypipe::render::tracer::trace::<raypipe_core::Watertight, _>(
+        &view,
+        &ray,
+        &mut NoProbe,
+        &mut Default::default(),
+    )
+    .unwrap();
     let opts = PathOptions { bounces: 0, roulette: false, background: Vec3::ZERO };
     let n = 200_000u32;
     let mut sum = [0.0f64; 3];

@@ -2,15 +2,15 @@
 //! that sum to the frame, warm-up frames left out of the totals, regions of interest,
 //! and walkthroughs whose frames are each the host's image while the caches stay warm.
 
+use raypipe::hw::chip::{simulate_frames, FrameRun, Measure};
+use raypipe::render::tracer::IntersectorKind;
 use raypipe::render::{render, Algorithm, RenderOptions};
 use raypipe::scene::{Accel, BuildOptions};
-use raypipe::simulate::{simulate_frames, FrameRun, Measure};
-use raypipe::tracer::IntersectorKind;
 use raypipe_core::image::CameraRecord;
 use raypipe_core::Vec3;
 use raypipe_hw::config::MemoryModel;
-use raypipe_hw::counters::counters;
-use raypipe_hw::metrics::metric;
+use raypipe_hw::observe::counters::counters;
+use raypipe_hw::observe::metrics::metric;
 use raypipe_hw::HwConfig;
 
 fn whitted_scene(accel: Accel) -> raypipe::scene::Scene {
@@ -133,7 +133,7 @@ fn walkthrough_frames_are_the_hosts_images() {
     let scene = whitted_scene(Accel::Kd);
     let view = scene.view().unwrap();
     let cam = CameraRecord { width: 24, height: 24, ..*view.camera().unwrap() };
-    let views = raypipe::camera_path::orbit(&cam, 3).unwrap();
+    let views = raypipe::input::camera_path::orbit(&cam, 3).unwrap();
     let run = frames(&scene, &views, &Measure::default(), &HwConfig::preset("saarcor").unwrap(), Algorithm::Whitted);
     for (k, (f, c)) in run.iter().zip(&views).enumerate() {
         let opts = RenderOptions { algo: Algorithm::Whitted, max_depth: 2, ..Default::default() };

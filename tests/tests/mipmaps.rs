@@ -3,11 +3,11 @@
 //! image carries the whole chain and validates it, and the hardware models read the
 //! same texels as the host — bit for bit, whatever the algorithm.
 
-use raypipe::mesh::Mesh;
+use raypipe::input::mesh::Mesh;
+use raypipe::input::texture::TextureImage;
+use raypipe::render::tracer::trace;
 use raypipe::render::{render, Algorithm, Frame, RenderOptions};
 use raypipe::scene::{self, BuildOptions, Scene};
-use raypipe::texture_loader::TextureImage;
-use raypipe::tracer::trace;
 use raypipe_core::camera::{Camera, EyeRays};
 use raypipe_core::image::{
     CameraRecord, LightRecord, MaterialRecord, SceneError, SectionKind, ShadingVertex, TextureRecord,
@@ -65,8 +65,8 @@ fn camera() -> CameraRecord {
 
 /// The image of `scene` with its textures cut down to level 0 (what raypipe read before
 /// mipmaps).
-fn without_mipmaps(scene: &Scene) -> raypipe::aligned::AlignedBytes {
-    let mut bytes = raypipe::aligned::AlignedBytes::from_slice(&scene.image);
+fn without_mipmaps(scene: &Scene) -> raypipe::platform::aligned::AlignedBytes {
+    let mut bytes = raypipe::platform::aligned::AlignedBytes::from_slice(&scene.image);
     let (_, e) = section_entry(&bytes, SectionKind::Textures);
     // `levels` is the fifth word of the record.
     put_u32(&mut bytes, e.offset as usize + 16, 1);
@@ -165,12 +165,12 @@ fn the_models_read_the_same_mipmap_levels_as_the_host() {
         let mut sim = Simulator::<Watertight>::with_shader(view, eye, Vec3::ZERO, shader, &cfg).unwrap();
         sim.run(|_, _| {}).unwrap();
         assert!(sim.framebuffer() == host.pixels, "simulate {algo:?} {samples}");
-        let (frame, _) = raypipe::stream::run_stream(
+        let (frame, _) = raypipe::hw::stream::run_stream(
             &view,
             &cam,
             &raypipe_hw::stream::StreamConfig::default(),
             &raypipe_hw::stream::CostModel::default(),
-            raypipe::tracer::IntersectorKind::Watertight,
+            raypipe::render::tracer::IntersectorKind::Watertight,
             shader,
             false,
             opts.sampler(),

@@ -5,10 +5,10 @@
 use std::path::Path;
 
 use proptest::prelude::*;
-use raypipe::packets::PacketSize;
+use raypipe::render::packets::PacketSize;
+use raypipe::render::tracer::trace;
 use raypipe::render::{render, Algorithm, Frame, RenderOptions};
 use raypipe::scene::{self, Accel, BuildOptions};
-use raypipe::tracer::trace;
 use raypipe_core::image::CameraRecord;
 use raypipe_core::shade::path::{shade_path, PathOptions};
 use raypipe_core::shade::ray_record::{RayKind, RayRecord};
@@ -87,7 +87,7 @@ fn path_traced_image_is_golden_and_the_same_for_every_structure_packet_and_threa
 /// its weight falls off with distance.
 #[test]
 fn area_light_samples_are_never_blocked_by_the_emitter_itself() {
-    use raypipe::mesh::Mesh;
+    use raypipe::input::mesh::Mesh;
     use raypipe_core::image::MaterialRecord;
     use raypipe_core::traverse::occlusion::occluded;
     let positions = vec![

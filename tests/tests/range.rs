@@ -7,8 +7,8 @@
 //! triangle id on every path. Rays and scenes just outside are flagged.
 
 use proptest::prelude::*;
+use raypipe::render::tracer::{trace, trace_packet};
 use raypipe::scene::{Accel, TriangleLayout};
-use raypipe::tracer::{trace, trace_packet};
 use raypipe_core::packet::step::trace_packet_steps;
 use raypipe_core::packet::{PacketCounters, RayPacket};
 use raypipe_core::range::{check_ray, check_scene, OutOfRange, MIN_COMPONENT_RATIO, ORIGIN_EXTENTS};

@@ -3,10 +3,10 @@
 //! the G-buffer covers exactly what ray casting sees.
 
 use proptest::prelude::*;
-use raypipe::raster::rasterize;
 use raypipe::render::eye_rays;
+use raypipe::render::gbuffer::rasterize;
+use raypipe::render::tracer::trace;
 use raypipe::scene::Accel;
-use raypipe::tracer::trace;
 use raypipe_core::image::{CameraRecord, NULL_INDEX};
 use raypipe_core::{NoProbe, RayCounters, Vec3, Watertight};
 use raypipe_tests::build_soup;

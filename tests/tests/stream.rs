@@ -7,10 +7,10 @@
 //! words.
 
 use proptest::prelude::*;
+use raypipe::hw::stream::run_stream;
+use raypipe::render::tracer::{trace, IntersectorKind};
 use raypipe::render::{render, Algorithm, RenderOptions};
 use raypipe::scene::{self, Accel, BuildOptions};
-use raypipe::stream::run_stream;
-use raypipe::tracer::{trace, IntersectorKind};
 use raypipe_core::camera::{Camera, EyeRays};
 use raypipe_core::image::CameraRecord;
 use raypipe_core::pixel_filter::Filter;

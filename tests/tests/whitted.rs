@@ -7,11 +7,11 @@
 use std::path::Path;
 
 use proptest::prelude::*;
-use raypipe::mesh::Mesh;
-use raypipe::packets::PacketSize;
+use raypipe::input::mesh::Mesh;
+use raypipe::render::packets::PacketSize;
+use raypipe::render::tracer::trace;
 use raypipe::render::{render, Algorithm, Frame, RenderOptions};
 use raypipe::scene::{self, Accel, BuildOptions, Scene};
-use raypipe::tracer::trace;
 use raypipe_core::image::{CameraRecord, LightRecord, MaterialRecord};
 use raypipe_core::shade::ray_record::{RayKind, RayRecord};
 use raypipe_core::shade::specular::reflect;
@@ -274,7 +274,7 @@ fn the_shadow_caster_equals_ray_casting_plus_shadows_where_coverage_agrees() {
         let hybrid = render(&view, &cam, &RenderOptions { algo: Algorithm::Shadow, ..base }).unwrap();
         let traced = render(&view, &cam, &RenderOptions { algo: Algorithm::Whitted, ..base }).unwrap();
         let eye = raypipe_core::camera::EyeRays::new(&raypipe_core::Camera::from(&cam)).unwrap();
-        let g = raypipe::raster::rasterize(&view, &eye, 0);
+        let g = raypipe::render::gbuffer::rasterize(&view, &eye, 0);
         let (lo, hi) = view.test_bounds();
         let mut disagree = 0;
         for y in 0..cam.height {

@@ -7,12 +7,12 @@
 //! rejected by the parse.
 
 use proptest::prelude::*;
-use raypipe::aligned::AlignedBytes;
-use raypipe::bvh_builder::BuiltWideBvh;
-use raypipe::image_writer::ImageWriter;
-use raypipe::mesh::Mesh;
+use raypipe::build::bvh::BuiltWideBvh;
+use raypipe::build::image_writer::ImageWriter;
+use raypipe::input::mesh::Mesh;
+use raypipe::platform::aligned::AlignedBytes;
+use raypipe::render::tracer::trace;
 use raypipe::scene::{self, Accel, BuildOptions};
-use raypipe::tracer::trace;
 use raypipe_core::image::{Bvh4Node, Bvh8Node, SectionEntry, SectionKind, WideNode, MAX_WIDE_DEPTH, NULL_INDEX};
 use raypipe_core::packet::bvh4::trace_bvh4_packet;
 use raypipe_core::packet::step::trace_packet_steps;
@@ -225,7 +225,7 @@ fn a_large_obj_polygon_builds_a_grid_of_n_log_n_references() {
         obj += &format!(" {k}");
     }
     obj += "\n";
-    let (mesh, _) = raypipe::obj::load_obj_str("polygon.obj", &obj, &|_| None).unwrap();
+    let (mesh, _) = raypipe::input::obj::load_obj_str("polygon.obj", &obj, &|_| None).unwrap();
     assert_eq!(mesh.triangles.len(), n - 2);
     let opts = BuildOptions { accel: Accel::Grid, ..Default::default() };
     let scene = scene::build("polygon".into(), mesh, Vec::new(), Default::default(), &opts).unwrap();
@@ -261,8 +261,8 @@ fn a_negative_t_min_is_no_ray_for_any_structure() {
         hits.push(trace::<Watertight, _>(&view, &ahead, &mut NoProbe, &mut c).map(|h| (h.t.to_bits(), h.prim)));
     }
     assert!(hits[0].is_some() && hits.iter().all(|h| *h == hits[0]), "{hits:?}");
-    let rows = raypipe::npy::Array2 { rows: 1, cols: 8, data: vec![0.0, 1.0, 0.5, 0.3, -0.2, -1.0, -2.0, 10.0] };
-    let (_, invalid) = raypipe::batch::rays_from_array(&rows).unwrap();
+    let rows = raypipe::input::npy::Array2 { rows: 1, cols: 8, data: vec![0.0, 1.0, 0.5, 0.3, -0.2, -1.0, -2.0, 10.0] };
+    let (_, invalid) = raypipe::render::batch::rays_from_array(&rows).unwrap();
     assert_eq!(invalid, [true], "a negative t_min is no ray: returned as a miss");
 }
 

@@ -1,13 +1,13 @@
 //! `raypipe bench`: timed runs of the host renderer.
 
-use crate::bench::{self, median};
+use crate::build::grid::GridResolution;
 use crate::cli::{BenchArgs, CameraArgs};
-use crate::grid_builder::GridResolution;
-use crate::packets::PacketSize;
+use crate::hw::chip;
+use crate::render::packets::PacketSize;
+use crate::render::tracer::IntersectorKind;
 use crate::render::{Algorithm, RenderOptions};
 use crate::scene::{self, Accel, BuildOptions};
-use crate::simulate;
-use crate::tracer::IntersectorKind;
+use crate::study::bench::{self, median};
 use anyhow::{anyhow, bail, Result};
 use raypipe_core::image::CameraRecord;
 use std::path::PathBuf;
@@ -32,7 +32,7 @@ pub(crate) fn cmd_bench(a: BenchArgs) -> Result<()> {
     }
     let kernel = a.intersector.map_or("default", IntersectorKind::name);
     let chip = match &a.simulate {
-        Some(preset) => Some(simulate::load_config(Some(preset), None, &[])?),
+        Some(preset) => Some(chip::load_config(Some(preset), None, &[])?),
         None => None,
     };
     println!(
@@ -88,7 +88,7 @@ pub(crate) fn cmd_bench(a: BenchArgs) -> Result<()> {
                 best_single = best_single.max(r.mrays_single);
                 let simd = if packet == PacketSize::Single {
                     "-".to_string()
-                } else if !crate::tracer::has_packet_kernel(&view) {
+                } else if !crate::render::tracer::has_packet_kernel(&view) {
                     // Traced ray by ray: no lock-step, no SIMD efficiency to report.
                     "by ray".to_string()
                 } else {
@@ -135,8 +135,8 @@ pub(crate) fn cmd_bench(a: BenchArgs) -> Result<()> {
                 let mut last = None;
                 for _ in 0..a.runs.min(3) {
                     let start = Instant::now();
-                    let measure = simulate::Measure::default();
-                    let mut out = simulate::simulate_frames(
+                    let measure = chip::Measure::default();
+                    let mut out = chip::simulate_frames(
                         &view,
                         std::slice::from_ref(&cam),
                         &measure,

@@ -13,7 +13,7 @@ pub(crate) fn cmd_build(a: BuildArgs) -> Result<()> {
     let start = Instant::now();
     let (input, scene) = match (&a.generate, &a.scene) {
         (Some(spec), _) => {
-            let g = crate::generate::generate(spec, a.view.as_deref())?;
+            let g = crate::input::generate::generate(spec, a.view.as_deref())?;
             let scene = scene::build(
                 g.name.clone(),
                 g.mesh,

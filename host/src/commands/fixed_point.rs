@@ -9,7 +9,7 @@ use std::path::Path;
 use super::{accel_name, camera_for, warn};
 
 pub(crate) fn cmd_fixed_point(a: FixedPointArgs) -> Result<()> {
-    use crate::fixed_point::{compare, fits, rays, RayKind};
+    use crate::study::fixed_point::{compare, fits, rays, RayKind};
     if let Some(d) = a.datapath.iter().find(|d| d.format().is_none()) {
         bail!("--datapath {}: name fixed-point formats to compare with f32", d.name());
     }
@@ -37,7 +37,7 @@ pub(crate) fn cmd_fixed_point(a: FixedPointArgs) -> Result<()> {
         let scene = scene::load(path, &opts)?;
         warn(&scene);
         let view = scene.view()?;
-        if let Some(why) = crate::tracer::fixed_point_unsupported(&view) {
+        if let Some(why) = crate::render::tracer::fixed_point_unsupported(&view) {
             bail!("{}: {why}; the fixed-point box test is for BVHs (rebuild it with --accel bvh4)", scene.name);
         }
         let camera_args = CameraArgs { camera: a.camera.clone(), size: Some(a.size), ..CameraArgs::default() };

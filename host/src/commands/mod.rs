@@ -140,7 +140,7 @@ pub(crate) fn camera_for(view: &raypipe_core::SceneView<'_>, args: &CameraArgs) 
 
 /// Warns about a scene or rays outside raypipe-core's guaranteed range.
 pub(crate) fn warn_range(view: &raypipe_core::SceneView<'_>, rays: &[raypipe_core::Ray], what: &str) {
-    for w in crate::range_check::warnings(view, rays, what) {
+    for w in crate::input::range_check::warnings(view, rays, what) {
         eprintln!("warning: {w}");
     }
 }

@@ -4,8 +4,8 @@ use anyhow::{anyhow, bail, Result};
 
 use crate::cli::PlotArgs;
 use crate::output;
-use crate::sweep_plot::{self, Plot};
-use crate::sweep_table::{self, label};
+use crate::study::sweep_plot::{self, Plot};
+use crate::study::sweep_table::{self, label};
 
 pub(crate) fn cmd_plot(a: PlotArgs) -> Result<()> {
     let png = match a.output.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
@@ -40,7 +40,7 @@ pub(crate) fn cmd_plot(a: PlotArgs) -> Result<()> {
     let title = a.title.clone().unwrap_or(what);
     let svg = sweep_plot::draw(&plot, &rows, &title).map_err(|e| anyhow!("{}: {e:#}", a.rows.display()))?;
     if png {
-        output::write_bytes(&a.output, &crate::stream_charts::to_png(&svg)?)?;
+        output::write_bytes(&a.output, &crate::hw::stream_charts::to_png(&svg)?)?;
     } else {
         output::write_bytes(&a.output, svg.as_bytes())?;
     }

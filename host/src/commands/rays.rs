@@ -18,7 +18,7 @@ pub(crate) fn cmd_rays(a: RaysArgs) -> Result<()> {
         for bx in (0..cam.width).step_by(b as usize) {
             // The lane order of the host's packets (Z-order within the block).
             for lane in 0..b * b {
-                let (i, j) = crate::packets::lane_pixel(lane, b);
+                let (i, j) = crate::render::packets::lane_pixel(lane, b);
                 let (x, y) = (bx + i, by + j);
                 if x < cam.width && y < cam.height {
                     let r = eye.ray(x, y);
@@ -30,7 +30,7 @@ pub(crate) fn cmd_rays(a: RaysArgs) -> Result<()> {
         }
     }
     let rows = data.len() / 8;
-    crate::npy::write_f32_2d(&a.output, &crate::npy::Array2 { rows, cols: 8, data })?;
+    crate::input::npy::write_f32_2d(&a.output, &crate::input::npy::Array2 { rows, cols: 8, data })?;
     if let Some(path) = &a.triangles {
         let mut data = Vec::with_capacity(view.triangle_count() as usize * 9);
         for prim in 0..view.triangle_count() {
@@ -38,8 +38,8 @@ pub(crate) fn cmd_rays(a: RaysArgs) -> Result<()> {
                 data.extend_from_slice(&v.to_array());
             }
         }
-        let tris = crate::npy::Array2 { rows: view.triangle_count() as usize, cols: 9, data };
-        crate::npy::write_f32_2d(path, &tris)?;
+        let tris = crate::input::npy::Array2 { rows: view.triangle_count() as usize, cols: 9, data };
+        crate::input::npy::write_f32_2d(path, &tris)?;
         println!("wrote {} triangles -> {}", tris.rows, path.display());
     }
     println!("wrote {rows} primary rays ({}x{}) -> {}", cam.width, cam.height, a.output.display());

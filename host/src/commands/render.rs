@@ -2,9 +2,9 @@
 
 use crate::cli::RenderArgs;
 use crate::output;
-use crate::packets::PacketSize;
+use crate::render::packets::PacketSize;
+use crate::render::tracer::IntersectorKind;
 use crate::render::{self, RenderOptions};
-use crate::tracer::IntersectorKind;
 use anyhow::Result;
 use std::time::Instant;
 
@@ -69,7 +69,7 @@ fn walkthrough(
     view: &raypipe_core::SceneView<'_>,
     cams: &[raypipe_core::image::CameraRecord],
     opts: &RenderOptions,
-    display: &crate::tone_map::Display,
+    display: &crate::output::tone_map::Display,
 ) -> Result<()> {
     println!("walkthrough of {} ({} triangles): {} frames", scene.name, view.triangle_count(), cams.len());
     println!("lights   {}", lights_summary(scene)?);

@@ -6,7 +6,7 @@ use anyhow::{anyhow, Result};
 use serde_json::Value;
 
 use crate::cli::{ReportArgs, ReportCommand, ReportDiffArgs};
-use crate::report_diff::{diff, is_headline, show, Change};
+use crate::study::report_diff::{diff, is_headline, show, Change};
 
 pub(crate) fn cmd_report(a: ReportArgs) -> Result<()> {
     match a.command {

@@ -5,11 +5,11 @@ use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use crate::cli::SimulateArgs;
+use crate::hw::chip::{self, FrameRun, Measure};
 use crate::output;
+use crate::render::tracer::IntersectorKind;
 use crate::render::{Algorithm, RenderOptions};
 use crate::scene::Scene;
-use crate::simulate::{self, FrameRun, Measure};
-use crate::tracer::IntersectorKind;
 use anyhow::{bail, Result};
 use raypipe_hw::Report;
 
@@ -45,7 +45,7 @@ pub(crate) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
     if a.measure.interval.is_some() {
         let mut text = String::new();
         for (k, f) in run.frames.iter().enumerate().filter(|(_, f)| !f.warmup) {
-            for crate::simulate::Interval { start, end, counters } in &f.intervals {
+            for crate::hw::chip::Interval { start, end, counters } in &f.intervals {
                 let c: serde_json::Map<String, serde_json::Value> =
                     counters.iter().map(|(n, v)| (n.clone(), serde_json::Value::from(*v))).collect();
                 let row = serde_json::json!({ "frame": k, "start": start, "end": end, "counters": c });
@@ -67,7 +67,7 @@ pub(crate) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
         .enumerate()
         {
             let values: Vec<f64> = last.cost.iter().map(|c| c[k]).collect();
-            crate::cost_image::write(&crate::cost_image::path(prefix, what), w, h, &values, title)?;
+            crate::study::cost_image::write(&crate::study::cost_image::path(prefix, what), w, h, &values, title)?;
         }
     }
     output::write_bytes(&a.report, run.report.to_json().as_bytes())?;
@@ -104,7 +104,7 @@ pub(crate) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
 /// data loaded over time) and the caches' hit rates.
 fn frame_line(k: usize, f: &FrameRun) -> String {
     let r = &f.report;
-    let hit: serde_json::Map<String, serde_json::Value> = raypipe_hw::metrics::metrics(r)
+    let hit: serde_json::Map<String, serde_json::Value> = raypipe_hw::observe::metrics::metrics(r)
         .into_iter()
         .filter(|(n, _)| n.starts_with("hit_rate."))
         .map(|(n, v)| {
@@ -132,7 +132,7 @@ fn frame_line(k: usize, f: &FrameRun) -> String {
 fn print_walkthrough(frames: &[FrameRun], warmup: usize) {
     println!("frame     cycles   frames/s   memory bytes   scene bytes read   node hits   triangle hits");
     let pct = |r: &Report, m: &str| {
-        raypipe_hw::metrics::metric(r, m)
+        raypipe_hw::observe::metrics::metric(r, m)
             .filter(|v| v.is_finite())
             .map_or("-".to_string(), |v| format!("{:.1}%", 100.0 * v))
     };
@@ -203,7 +203,7 @@ impl SceneCache {
 /// loaded (through `cache` when given). `raypipe simulate` and every sweep point go
 /// through here, so a sweep point's report is the stand-alone run's.
 pub(crate) fn simulate_args(a: &SimulateArgs, cache: Option<&SceneCache>, show_progress: bool) -> Result<Simulated> {
-    let cfg = simulate::load_config(a.preset.as_deref(), a.config.as_deref(), &a.set)?;
+    let cfg = chip::load_config(a.preset.as_deref(), a.config.as_deref(), &a.set)?;
     if let (Some(k), true) = (a.intersector, cfg.datapath != raypipe_hw::Datapath::F32) {
         bail!(
             "--intersector {}: datapath {} has its own triangle test (fixed-point watertight)",
@@ -228,13 +228,13 @@ pub(crate) fn simulate_args(a: &SimulateArgs, cache: Option<&SceneCache>, show_p
     let views = match a.walk.cameras(&cam)? {
         Some(cams) => cams,
         // One view: repeated for its warm-up frames, then measured.
-        None => vec![cam; a.measure.warmup_frames.saturating_add(1).min(crate::camera_path::MAX_FRAMES)],
+        None => vec![cam; a.measure.warmup_frames.saturating_add(1).min(crate::input::camera_path::MAX_FRAMES)],
     };
     let measure = Measure {
         warmup_frames: a.measure.warmup_frames,
         roi: a.measure.roi,
         interval: a.measure.interval,
-        vcd: a.measure.vcd.clone().map(|path| simulate::VcdSpec {
+        vcd: a.measure.vcd.clone().map(|path| chip::VcdSpec {
             path,
             window: a.measure.vcd_window,
             units: a.measure.vcd_units.clone(),
@@ -246,7 +246,7 @@ pub(crate) fn simulate_args(a: &SimulateArgs, cache: Option<&SceneCache>, show_p
     }
     let start = Instant::now();
     let shadow_caster = opts.algo == Algorithm::Shadow;
-    let mut frames = simulate::simulate_frames(
+    let mut frames = chip::simulate_frames(
         &view,
         &views,
         &measure,
@@ -259,9 +259,9 @@ pub(crate) fn simulate_args(a: &SimulateArgs, cache: Option<&SceneCache>, show_p
     )?;
     let seconds = start.elapsed().as_secs_f64();
     for (f, cam) in frames.iter_mut().zip(&views) {
-        f.report.run = raypipe_hw::report::RunIdentity {
+        f.report.run = raypipe_hw::observe::report::RunIdentity {
             scene: a.scene.as_ref().map_or("built-in Cornell box".to_string(), |p| p.display().to_string()),
-            scene_hash: format!("{:016x}", raypipe_hw::report::fnv1a64(view.bytes())),
+            scene_hash: format!("{:016x}", raypipe_hw::observe::report::fnv1a64(view.bytes())),
             structure: structure_summary(&view),
             algorithm: format!("{:?}", opts.algo).to_lowercase(),
             intersector: match cfg.datapath {

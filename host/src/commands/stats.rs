@@ -1,10 +1,10 @@
 //! `raypipe stats`: Purcell's scene statistics for a view.
 
 use crate::cli::StatsArgs;
-use crate::packets::PacketSize;
+use crate::render::packets::PacketSize;
+use crate::render::tracer::IntersectorKind;
 use crate::render::{Algorithm, RenderOptions};
-use crate::stats;
-use crate::tracer::IntersectorKind;
+use crate::study::scene_stats;
 use anyhow::Result;
 use raypipe_core::DataClass;
 
@@ -27,9 +27,9 @@ pub(crate) fn cmd_stats(a: StatsArgs) -> Result<()> {
     if let Some(prefix) = &a.cost_image {
         crate::output::check_dir(prefix)?;
     }
-    let s = stats::gather(&view, &cam, &opts)?;
+    let s = scene_stats::gather(&view, &cam, &opts)?;
     if let Some(prefix) = &a.cost_image {
-        let c = stats::cost_image(&view, &cam, &opts)?;
+        let c = scene_stats::cost_image(&view, &cam, &opts)?;
         for (k, (what, title)) in [
             ("steps", "nodes visited per pixel"),
             ("tests", "triangle tests per pixel"),
@@ -39,7 +39,13 @@ pub(crate) fn cmd_stats(a: StatsArgs) -> Result<()> {
         .enumerate()
         {
             let values: Vec<f64> = c.iter().map(|v| v[k]).collect();
-            crate::cost_image::write(&crate::cost_image::path(prefix, what), cam.width, cam.height, &values, title)?;
+            crate::study::cost_image::write(
+                &crate::study::cost_image::path(prefix, what),
+                cam.width,
+                cam.height,
+                &values,
+                title,
+            )?;
         }
     }
     println!("scene                     {} ({} triangles)", scene.name, view.triangle_count());
@@ -60,10 +66,10 @@ pub(crate) fn cmd_stats(a: StatsArgs) -> Result<()> {
     let classes: Vec<String> =
         DataClass::ALL.iter().map(|c| format!("{} {:.1}", c.name(), s.per_ray(s.bytes.bytes[*c as usize]))).collect();
     println!("bytes read per ray        {}", classes.join(", "));
-    if a.packet != PacketSize::Single && !crate::tracer::has_packet_kernel(&view) {
+    if a.packet != PacketSize::Single && !crate::render::tracer::has_packet_kernel(&view) {
         println!("packets {:<17} none: the structure has no packet kernel (rays traced one by one)", a.packet.label());
     } else if a.packet != PacketSize::Single {
-        let p = stats::gather_packets(&view, &cam, &opts, a.packet)?;
+        let p = scene_stats::gather_packets(&view, &cam, &opts, a.packet)?;
         let n = a.packet.rays() as f64;
         println!(
             "packets {:<17} {} packets, {:.1} node visits per packet, SIMD efficiency {:.1}%, {:.2} triangle tests per ray",
@@ -77,8 +83,8 @@ pub(crate) fn cmd_stats(a: StatsArgs) -> Result<()> {
     if a.algo.algo != Algorithm::Cast {
         let mut algo_opts = opts;
         a.algo.apply(&mut algo_opts)?;
-        let cast = stats::algorithm_costs(&view, &cam, &RenderOptions { algo: Algorithm::Cast, ..algo_opts })?;
-        let c = stats::algorithm_costs(&view, &cam, &algo_opts)?;
+        let cast = scene_stats::algorithm_costs(&view, &cam, &RenderOptions { algo: Algorithm::Cast, ..algo_opts })?;
+        let c = scene_stats::algorithm_costs(&view, &cam, &algo_opts)?;
         let px = c.pixels.max(1) as f64;
         let kinds: Vec<String> = raypipe_core::shade::ray_record::RayKind::ALL
             .iter()
@@ -95,7 +101,7 @@ pub(crate) fn cmd_stats(a: StatsArgs) -> Result<()> {
             ratio(c.bytes, cast.bytes)
         );
         if a.algo.algo == Algorithm::Shadow {
-            let m = stats::coverage_mismatch(&view, &cam, &algo_opts)?;
+            let m = scene_stats::coverage_mismatch(&view, &cam, &algo_opts)?;
             let pct = |n: u64| 100.0 * n as f64 / m.pixels.max(1) as f64;
             println!(
                 "shadow caster coverage    rasterization and ray casting disagree at {:.4}% of pixels ({} of {}); {:.4}% at another depth, {} where both see the same point of overlapping coplanar triangles; {} triangles clipped at the near plane",

@@ -2,8 +2,8 @@
 
 use crate::cli::{AlgoArgs, CameraArgs, StreamArgs};
 use crate::output;
+use crate::render::tracer::IntersectorKind;
 use crate::render::{self, Algorithm, RenderOptions};
-use crate::tracer::IntersectorKind;
 use anyhow::{anyhow, bail, Result};
 use std::time::Instant;
 
@@ -55,15 +55,15 @@ pub(crate) fn cmd_stream(a: StreamArgs) -> Result<()> {
     let shadow_caster = opts.algo == Algorithm::Shadow;
     let start = Instant::now();
     let (frame, report) =
-        crate::stream::run_stream(&view, &cam, &cfg, &costs, kind, shader, shadow_caster, opts.sampler(), true)?;
+        crate::hw::stream::run_stream(&view, &cam, &cfg, &costs, kind, shader, shadow_caster, opts.sampler(), true)?;
     let secs = start.elapsed().as_secs_f64();
     // The same frame from the host renderer: the model must agree bit for bit.
     opts.intersector = kind;
-    opts.packet = crate::packets::PacketSize::auto_for(&view);
+    opts.packet = crate::render::packets::PacketSize::auto_for(&view);
     let host = render::render(&view, &cam, &opts)?;
     let same = host.pixels == frame.pixels;
     let cast = if opts.algo != Algorithm::Cast && !a.no_table3 {
-        Some(crate::stream::run_stream(&view, &cam, &cfg, &costs, kind, None, false, opts.sampler(), true)?.1)
+        Some(crate::hw::stream::run_stream(&view, &cam, &cfg, &costs, kind, None, false, opts.sampler(), true)?.1)
     } else {
         None
     };
@@ -89,15 +89,15 @@ pub(crate) fn cmd_stream(a: StreamArgs) -> Result<()> {
         }
     );
     let label = format!("{} {}", scene.name, cfg.arch);
-    print!("{}", crate::stream::table2(&report, &label));
-    print!("{}", crate::stream::kernel_table(&report));
-    print!("{}", crate::stream::class_table(&report));
-    print!("{}", crate::stream::frame_lines(&report));
+    print!("{}", crate::hw::stream::table2(&report, &label));
+    print!("{}", crate::hw::stream::kernel_table(&report));
+    print!("{}", crate::hw::stream::class_table(&report));
+    print!("{}", crate::hw::stream::frame_lines(&report));
     if let Some(c) = &cast {
-        print!("{}", crate::stream::table3(&format!("{:?}", opts.algo).to_lowercase(), &report, c));
+        print!("{}", crate::hw::stream::table3(&format!("{:?}", opts.algo).to_lowercase(), &report, c));
     }
     if !a.no_charts {
-        let written = crate::stream_charts::write_all(&a.charts, &report)?;
+        let written = crate::hw::stream_charts::write_all(&a.charts, &report)?;
         println!("charts        {} files -> {}", written, a.charts.display());
     }
     println!(

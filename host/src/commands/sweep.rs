@@ -12,9 +12,9 @@ use anyhow::{anyhow, bail, Result};
 use rayon::prelude::*;
 
 use crate::cli::{SweepArgs, SweepCommand, SweepMergeArgs};
-use crate::sweep::{Point, Spec};
-use crate::sweep_table::{self, Row};
-use crate::{output, progress, simulate};
+use crate::study::sweep::{Point, Spec};
+use crate::study::sweep_table::{self, Row};
+use crate::{hw::chip, output, output::progress};
 
 use super::simulate::{simulate_args, SceneCache};
 
@@ -31,7 +31,7 @@ pub(crate) fn cmd_sweep(a: SweepArgs) -> Result<()> {
     // Every point's configuration and files are checked before any point runs.
     for p in &points {
         let args = p.simulate_args(&spec.dir)?;
-        simulate::load_config(args.preset.as_deref(), args.config.as_deref(), &args.set)
+        chip::load_config(args.preset.as_deref(), args.config.as_deref(), &args.set)
             .map_err(|e| anyhow!("sweep point {} ({}): {e:#}", p.index, p.id()))?;
         for path in [&args.scene, &args.camera.camera].into_iter().flatten() {
             if !path.exists() {

@@ -1,12 +1,12 @@
 //! `raypipe trace`: traces a batch of rays from a file and writes their hits (or their
 //! occlusion), with the fields asked for.
 
-use crate::batch::{incoherent_share, rays_from_array};
-use crate::bench::median;
 use crate::cli::{Query, TraceArgs};
-use crate::packets::PacketSize;
+use crate::render::batch::{incoherent_share, rays_from_array};
+use crate::render::packets::PacketSize;
+use crate::render::tracer::IntersectorKind;
 use crate::scene;
-use crate::tracer::IntersectorKind;
+use crate::study::bench::median;
 use anyhow::{anyhow, bail, Result};
 use rayon::prelude::*;
 use raypipe_core::shade::ray_cone::RayCone;
@@ -86,7 +86,7 @@ pub(crate) fn cmd_trace(a: TraceArgs) -> Result<()> {
             Vec::new()
         }
     };
-    let array = crate::npy::read_f32_2d(&a.rays)?;
+    let array = crate::input::npy::read_f32_2d(&a.rays)?;
     let name = a.rays.display();
     let (rays, invalid) = rays_from_array(&array).map_err(|e| anyhow!("{name}: {e}"))?;
     let scene = scene::load(Some(&a.scene), &a.structure.options())?;
@@ -119,7 +119,7 @@ pub(crate) fn cmd_trace(a: TraceArgs) -> Result<()> {
             let mut hits = Vec::new();
             for _ in 0..a.runs {
                 let start = Instant::now();
-                crate::batch::trace_batch_into(&view, &rays, kind, a.packet, a.run.threads, &mut hits)?;
+                crate::render::batch::trace_batch_into(&view, &rays, kind, a.packet, a.run.threads, &mut hits)?;
                 times.push(start.elapsed().as_secs_f64());
             }
             let data = closest_records(&view, &rays, &hits, &invalid, &fields);
@@ -144,7 +144,7 @@ pub(crate) fn cmd_trace(a: TraceArgs) -> Result<()> {
         }
     };
     let secs = median(&times);
-    crate::npy::write_records(&a.hits, &fields_out, rays.len(), &data)?;
+    crate::input::npy::write_records(&a.hits, &fields_out, rays.len(), &data)?;
     println!(
         "traced {} rays ({} query{}) through {} ({}): {} {} ({:.2}%) in {:.3} s ({:.2} Mrays/s) -> {}",
         rays.len(),
@@ -166,7 +166,7 @@ pub(crate) fn cmd_trace(a: TraceArgs) -> Result<()> {
 fn closest_records(
     view: &SceneView<'_>,
     rays: &[Ray],
-    hits: &[crate::npy::HitRecord],
+    hits: &[crate::input::npy::HitRecord],
     invalid: &[bool],
     fields: &[Field],
 ) -> Vec<u8> {

@@ -5,7 +5,7 @@ use std::str::FromStr;
 
 use serde::Serialize;
 
-use crate::stream::machine::Machine;
+use crate::stream::gpu::Machine;
 use crate::stream::oracle::Oracle;
 use crate::stream::texture_cache::TextureCacheConfig;
 

@@ -9,7 +9,7 @@
 //! The parts, named after the paper's concepts: [`config`] (architecture, oracle,
 //! unrolling), [`stencil`], [`ray_state`] (the state textures), [`oracle`],
 //! [`pass_loop`] (multipass), [`branching`], [`shading_pass`], [`cost_model`] (Table 1),
-//! [`texture_cache`] (§4.1), [`machine`] (frame time), [`counters`] and [`report`];
+//! [`texture_cache`] (§4.1), [`gpu`] (frame time), [`counters`] and [`report`];
 //! [`frame`] runs a frame. The model's image is the host's image, bit for bit.
 
 pub mod branching;
@@ -17,7 +17,7 @@ pub mod config;
 pub mod cost_model;
 pub mod counters;
 pub mod frame;
-pub mod machine;
+pub mod gpu;
 pub mod memory_probe;
 pub mod oracle;
 pub mod pass_loop;
@@ -30,7 +30,7 @@ pub mod texture_cache;
 pub use config::{Architecture, StreamConfig, Unroll};
 pub use cost_model::{CostModel, Kernel};
 pub use frame::StreamMachine;
-pub use machine::Machine;
+pub use gpu::Machine;
 pub use oracle::Oracle;
 pub use report::StreamReport;
 pub use texture_cache::TextureCacheConfig;

@@ -8,7 +8,7 @@ use crate::stream::config::{Architecture, StreamConfig};
 use crate::stream::cost_model::{CostModel, Kernel};
 use crate::stream::counters::{KernelTotals, PassKind, PassRecord, RayWork};
 use crate::stream::frame::StreamMachine;
-use crate::stream::machine::FrameTime;
+use crate::stream::gpu::FrameTime;
 use crate::stream::texture_cache::{TextureCacheStats, CLASSES, CLASS_NAMES, STATE};
 
 /// Loop passes and the optimal bound, summed over every screen's loop.

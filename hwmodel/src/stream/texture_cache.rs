@@ -2,7 +2,7 @@
 //! random-access read, in the order the fragments are processed, goes through one cache
 //! (default 64 KB, direct-mapped, 48-byte lines); per data type it counts hits and
 //! misses, and the bandwidth with the cache (lines fetched) against without (words
-//! read). Tags and replacement are [`crate::cache::Cache`]'s; there is no timing here —
+//! read). Tags and replacement are [`crate::memory::cache::Cache`]'s; there is no timing here —
 //! the stream machine is measured in passes, instructions and words.
 
 use std::fmt;
@@ -10,8 +10,8 @@ use std::str::FromStr;
 
 use serde::Serialize;
 
-use crate::cache::{Cache, Lookup};
 use crate::config::CacheConfig;
+use crate::memory::cache::{Cache, Lookup};
 
 /// Traffic classes: the scene's four data classes, then the state textures.
 pub const CLASSES: usize = 5;

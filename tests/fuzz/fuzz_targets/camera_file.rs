@@ -3,7 +3,7 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use raypipe::camera_file::CameraSpec;
+use raypipe::input::camera_file::CameraSpec;
 use raypipe_core::camera::{Camera, EyeRays};
 use raypipe_core::image::CameraRecord;
 

@@ -5,7 +5,7 @@
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
-    if let Ok(a) = raypipe::npy::parse_f32_2d(data) {
-        let _ = raypipe::batch::rays_from_array(&a);
+    if let Ok(a) = raypipe::input::npy::parse_f32_2d(data) {
+        let _ = raypipe::render::batch::rays_from_array(&a);
     }
 });

@@ -11,7 +11,7 @@ fuzz_target!(|data: &[u8]| {
     let split = text.char_indices().map(|(i, _)| i).find(|&i| i >= text.len() / 2).unwrap_or(text.len());
     let (obj, mtl) = text.split_at(split);
     let mtl = mtl.to_string();
-    let Ok((mesh, _)) = raypipe::obj::load_obj_str("fuzz.obj", obj, &|_| Some(mtl.clone())) else { return };
+    let Ok((mesh, _)) = raypipe::input::obj::load_obj_str("fuzz.obj", obj, &|_| Some(mtl.clone())) else { return };
     for accel in [Accel::Grid, Accel::Kd, Accel::Bvh4] {
         let opts = BuildOptions { accel, ..Default::default() };
         if let Ok(scene) = scene::build("fuzz".into(), mesh.clone(), Vec::new(), Default::default(), &opts) {

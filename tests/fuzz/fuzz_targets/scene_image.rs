@@ -5,8 +5,8 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use raypipe::aligned::AlignedBytes;
-use raypipe::tracer::trace;
+use raypipe::platform::aligned::AlignedBytes;
+use raypipe::render::tracer::trace;
 use raypipe_core::packet::step::trace_packet_steps;
 use raypipe_core::shade::lambert::shade;
 use raypipe_core::shade::ray_cone::RayCone;

@@ -1,0 +1,12 @@
+//! Compiling a mesh into a scene image: the acceleration structure builders, mipmaps, default lights and the image writer.
+
+pub mod bvh;
+pub mod default_lights;
+pub mod grid;
+pub mod image_writer;
+pub mod kdtree;
+pub mod light_distribution;
+pub mod mipmap;
+pub mod spatial_split;
+pub mod tri_box;
+pub mod tri_clip;

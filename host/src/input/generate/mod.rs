@@ -1,0 +1,103 @@
+//! Procedural scenes that raypipe generates itself: stand-ins for the two
+//! million-triangle scenes of Purcell 2002 (Soda Hall, a building interior of rooms and
+//! furniture; a forest of trees), each with the paper's two views. `NAME[:key=value,...]`
+//! picks a generator and its parameters; the same parameters give the same scene.
+
+pub mod building;
+pub mod forest;
+pub mod shapes;
+
+use anyhow::{bail, Result};
+
+use crate::input::camera_file::CameraSpec;
+use crate::input::mesh::Mesh;
+
+/// A generated scene: its mesh and the camera of the chosen view.
+pub struct Generated {
+    /// A name for reports ("building:floors=6,...").
+    pub name: String,
+    /// The triangles, materials and lights.
+    pub mesh: Mesh,
+    /// The view's camera.
+    pub camera: CameraSpec,
+}
+
+/// Parameters as `key=value` pairs, each read once.
+struct Params<'a> {
+    spec: &'a str,
+    pairs: Vec<(&'a str, &'a str, bool)>,
+}
+
+impl<'a> Params<'a> {
+    fn parse(spec: &'a str, text: &'a str) -> Result<Params<'a>> {
+        let mut pairs = Vec::new();
+        for p in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+            let Some((k, v)) = p.split_once('=') else { bail!("--generate {spec}: expected key=value, got '{p}'") };
+            pairs.push((k.trim(), v.trim(), false));
+        }
+        Ok(Params { spec, pairs })
+    }
+
+    /// A whole number in `lo..=hi`.
+    fn get(&mut self, key: &str, default: u32, lo: u32, hi: u32) -> Result<u32> {
+        let Some(p) = self.pairs.iter_mut().find(|p| p.0 == key) else { return Ok(default) };
+        p.2 = true;
+        let v: u32 =
+            p.1.parse()
+                .map_err(|_| anyhow::anyhow!("--generate {}: {key}={} is not a whole number", self.spec, p.1))?;
+        if !(lo..=hi).contains(&v) {
+            bail!("--generate {}: {key}={v} is not between {lo} and {hi}", self.spec);
+        }
+        Ok(v)
+    }
+
+    /// Fails on a key no generator parameter read.
+    fn finish(self, known: &[&str]) -> Result<()> {
+        if let Some(p) = self.pairs.iter().find(|p| !p.2) {
+            bail!("--generate {}: unknown parameter '{}' (parameters: {})", self.spec, p.0, known.join(", "));
+        }
+        Ok(())
+    }
+}
+
+/// Generates `spec` (`building[:floors=F,rooms=R,seed=S]` or
+/// `forest[:trees=T,leaves=L,seed=S]`) seen from `view` (building: outside, inside;
+/// forest: top, inside; default: the first).
+pub fn generate(spec: &str, view: Option<&str>) -> Result<Generated> {
+    let (name, params) = spec.split_once(':').unwrap_or((spec, ""));
+    let mut p = Params::parse(spec, params)?;
+    let (mesh, views): (Mesh, Vec<(&str, CameraSpec)>) = match name {
+        "building" => {
+            let b = building::Building {
+                floors: p.get("floors", 6, 1, 64)?,
+                rooms: p.get("rooms", 12, 1, 64)?,
+                seed: p.get("seed", 1, 0, u32::MAX)?,
+            };
+            p.finish(&["floors", "rooms", "seed"])?;
+            (b.mesh(), b.views())
+        }
+        "forest" => {
+            let f = forest::Forest {
+                trees: p.get("trees", 1200, 1, 100_000)?,
+                leaves: p.get("leaves", 800, 0, 10_000)?,
+                seed: p.get("seed", 1, 0, u32::MAX)?,
+            };
+            p.finish(&["trees", "leaves", "seed"])?;
+            (f.mesh(), f.views())
+        }
+        _ => bail!("--generate {spec}: unknown scene '{name}' (building, forest)"),
+    };
+    let names: Vec<&str> = views.iter().map(|v| v.0).collect();
+    let camera = match view {
+        None => views[0].1,
+        Some(v) => match views.iter().find(|(n, _)| *n == v) {
+            Some((_, c)) => *c,
+            None => bail!("--view {v}: {name} has the views {}", names.join(", ")),
+        },
+    };
+    let limit = 20_000_000;
+    if mesh.triangles.len() > limit {
+        bail!("--generate {spec}: {} triangles is more than {limit}", mesh.triangles.len());
+    }
+    Ok(Generated { name: spec.to_string(), mesh, camera })
+}

@@ -1,0 +1,293 @@
+//! A scene description file (TOML): meshes from OBJ, PLY or glTF files with transforms
+//! and material overrides, lights and a camera, merged into one mesh and built into one
+//! scene image — a scene assembled from several files without a hand-written merger.
+//!
+//! ```toml
+//! [camera]                    # optional; the camera file's keys
+//! eye = [0, 1, 4]
+//! look_at = [0, 0.5, 0]
+//! fov = 45
+//! size = [800, 600]
+//!
+//! [[mesh]]
+//! file = "bunny.obj"          # relative to this file
+//! translate = [0, 0, 0]
+//! rotate = [0, 90, 0]         # degrees about x, then y, then z
+//! scale = 2.0                 # or [sx, sy, sz]
+//! material = "gold"           # every triangle of this mesh gets it
+//!
+//! [materials.gold]            # MTL's fields: diffuse, specular, shininess, emission,
+//! diffuse = [0.8, 0.6, 0.2]   # ior, dissolve, illum
+//! specular = [0.9, 0.8, 0.5]
+//! shininess = 200
+//! illum = 2
+//!
+//! [[light]]                   # point (position), sun (direction), sky (horizon, zenith)
+//! kind = "sun"
+//! direction = [0.3, 1, 0.2]
+//! color = [2, 2, 2]
+//! ```
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use anyhow::{anyhow, bail, Result};
+use glam::{EulerRot, Mat3, Mat4, Quat, Vec3};
+use raypipe_core::image::{LightRecord, MaterialRecord, ShadingVertex, NULL_INDEX};
+use serde::Deserialize;
+
+use crate::input::camera_file::CameraSpec;
+use crate::input::mesh::Mesh;
+
+/// Largest number of meshes a scene file may list.
+const MAX_MESHES: usize = 4096;
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneFile {
+    #[serde(default)]
+    camera: Option<CameraTable>,
+    #[serde(default)]
+    mesh: Vec<MeshEntry>,
+    #[serde(default)]
+    materials: BTreeMap<String, MaterialTable>,
+    #[serde(default)]
+    light: Vec<LightTable>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CameraTable {
+    eye: Option<[f32; 3]>,
+    look_at: Option<[f32; 3]>,
+    up: Option<[f32; 3]>,
+    fov: Option<f32>,
+    size: Option<[u32; 2]>,
+    background: Option<[f32; 3]>,
+}
+
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum Scale {
+    Uniform(f32),
+    Axes([f32; 3]),
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MeshEntry {
+    file: String,
+    #[serde(default)]
+    translate: Option<[f32; 3]>,
+    #[serde(default)]
+    rotate: Option<[f32; 3]>,
+    #[serde(default)]
+    scale: Option<Scale>,
+    #[serde(default)]
+    material: Option<String>,
+}
+
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct MaterialTable {
+    diffuse: Option<[f32; 3]>,
+    specular: Option<[f32; 3]>,
+    shininess: Option<f32>,
+    emission: Option<[f32; 3]>,
+    ior: Option<f32>,
+    dissolve: Option<f32>,
+    illum: Option<u32>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LightTable {
+    kind: String,
+    position: Option<[f32; 3]>,
+    direction: Option<[f32; 3]>,
+    color: Option<[f32; 3]>,
+    horizon: Option<[f32; 3]>,
+    zenith: Option<[f32; 3]>,
+}
+
+/// True if `path` names a scene description file.
+pub fn is_scene_file(path: &Path) -> bool {
+    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("toml"))
+}
+
+/// Reads a scene file: the merged mesh (with its lights, if the file lists any, followed
+/// by a dim ambient term and the emitters as area lights), warnings, and the camera.
+pub fn load_scene_file(path: &Path) -> Result<(Mesh, Vec<String>, CameraSpec)> {
+    let name = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|e| anyhow!("{name}: cannot read: {e}"))?;
+    let file: SceneFile = toml::from_str(&text)
+        .map_err(|e| anyhow!("{name}: {}", e.to_string().split_whitespace().collect::<Vec<_>>().join(" ")))?;
+    if file.mesh.is_empty() {
+        bail!("{name}: the scene file lists no [[mesh]]");
+    }
+    if file.mesh.len() > MAX_MESHES {
+        bail!("{name}: {} meshes is more than {MAX_MESHES}", file.mesh.len());
+    }
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let mut merged = Mesh::default();
+    let mut warnings = Vec::new();
+    for (i, entry) in file.mesh.iter().enumerate() {
+        let what = format!("{name}: mesh {} ({})", i + 1, entry.file);
+        let child = dir.join(&entry.file);
+        if is_scene_file(&child) {
+            bail!("{what}: a scene file cannot include another");
+        }
+        let crate::scene::Source::Mesh { mesh, warnings: w, .. } = crate::scene::load_source(Some(&child))? else {
+            bail!("{what}: is a scene image; a scene file lists meshes (OBJ, PLY, glTF)");
+        };
+        warnings.extend(w);
+        let transform = transform_of(entry).map_err(|e| anyhow!("{what}: {e}"))?;
+        let material = match &entry.material {
+            Some(m) => {
+                let table =
+                    file.materials.get(m).ok_or_else(|| anyhow!("{what}: material '{m}' is not in [materials]"))?;
+                Some((m.clone(), material_of(table)))
+            }
+            None => None,
+        };
+        append(&mut merged, mesh, transform, material);
+    }
+    let lights: Vec<LightRecord> = file
+        .light
+        .iter()
+        .enumerate()
+        .map(|(i, l)| light_of(l).map_err(|e| anyhow!("{name}: light {}: {e}", i + 1)))
+        .collect::<Result<_>>()?;
+    if !lights.is_empty() {
+        merged.lights = lights;
+        merged.lights.push(LightRecord {
+            position: [0.0; 3],
+            kind: LightRecord::AMBIENT,
+            color: [0.1; 3],
+            triangle: 0,
+        });
+        merged.lights.extend(crate::build::default_lights::emitters(&merged).1);
+    }
+    let camera = file.camera.map_or_else(CameraSpec::default, |c| CameraSpec {
+        eye: c.eye,
+        look_at: c.look_at,
+        up: c.up,
+        fov: c.fov,
+        size: c.size.map(|[w, h]| (w, h)),
+        background: c.background,
+    });
+    merged.validate(&name)?;
+    Ok((merged, warnings, camera))
+}
+
+/// The entry's transform: scale, then rotation (x, y, z in degrees), then translation.
+fn transform_of(e: &MeshEntry) -> Result<Mat4, String> {
+    let scale = match e.scale {
+        None => Vec3::ONE,
+        Some(Scale::Uniform(s)) => Vec3::splat(s),
+        Some(Scale::Axes(a)) => Vec3::from(a),
+    };
+    let rotate = Vec3::from(e.rotate.unwrap_or([0.0; 3]));
+    let translate = Vec3::from(e.translate.unwrap_or([0.0; 3]));
+    if !(scale.is_finite() && rotate.is_finite() && translate.is_finite()) {
+        return Err("a transform value is NaN or infinite".into());
+    }
+    if scale.abs().min_element() == 0.0 {
+        return Err("a scale of zero flattens the mesh".into());
+    }
+    let r = Quat::from_euler(EulerRot::ZYX, rotate.z.to_radians(), rotate.y.to_radians(), rotate.x.to_radians());
+    Ok(Mat4::from_scale_rotation_translation(scale, r, translate))
+}
+
+fn material_of(t: &MaterialTable) -> MaterialRecord {
+    let d = MaterialRecord::DEFAULT;
+    MaterialRecord {
+        diffuse: t.diffuse.unwrap_or(d.diffuse),
+        specular: t.specular.unwrap_or(d.specular),
+        shininess: t.shininess.unwrap_or(d.shininess),
+        emission: t.emission.unwrap_or(d.emission),
+        ior: t.ior.unwrap_or(d.ior),
+        dissolve: t.dissolve.unwrap_or(d.dissolve),
+        illum: t.illum.unwrap_or(d.illum),
+        texture: NULL_INDEX,
+        ..d
+    }
+}
+
+fn light_of(l: &LightTable) -> Result<LightRecord, String> {
+    let color = l.color.unwrap_or([1.0; 3]);
+    let (kind, position, color) = match l.kind.as_str() {
+        "point" => (LightRecord::POINT, l.position.ok_or("a point light needs a position")?, color),
+        "sun" | "directional" => {
+            let d = l.direction.ok_or("a sun needs a direction")?;
+            if Vec3::from(d).length_squared() == 0.0 {
+                return Err("the direction is zero".into());
+            }
+            (LightRecord::DIRECTIONAL, d, color)
+        }
+        "sky" | "environment" => {
+            let zenith = l.zenith.or(l.color).ok_or("a sky needs a zenith (or color)")?;
+            (LightRecord::ENVIRONMENT, l.horizon.unwrap_or(zenith), zenith)
+        }
+        other => return Err(format!("unknown kind '{other}' (point, sun, sky)")),
+    };
+    if !position.iter().chain(&color).all(|v| v.is_finite()) || color.iter().any(|c| *c < 0.0) {
+        return Err("values must be finite and colours not negative".into());
+    }
+    Ok(LightRecord { position, kind, color, triangle: 0 })
+}
+
+/// Appends `mesh`, transformed, to `merged` (a material override replaces all of its
+/// materials); indices, materials and textures are renumbered.
+fn append(merged: &mut Mesh, mut mesh: Mesh, m: Mat4, material: Option<(String, MaterialRecord)>) {
+    let normal_matrix = Mat3::from_mat4(m).inverse().transpose();
+    let base = merged.positions.len() as u32;
+    // Shading data: all or nothing across the merged mesh.
+    if !mesh.shading.is_empty() && merged.shading.is_empty() {
+        merged.shading =
+            vec![ShadingVertex { normal: [0.0; 3], uv: [0.0; 2], color: [1.0; 3] }; merged.positions.len()];
+    }
+    if mesh.shading.is_empty() && !merged.shading.is_empty() {
+        mesh.shading = vec![ShadingVertex { normal: [0.0; 3], uv: [0.0; 2], color: [1.0; 3] }; mesh.positions.len()];
+    }
+    merged.positions.extend(mesh.positions.iter().map(|&p| m.transform_point3(Vec3::from(p)).to_array()));
+    merged.shading.extend(mesh.shading.iter().map(|s| ShadingVertex {
+        normal: (normal_matrix * Vec3::from(s.normal)).normalize_or_zero().to_array(),
+        ..*s
+    }));
+    // Each listed mesh's objects follow the ones before it.
+    let object_base = merged.objects.iter().max().map_or(0, |&o| o + 1);
+    let objects =
+        if mesh.objects.len() == mesh.triangles.len() { mesh.objects.clone() } else { vec![0; mesh.triangles.len()] };
+    merged.objects.extend(objects.iter().map(|&o| o + object_base));
+    merged.triangles.extend(mesh.triangles.iter().map(|t| t.map(|v| v + base)));
+    let material_base = merged.materials.len() as u32;
+    match material {
+        Some((name, record)) => {
+            merged.materials.push(record);
+            merged.material_names.push(name);
+            merged.tri_materials.extend(std::iter::repeat_n(material_base, mesh.triangles.len()));
+        }
+        None => {
+            let texture_base = merged.textures.len() as u32;
+            merged.textures.append(&mut mesh.textures);
+            if mesh.materials.is_empty() {
+                mesh.materials.push(MaterialRecord::DEFAULT);
+                mesh.material_names.push("default".into());
+            }
+            for mut r in mesh.materials {
+                if r.texture != NULL_INDEX {
+                    r.texture += texture_base;
+                }
+                merged.materials.push(r);
+            }
+            merged.material_names.extend(mesh.material_names);
+            let ids = if mesh.tri_materials.len() == mesh.triangles.len() {
+                mesh.tri_materials
+            } else {
+                vec![0; mesh.triangles.len()]
+            };
+            merged.tri_materials.extend(ids.iter().map(|&id| id + material_base));
+        }
+    }
+}

@@ -1,0 +1,6 @@
+//! What the host machine offers the renderer: instruction sets, prefetch, huge pages, aligned buffers.
+
+pub mod aligned;
+pub mod huge_pages;
+pub mod isa;
+pub mod prefetch;

@@ -1,0 +1,316 @@
+//! The host runner: eye rays → traversal/intersection → shading, over image tiles on all
+//! cores. Every pixel is computed independently by the same kernels, so the image is
+//! identical for any thread count and tile order.
+
+pub mod batch;
+pub mod gbuffer;
+pub mod packets;
+pub mod ray_stream;
+pub mod tracer;
+
+use anyhow::{anyhow, Result};
+use glam::Vec3;
+use rayon::prelude::*;
+use raypipe_core::camera::{Camera, EyeRays};
+use raypipe_core::image::CameraRecord;
+use raypipe_core::packet::PacketCounters;
+use raypipe_core::shade::color::rgb8;
+use raypipe_core::shade::lambert::shade;
+use raypipe_core::shade::ray_cone::RayCone;
+use raypipe_core::{Intersector, NoProbe, Ray, RayCounters, SceneView};
+
+use crate::render::gbuffer::{gbuffer_hit, rasterize, GBuffer};
+use crate::render::packets::{trace_tile, PacketSize};
+use crate::render::ray_stream::{shade_tile, StreamCounts, TileGeometry};
+use raypipe_core::pixel_filter::{Filter, PixelSampler};
+use raypipe_core::shade::path::PathOptions;
+use raypipe_core::shade::radiance_sum::RadianceSum;
+use raypipe_core::shade::shader::Shader;
+use raypipe_core::shade::whitted::WhittedOptions;
+
+use crate::output::progress;
+use crate::render::tracer::IntersectorKind;
+use crate::with_intersector;
+
+/// Side of the square tiles rendered as one unit of work.
+pub const TILE: u32 = 16;
+
+/// Host runner settings.
+#[derive(Clone, Copy, Debug)]
+pub struct RenderOptions {
+    /// Worker threads (`None`: all cores).
+    pub threads: Option<usize>,
+    /// Ray–triangle test.
+    pub intersector: IntersectorKind,
+    /// Show a progress bar on a terminal.
+    pub progress: bool,
+    /// Rays traced one by one or as packets.
+    pub packet: PacketSize,
+    /// What the shader does with a hit.
+    pub algo: Algorithm,
+    /// Largest reflection/refraction depth (Whitted).
+    pub max_depth: u8,
+    /// Path tracing: bounces after the first hit.
+    pub bounces: u8,
+    /// Eye rays per pixel (every algorithm; path tracing: one path each).
+    pub samples: u32,
+    /// The reconstruction filter the eye rays' offsets follow.
+    pub filter: Filter,
+    /// Path tracing: Russian roulette after the first bounce.
+    pub roulette: bool,
+}
+
+/// The rendering algorithm (Purcell 2002 Fig. 3).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Algorithm {
+    /// Ray casting: the first hit, Lambert-shaded from the lights without shadows.
+    #[default]
+    Cast,
+    /// Purcell's hybrid shadow caster: visibility from a rasterized G-buffer, then shadow
+    /// rays to the point lights.
+    Shadow,
+    /// Whitted ray tracing: shadow rays to point lights, mirror reflection, refraction.
+    Whitted,
+    /// Path tracing: diffuse bounces, next-event estimation, samples per pixel.
+    Path,
+}
+
+impl RenderOptions {
+    /// The ray-emitting shader of the algorithm (`None` for ray casting).
+    pub fn shader(&self, background: Vec3) -> Option<Shader> {
+        match self.algo {
+            Algorithm::Cast => None,
+            Algorithm::Shadow => Some(Shader::Whitted(WhittedOptions { max_depth: 0, background })),
+            Algorithm::Whitted => Some(Shader::Whitted(WhittedOptions { max_depth: self.max_depth, background })),
+            Algorithm::Path => {
+                Some(Shader::Path(PathOptions { bounces: self.bounces, roulette: self.roulette, background }))
+            }
+        }
+    }
+
+    /// Eye rays per pixel and where they go.
+    pub fn sampler(&self) -> PixelSampler {
+        PixelSampler { samples: self.samples.max(1), filter: self.filter }
+    }
+}
+
+impl Default for RenderOptions {
+    fn default() -> Self {
+        RenderOptions {
+            threads: None,
+            intersector: IntersectorKind::Watertight,
+            progress: false,
+            packet: PacketSize::Single,
+            algo: Algorithm::Cast,
+            max_depth: 5,
+            bounces: 2,
+            samples: 1,
+            filter: Filter::Box,
+            roulette: false,
+        }
+    }
+}
+
+/// A rendered image, rows top to bottom: its linear radiance and that radiance as 8-bit
+/// sRGB (clamped, no exposure or tone mapping: what the golden images and the host =
+/// model checks compare).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Frame {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Pixels, row-major, 8-bit sRGB.
+    pub pixels: Vec<[u8; 3]>,
+    /// Pixels, row-major, linear RGB radiance (empty for an image read from a PNG).
+    pub radiance: Vec<[f32; 3]>,
+}
+
+impl Frame {
+    /// A frame from linear radiance, row-major.
+    pub fn from_radiance(width: u32, height: u32, radiance: Vec<Vec3>) -> Frame {
+        Frame {
+            width,
+            height,
+            pixels: radiance.iter().map(|&c| rgb8(c)).collect(),
+            radiance: radiance.iter().map(|c| c.to_array()).collect(),
+        }
+    }
+}
+
+/// Validates a camera record into eye-ray constants; `what` names it in errors.
+pub fn eye_rays(camera: &CameraRecord, what: &str) -> Result<EyeRays> {
+    EyeRays::new(&Camera::from(camera)).map_err(|e| anyhow!("{what}: {e}"))
+}
+
+/// Runs `f` on a pool of `threads` workers (all cores when `None`).
+pub fn in_pool<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Send) -> Result<T> {
+    let mut b = rayon::ThreadPoolBuilder::new();
+    if let Some(n) = threads {
+        b = b.num_threads(n.max(1));
+    }
+    let pool = b.build().map_err(|e| anyhow!("cannot start worker threads: {e}"))?;
+    Ok(pool.install(f))
+}
+
+/// The tiles of a `w × h` image as `(x0, y0, x1, y1)`.
+pub fn tiles(w: u32, h: u32) -> Vec<(u32, u32, u32, u32)> {
+    let mut v = Vec::new();
+    for ty in (0..h).step_by(TILE as usize) {
+        for tx in (0..w).step_by(TILE as usize) {
+            v.push((tx, ty, (tx + TILE).min(w), (ty + TILE).min(h)));
+        }
+    }
+    v
+}
+
+/// Rays a frame traced.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RayTotals {
+    /// Eye rays traced (those that entered the scene's box; the shadow caster's come from
+    /// its G-buffer and are not traced).
+    pub primary: u64,
+    /// Rays the shaders emitted (shadow, reflection, refraction, path), all traced.
+    pub secondary: u64,
+}
+
+impl RayTotals {
+    /// Every ray traced.
+    pub fn total(&self) -> u64 {
+        self.primary + self.secondary
+    }
+}
+
+/// Renders the scene as the camera sees it.
+pub fn render(scene: &SceneView<'_>, camera: &CameraRecord, opts: &RenderOptions) -> Result<Frame> {
+    Ok(render_counted(scene, camera, opts)?.0)
+}
+
+/// [`render`], and the rays it traced.
+pub fn render_counted(
+    scene: &SceneView<'_>,
+    camera: &CameraRecord,
+    opts: &RenderOptions,
+) -> Result<(Frame, RayTotals)> {
+    let eye = eye_rays(camera, "camera")?.with_sampler(opts.sampler());
+    with_intersector!(opts.intersector, I => render_with::<I>(scene, &eye, Vec3::from(camera.background), opts))
+}
+
+fn render_with<I: Intersector>(
+    scene: &SceneView<'_>,
+    eye: &EyeRays,
+    background: Vec3,
+    opts: &RenderOptions,
+) -> Result<(Frame, RayTotals)> {
+    let (w, h) = (eye.width, eye.height);
+    let (lo, hi) = scene.test_bounds();
+    let tiles = tiles(w, h);
+    let samples = eye.samples();
+    // The shadow caster's visibility pass: a G-buffer per eye ray of the pixels.
+    let gbuffers: Option<Vec<GBuffer>> =
+        (opts.algo == Algorithm::Shadow).then(|| (0..samples).map(|s| rasterize(scene, eye, s)).collect());
+    let bar = progress::bar(tiles.len() as u64, "render", opts.progress);
+    let done: Vec<(Vec<Vec3>, RayTotals)> = in_pool(opts.threads, || {
+        tiles
+            .par_iter()
+            .map(|&(x0, y0, x1, y1)| {
+                let tw = (x1 - x0) as usize;
+                let n = tw * (y1 - y0) as usize;
+                let (mut counters, mut pc) = (RayCounters::default(), PacketCounters::default());
+                let tile = (x0, y0, x1, y1);
+                let mut totals = RayTotals::default();
+                // Every eye ray of the tile and its hit, sample-major.
+                let mut primaries = vec![(None, None); n * samples as usize];
+                for s in 0..samples {
+                    let at = |x: u32, y: u32| s as usize * n + (y - y0) as usize * tw + (x - x0) as usize;
+                    match &gbuffers {
+                        Some(g) => {
+                            for y in y0..y1 {
+                                for x in x0..x1 {
+                                    primaries[at(x, y)] = gbuffer_hit::<I>(scene, eye, &g[s as usize], x, y);
+                                }
+                            }
+                        }
+                        None => {
+                            let mut put = |x: u32, y: u32, ray: Option<Ray>, hit| {
+                                totals.primary += ray.is_some() as u64;
+                                primaries[at(x, y)] = (ray, hit);
+                            };
+                            trace_tile::<I>(
+                                scene,
+                                eye,
+                                (lo, hi),
+                                tile,
+                                s,
+                                opts.packet,
+                                &mut counters,
+                                &mut pc,
+                                &mut put,
+                            );
+                        }
+                    }
+                }
+                let radiance = match opts.shader(background) {
+                    None => cast_tile(scene, background, samples, eye.cone(), &primaries),
+                    Some(shader) => {
+                        let geometry = TileGeometry { x0, y0, width: tw as u32, image_width: w };
+                        let mut counts = StreamCounts::default();
+                        let radiance = shade_tile::<I, _>(
+                            scene,
+                            &shader,
+                            background,
+                            geometry,
+                            samples,
+                            eye.cone(),
+                            &primaries,
+                            &mut NoProbe,
+                            &mut counts,
+                        );
+                        totals.secondary = counts.rays.iter().sum();
+                        radiance
+                    }
+                };
+                bar.inc(1);
+                (radiance, totals)
+            })
+            .collect()
+    })?;
+    bar.finish_and_clear();
+    let mut radiance = vec![Vec3::ZERO; (w * h) as usize];
+    let mut totals = RayTotals::default();
+    for (&(x0, y0, x1, _), (tile, t)) in tiles.iter().zip(done) {
+        let tw = (x1 - x0) as usize;
+        for (row, chunk) in tile.chunks(tw).enumerate() {
+            let start = (y0 as usize + row) * w as usize + x0 as usize;
+            radiance[start..start + tw].copy_from_slice(chunk);
+        }
+        totals.primary += t.primary;
+        totals.secondary += t.secondary;
+    }
+    Ok((Frame::from_radiance(w, h, radiance), totals))
+}
+
+/// Ray casting's colours for a tile's eye rays (sample-major): one sample's colour as it
+/// is, several summed exactly ([`RadianceSum`]) with weight `1 / samples` each.
+fn cast_tile(
+    scene: &SceneView<'_>,
+    background: Vec3,
+    samples: u32,
+    cone: RayCone,
+    primaries: &[(Option<Ray>, Option<raypipe_core::Hit>)],
+) -> Vec<Vec3> {
+    let color = |(ray, hit): &(Option<Ray>, Option<raypipe_core::Hit>)| match ray {
+        Some(ray) => shade(scene, ray, cone, *hit, background, &mut NoProbe),
+        None => background,
+    };
+    if samples <= 1 {
+        return primaries.iter().map(color).collect();
+    }
+    let n = primaries.len() / samples as usize;
+    let mut sum = vec![RadianceSum::default(); n];
+    let weight = 1.0 / samples as f32;
+    for (i, p) in primaries.iter().enumerate() {
+        sum[i % n].add(color(p) * weight);
+    }
+    sum.iter().map(RadianceSum::value).collect()
+}

@@ -1,0 +1,125 @@
+//! The host's driver of the ray-emitting shaders (Purcell 2002 §3.1.4): a tile's rays
+//! are records in one first-in first-out stream. Primary hits are shaded in pixel order
+//! (one record per sample); every record a shader emits joins the stream; shadow rays
+//! take core's any-hit query, the others its closest-hit query and the shader again. A
+//! record's contribution is added to its pixel when it ends, as an exact fixed-point sum
+//! ([`RadianceSum`]), so the image depends neither on the order rays end in nor on
+//! threads, tiles, packet sizes — or on being traced by the hardware model instead.
+
+use std::collections::VecDeque;
+
+use raypipe_core::shade::radiance_sum::RadianceSum;
+use raypipe_core::shade::ray_cone::RayCone;
+use raypipe_core::shade::ray_record::{RayKind, RayRecord};
+use raypipe_core::shade::shader::Shader;
+use raypipe_core::traverse::occlusion::occluded;
+use raypipe_core::{Hit, Intersector, MemoryProbe, Ray, RayCounters, SceneView, Vec3};
+
+use crate::render::tracer::trace;
+
+/// What a tile's ray stream cost.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct StreamCounts {
+    /// Rays by kind (indexed by `RayKind as usize`; primary rays are the caller's).
+    pub rays: [u64; RayKind::COUNT],
+    /// Traversal steps (nodes or voxels) of the secondary and shadow rays.
+    pub steps: u64,
+    /// Their ray–triangle tests.
+    pub tests: u64,
+    /// Hits shaded.
+    pub shades: u64,
+}
+
+impl StreamCounts {
+    /// Adds another tile's counts.
+    pub fn add(&mut self, o: &StreamCounts) {
+        for (a, b) in self.rays.iter_mut().zip(o.rays) {
+            *a += b;
+        }
+        self.steps += o.steps;
+        self.tests += o.tests;
+        self.shades += o.shades;
+    }
+}
+
+/// A tile of the image: its corner, its width, and the image's width. Records carry
+/// image-wide pixel numbers (path tracing draws its random numbers from them).
+#[derive(Clone, Copy, Debug)]
+pub struct TileGeometry {
+    /// Left column.
+    pub x0: u32,
+    /// Top row.
+    pub y0: u32,
+    /// Tile width.
+    pub width: u32,
+    /// Image width.
+    pub image_width: u32,
+}
+
+impl TileGeometry {
+    fn global(&self, local: usize) -> u32 {
+        let (x, y) = (self.x0 + local as u32 % self.width, self.y0 + local as u32 / self.width);
+        y * self.image_width + x
+    }
+
+    fn local(&self, global: u32) -> usize {
+        let (x, y) = (global % self.image_width, global / self.image_width);
+        ((y.wrapping_sub(self.y0)) * self.width + x.wrapping_sub(self.x0)) as usize
+    }
+}
+
+/// Radiance of a tile's pixels (row-major in the tile) from their eye rays and hits:
+/// `samples` per pixel, sample-major (`primaries[s * pixels + p]`); a `None` ray missed
+/// the scene's bounds and brings the background.
+#[allow(clippy::too_many_arguments)]
+pub fn shade_tile<I: Intersector, P: MemoryProbe>(
+    scene: &SceneView<'_>,
+    shader: &Shader,
+    background: Vec3,
+    tile: TileGeometry,
+    samples: u32,
+    cone: RayCone,
+    primaries: &[(Option<Ray>, Option<Hit>)],
+    probe: &mut P,
+    counts: &mut StreamCounts,
+) -> Vec<Vec3> {
+    let samples = samples.max(1);
+    let pixels = primaries.len() / samples as usize;
+    let mut radiance = vec![RadianceSum::default(); pixels];
+    let mut stream: VecDeque<RayRecord> = VecDeque::new();
+    let miss = background * (1.0 / samples as f32);
+    for (i, (ray, hit)) in primaries.iter().enumerate() {
+        let (s, p) = ((i / pixels.max(1)) as u32, i % pixels.max(1));
+        match ray {
+            None => radiance[p].add(miss),
+            Some(ray) => {
+                counts.shades += hit.is_some() as u64;
+                shader.shade_primary(
+                    scene,
+                    RayRecord::eye_sample(*ray, tile.global(p), s, samples, cone),
+                    *hit,
+                    &mut radiance[p],
+                    probe,
+                    &mut |r| stream.push_back(r),
+                );
+            }
+        }
+    }
+    while let Some(rec) = stream.pop_front() {
+        counts.rays[rec.kind as usize] += 1;
+        let Some(slot) = radiance.get_mut(tile.local(rec.pixel)) else { continue };
+        let mut c = RayCounters::default();
+        if rec.kind == RayKind::Shadow {
+            if !occluded::<I, _>(scene, &rec.ray, probe, &mut c) {
+                slot.add(rec.weight);
+            }
+        } else {
+            let hit = trace::<I, _>(scene, &rec.ray, probe, &mut c);
+            counts.shades += hit.is_some() as u64;
+            slot.add(shader.shade(scene, &rec, hit, probe, &mut |r| stream.push_back(r)));
+        }
+        counts.steps += c.nodes as u64;
+        counts.tests += c.tri_tests as u64;
+    }
+    radiance.iter().map(RadianceSum::value).collect()
+}

@@ -1,0 +1,244 @@
+//! The memory behind every unit's caches: an optional shared L2, then one of three
+//! models (`memory.model`):
+//!
+//! * **perfect** — every request's data arrives the next cycle, without a bandwidth
+//!   limit and without the L2 (the compute bound);
+//! * **fixed** — one channel moving `bytes_per_cycle`, a request a whole number of
+//!   `min_burst_bytes`, its data `latency` cycles after its transfer;
+//! * **dram** — [`crate::memory::dram`]'s channels, banks and rows.
+//!
+//! Requests are taken at the clock edge from the ports in a fixed order (shading,
+//! traversal units, intersection units), oldest first, while the request queue has room
+//! (`queue_depth` requests accepted but not yet started); the rest stay in their port and
+//! push back on its unit. So the schedule cannot depend on the order units ticked in.
+
+pub mod cache;
+pub mod dram;
+pub mod port;
+pub mod traffic;
+
+use std::collections::VecDeque;
+
+use serde::Serialize;
+
+use crate::config::{HwConfig, MemoryModel};
+use crate::memory::cache::{Cache, Lookup};
+use crate::memory::dram::Dram;
+use crate::memory::port::{MemPort, Request};
+use crate::memory::traffic::CLASSES;
+
+/// What the memory carried.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct ChannelStats {
+    /// Bytes moved by the memory (after the L2), per class.
+    pub bytes: [u64; CLASSES],
+    /// Requests served by the memory, per class.
+    pub requests: [u64; CLASSES],
+    /// Bytes the channel's bus could have moved in the cycles it was busy (fixed), or the
+    /// DRAM data-bus cycles in chip cycles (dram).
+    pub busy_cycles: u64,
+    /// L2 lookups that hit, merged, missed (all classes).
+    pub l2: [u64; 3],
+}
+
+/// The shared L2: its tags and the ready cycle of each fill.
+#[derive(Clone, Debug)]
+struct L2 {
+    cache: Cache,
+    ports: u32,
+    fills: Vec<u64>,
+}
+
+/// The memory's registers.
+#[derive(Clone, Debug)]
+pub struct Memory {
+    model: MemoryModel,
+    latency: u64,
+    bytes_per_cycle: u64,
+    min_burst: u64,
+    queue_depth: usize,
+    /// Start cycles of accepted requests not yet started (the request queue).
+    queue: VecDeque<u64>,
+    /// Fixed model: the channel is busy up to this byte slot (`cycle × bytes_per_cycle`).
+    busy_slot: u64,
+    dram: Option<Dram>,
+    l2: Option<L2>,
+    last_done: u64,
+    /// Statistics.
+    pub stats: ChannelStats,
+}
+
+impl Memory {
+    /// An idle memory for `cfg`.
+    pub fn new(cfg: &HwConfig) -> Memory {
+        let m = &cfg.memory;
+        Memory {
+            model: m.model,
+            latency: m.latency as u64,
+            bytes_per_cycle: m.bytes_per_cycle.max(1) as u64,
+            min_burst: m.min_burst_bytes.max(1) as u64,
+            queue_depth: m.queue_depth.max(1) as usize,
+            queue: VecDeque::new(),
+            busy_slot: 0,
+            dram: (m.model == MemoryModel::Dram).then(|| Dram::new(&m.dram, cfg.clock_mhz)),
+            l2: Cache::new(&cfg.cache.l2).map(|cache| L2 {
+                cache,
+                ports: cfg.cache.l2.ports.max(1),
+                fills: Vec::new(),
+            }),
+            last_done: 0,
+            stats: ChannelStats::default(),
+        }
+    }
+
+    /// Zeroes the statistics (queue, lines, rows and timing state stay).
+    pub fn reset_stats(&mut self) {
+        self.stats = ChannelStats::default();
+        if let Some(d) = self.dram.as_mut() {
+            d.reset_stats();
+        }
+    }
+
+    /// Requests accepted and not yet started (as last updated at an edge).
+    pub fn queue_len(&self) -> usize {
+        self.queue.len()
+    }
+
+    /// The DRAM, if that is the model.
+    pub fn dram(&self) -> Option<&Dram> {
+        self.dram.as_ref()
+    }
+
+    /// At the edge ending cycle `now`: takes the ports' staged requests, in port order,
+    /// while the queue has room. Returns whether it took any.
+    pub fn accept(&mut self, now: u64, ports: &mut [&mut MemPort]) -> bool {
+        while self.queue.front().is_some_and(|&s| s <= now) {
+            self.queue.pop_front();
+        }
+        let mut l2_lookups = self.l2.as_ref().map_or(0, |l| l.ports);
+        let mut took = false;
+        for port in ports.iter_mut() {
+            while let Some(r) = port.staged.front().copied() {
+                if self.model != MemoryModel::Perfect && self.queue.len() >= self.queue_depth {
+                    return took;
+                }
+                // Perfect memory is the compute bound: nothing behind the units' own caches
+                // costs time, so it bypasses the L2 (whose ports and latency would bound
+                // it, and whose fills would reorder it, making it no bound at all).
+                let ready = if self.l2.is_some() && !r.write && self.model != MemoryModel::Perfect {
+                    if l2_lookups == 0 {
+                        return took;
+                    }
+                    l2_lookups -= 1;
+                    self.through_l2(now, &r)
+                } else {
+                    self.serve(now, r.addr, r.bytes, r.class, r.write)
+                };
+                port.staged.pop_front();
+                port.set_ready(&r, ready);
+                took = true;
+            }
+        }
+        took
+    }
+
+    /// A read through the L2: a hit after its latency, a line being filled when it
+    /// arrives, a miss after the memory has served the L2 line.
+    fn through_l2(&mut self, now: u64, r: &Request) -> u64 {
+        let Some(mut l2) = self.l2.take() else { return self.serve(now, r.addr, r.bytes, r.class, false) };
+        let line_bytes = l2.cache.line_bytes() as u64;
+        let first = l2.cache.line_of(r.addr);
+        let last = l2.cache.line_of(r.addr + r.bytes.max(1) as u64 - 1);
+        let hit_at = now + 1 + l2.cache.hit_latency as u64;
+        let mut ready = hit_at;
+        for line in first..=last {
+            match l2.cache.lookup(line) {
+                Lookup::Present { fill } => {
+                    let f = l2.fills.get(fill as usize).copied().unwrap_or(0);
+                    if f <= now {
+                        self.stats.l2[0] += 1;
+                        ready = ready.max(hit_at);
+                    } else {
+                        self.stats.l2[1] += 1;
+                        ready = ready.max(f + l2.cache.hit_latency as u64);
+                    }
+                }
+                Lookup::Absent => {
+                    self.stats.l2[2] += 1;
+                    let f = self.serve(now, line * line_bytes, line_bytes as u32, r.class, false);
+                    let id = l2.fills.len() as u32;
+                    l2.fills.push(f);
+                    l2.cache.install(line, id);
+                    ready = ready.max(f + l2.cache.hit_latency as u64);
+                }
+            }
+        }
+        self.l2 = Some(l2);
+        ready
+    }
+
+    /// The memory model serves `bytes` at `addr`: the cycle its data arrives.
+    fn serve(&mut self, now: u64, addr: u64, bytes: u32, class: usize, write: bool) -> u64 {
+        self.stats.requests[class] += 1;
+        let (start, done) = match self.model {
+            MemoryModel::Perfect => {
+                self.stats.bytes[class] += bytes as u64;
+                (now + 1, now + 1)
+            }
+            MemoryModel::Fixed => {
+                let moved = (bytes as u64).max(1).div_ceil(self.min_burst) * self.min_burst;
+                self.stats.bytes[class] += moved;
+                let bpc = self.bytes_per_cycle;
+                let start_slot = self.busy_slot.max((now + 1) * bpc);
+                let end_slot = start_slot + moved;
+                self.busy_slot = end_slot;
+                self.stats.busy_cycles += moved;
+                (start_slot / bpc, end_slot.div_ceil(bpc) + self.latency)
+            }
+            MemoryModel::Dram => {
+                let Some(d) = self.dram.as_mut() else { return now + 1 };
+                let burst = d.burst_bytes();
+                let first = addr / burst * burst;
+                let moved = (addr + bytes.max(1) as u64).div_ceil(burst) * burst - first;
+                self.stats.bytes[class] += moved;
+                d.access(now + 1, addr, bytes, write)
+            }
+        };
+        if start > now + 1 {
+            self.queue.push_back(start);
+        }
+        self.last_done = self.last_done.max(done);
+        done
+    }
+
+    /// The earliest cycle after `now` at which the queue frees a slot, if requests wait
+    /// for one.
+    pub fn next_wake(&self, now: u64, waiting: bool) -> Option<u64> {
+        if !waiting {
+            return None;
+        }
+        match self.queue.iter().copied().filter(|&s| s > now).min() {
+            Some(t) => Some(t),
+            // Room now (or an L2 port next cycle): the next edge takes them.
+            None => Some(now + 1),
+        }
+    }
+
+    /// The cycle the last accepted request's data arrives.
+    pub fn drained_at(&self) -> u64 {
+        self.last_done
+    }
+
+    /// Fraction of `cycles` the channel (fixed) or the DRAM data buses (dram) carried
+    /// data.
+    pub fn utilization(&self, cycles: u64, chip_mhz: f64) -> f64 {
+        let cycles = cycles.max(1) as f64;
+        match (self.model, &self.dram) {
+            (MemoryModel::Fixed, _) => self.stats.busy_cycles as f64 / self.bytes_per_cycle as f64 / cycles,
+            (MemoryModel::Dram, Some(d)) => {
+                d.bus_busy as f64 / (cycles * d.clock_mhz() / chip_mhz * d.channels() as f64)
+            }
+            _ => 0.0,
+        }
+    }
+}

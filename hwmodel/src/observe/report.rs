@@ -1,0 +1,587 @@
+//! The report of a run, gathered in one place from the units' counters: a JSON document
+//! (schema `raypipe-hw-report/2`, documented in docs/hw-model.md) and a human summary.
+
+use std::collections::BTreeMap;
+
+use serde::Serialize;
+
+use raypipe_core::shade::ray_record::RayKind;
+
+use crate::chip::fifo::FifoStats;
+use crate::chip::traversal_unit::{TraversalStats, STATE_NAMES};
+use crate::config::HwConfig;
+use crate::memory::cache::Cache;
+use crate::memory::port::LatencyStats;
+use crate::memory::traffic::{CLASSES, CLASS_NAMES, FRAMEBUFFER};
+use crate::memory::ChannelStats;
+use crate::observe::stall::Stall;
+use crate::observe::unit_stats::UnitStats;
+
+/// Schema name and version of the JSON report.
+pub const SCHEMA: &str = "raypipe-hw-report/2";
+
+/// One unit's line of the report.
+#[derive(Clone, Debug, Serialize)]
+pub struct UnitReport {
+    /// Unit name (`rgs.generate`, `rgs.shade`, `traversal0`, `intersection0`, …).
+    pub name: String,
+    /// Cycles doing work.
+    pub busy_cycles: u64,
+    /// Cycles with work waiting (memory, latency, a full FIFO).
+    pub stall_cycles: u64,
+    /// Cycles without work.
+    pub idle_cycles: u64,
+    /// Packet operations issued.
+    pub issues: u64,
+    /// Active lanes over lane slots of those issues.
+    pub simd_efficiency: f64,
+    /// Lanes that took part, summed over issues (ray–node tests, ray–triangle tests in
+    /// leaf jobs, rays generated or shaded).
+    pub active_lanes: u64,
+    /// Stall cycles by reason; they sum to `stall_cycles`.
+    pub stall_reasons: BTreeMap<String, u64>,
+    /// Traversal units: node records read per packet step (1 for a packet's shared walk).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub node_reads_per_step: Option<f64>,
+    /// Traversal units: mean threads in each state over the frame.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub thread_states: Option<BTreeMap<String, f64>>,
+    /// Bytes delivered to the unit's memory port.
+    pub bytes: u64,
+}
+
+/// One FIFO's line.
+#[derive(Clone, Debug, Serialize)]
+pub struct FifoReport {
+    /// FIFO name (`rays0`, `leaves0`, `results0`, `hits0`, …).
+    pub name: String,
+    /// Configured depth.
+    pub depth: usize,
+    /// Mean committed occupancy.
+    pub mean_occupancy: f64,
+    /// Counters and the occupancy histogram (`occupancy[k]`: cycles with `k` entries).
+    #[serde(flatten)]
+    pub stats: FifoStats,
+}
+
+/// One class's counts in one cache.
+#[derive(Clone, Debug, Serialize)]
+pub struct CacheClassReport {
+    /// Line accesses that hit.
+    pub hits: u64,
+    /// Line accesses that joined a fill in flight.
+    pub merged: u64,
+    /// Line accesses that missed.
+    pub misses: u64,
+    /// `hits / (hits + merged + misses)`.
+    pub hit_rate: f64,
+}
+
+/// One cache's line.
+#[derive(Clone, Debug, Serialize)]
+pub struct CacheReport {
+    /// Cache name (that of its port).
+    pub name: String,
+    /// Capacity in bytes.
+    pub size_bytes: u32,
+    /// Line size in bytes.
+    pub line_bytes: u32,
+    /// Per data class with any access.
+    pub classes: BTreeMap<String, CacheClassReport>,
+}
+
+/// The memory channel.
+#[derive(Clone, Debug, Serialize)]
+pub struct MemoryReport {
+    /// Bytes transferred per class.
+    pub bytes: BTreeMap<String, u64>,
+    /// Total bytes transferred.
+    pub total_bytes: u64,
+    /// Total bytes per traced ray.
+    pub bytes_per_ray: f64,
+    /// Requests served.
+    pub requests: u64,
+    /// Fraction of cycles the channel was transferring.
+    pub utilization: f64,
+    /// Distinct scene bytes the kernels read (the compulsory traffic).
+    pub distinct_scene_bytes: u64,
+    /// Scene bytes transferred over distinct scene bytes read (1.0 is the floor).
+    pub traffic_over_compulsory: f64,
+    /// `"perfect"`, `"fixed"` or `"dram"`.
+    pub model: String,
+    /// Read latency (cycles from a unit's request to its data) per class: mean, count and
+    /// a log2 histogram (`"<N"`: requests below N cycles).
+    pub latency: BTreeMap<String, LatencyReport>,
+    /// Shared L2: hits, merges and misses (line lookups).
+    pub l2: BTreeMap<String, u64>,
+    /// DRAM: row-buffer hit rate and per-bank counters (absent for other models).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dram: Option<DramReport>,
+}
+
+/// Latencies of one data class.
+#[derive(Clone, Debug, Serialize)]
+pub struct LatencyReport {
+    /// Requests.
+    pub count: u64,
+    /// Mean cycles from request to data.
+    pub mean: f64,
+    /// Requests by latency bin.
+    pub histogram: BTreeMap<String, u64>,
+}
+
+/// The DRAM's statistics.
+#[derive(Clone, Debug, Serialize)]
+pub struct DramReport {
+    /// Bursts that found their row open.
+    pub row_hit_rate: f64,
+    /// Per bank, channel-major.
+    pub banks: Vec<crate::memory::dram::BankStats>,
+}
+
+/// What produced a report: the scene, view, algorithm and program.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct RunIdentity {
+    /// The scene argument (a path, or the built-in default).
+    pub scene: String,
+    /// FNV-1a 64 of the scene image bytes, hex.
+    pub scene_hash: String,
+    /// Acceleration structure.
+    pub structure: String,
+    /// Shading algorithm.
+    pub algorithm: String,
+    /// Intersection test.
+    pub intersector: String,
+    /// Camera: eye, look-at, up, vertical field of view.
+    pub camera: String,
+    /// raypipe's version.
+    pub raypipe_version: String,
+}
+
+/// FNV-1a, 64 bits (a scene image's fingerprint in reports).
+pub fn fnv1a64(bytes: &[u8]) -> u64 {
+    let mut h = 0xcbf2_9ce4_8422_2325u64;
+    for &b in bytes {
+        h ^= b as u64;
+        h = h.wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    h
+}
+
+/// Checks that must hold for every run.
+#[derive(Clone, Debug, Serialize)]
+pub struct Conservation {
+    /// Rays sent to traversal.
+    pub rays_issued: u64,
+    /// Rays shaded after traversal.
+    pub rays_retired: u64,
+    /// Bytes the ports requested.
+    pub bytes_requested: u64,
+    /// Bytes the channel delivered.
+    pub bytes_delivered: u64,
+}
+
+/// The whole report.
+#[derive(Clone, Debug, Serialize)]
+pub struct Report {
+    /// Schema name and version.
+    pub schema: &'static str,
+    /// The configuration simulated.
+    pub config: HwConfig,
+    /// Image size.
+    pub width: u32,
+    /// Image size.
+    pub height: u32,
+    /// Rays traced (primary rays that passed the scene-bounds test).
+    pub rays: u64,
+    /// Cycles for the frame.
+    pub cycles: u64,
+    /// Frames per second at `config.clock_mhz`.
+    pub frames_per_second: f64,
+    /// Traced rays per second at `config.clock_mhz`.
+    pub rays_per_second: f64,
+    /// Rays traced, by kind (primary, shadow, reflection, refraction, path).
+    pub rays_by_kind: BTreeMap<String, u64>,
+    /// Most shadow and secondary ray records waiting in the shading unit at once.
+    pub ray_stream_peak: usize,
+    /// Traversal steps issued (packet steps).
+    pub traversal_steps: u64,
+    /// Ray–triangle tests run.
+    pub triangle_tests: u64,
+    /// What produced the report (set by the command line).
+    pub run: RunIdentity,
+    /// The one-line verdict: what bounds the frame.
+    pub bottleneck: String,
+    /// Per unit.
+    pub units: Vec<UnitReport>,
+    /// Per FIFO.
+    pub fifos: Vec<FifoReport>,
+    /// Per cache.
+    pub caches: Vec<CacheReport>,
+    /// The memory channel.
+    pub memory: MemoryReport,
+    /// Conservation checks.
+    pub conservation: Conservation,
+    /// Energy and area estimates (`config.energy`'s figures over the counters).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub energy: Option<crate::observe::energy::EnergyReport>,
+}
+
+/// Everything [`Report::gather`] reads.
+pub struct Sources<'a> {
+    /// The configuration.
+    pub cfg: &'a HwConfig,
+    /// Image size.
+    pub size: (u32, u32),
+    /// Frame cycles.
+    pub cycles: u64,
+    /// Units by name.
+    pub units: Vec<(String, &'a UnitStats)>,
+    /// Traversal units' own counters, by unit name.
+    pub traversal: Vec<(String, &'a TraversalStats)>,
+    /// Bytes delivered per unit port, by unit name.
+    pub port_bytes: Vec<(String, u64)>,
+    /// Read latencies per class over all ports.
+    pub latency: Vec<LatencyStats>,
+    /// Memory utilization.
+    pub utilization: f64,
+    /// Bytes delivered to the ports.
+    pub delivered: u64,
+    /// The DRAM, if that is the model.
+    pub dram: Option<&'a crate::memory::dram::Dram>,
+    /// FIFOs: name, depth, counters.
+    pub fifos: Vec<(String, usize, &'a FifoStats)>,
+    /// Caches by port name.
+    pub caches: Vec<(String, &'a Cache)>,
+    /// The channel.
+    pub channel: &'a ChannelStats,
+    /// Bytes requested by all ports.
+    pub requested: u64,
+    /// Distinct scene bytes read.
+    pub distinct: u64,
+    /// Rays issued, rays retired.
+    pub rays: (u64, u64),
+    /// Ray–triangle tests.
+    pub tests: u64,
+    /// Rays by kind, in `RayKind::ALL` order.
+    pub rays_by_kind: [u64; RayKind::COUNT],
+    /// Peak of the shading unit's ray stream.
+    pub stream_peak: usize,
+}
+
+fn ratio(a: f64, b: f64) -> f64 {
+    if b > 0.0 {
+        a / b
+    } else {
+        0.0
+    }
+}
+
+impl Report {
+    /// Gathers the report.
+    pub fn gather(s: Sources<'_>) -> Report {
+        let cycles = s.cycles.max(1);
+        let seconds = cycles as f64 / (s.cfg.clock_mhz * 1e6);
+        let rays = s.rays.0;
+        let units = s
+            .units
+            .iter()
+            .map(|(name, u)| {
+                let tr = s.traversal.iter().find(|(n, _)| n == name).map(|(_, t)| *t);
+                let ticked = (u.busy_cycles + u.stall_cycles + u.idle_cycles).max(1) as f64;
+                UnitReport {
+                    name: name.clone(),
+                    busy_cycles: u.busy_cycles,
+                    stall_cycles: u.stall_cycles,
+                    idle_cycles: u.idle_cycles,
+                    issues: u.issues,
+                    simd_efficiency: u.simd_efficiency(),
+                    active_lanes: u.active_lanes,
+                    stall_reasons: Stall::ALL
+                        .iter()
+                        .map(|r| (r.name().to_string(), u.stall_reasons[*r as usize]))
+                        .collect(),
+                    node_reads_per_step: tr.map(|t| ratio(t.node_reads as f64, t.steps as f64)),
+                    thread_states: tr.map(|t| {
+                        STATE_NAMES
+                            .iter()
+                            .zip(t.thread_state_cycles.iter())
+                            .map(|(n, c)| (n.to_string(), *c as f64 / ticked))
+                            .collect()
+                    }),
+                    bytes: s.port_bytes.iter().find(|(n, _)| n == name).map_or(0, |(_, b)| *b),
+                }
+            })
+            .collect::<Vec<_>>();
+        let traversal_steps =
+            s.units.iter().filter(|(n, _)| n.starts_with("traversal")).map(|(_, u)| u.issues).sum::<u64>();
+        let fifos = s
+            .fifos
+            .iter()
+            .map(|(name, depth, st)| {
+                let total: u64 = st.occupancy.iter().sum();
+                let weighted: u64 = st.occupancy.iter().enumerate().map(|(k, c)| k as u64 * c).sum();
+                FifoReport {
+                    name: name.clone(),
+                    depth: *depth,
+                    mean_occupancy: ratio(weighted as f64, total as f64),
+                    stats: (*st).clone(),
+                }
+            })
+            .collect();
+        let caches = s
+            .caches
+            .iter()
+            .map(|(name, cache)| (name, &cache.stats, cache))
+            .map(|(name, c, cache)| CacheReport {
+                name: name.clone(),
+                size_bytes: cache.size_bytes(),
+                line_bytes: cache.line_bytes(),
+                classes: (0..CLASSES)
+                    .filter(|&k| c.hits[k] + c.merged[k] + c.misses[k] > 0)
+                    .map(|k| {
+                        let all = (c.hits[k] + c.merged[k] + c.misses[k]) as f64;
+                        let r = CacheClassReport {
+                            hits: c.hits[k],
+                            merged: c.merged[k],
+                            misses: c.misses[k],
+                            hit_rate: ratio(c.hits[k] as f64, all),
+                        };
+                        (CLASS_NAMES[k].to_string(), r)
+                    })
+                    .collect(),
+            })
+            .collect();
+        let total_bytes: u64 = s.channel.bytes.iter().sum();
+        let scene_bytes = total_bytes - s.channel.bytes[FRAMEBUFFER];
+        let memory = MemoryReport {
+            bytes: (0..CLASSES).map(|k| (CLASS_NAMES[k].to_string(), s.channel.bytes[k])).collect(),
+            total_bytes,
+            bytes_per_ray: ratio(total_bytes as f64, rays as f64),
+            requests: s.channel.requests.iter().sum(),
+            utilization: s.utilization,
+            distinct_scene_bytes: s.distinct,
+            traffic_over_compulsory: ratio(scene_bytes as f64, s.distinct as f64),
+            model: format!("{:?}", s.cfg.memory.model).to_lowercase(),
+            latency: (0..CLASSES)
+                .filter(|&k| s.latency[k].count > 0)
+                .map(|k| {
+                    let l = &s.latency[k];
+                    let histogram = l
+                        .histogram
+                        .iter()
+                        .enumerate()
+                        .filter(|(_, &n)| n > 0)
+                        .map(|(b, &n)| (format!("<{}", 1u64 << b), n))
+                        .collect();
+                    let r = LatencyReport { count: l.count, mean: ratio(l.sum as f64, l.count as f64), histogram };
+                    (CLASS_NAMES[k].to_string(), r)
+                })
+                .collect(),
+            l2: [("hits", s.channel.l2[0]), ("merged", s.channel.l2[1]), ("misses", s.channel.l2[2])]
+                .into_iter()
+                .map(|(k, v)| (k.to_string(), v))
+                .collect(),
+            dram: s.dram.map(|d| DramReport { row_hit_rate: d.row_hit_rate(), banks: d.stats.clone() }),
+        };
+        let bottleneck = verdict(&units, memory.utilization);
+        Report {
+            schema: SCHEMA,
+            config: s.cfg.clone(),
+            width: s.size.0,
+            height: s.size.1,
+            rays,
+            cycles: s.cycles,
+            frames_per_second: 1.0 / seconds,
+            rays_per_second: rays as f64 / seconds,
+            rays_by_kind: RayKind::ALL.iter().map(|k| (k.name().to_string(), s.rays_by_kind[*k as usize])).collect(),
+            ray_stream_peak: s.stream_peak,
+            run: RunIdentity::default(),
+            bottleneck,
+            traversal_steps,
+            triangle_tests: s.tests,
+            units,
+            fifos,
+            caches,
+            memory,
+            conservation: Conservation {
+                rays_issued: s.rays.0,
+                rays_retired: s.rays.1,
+                bytes_requested: s.requested,
+                bytes_delivered: s.delivered,
+            },
+            energy: None,
+        }
+    }
+
+    /// The report as pretty-printed JSON.
+    pub fn to_json(&self) -> String {
+        serde_json::to_string_pretty(self).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
+    }
+
+    /// A human summary for the terminal.
+    pub fn summary(&self) -> String {
+        let mut out = String::new();
+        let mut line = |s: String| {
+            out.push_str(&s);
+            out.push('\n');
+        };
+        if !self.run.scene.is_empty() {
+            line(format!(
+                "run            {} ({} {}, {}), scene {}",
+                self.run.scene, self.run.structure, self.run.algorithm, self.run.intersector, self.run.scene_hash
+            ));
+        }
+        line(format!("bottleneck     {}", self.bottleneck));
+        line(format!(
+            "frame          {}x{}, {} rays in packets of {}, {} cycles",
+            self.width, self.height, self.rays, self.config.packet_size, self.cycles
+        ));
+        line(format!(
+            "at {} MHz      {:.2} frames/s, {:.2} Mrays/s",
+            self.config.clock_mhz,
+            self.frames_per_second,
+            self.rays_per_second / 1e6
+        ));
+        line(format!(
+            "work           {} traversal steps, {} ray-triangle tests",
+            self.traversal_steps, self.triangle_tests
+        ));
+        let kinds: Vec<String> =
+            self.rays_by_kind.iter().filter(|(_, &n)| n > 0).map(|(k, n)| format!("{k} {n}")).collect();
+        line(format!("rays by kind   {} (stream peak {} records)", kinds.join(", "), self.ray_stream_peak));
+        line("unit                busy  stall   idle   SIMD".to_string());
+        for u in &self.units {
+            let all = (u.busy_cycles + u.stall_cycles + u.idle_cycles).max(1) as f64;
+            line(format!(
+                "  {:<16} {:>5.1}% {:>5.1}% {:>5.1}% {:>5.1}%",
+                u.name,
+                100.0 * u.busy_cycles as f64 / all,
+                100.0 * u.stall_cycles as f64 / all,
+                100.0 * u.idle_cycles as f64 / all,
+                100.0 * u.simd_efficiency
+            ));
+            let mut reasons: Vec<(&String, &u64)> = u.stall_reasons.iter().filter(|(_, &n)| n > 0).collect();
+            reasons.sort_by(|a, b| b.1.cmp(a.1));
+            if !reasons.is_empty() {
+                let parts: Vec<String> =
+                    reasons.iter().take(3).map(|(k, n)| format!("{k} {:.1}%", 100.0 * **n as f64 / all)).collect();
+                line(format!("    stalls: {}", parts.join(", ")));
+            }
+        }
+        let (full, empty): (u64, u64) =
+            self.fifos.iter().fold((0, 0), |(a, b), f| (a + f.stats.full_stall_cycles, b + f.stats.empty_stall_cycles));
+        line(format!("fifos          {} full-stall cycles, {} empty-stall cycles in all", full, empty));
+        for c in &self.caches {
+            let parts: Vec<String> = c
+                .classes
+                .iter()
+                .map(|(k, r)| format!("{k} {:.1}% hit ({} misses)", 100.0 * r.hit_rate, r.misses))
+                .collect();
+            if !parts.is_empty() {
+                line(format!("cache {:<26} {}", c.name, parts.join(", ")));
+            }
+        }
+        let m = &self.memory;
+        let by_class: Vec<String> = m.bytes.iter().filter(|(_, &b)| b > 0).map(|(k, b)| format!("{k} {b}")).collect();
+        line(format!(
+            "memory         {}: {} bytes ({:.1} per ray; {}), {:.1}% busy",
+            m.model,
+            m.total_bytes,
+            m.bytes_per_ray,
+            by_class.join(", "),
+            100.0 * m.utilization
+        ));
+        line(format!(
+            "scene traffic  {:.2}x the {} distinct bytes read",
+            m.traffic_over_compulsory, m.distinct_scene_bytes
+        ));
+        if let Some(e) = &self.energy {
+            let mut parts: Vec<(&String, &f64)> = e.joules.iter().filter(|(_, j)| **j > 0.0).collect();
+            parts.sort_by(|a, b| b.1.total_cmp(a.1));
+            let parts: Vec<String> =
+                parts.iter().map(|(k, j)| format!("{k} {:.0}%", 100.0 * **j / e.joules_per_frame.max(1e-30))).collect();
+            line(format!(
+                "energy         {:.4} mJ/frame, {:.2} nJ/ray, {:.3} W at {} MHz ({}); area {:.2} mm² ({} nm figures)",
+                e.joules_per_frame * 1e3,
+                e.joules_per_ray * 1e9,
+                e.watts,
+                self.config.clock_mhz,
+                parts.join(", "),
+                e.area_mm2,
+                e.process_nm
+            ));
+        }
+        out
+    }
+}
+
+/// The one-line verdict: the memory when it is busy most of the time, else the unit kind
+/// that works most, else what the traversal units wait for most.
+fn verdict(units: &[UnitReport], utilization: f64) -> String {
+    let kind = |prefix: &str| -> Option<(f64, f64, String, f64)> {
+        let us: Vec<&UnitReport> = units.iter().filter(|u| u.name.starts_with(prefix)).collect();
+        if us.is_empty() {
+            return None;
+        }
+        let ticked: f64 = us.iter().map(|u| (u.busy_cycles + u.stall_cycles + u.idle_cycles) as f64).sum();
+        let busy: f64 = us.iter().map(|u| u.busy_cycles as f64).sum::<f64>() / ticked.max(1.0);
+        let mut reasons: BTreeMap<String, u64> = BTreeMap::new();
+        for u in &us {
+            for (k, v) in &u.stall_reasons {
+                *reasons.entry(k.clone()).or_default() += v;
+            }
+        }
+        let (top, n) = reasons.into_iter().max_by_key(|(_, v)| *v).unwrap_or_default();
+        let mem: f64 = us
+            .iter()
+            .flat_map(|u| u.stall_reasons.iter())
+            .filter(|(k, _)| Stall::ALL.iter().any(|s| s.is_memory() && s.name() == k.as_str()))
+            .map(|(_, v)| *v as f64)
+            .sum::<f64>()
+            / ticked.max(1.0);
+        Some((busy, mem, top, n as f64 / ticked.max(1.0)))
+    };
+    let trav = kind("traversal");
+    let isect = kind("intersection");
+    let shade = kind("rgs.shade");
+    let wait = |k: &Option<(f64, f64, String, f64)>, what: &str| {
+        k.as_ref().map_or(String::new(), |(_, mem, top, share)| {
+            format!("; {what} wait on memory {:.0}% of their cycles (most: {top} {:.0}%)", 100.0 * mem, 100.0 * share)
+        })
+    };
+    if utilization >= 0.8 {
+        return format!(
+            "memory-bound: memory {:.0}% busy{}{}",
+            100.0 * utilization,
+            wait(&trav, "traversal units"),
+            wait(&isect, "intersection units")
+        );
+    }
+    let mut best = ("traversal", trav.as_ref().map_or(0.0, |k| k.0));
+    for (name, k) in [("intersection", &isect), ("shading", &shade)] {
+        let b = k.as_ref().map_or(0.0, |k| k.0);
+        if b > best.1 {
+            best = (name, b);
+        }
+    }
+    if best.1 >= 0.6 {
+        return format!("{}-bound: its datapath busy {:.0}% of cycles", best.0, 100.0 * best.1);
+    }
+    match &trav {
+        Some((busy, mem, top, share)) if *mem >= 0.3 => format!(
+            "latency-bound: memory {:.0}% busy, traversal units wait on memory {:.0}% of their cycles (most: {top} {:.0}%), busy {:.0}%",
+            100.0 * utilization,
+            100.0 * mem,
+            100.0 * share,
+            100.0 * busy
+        ),
+        Some((busy, _, top, share)) => format!(
+            "no dominant bound: traversal busy {:.0}%, most stalls {top} {:.0}%; memory {:.0}% busy",
+            100.0 * busy,
+            100.0 * share,
+            100.0 * utilization
+        ),
+        None => "no traversal units".to_string(),
+    }
+}
