@@ -8,7 +8,7 @@ use crate::image::CameraRecord;
 use crate::pixel_filter::PixelSampler;
 use crate::ray::Ray;
 use crate::shade::ray_cone::RayCone;
-use crate::traverse::aabb::{clip_ray, clip_rays4};
+use crate::traverse::boxes::clip::{clip_ray, clip_rays4};
 
 /// A pinhole camera: where it is, what it looks at, which way is up, and the image size.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -123,7 +123,7 @@ impl EyeRays {
         }
         let right = right.normalize();
         let up = right.cross(forward);
-        let half_h = crate::trig::tan(cam.vfov_deg.to_radians() * 0.5);
+        let half_h = crate::math::trig::tan(cam.vfov_deg.to_radians() * 0.5);
         let half_w = half_h * cam.width as f32 / cam.height as f32;
         Ok(EyeRays {
             eye: cam.eye,

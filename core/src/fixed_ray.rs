@@ -1,5 +1,5 @@
 //! The ray of the fixed-point datapath: what a fixed-point box test and triangle test
-//! (`crate::traverse::fixed_ray_box`, `crate::intersect::fixed_watertight`) agree to
+//! (`crate::traverse::boxes::fixed_slab`, `crate::intersect::fixed_watertight`) agree to
 //! trace. An `f32` ray is rounded once, at the datapath's input, to
 //!
 //! * an origin on the format's grid (each coordinate to the nearest raw value), and
@@ -19,7 +19,7 @@
 //! Hardware Ray Tracing using Fixed Point Arithmetic" (IEEE RT 2007) take the same
 //! route: quantize the scene and the ray once, then compute in integers.
 
-use crate::fixed_point::{pow2, ratio_nearest, scaled, QFormat, Round};
+use crate::math::fixed_point::{pow2, ratio_nearest, scaled, QFormat, Round};
 use crate::ray::Ray;
 
 /// An `f32` ray rounded into the format `Q(BITS − FRAC).FRAC` (see the module docs).

@@ -82,10 +82,6 @@ pub mod camera;
 #[forbid(unsafe_code)]
 pub mod counters;
 #[forbid(unsafe_code)]
-pub mod exp_log;
-#[forbid(unsafe_code)]
-pub mod fixed_point;
-#[forbid(unsafe_code)]
 pub mod fixed_ray;
 #[forbid(unsafe_code)]
 pub mod hit;
@@ -93,6 +89,7 @@ pub mod hit;
 pub mod image;
 #[forbid(unsafe_code)]
 pub mod intersect;
+pub mod math;
 #[forbid(unsafe_code)]
 pub mod packet;
 #[forbid(unsafe_code)]
@@ -111,7 +108,6 @@ pub mod simd;
 mod test_lcg;
 #[forbid(unsafe_code)]
 pub mod traverse;
-pub mod trig;
 
 pub use camera::{Camera, CameraError};
 pub use counters::RayCounters;

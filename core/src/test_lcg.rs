@@ -23,7 +23,7 @@ impl Lcg {
 }
 
 /// The distance in ulps between an f32 and the true value (f64), for the tests of the
-/// single-precision maths ([`crate::trig`], [`crate::exp_log`]).
+/// single-precision maths ([`crate::math::trig`], [`crate::math::exp_log`]).
 pub(crate) fn ulps(got: f32, want: f64) -> f64 {
     let w = want as f32;
     let ulp = (w.abs().next_up() - w.abs()) as f64;

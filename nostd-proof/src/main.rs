@@ -108,11 +108,11 @@ fn trace_structure(view: &SceneView<'_>, ray: &Ray) -> Option<Hit> {
     }
     #[cfg(feature = "bvh4")]
     if let Some(t) = view.bvh4() {
-        return raypipe_core::traverse::bvh4::trace_bvh4::<Datapath, _>(view, t, ray, p, c);
+        return raypipe_core::traverse::wide_bvh::node4::trace_bvh4::<Datapath, _>(view, t, ray, p, c);
     }
     #[cfg(feature = "bvh8")]
     if let Some(t) = view.bvh8() {
-        return raypipe_core::traverse::bvh8::trace_bvh8::<Datapath, _>(view, t, ray, p, c);
+        return raypipe_core::traverse::wide_bvh::node8::trace_bvh8::<Datapath, _>(view, t, ray, p, c);
     }
     #[cfg(feature = "bvh")]
     if let Some(t) = view.bvh() {

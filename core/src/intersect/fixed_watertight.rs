@@ -25,13 +25,13 @@
 
 use glam::Vec3;
 
-use crate::fixed_point::{div_nearest, shift_nearest, Round};
 use crate::fixed_ray::FixedRay;
 use crate::image::SceneView;
 use crate::intersect::triangle::Intersector;
+use crate::math::fixed_point::{div_nearest, shift_nearest, Round};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
-use crate::traverse::node_tests::FixedNodes;
+use crate::traverse::boxes::datapath::FixedNodes;
 
 /// The fixed-point watertight test in the format `Q(BITS − FRAC).FRAC`.
 #[derive(Clone, Copy, Debug, Default)]
@@ -131,8 +131,8 @@ mod tests {
             let ring: [Vec3; 9] = core::array::from_fn(|i| {
                 let a = i as f32 / n as f32 * core::f32::consts::TAU;
                 c + Vec3::new(
-                    q(crate::trig::sin_cos(a).1 * 1.5),
-                    q(crate::trig::sin_cos(a).0 * 1.5),
+                    q(crate::math::trig::sin_cos(a).1 * 1.5),
+                    q(crate::math::trig::sin_cos(a).0 * 1.5),
                     q(g.range(-0.3, 0.3)),
                 )
             });

@@ -27,7 +27,7 @@ impl Intersector for MollerTrumbore {
     type Prepared = PlainRay;
     type Triangle = [Vec3; 3];
     const NAME: &'static str = "moller-trumbore";
-    type Nodes = crate::traverse::node_tests::FloatNodes;
+    type Nodes = crate::traverse::boxes::datapath::FloatNodes;
     // No four-ray form: packets test ray by ray.
     type Prepared4 = ();
 

@@ -6,7 +6,7 @@ use glam::{Vec3, Vec4};
 use crate::image::{SceneView, TriBlock4};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
-use crate::traverse::node_tests::NodeTests;
+use crate::traverse::boxes::datapath::NodeTests;
 
 pub use crate::intersect::moller_trumbore::MollerTrumbore;
 pub use crate::intersect::wald::WaldProjection;
@@ -24,7 +24,7 @@ pub trait Intersector {
     /// A short name for reports.
     const NAME: &'static str;
     /// The box tests that go with this test in the BVH walks: conservative for its
-    /// rounding ([`crate::traverse::node_tests`]).
+    /// rounding ([`crate::traverse::boxes::datapath`]).
     type Nodes: NodeTests;
     /// Computes the per-ray constants.
     fn prepare(ray: &Ray) -> Self::Prepared;

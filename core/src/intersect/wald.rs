@@ -94,7 +94,7 @@ impl Intersector for WaldProjection {
     type Prepared = WaldRay;
     type Triangle = WaldTriangle;
     const NAME: &'static str = "wald";
-    type Nodes = crate::traverse::node_tests::FloatNodes;
+    type Nodes = crate::traverse::boxes::datapath::FloatNodes;
     // No four-ray form: packets test ray by ray.
     type Prepared4 = ();
 

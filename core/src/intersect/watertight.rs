@@ -36,7 +36,7 @@ impl Intersector for Watertight {
     type Prepared = ShearedRay;
     type Triangle = [Vec3; 3];
     const NAME: &'static str = "watertight";
-    type Nodes = crate::traverse::node_tests::FloatNodes;
+    type Nodes = crate::traverse::boxes::datapath::FloatNodes;
     type Prepared4 = ShearedRays4;
 
     /// [`Watertight::prepare`] for four rays at once: the same axis choice (the largest

@@ -11,9 +11,9 @@ use crate::intersect::triangle::{test_triangle, Intersector};
 use crate::packet::{ray_by_ray, LanesOf, PacketCounters, PacketHits, RayPacket};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
+use crate::traverse::boxes::datapath::NodeTests;
+use crate::traverse::boxes::slab::RayBox;
 use crate::traverse::bvh::trace_bvh;
-use crate::traverse::node_tests::NodeTests;
-use crate::traverse::ray_box::RayBox;
 
 /// Traces all active rays of `packet`; `hits[i]` receives ray `i`'s closest hit.
 pub fn trace_bvh_packet<I: Intersector, P: MemoryProbe, const N: usize>(

@@ -5,7 +5,7 @@
 //! of one origin (a camera's) meet each triangle made ready once for it, eight lanes at a
 //! time where the CPU has AVX (`simd::watertight8`).
 
-use crate::traverse::bvh4::slab4_exact;
+use crate::traverse::wide_bvh::node4::slab4_exact;
 use glam::{BVec4A, Vec3, Vec3A, Vec4};
 
 use crate::counters::RayCounters;
@@ -16,10 +16,10 @@ use crate::intersect::triangle::{in_range, test_triangle, Intersector, LaneHits,
 use crate::packet::{ray_by_ray, Lanes, PacketCounters, PacketHits, RayPacket, MAX_PACKET};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
-use crate::traverse::aabb::SLAB_GROWTH;
-use crate::traverse::bvh4::trace_bvh4;
-use crate::traverse::node_tests::NodeTests;
-use crate::traverse::ray_box::{recip, recip4, RayBox};
+use crate::traverse::boxes::clip::SLAB_GROWTH;
+use crate::traverse::boxes::datapath::NodeTests;
+use crate::traverse::boxes::slab::{recip, recip4, RayBox};
+use crate::traverse::wide_bvh::node4::trace_bvh4;
 
 const STACK: usize = 3 * MAX_WIDE_DEPTH as usize + 4;
 

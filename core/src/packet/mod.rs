@@ -6,13 +6,10 @@
 
 pub mod bvh;
 pub mod bvh4;
-pub mod bvh_step;
 pub mod grid;
 pub mod kdtree;
-pub mod kdtree_step;
 pub mod lockstep;
 pub mod step;
-pub mod wide_bvh_step;
 
 use glam::{Mat4, Vec3, Vec4};
 
@@ -221,7 +218,7 @@ impl PacketCounters {
 
 /// A packet traced ray by ray with the single-ray kernel `trace`: what the packet kernels
 /// do for a triangle test whose box tests are not the `f32` ones their lanes share (the
-/// fixed-point datapath, [`crate::traverse::node_tests`]). Each visit counts one lane.
+/// fixed-point datapath, [`crate::traverse::boxes::datapath`]). Each visit counts one lane.
 #[inline]
 pub fn ray_by_ray<const N: usize>(
     packet: &RayPacket<N>,

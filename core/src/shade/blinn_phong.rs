@@ -54,7 +54,7 @@ impl BlinnPhong {
     /// `Kd / π` of the same reflectance.
     fn pi_norm(&self) -> f32 {
         let n = self.exponent;
-        (n + 2.0) * (n + 4.0) / (8.0 * (crate::exp_log::exp2(-0.5 * n) + n))
+        (n + 2.0) * (n + 4.0) / (8.0 * (crate::math::exp_log::exp2(-0.5 * n) + n))
     }
 
     /// π times the BRDF for light arriving from unit `to_light` and leaving toward unit
@@ -67,7 +67,7 @@ impl BlinnPhong {
         }
         let h = (to_light + to_eye).normalize_or_zero();
         let cos_h = normal.dot(h).max(0.0);
-        self.ks * (self.pi_norm() * crate::exp_log::pow(cos_h, self.exponent))
+        self.ks * (self.pi_norm() * crate::math::exp_log::pow(cos_h, self.exponent))
     }
 
     /// A bounce direction for light leaving toward unit `to_eye` from a surface with unit
@@ -76,9 +76,9 @@ impl BlinnPhong {
     /// is clipped by the horizon).
     pub fn sample(&self, normal: Vec3, to_eye: Vec3, u1: f32, u2: f32) -> Option<(Vec3, Vec3)> {
         let n = self.exponent;
-        let cos_h = crate::exp_log::pow(u1, 1.0 / (n + 1.0));
+        let cos_h = crate::math::exp_log::pow(u1, 1.0 / (n + 1.0));
         let sin_h = libm::sqrtf((1.0 - cos_h * cos_h).max(0.0));
-        let (sin, cos) = crate::trig::sin_cos(2.0 * core::f32::consts::PI * u2);
+        let (sin, cos) = crate::math::trig::sin_cos(2.0 * core::f32::consts::PI * u2);
         let h = around(normal, sin_h * cos, sin_h * sin, cos_h);
         let eye_h = to_eye.dot(h);
         let dir = h * (2.0 * eye_h) - to_eye;
@@ -139,7 +139,7 @@ mod tests {
                 let (u1, u2) = (uniform(i, 2, 0, 0), uniform(i, 2, 0, 1));
                 let z = u1;
                 let r = libm::sqrtf((1.0 - z * z).max(0.0));
-                let (s, c) = crate::trig::sin_cos(2.0 * core::f32::consts::PI * u2);
+                let (s, c) = crate::math::trig::sin_cos(2.0 * core::f32::consts::PI * u2);
                 let d = Vec3::new(r * c, r * s, z);
                 // f cos / (1 / 2π), with f = eval_pi / π.
                 uniform_est += (l.eval_pi(Vec3::Z, d, v).x * z * 2.0) as f64;

@@ -18,7 +18,7 @@ pub fn around(n: Vec3, x: f32, y: f32, z: f32) -> Vec3 {
 pub fn cosine_direction(n: Vec3, u1: f32, u2: f32) -> Vec3 {
     let r = libm::sqrtf(u1);
     let phi = 2.0 * core::f32::consts::PI * u2;
-    let (sin, cos) = crate::trig::sin_cos(phi);
+    let (sin, cos) = crate::math::trig::sin_cos(phi);
     around(n, r * cos, r * sin, libm::sqrtf((1.0 - u1).max(0.0)))
 }
 

@@ -44,8 +44,8 @@ impl RayCone {
     /// of the texels the footprint covers along one side; −∞ (the finest level) for a
     /// point-like cone.
     pub fn level(width: f32, cos_incidence: f32, texel_area: f32, world_area: f32) -> f32 {
-        let texels_per_unit = crate::exp_log::log2(texel_area / world_area) * 0.5;
-        let footprint = crate::exp_log::log2(width) - crate::exp_log::log2(cos_incidence.abs());
+        let texels_per_unit = crate::math::exp_log::log2(texel_area / world_area) * 0.5;
+        let footprint = crate::math::exp_log::log2(width) - crate::math::exp_log::log2(cos_incidence.abs());
         let level = texels_per_unit + footprint;
         if level.is_nan() {
             f32::NEG_INFINITY

@@ -3,7 +3,7 @@
 
 use super::Avx;
 use crate::packet::bvh4::{Groups, GROUPS};
-use crate::traverse::aabb::SLAB_GROWTH;
+use crate::traverse::boxes::clip::SLAB_GROWTH;
 use glam::Vec4;
 
 /// The active lanes of `mask` that enter the leaf box `leaf_box` before their best hit:

@@ -12,15 +12,15 @@ use crate::image::{BvhNode, BvhView, SceneView, MAX_TREE_DEPTH};
 use crate::intersect::triangle::Intersector;
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
-use crate::traverse::node_tests::{BoxTest, NodeTests};
-use crate::traverse::ray_box::RayBox;
+use crate::traverse::boxes::datapath::{BoxTest, NodeTests};
+use crate::traverse::boxes::slab::RayBox;
 use crate::traverse::tree_step::{trace_tree, TreeEvent, TreeWalk};
 
 /// The traversal registers of one ray in the BVH: the node it stands on (its record is
 /// held, not re-read), a fixed-capacity stack of `(node, entry distance)`, and the best
 /// hit so far. One [`BvhTraversal::step`] visits one inner node: it reads the node's two
 /// children (adjacent records) and tests both boxes with the box test `B` (the `f32`
-/// slab test, or the fixed-point one: [`crate::traverse::node_tests`]).
+/// slab test, or the fixed-point one: [`crate::traverse::boxes::datapath`]).
 #[derive(Clone, Debug)]
 pub struct BvhTraversal<B: BoxTest = RayBox> {
     rb: B,

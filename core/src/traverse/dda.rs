@@ -11,7 +11,7 @@ use glam::Vec3;
 
 use crate::image::GridView;
 use crate::ray::Ray;
-use crate::traverse::aabb::clip_ray;
+use crate::traverse::boxes::clip::clip_ray;
 
 /// One voxel on the ray's path.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -12,7 +12,7 @@ use crate::image::{KdNode, KdTreeView, SceneView, MAX_TREE_DEPTH};
 use crate::intersect::triangle::Intersector;
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
-use crate::traverse::aabb::clip_ray;
+use crate::traverse::boxes::clip::clip_ray;
 use crate::traverse::tree_step::{trace_tree, TreeEvent, TreeWalk};
 
 /// The traversal registers of one ray.

@@ -2,18 +2,13 @@
 //! with its 3D-DDA, the kd-tree, the binary, 4-wide and 8-wide BVHs — the robust ray/box
 //! tests they share (in `f32` and in fixed point), the any-hit query of shadow rays, and the brute-force reference.
 
-pub mod aabb;
+pub mod boxes;
 pub mod brute_force;
 pub mod bvh;
-pub mod bvh4;
-pub mod bvh8;
 pub mod dda;
-pub mod fixed_ray_box;
 pub mod grid;
 pub mod kdtree;
-pub mod node_tests;
 pub mod occlusion;
-pub mod ray_box;
 pub mod tree_step;
 pub mod walk;
 pub mod wide_bvh;

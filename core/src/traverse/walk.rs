@@ -11,14 +11,14 @@ use crate::image::{SceneView, NULL_INDEX};
 use crate::intersect::triangle::{in_range, test_triangle, Intersector};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
+use crate::traverse::boxes::datapath::{FloatNodes, NodeTests};
 use crate::traverse::bvh::BvhTraversal;
-use crate::traverse::bvh4::Bvh4Traversal;
-use crate::traverse::bvh8::Bvh8Traversal;
 use crate::traverse::dda::Voxel;
 use crate::traverse::grid::{GridEvent, GridTraversal};
 use crate::traverse::kdtree::KdTraversal;
-use crate::traverse::node_tests::{FloatNodes, NodeTests};
 use crate::traverse::tree_step::TreeEvent;
+use crate::traverse::wide_bvh::node4::Bvh4Traversal;
+use crate::traverse::wide_bvh::node8::Bvh8Traversal;
 
 /// Where a leaf's triangle ids are.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -131,7 +131,7 @@ pub enum WalkEvent {
 
 /// The traversal registers of one ray, for the structure the scene holds, with the box
 /// tests `D` in the BVHs (the `f32` ones, or the fixed-point one: see
-/// [`crate::traverse::node_tests`]; take them from the triangle test, `I::Nodes`). The
+/// [`crate::traverse::boxes::datapath`]; take them from the triangle test, `I::Nodes`). The
 /// grid's and the kd-tree's steps are `f32` whatever `D`: they have no box test to swap,
 /// and with a fixed-point triangle test they are not conservative (a hit half a unit
 /// across a cell boundary can be missed).

@@ -16,7 +16,7 @@
 
 use glam::{DVec3, Vec3};
 use raypipe_core::image::{CameraRecord, LightRecord};
-use raypipe_core::traverse::aabb::clip_ray;
+use raypipe_core::traverse::boxes::clip::clip_ray;
 use raypipe_core::{Intersector, Ray, Watertight};
 
 use crate::build::light_distribution::{area_light_power, luminance};

@@ -11,10 +11,10 @@ use raypipe_core::packet::grid::trace_grid_packet;
 use raypipe_core::packet::kdtree::trace_kdtree_packet;
 use raypipe_core::packet::{PacketCounters, PacketHits, RayPacket};
 use raypipe_core::traverse::bvh::trace_bvh;
-use raypipe_core::traverse::bvh4::trace_bvh4;
-use raypipe_core::traverse::bvh8::trace_bvh8;
 use raypipe_core::traverse::grid::trace_grid;
 use raypipe_core::traverse::kdtree::trace_kdtree;
+use raypipe_core::traverse::wide_bvh::node4::trace_bvh4;
+use raypipe_core::traverse::wide_bvh::node8::trace_bvh8;
 use raypipe_core::{
     traverse::brute_force::trace_brute_force, Hit, Intersector, MemoryProbe, Ray, RayCounters, SceneView,
 };

@@ -9,7 +9,7 @@
 
 use rayon::prelude::*;
 use raypipe_core::camera::EyeRays;
-use raypipe_core::fixed_point::QFormat;
+use raypipe_core::math::fixed_point::QFormat;
 use raypipe_core::shade::hemisphere::cosine_direction;
 use raypipe_core::shade::rng::uniform;
 use raypipe_core::shade::surface::Surface;

@@ -1,13 +1,13 @@
 //! The arithmetic of the traversal and intersection datapaths: `f32` (the default), or a
 //! fixed-point format of raypipe-core's fixed-point datapath — its box test in the
 //! traversal units and its watertight triangle test in the intersection units
-//! (`raypipe_core::traverse::fixed_ray_box`, `raypipe_core::intersect::fixed_watertight`).
+//! (`raypipe_core::traverse::boxes::fixed_slab`, `raypipe_core::intersect::fixed_watertight`).
 //! The choice changes what the units compute, not how long they take: the latencies are
 //! the configuration's own (`traversal.step_latency`, `intersection.latency`).
 
 use serde::{Deserialize, Serialize};
 
-use raypipe_core::fixed_point::QFormat;
+use raypipe_core::math::fixed_point::QFormat;
 
 /// The datapath's number format. The fixed-point ones are those raypipe-core is built
 /// for here (its format is a type parameter): 32-bit and 24-bit registers with the

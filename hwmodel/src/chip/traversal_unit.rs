@@ -21,7 +21,7 @@
 use std::collections::VecDeque;
 
 use raypipe_core::packet::step::{PacketEvent, PacketStep, PacketWalk};
-use raypipe_core::traverse::node_tests::{FloatNodes, NodeTests};
+use raypipe_core::traverse::boxes::datapath::{FloatNodes, NodeTests};
 use raypipe_core::traverse::walk::{Leaf, Walk, WalkEvent};
 use raypipe_core::{DataClass, Ray, SceneView};
 use serde::Serialize;
@@ -108,7 +108,7 @@ pub struct TraversalStats {
 }
 
 /// A traversal unit, whose datapath tests boxes with `D` (the `f32` tests, or the
-/// fixed-point test: `raypipe_core::traverse::node_tests`).
+/// fixed-point test: `raypipe_core::traverse::boxes::datapath`).
 pub struct TraversalUnit<D: NodeTests = FloatNodes> {
     /// Unit number.
     pub id: usize,

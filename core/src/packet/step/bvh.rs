@@ -13,10 +13,10 @@ use crate::image::{BvhNode, BvhView, SceneView, MAX_TREE_DEPTH};
 use crate::packet::LanesOf;
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
-use crate::traverse::ray_box::RayBox;
+use crate::traverse::boxes::slab::RayBox;
 use crate::traverse::walk::Leaf;
 
-use super::step::{existing, lane_end, PacketEvent, PacketStep};
+use super::{existing, lane_end, PacketEvent, PacketStep};
 
 /// The registers of a packet in the binary BVH.
 #[derive(Clone, Debug)]

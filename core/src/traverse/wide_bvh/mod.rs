@@ -5,6 +5,9 @@
 //! are stack entries like nodes, so a leaf is intersected only when it is the nearest
 //! thing left to visit.
 
+pub mod node4;
+pub mod node8;
+
 use core::marker::PhantomData;
 use core::ops::{Index, IndexMut};
 
@@ -17,8 +20,8 @@ use crate::intersect::leaf_blocks::test_leaf_blocks;
 use crate::intersect::triangle::Intersector;
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
-use crate::traverse::node_tests::{NodeTests, WideRay};
-use crate::traverse::ray_box::RayBox;
+use crate::traverse::boxes::datapath::{NodeTests, WideRay};
+use crate::traverse::boxes::slab::RayBox;
 use crate::traverse::tree_step::{test_leaf, trace_tree, TreeEvent, TreeWalk};
 
 /// Stack capacity for nodes of `width` children: at most `width − 1` entries wait per
@@ -130,7 +133,7 @@ impl NodeRay {
 
 /// A wide node's slab test: the entry distances of the ray into each child box within
 /// `[t0, t1]`, and the bit mask of the children it hits (never an empty slot). It must
-/// never reject a box the ray touches (see [`crate::traverse::ray_box`]).
+/// never reject a box the ray touches (see [`crate::traverse::boxes::slab`]).
 pub trait WideSlab: WideNode {
     /// Entry distances, one per slot.
     type Dist: Copy + Default + Index<usize, Output = f32> + IndexMut<usize>;
@@ -150,7 +153,7 @@ pub trait WideSlab: WideNode {
 /// fixed-capacity stack of `(child or first entry, leaf count or 0, entry distance)`, and
 /// the best hit so far. One [`WideBvhTraversal::step`] reads one node and tests its
 /// boxes with `R` (the `f32` SIMD tests, or the fixed-point test:
-/// [`crate::traverse::node_tests`]).
+/// [`crate::traverse::boxes::datapath`]).
 #[derive(Clone, Debug)]
 pub struct WideBvhTraversal<N: WideSlab, const C: usize, R: WideRay<N> = NodeRay> {
     ray: R,

@@ -7,10 +7,14 @@
 //! same, bit for bit.
 //!
 //! This is the interface a hardware traversal unit drives, one [`PacketStep::step`] per
-//! node: the kd-tree ([`super::kdtree_step`]), the binary BVH ([`super::bvh_step`]) and
-//! the 4- and 8-wide BVHs ([`super::wide_bvh_step`]). The uniform grid has no shared
+//! node: the kd-tree ([`kdtree`]), the binary BVH ([`bvh`]) and
+//! the 4- and 8-wide BVHs ([`wide_bvh`]). The uniform grid has no shared
 //! walk: its rays leave a voxel at different distances, so its packets keep per-ray
-//! lock-step (Purcell 2002 §3.2, [`super::lockstep`]).
+//! lock-step (Purcell 2002 §3.2, [`crate::packet::lockstep`]).
+
+pub mod bvh;
+pub mod kdtree;
+pub mod wide_bvh;
 
 use crate::hit::Hit;
 use crate::image::SceneView;
@@ -20,9 +24,9 @@ use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::traverse::walk::{trace_walk, Leaf};
 
-use super::bvh_step::BvhPacketTraversal;
-use super::kdtree_step::KdPacketTraversal;
-use super::wide_bvh_step::{Bvh4PacketTraversal, Bvh8PacketTraversal};
+use bvh::BvhPacketTraversal;
+use kdtree::KdPacketTraversal;
+use wide_bvh::{Bvh4PacketTraversal, Bvh8PacketTraversal};
 
 /// What one packet step produced.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -30,10 +30,10 @@
 
 use glam::Vec3A;
 
-use crate::fixed_point::{Round, SATURATE};
 use crate::fixed_ray::FixedRay;
+use crate::math::fixed_point::{Round, SATURATE};
 use crate::ray::Ray;
-use crate::traverse::node_tests::{BoxTest, WideRay};
+use crate::traverse::boxes::datapath::{BoxTest, WideRay};
 use crate::traverse::wide_bvh::WideSlab;
 
 /// Per-ray constants of the fixed-point slab test.
@@ -198,7 +198,7 @@ impl<N: WideSlab, const BITS: u32, const FRAC: u32> WideRay<N> for FixedRayBox<B
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fixed_point::QFormat;
+    use crate::math::fixed_point::QFormat;
     use crate::test_lcg::Lcg;
     use glam::Vec3;
 
@@ -220,7 +220,7 @@ mod tests {
         let s = FixedRay::<B, F>::SLOPE_FRAC;
         let mut g = Lcg(B as u64 * 131 + F as u64);
         // Small enough that the boxes' raw corners are exact in f32 (below 2^24).
-        let span = (fmt.max_value() / 8.0).min(crate::fixed_point::pow2(21 - F as i32));
+        let span = (fmt.max_value() / 8.0).min(crate::math::fixed_point::pow2(21 - F as i32));
         for case in 0..40_000 {
             let origin = Vec3::new(g.range(-span, span), g.range(-span, span), g.range(-span, span));
             let mut dir = Vec3::new(g.range(-1.0, 1.0), g.range(-1.0, 1.0), g.range(-1.0, 1.0));

@@ -1,6 +1,6 @@
 //! Base-2 exponential, logarithm and power in single precision only: `libm`'s `exp2f`,
 //! `log2f` and `powf` (musl's) compute in f64, which the firmware targets emulate in
-//! software (see [`crate::trig`]); these keep to f32 so the default embedded build has
+//! software (see [`crate::math::trig`]); these keep to f32 so the default embedded build has
 //! no f64 code and every target gets the same bits. The logarithm splits off the
 //! exponent and takes the mantissa `m` in [√½, √2) through the series of
 //! `2 atanh((m − 1)/(m + 1))`; the exponential splits off the integer part and takes the

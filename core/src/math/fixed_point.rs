@@ -1,5 +1,5 @@
 //! Signed fixed-point numbers `Q(BITS − FRAC).FRAC`, the number format of the fixed-point
-//! datapath (`crate::fixed_ray`, the box test `crate::traverse::fixed_ray_box`, the
+//! datapath (`crate::fixed_ray`, the box test `crate::traverse::boxes::fixed_slab`, the
 //! triangle test `crate::intersect::fixed_watertight`): a value is a `BITS`-bit two's
 //! complement integer `raw` standing for `raw · 2^−FRAC` scene units.
 //!

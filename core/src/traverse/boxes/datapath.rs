@@ -1,6 +1,6 @@
 //! The box tests of a datapath: which ray–box test the BVH walks use, chosen by the
 //! triangle test ([`crate::intersect::triangle::Intersector::Nodes`]). The `f32` tests
-//! ([`FloatNodes`]: the robust slab test of [`crate::traverse::ray_box`] and the wide
+//! ([`FloatNodes`]: the robust slab test of [`crate::traverse::boxes::slab`] and the wide
 //! nodes' SIMD tests) go with the `f32` triangle tests; the fixed-point box test
 //! ([`FixedNodes`]) goes with the fixed-point triangle test, whose rounding its margins
 //! are made for. A box test is conservative only for the triangle test it was made for.
@@ -11,8 +11,8 @@ use glam::Vec3A;
 
 use crate::image::{Bvh4Node, Bvh8Node};
 use crate::ray::Ray;
-use crate::traverse::fixed_ray_box::FixedRayBox;
-use crate::traverse::ray_box::RayBox;
+use crate::traverse::boxes::fixed_slab::FixedRayBox;
+use crate::traverse::boxes::slab::RayBox;
 use crate::traverse::wide_bvh::{NodeRay, WideSlab};
 
 /// One ray's test against one box (the binary BVH's nodes).

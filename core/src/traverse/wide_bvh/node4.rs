@@ -12,7 +12,7 @@ use crate::image::{Bvh4Node, Bvh4View, SceneView};
 use crate::intersect::triangle::Intersector;
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
-use crate::traverse::ray_box::RayBox;
+use crate::traverse::boxes::slab::RayBox;
 pub use crate::traverse::wide_bvh::NodeRay;
 use crate::traverse::wide_bvh::{stack_capacity, trace_wide_bvh, WideBvhTraversal, WideSlab};
 

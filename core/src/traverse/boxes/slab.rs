@@ -15,7 +15,7 @@
 use glam::{Vec3A, Vec4};
 
 use crate::ray::Ray;
-use crate::traverse::aabb::SLAB_GROWTH;
+use crate::traverse::boxes::clip::SLAB_GROWTH;
 
 /// Per-ray constants of the slab test.
 #[derive(Clone, Copy, Debug)]

@@ -10,7 +10,7 @@ use crate::image::{Bvh8Node, Bvh8View, SceneView};
 use crate::intersect::triangle::Intersector;
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
-use crate::traverse::ray_box::RayBox;
+use crate::traverse::boxes::slab::RayBox;
 use crate::traverse::wide_bvh::{stack_capacity, trace_wide_bvh, NodeRay, WideBvhTraversal, WideSlab};
 
 /// `max` as the SIMD instruction computes it (the second operand when either is NaN),
@@ -36,7 +36,7 @@ fn min(a: f32, b: f32) -> f32 {
 
 /// Entry distances of the ray into the eight child boxes of `n`, within `[t0, t1]`, and
 /// the bit mask of those it hits (empty slots, whose boxes are inverted, never). The
-/// same arithmetic as [`crate::traverse::bvh4::slab4`], eight lanes wide.
+/// same arithmetic as [`crate::traverse::wide_bvh::node4::slab4`], eight lanes wide.
 #[inline(always)]
 pub fn slab8(r: &NodeRay, n: &Bvh8Node, t0: f32, t1: f32) -> ([f32; 8], u32) {
     let mut tn = [0.0f32; 8];
@@ -86,7 +86,7 @@ fn mask8(hit: [u8; 8]) -> u32 {
 }
 
 /// [`slab8`] for any ray, including one with a zero direction component (whose axis is
-/// tested as "origin inside the slab", see [`crate::traverse::ray_box::RayBox`]).
+/// tested as "origin inside the slab", see [`crate::traverse::boxes::slab::RayBox`]).
 #[inline(never)]
 pub fn slab8_exact(r: &RayBox, n: &Bvh8Node, t0: f32, t1: f32) -> ([f32; 8], u32) {
     let (o, inv, inv_far, zero) = (r.origin.to_array(), r.inv.to_array(), r.inv_far.to_array(), r.zero_axes);
@@ -160,7 +160,7 @@ mod tests {
     use super::*;
     use crate::image::{Bvh4Node, WideNode};
     use crate::test_lcg::Lcg;
-    use crate::traverse::bvh4::slab4;
+    use crate::traverse::wide_bvh::node4::slab4;
     use glam::Vec3;
 
     /// The 8-lane test, in its portable and its AVX form, gives slot for slot the 4-lane

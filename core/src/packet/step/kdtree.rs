@@ -14,10 +14,10 @@ use crate::image::{KdNode, KdTreeView, SceneView, MAX_TREE_DEPTH};
 use crate::packet::LanesOf;
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
-use crate::traverse::aabb::clip_ray;
+use crate::traverse::boxes::clip::clip_ray;
 use crate::traverse::walk::Leaf;
 
-use super::step::{existing, PacketEvent, PacketStep};
+use super::{existing, PacketEvent, PacketStep};
 
 /// A shared-stack entry: a node, the rays that need it, and their intervals in it.
 #[derive(Clone, Copy, Debug)]
