@@ -9,7 +9,7 @@ divided by Embree's.
 
     pip install embreex numpy
     cargo build --release -p raypipe
-    python3 bench/embree_compare.py ../shared/models/stanford_bunny/stanford-bunny.obj
+    python3 bench/embree_compare.py scenes/stanford_bunny/stanford-bunny.obj
 
 A ray agrees when both miss, or both hit the same triangle, or both hit at the same
 distance within a relative 1e-6 (Embree's test is not watertight, so a few grazing

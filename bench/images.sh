@@ -1,15 +1,15 @@
 #!/usr/bin/env bash
-# The image figures of issue 20: Sponza, the conference room, Sibenik and the Cornell box
+# The image figures of docs/cli.md: Sponza, the conference room, Sibenik and the Cornell box
 # with every algorithm, from their cameras, with no hand-placed light (each scene's
 # default light is chosen for its camera), and the stats --algo shadow mismatch of each.
-# Needs ../shared/models and ImageMagick's `convert` (to put each scene's four images in
+# Needs the scenes under $RAYPIPE_SCENES (default scenes/; docs/scenes.md) and ImageMagick's `convert` (to put each scene's four images in
 # one row; CONVERT names another binary). Usage: bench/images.sh [size] [path samples]
 # (defaults 384, 16)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 size=${1:-384}
 spp=${2:-16}
-models=../shared/models
+models=${RAYPIPE_SCENES:-scenes}
 out=docs/images
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # What mipmaps save the modelled chip: a generated floor under a 512² one-pixel-check
-# texture running to the horizon (the shared models ship without their textures), cast
+# texture running to the horizon (the downloaded scenes are used without their textures), cast
 # by `raypipe simulate` (default configuration) from a built image, then from the same
 # image with every texture cut down to level 0 (levels = 1, checksum resealed). Prints the
 # cycles, the shading cache's hit rate and the shading bytes of each.

@@ -1,7 +1,9 @@
 #!/bin/sh
 # The architect's four questions on the conference room and the Stanford bunny
 # (saarcor preset, 512×384, kd-tree), one sweep each, with their plots, and energy per
-# frame and per ray for every preset. Needs ../shared/models beside the repository.
+# frame and per ray for every preset. Needs the conference room and the bunny under
+# $RAYPIPE_SCENES (default: scenes/ at the repository root; docs/scenes.md says where to
+# download them). Writes its figures to OUT; docs/workbench/ holds the committed ones.
 #
 #   bench/workbench.sh [OUT]        (default OUT: workbench-out)
 set -eu
@@ -10,6 +12,7 @@ out=${1:-workbench-out}
 mkdir -p "$out"
 cargo build --release -p raypipe --quiet --manifest-path "$here/../Cargo.toml"
 rp="$here/../target/release/raypipe"
+scenes=${RAYPIPE_SCENES:-$here/../scenes}
 conf=conference.obj.gz
 bunny=stanford-bunny.obj
 for s in cache bound scaling; do
@@ -38,9 +41,9 @@ for scene in $conf $bunny; do
 done
 # Energy per frame and per ray of every preset.
 for preset in saarcor minimal; do
-    "$rp" simulate "$here/../../shared/models/conference/$conf" --camera "$here/../fixtures/cameras/conference.camera" \
+    "$rp" simulate "$scenes/conference/$conf" --camera "$here/../fixtures/cameras/conference.camera" \
         --size 512x384 --accel kd --preset $preset -o "$out/energy-conference-$preset.png" \
         --report "$out/energy-conference-$preset.json" | grep -E "^(energy|at )"
-    "$rp" simulate "$here/../../shared/models/stanford_bunny/$bunny" --size 512x384 --accel kd --preset $preset \
+    "$rp" simulate "$scenes/stanford_bunny/$bunny" --size 512x384 --accel kd --preset $preset \
         -o "$out/energy-bunny-$preset.png" --report "$out/energy-bunny-$preset.json" | grep -E "^(energy|at )"
 done

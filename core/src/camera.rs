@@ -101,7 +101,7 @@ impl EyeRays {
             return Err(CameraError::ZeroSize);
         }
         // Whatever the camera came from (a file, an image, the command line), a frame is
-        // something a driver can allocate and finish (issue 18, D4).
+        // something a driver can allocate and finish.
         if cam.width as u64 * cam.height as u64 > MAX_PIXELS {
             return Err(CameraError::TooLarge);
         }

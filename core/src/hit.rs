@@ -15,7 +15,7 @@ pub struct Hit {
 }
 
 impl Hit {
-    /// DESIGN.md, "one hit whatever the path": the closest hit is the one with the smallest
+    /// `docs/design.md`, "one hit, whatever the path": the closest hit is the one with the smallest
     /// `(t, prim)`, compared lexicographically. Returns true if `self` beats `other`.
     #[inline]
     pub fn is_closer_than(&self, other: &Hit) -> bool {

@@ -5,7 +5,7 @@
 //! ([`SceneView::parse`]), validated once; after that no kernel can index out of bounds
 //! or panic.
 //!
-//! The kernels are steps over plain data (see `../shared/DESIGN.md`), grouped by
+//! The kernels are steps over plain data (`docs/design.md`, contract 3), grouped by
 //! Purcell's pipeline stages (generate → traverse → intersect → shade):
 //!
 //! * [`camera`]: pinhole eye rays and Purcell's scene-bounding-box test (generate);
@@ -17,10 +17,11 @@
 //! * [`packet`]: ray packets, the lock-step driver and each structure's packet traversal;
 //! * [`shade`]: Lambert shading, weighted ray records, Whitted's and the path tracer's
 //!   shaders as stream kernels that emit rays, counter-based random numbers;
+//! * [`math`]: sine, cosine, tangent, exp2 and log2 in f32 only, and the fixed-point
+//!   numbers of the integer datapath; [`simd`]: the AVX forms of four kernels;
 //! * at the root, the scene image ([`image`]) and the plain records: [`ray`], [`hit`],
 //!   [`probe`] (the one access path of scene reads) and [`counters`], [`range`] (the
-//!   scenes and rays for which every path gives the same hit) and [`trig`] (sine,
-//!   cosine and tangent in f32 only).
+//!   scenes and rays for which every path gives the same hit).
 //!
 //! ## Firmware in five steps
 //!

@@ -1,7 +1,7 @@
 //! The guaranteed range: the scenes and rays for which "one hit whatever the path"
-//! (DESIGN.md) holds — every structure, packet size and driver returns the brute-force
+//! (`docs/design.md`) holds — every structure, packet size and driver returns the brute-force
 //! hit bit for bit, with the watertight test. Outside it the kernels stay bounded and
-//! panic-free, but hits may differ between paths (issue 18, D8–D10: far origins, where
+//! panic-free, but hits may differ between paths (far origins, where
 //! the rounding of the ray itself outgrows the structures' margins; tiny direction
 //! components, whose reciprocals the box tests clamp; scenes so large or small that the
 //! watertight test's products overflow or underflow). Drivers check rays and scenes here
@@ -16,7 +16,7 @@
 //! * Intersector: [`crate::Watertight`]. Möller–Trumbore and Wald's test are not
 //!   watertight: near an edge (within an ulp or so) they may report different triangles
 //!   on different structures, whose leaves hand them the same triangle with different
-//!   intervals (D11).
+//!   intervals.
 
 use crate::image::SceneView;
 use crate::ray::Ray;

@@ -54,7 +54,7 @@ impl Ray {
     /// A ray starts at its origin: a negative `t_min` (the part behind the origin) is not
     /// a ray every structure can trace alike. The kd-tree's split rule and the robust box
     /// tests' rounding margins are exact for `t >= 0` only, and the kd-tree returned a
-    /// different hit from every other structure on 6–52% of such rays (issue 18, D3), so
+    /// different hit from every other structure on 6–52% of such rays, so
     /// every structure rejects them (one rule, documented in the README).
     #[inline]
     pub fn is_valid(&self) -> bool {

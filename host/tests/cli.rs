@@ -158,7 +158,7 @@ fn malformed_and_degenerate_geometry() {
     assert_one_line_error(&raypipe(d, &["build", "face.obj", "-o", "o.rpsi"]), "face.obj");
     write(d, "nan.obj", "v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
     assert_one_line_error(&raypipe(d, &["build", "nan.obj", "-o", "o.rpsi"]), "NaN or infinite");
-    // Issue 18, D12: a scene of extent 1e20 was "internal error: built an invalid image".
+    // A scene of extent 1e20 was "internal error: built an invalid image".
     write(d, "huge.obj", "v 0 0 0\nv 1e20 0 0\nv 0 1e20 0\nf 1 2 3\n");
     for accel in ["grid", "kd", "bvh", "bvh4", "bvh8"] {
         let o = raypipe(d, &["build", "huge.obj", "--accel", accel, "-o", "o.rpsi"]);
@@ -211,7 +211,7 @@ fn impossible_cameras_and_sizes() {
     assert_one_line_error(&raypipe(d, &["render", "--camera", "typo.camera", "-o", "o.png"]), "typo.camera:3");
     let o = raypipe(d, &["render", "--fov", "180", "-o", "o.png"]);
     assert_one_line_error(&o, "field of view");
-    // Issue 18, D4: sizes from camera files are capped like --size (a 6 GB allocation
+    // Sizes from camera files are capped like --size (a 6 GB allocation
     // aborted the process; 100000 x 100000 never finished).
     write(d, "huge.camera", "eye 0 1 3\nlook_at 0 1 0\nsize 4294967295 1\n");
     write(d, "wide.camera", "eye 0 1 3\nlook_at 0 1 0\nsize 100000 100000\n");
@@ -229,7 +229,7 @@ fn impossible_cameras_and_sizes() {
 fn failed_writes_leave_no_half_written_file() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    // Issue 18, D13: a report into a missing directory left the image behind.
+    // A report into a missing directory left the image behind.
     let o = raypipe(d, &["simulate", "--size", "8x8", "-o", "o.png", "--report", "missing/r.json"]);
     assert_one_line_error(&o, "does not exist");
     assert!(!d.join("o.png").exists(), "no image without its report");
@@ -349,7 +349,7 @@ fn trace_a_ray_batch_with_every_structure_and_packet_size() {
     assert!((h[0].0 - 1359.2).abs() < 1e-3, "{h:?}");
 }
 
-/// Ray queries (issue 20, D8): float64 input, rows that are no rays returned as misses
+/// Ray queries: float64 input, rows that are no rays returned as misses
 /// and counted, any-hit queries, optional fields, and the warning for incoherent packets.
 #[test]
 fn ray_queries_fields_and_invalid_rays() {
@@ -822,7 +822,7 @@ fn generated_scenes_build_with_their_views() {
     }
 }
 
-/// HDR outputs (issue 20, D5): `.exr` and `.pfm` hold the linear framebuffer exactly;
+/// HDR outputs: `.exr` and `.pfm` hold the linear framebuffer exactly;
 /// exposure and tone mapping change only the PNG; outputs get the umask's permissions.
 #[test]
 fn hdr_outputs_hold_the_linear_framebuffer() {
@@ -907,7 +907,7 @@ fn hdr_outputs_hold_the_linear_framebuffer() {
     assert!(!o.status.success() && stderr(&o).contains("unknown filter"), "{}", stderr(&o));
 }
 
-/// Lights on the command line (issue 20, D2): a sun and a sky light the path tracer; on a
+/// Lights on the command line: a sun and a sky light the path tracer; on a
 /// built image they replace its lights with a note; a structure flag the image cannot
 /// apply is a warning; `info` describes the scene and its sections.
 #[test]
@@ -991,7 +991,7 @@ fn lights_on_obj_and_image_and_info() {
     assert_one_line_error(&raypipe(d, &["info", "missing.obj"]), "missing.obj");
 }
 
-/// glTF 2.0 and PLY inputs (issue 20, D7): built, rendered and described like an OBJ;
+/// glTF 2.0 and PLY inputs: built, rendered and described like an OBJ;
 /// the glTF's node transform, material and camera are used; malformed files are one-line
 /// errors.
 #[test]
@@ -1054,7 +1054,7 @@ fn gltf_and_ply_inputs() {
     assert!(!d.join("x.png").exists());
 }
 
-/// A scene file (issue 20, D7): two meshes from different formats, transformed, one with
+/// A scene file: two meshes from different formats, transformed, one with
 /// a material override, a sun and a camera, built into one image; bad entries are
 /// one-line errors naming the file and the mesh.
 #[test]

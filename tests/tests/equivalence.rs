@@ -1,4 +1,4 @@
-//! DESIGN.md's first contract: for random triangle soups and rays, every structure (grid,
+//! The first contract of `docs/design.md`: for random triangle soups and rays, every structure (grid,
 //! kd-tree, BVH) returns exactly the brute-force hit — same triangle id, bit-identical
 //! `t` and barycentrics — and the same misses, with either intersection kernel.
 

@@ -1,4 +1,4 @@
-//! The fixed-point datapath (issue 18, item 8): with the fixed-point triangle test, every
+//! The fixed-point datapath: with the fixed-point triangle test, every
 //! BVH (binary, 4- and 8-wide, both triangle layouts), the generic walk, the packet
 //! kernels and the any-hit query give the fixed-point brute-force hit bit for bit, in
 //! Q16.16, Q12.12 and Q8.16 — so the fixed-point box test never drops a box holding a hit,

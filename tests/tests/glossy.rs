@@ -1,4 +1,4 @@
-//! Glossy materials (issue 20, D6): Blinn–Phong highlights where optics puts them,
+//! Glossy materials: Blinn–Phong highlights where optics puts them,
 //! a glossy lobe that conserves energy under a white sky (a furnace test of the path
 //! tracer's lobe pick and importance sampling), and golden Whitted and path-traced images
 //! of glossy spheres, the same from every structure and packet size.

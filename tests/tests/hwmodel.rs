@@ -1,4 +1,4 @@
-//! The hardware model (issue 4) against the host: for random small scenes, views,
+//! The hardware model against the host: for random small scenes, views,
 //! structures and hardware configurations, every pixel's hit equals the host runner's
 //! exactly, every run terminates, rays issued = rays retired, and every byte the channel
 //! delivered was requested. The tick order of the units cannot change anything, and the
@@ -259,7 +259,7 @@ fn fixed_model_hits<I: Intersector>(view: &SceneView<'_>, cam: &CameraRecord, cf
 proptest! {
     #![proptest_config(ProptestConfig { cases: 80, ..ProptestConfig::default() })]
 
-    /// With the fixed-point datapath (issue 18, item 8) the model's traversal units walk
+    /// With the fixed-point datapath the model's traversal units walk
     /// each ray with the fixed-point box test and its intersection units run the
     /// fixed-point triangle test: every pixel's hit is the host's with the same datapath,
     /// on every BVH and any chip.

@@ -1,4 +1,4 @@
-//! Lights (issue 20, D2–D3): the path tracer's pick of one emitter by power is unbiased
+//! Lights: the path tracer's pick of one emitter by power is unbiased
 //! (a furnace-style check against the irradiance integrated by quadrature), the other
 //! shaders read no area-light record however many emitters there are, and the lights of
 //! a built image can be replaced.

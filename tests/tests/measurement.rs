@@ -1,4 +1,4 @@
-//! Measuring the hardware model the way architects do (issue 21): interval statistics
+//! Measuring the hardware model the way architects do: interval statistics
 //! that sum to the frame, warm-up frames left out of the totals, regions of interest,
 //! and walkthroughs whose frames are each the host's image while the caches stay warm.
 

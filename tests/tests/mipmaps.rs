@@ -1,4 +1,4 @@
-//! Mipmapped textures filtered by ray cones (issue 20, D6): a checkerboard floor running
+//! Mipmapped textures filtered by ray cones: a checkerboard floor running
 //! to the horizon fades to its mean grey far away instead of aliasing into noise, the
 //! image carries the whole chain and validates it, and the hardware models read the
 //! same texels as the host — bit for bit, whatever the algorithm.

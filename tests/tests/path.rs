@@ -1,4 +1,4 @@
-//! Path tracing (issue 5): a path's weight never grows from bounce to bounce (without
+//! Path tracing: a path's weight never grows from bounce to bounce (without
 //! Russian roulette), and the image — random numbers included — is the same for every
 //! structure, packet size and thread count, and equal to its golden image.
 

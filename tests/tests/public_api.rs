@@ -1,4 +1,4 @@
-//! The public packet API cannot panic (issue 18, D5–D6): bits of `RayPacket::active` past
+//! The public packet API cannot panic: bits of `RayPacket::active` past
 //! the packet's lanes, lane indices past the end (`set`, `set4`, `ray`) and every packet
 //! kernel on such packets. (`RayPacket<0>` and `RayPacket<65>` do not compile, through
 //! `new` or `Default`.)

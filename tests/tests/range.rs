@@ -1,4 +1,4 @@
-//! The guaranteed range (`raypipe_core::range`, issue 18 D8–D11) holds at its edges:
+//! The guaranteed range (`raypipe_core::range`) holds at its edges:
 //! scenes of extent 2^-20 … 2^20, origins up to 16 extents outside the scene, directions
 //! whose largest component is 2^-20 … 2^20 with other components down to 2^-40 of it,
 //! and intervals ending or starting exactly at the hit. Every structure, triangle layout,

@@ -1,4 +1,4 @@
-//! The shadow caster's rasterizer (issue 20, D1): triangles crossing the eye plane, at
+//! The shadow caster's rasterizer: triangles crossing the eye plane, at
 //! every orientation, are clipped against the near plane (Sutherland–Hodgman) so that
 //! the G-buffer covers exactly what ray casting sees.
 

@@ -1,4 +1,4 @@
-//! Purcell's stream machine (issue 19): its image is the host's for every architecture,
+//! Purcell's stream machine: its image is the host's for every architecture,
 //! oracle, unrolling and algorithm; every ray retires; per pass, processed iterations =
 //! useful + idle and the stencil is read once per covered fragment (multipass) or never
 //! (branching); no oracle beats the optimal bound and the clairvoyant one meets it on a

@@ -1,4 +1,4 @@
-//! Whitted ray tracing (issue 5, first part): the any-hit query agrees with the
+//! Whitted ray tracing: the any-hit query agrees with the
 //! closest-hit query, shadow rays toward an unobstructed light are never blocked, a
 //! mirror's reflected ray finds what the explicitly reflected ray finds, a slab whose
 //! index equals the air's changes nothing, and the image is the same for every

@@ -3,7 +3,7 @@
 //! tests at most PRIM_LISTS' length; a grid walk visits at most `dx + dy + dz` cells and
 //! reads at most its lists' length. Checked on random soups and on adversarial valid
 //! scenes (every triangle crossing the whole scene), for closest-hit and any-hit
-//! queries; and the structures that used to amplify work (issue 18, D1 and D2) are
+//! queries; and the structures that used to amplify work are
 //! rejected by the parse.
 
 use proptest::prelude::*;
@@ -136,7 +136,7 @@ fn put_f32(b: &mut [u8], at: usize, v: f32) {
     b[at..at + 4].copy_from_slice(&v.to_le_bytes());
 }
 
-/// Issue 18, D1: an "empty" wide-BVH slot (child null) whose box is inverted by one ulp
+/// An "empty" wide-BVH slot (child null) whose box is inverted by one ulp
 /// and whose count is 2^32 − 1 was accepted, and the single-ray box test entered it as a
 /// leaf of four billion entries. Empty slots must now be exactly the empty encoding.
 #[test]
@@ -191,7 +191,7 @@ fn leaves_holding_more_than_the_list_are_rejected() {
     assert!(matches!(e, SceneError::BadTree { section: SectionKind::Bvh4Nodes, .. }), "{e}");
 }
 
-/// Issue 18, D2: grid cells sharing one list (a 330 KB image cost one ray 10^9 tests), or
+/// Grid cells sharing one list (a 330 KB image cost one ray 10^9 tests), or
 /// starting in the middle of another cell's list, are rejected.
 #[test]
 fn grid_cells_sharing_a_list_are_rejected() {
@@ -210,7 +210,7 @@ fn grid_cells_sharing_a_list_are_rejected() {
     assert!(e.to_string().contains("shares a primitive list"));
 }
 
-/// Issue 18, D2: a 20,000-vertex OBJ polygon made 91 M grid list entries (22 s) when it
+/// A 20,000-vertex OBJ polygon made 91 M grid list entries (22 s) when it
 /// was triangulated as a fan; split by halving it makes `n log n` references.
 #[test]
 fn a_large_obj_polygon_builds_a_grid_of_n_log_n_references() {
@@ -236,7 +236,7 @@ fn a_large_obj_polygon_builds_a_grid_of_n_log_n_references() {
     assert!((entries as f64) < 4.0 * n as f64 * log_n, "{entries} list entries");
 }
 
-/// Issue 18, D3: with `t_min < 0` the kd-tree returned another hit than every other
+/// With `t_min < 0` the kd-tree returned another hit than every other
 /// structure (it ignores the part of the ray behind its origin). The rule is now one for
 /// all: a ray starts at its origin, `Ray::is_valid` demands `0 <= t_min`, and every
 /// structure and the packet kernels return no hit for such a ray; the batch reader
@@ -305,7 +305,7 @@ fn chain_image<N: WideNode>(depth: usize) -> AlignedBytes {
 }
 
 /// The wide BVHs may be at most `MAX_WIDE_DEPTH` levels deep, which bounds a firmware
-/// walk's stack (issue 18: ≤ 2 KiB for a 4-wide walk): a chain that deep, made to fill
+/// walk's stack (≤ 2 KiB for a 4-wide walk): a chain that deep, made to fill
 /// the stack, gives the brute-force hits on every kernel (single rays, any-hit, the
 /// packet walk and the 4-wide packet kernel); one level more is rejected by the parse.
 #[test]

@@ -1,5 +1,5 @@
 //! Linear colour to 8-bit sRGB and back, shared by every driver so images agree bit for
-//! bit. Both directions read tables ([`crate::shade::srgb_tables`]) made from the
+//! bit. Both directions read tables (`shade/srgb_tables.rs`) made from the
 //! IEC 61966-2-1 formulas, so no power function (and no f64) runs on a firmware target;
 //! the results are the formulas' bit for bit.
 

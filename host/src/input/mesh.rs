@@ -4,7 +4,7 @@ use anyhow::{bail, Result};
 use raypipe_core::image::{LightRecord, MaterialRecord, ShadingVertex};
 
 /// The largest coordinate magnitude a mesh may have: the builders' surface areas (squares
-/// of extents) and grown boxes stay finite in f32 below it (issue 18, D12: scenes of
+/// of extents) and grown boxes stay finite in f32 below it (scenes of
 /// extent 1e20 failed with "internal error: built an invalid image").
 pub const MAX_COORDINATE: f32 = 1e18;
 /// A triangle mesh with shading data, in the input's face order after triangulation

@@ -1,5 +1,5 @@
 //! A check of an OBJ file's face indices before tobj reads it: tobj drops a texture
-//! coordinate or normal index that names nothing, silently (issue 18, D14), so a face
+//! coordinate or normal index that names nothing, silently, so a face
 //! that names a missing `vt` or `vn` (or `v`) is reported here, with its line. OBJ
 //! indices count from 1 and refer to the elements defined so far; negative ones count
 //! back from the last.

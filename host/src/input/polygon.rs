@@ -4,7 +4,7 @@
 //! and recurses into `i..=m` and `m..=j`. A fan of an `n`-gon has `n − 3` diagonals from
 //! one vertex, nearly all as long as the polygon is wide, and every one of those slivers
 //! crosses a spatial structure from side to side: building a grid over a 20,000-vertex
-//! polygon took 22 s and 91 M list entries (issue 18, D2). Halving's diagonals on level
+//! polygon took 22 s and 91 M list entries. Halving's diagonals on level
 //! `k` are `2^k` chords of about `1/2^k` of the outline each, so their total length is
 //! the outline's times `log2 n`, and the references a grid or tree makes grow as
 //! `n log n`. Both keep the polygon's winding, and both assume (as OBJ does) a convex or

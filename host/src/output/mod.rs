@@ -21,7 +21,7 @@ fn dir_of(path: &Path) -> &Path {
 }
 
 /// Checks that `path`'s directory exists, so that a command writing several outputs can
-/// refuse before it writes any (issue 18, D13: `simulate --report <bad dir>` left the PNG
+/// refuse before it writes any (`simulate --report <bad dir>` left the PNG
 /// behind).
 pub fn check_dir(path: &Path) -> Result<()> {
     let dir = dir_of(path);

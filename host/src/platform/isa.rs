@@ -19,7 +19,7 @@ pub fn with_avx2<R>(f: impl FnOnce() -> R) -> R {
     f()
 }
 
-/// Every feature the AVX2 build enables, each checked (issue 18, D14: a VM may expose
+/// Every feature the AVX2 build enables, each checked (a VM may expose
 /// AVX2 without BMI; running BMI instructions there would be undefined behaviour).
 #[cfg(target_arch = "x86_64")]
 fn has_avx2_set() -> bool {
