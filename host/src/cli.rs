@@ -1,5 +1,8 @@
 //! The `raypipe` command line's arguments: clap parses into one options struct per
 //! subcommand. What each subcommand does is in [`crate::commands`].
+// The argument docs are `--help` text, written for a terminal: `[fixed]` and `<part>`
+// there are TOML tables and placeholders, not rustdoc links or HTML.
+#![allow(rustdoc::broken_intra_doc_links, rustdoc::invalid_html_tags)]
 
 use std::path::PathBuf;
 

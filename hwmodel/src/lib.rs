@@ -1,20 +1,27 @@
 //! # raypipe-hw
 //!
 //! A cycle-level, RTL-style model of a ray tracing chip in the spirit of SaarCOR (Wald &
-//! Slusallek 2001 §7.3): a ray generation & shading unit ([`rgs`]) feeds several traversal
-//! units ([`traversal_unit`]), each coupled to a list & intersection unit
-//! ([`intersection_unit`]) through bounded FIFOs ([`fifo`]); packets step in lock-step;
-//! per-unit caches ([`cache`]) sit in front of the memory ([`memory`]: perfect, fixed or
-//! DRAM ([`dram`]))
-//! that accounts every byte by data class. Every unit has registered state and one
-//! `tick`; FIFOs and the channel commit at the clock edge ([`simulator`]), so the tick
-//! order cannot change any result.
+//! Slusallek 2001 §7.3), and Purcell's programmable GPU as a stream processor
+//! ([`stream`]). The parts, by folder:
+//!
+//! * [`chip`]: a ray generation & shading unit ([`chip::rgs`]) feeds several traversal
+//!   units ([`chip::traversal_unit`]), each coupled to a list & intersection unit
+//!   ([`chip::intersection_unit`]) through bounded FIFOs ([`chip::fifo`]); packets step
+//!   in lock-step on a datapath of a configured width. Every unit has registered state
+//!   and one `tick`; FIFOs and the channel commit at the clock edge
+//!   ([`chip::simulator`]), so the tick order cannot change any result.
+//! * [`memory`]: per-unit caches ([`memory::cache`]) behind ports ([`memory::port`]), an
+//!   optional L2 and the memory — perfect, fixed or DRAM ([`memory::dram`]) — that
+//!   accounts every byte by data class.
+//! * [`observe`]: stall reasons, unit statistics, the report ([`observe::report`]), its
+//!   counters and metrics, energy and area, waveform and trace signals — all reading the
+//!   chip, none changing it.
+//! * [`config`]: every parameter, declared once with its unit and source ([`HwConfig`]).
 //!
 //! The model computes with raypipe-core's kernels — the structures' step kernels through
-//! `raypipe_core::traverse::walk::Walk`, the intersection and shading kernels — and observes their
-//! reads through `MemoryProbe`, so its image is the host's image bit for bit; it adds
-//! cycles, stalls, occupancy and traffic ([`report`]). Parameters live in one
-//! [`config::HwConfig`].
+//! `raypipe_core::traverse::walk::Walk`, the intersection and shading kernels — and
+//! observes their reads through `MemoryProbe`, so its image is the host's image bit for
+//! bit; it adds cycles, stalls, occupancy and traffic.
 #![forbid(unsafe_code)]
 
 pub mod chip;
