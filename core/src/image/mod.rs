@@ -7,20 +7,26 @@
 
 mod crc32;
 mod embed;
+mod error;
 mod header;
+mod limits;
+mod margin;
 mod records;
+mod sections;
+mod structure_views;
+mod validate;
 mod view;
 
 pub use crc32::{crc32, Crc32};
 pub use embed::Aligned64;
+pub use error::SceneError;
 pub use header::{
     AccelKind, Header, SectionEntry, SectionKind, FLAG_DEFAULT_LIGHT, FORMAT_VERSION, KNOWN_FLAGS, MAGIC,
 };
+pub use limits::{IMAGE_ALIGN, MAX_TREE_DEPTH, MAX_WIDE_DEPTH, SECTION_ALIGN};
 pub use records::{
     Bvh4Node, Bvh8Node, BvhNode, CameraRecord, GridRecord, KdNode, LightAlias, LightRecord, MaterialRecord, Position,
     ShadingVertex, TextureRecord, TriBlock4, TriangleRecord, WaldTriangle, WideNode, NULL_INDEX,
 };
-pub use view::{
-    Bvh4View, Bvh8View, BvhView, GridView, KdTreeView, SceneError, SceneView, WideBvhView, IMAGE_ALIGN, MAX_TREE_DEPTH,
-    MAX_WIDE_DEPTH, SECTION_ALIGN,
-};
+pub use structure_views::{Bvh4View, Bvh8View, BvhView, GridView, KdTreeView, WideBvhView};
+pub use view::SceneView;

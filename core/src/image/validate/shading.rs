@@ -1,0 +1,70 @@
+//! The optional shading sections — SHADING_VERTICES, MATERIALS, TRIANGLE_MATERIALS,
+//! TRIANGLE_OBJECTS, TEXTURES and TEXELS — absent, or matching the geometry: one record
+//! per vertex or triangle, material and texture indices in range, texture chains inside
+//! TEXELS.
+
+use crate::image::error::SceneError;
+use crate::image::header::SectionKind;
+use crate::image::records::{MaterialRecord, ShadingVertex, TextureRecord, NULL_INDEX};
+use crate::image::sections::Sections;
+
+/// The validated shading data.
+pub(in crate::image) struct Shading<'a> {
+    pub vertices: &'a [ShadingVertex],
+    pub materials: &'a [MaterialRecord],
+    pub tri_materials: &'a [u32],
+    pub tri_objects: &'a [u32],
+    pub textures: &'a [TextureRecord],
+    pub texels: &'a [u32],
+}
+
+/// An optional section with one record per vertex or triangle: absent, or all of them.
+fn one_each(section: SectionKind, found: usize, expected: u32) -> Result<(), SceneError> {
+    if found != 0 && found as u32 != expected {
+        return Err(SceneError::CountMismatch { section, expected, found: found as u32 });
+    }
+    Ok(())
+}
+
+/// The shading data of an image with `nv` vertices and `nt` triangles.
+pub(in crate::image) fn shading<'a>(s: &Sections<'a>, nv: u32, nt: u32) -> Result<Shading<'a>, SceneError> {
+    use SectionKind as K;
+    let vertices: &[ShadingVertex] = s.slice(K::ShadingVertices)?;
+    one_each(K::ShadingVertices, vertices.len(), nv)?;
+    let materials: &[MaterialRecord] = s.slice(K::Materials)?;
+    let tri_materials: &[u32] = s.slice(K::TriangleMaterials)?;
+    one_each(K::TriangleMaterials, tri_materials.len(), nt)?;
+    let nm = materials.len() as u32;
+    for (i, &m) in tri_materials.iter().enumerate() {
+        if m >= nm {
+            return Err(SceneError::IndexOutOfRange {
+                section: K::TriangleMaterials,
+                record: i as u32,
+                value: m,
+                limit: nm,
+            });
+        }
+    }
+    let tri_objects: &[u32] = s.slice(K::TriangleObjects)?;
+    one_each(K::TriangleObjects, tri_objects.len(), nt)?;
+    let textures: &[TextureRecord] = s.slice(K::Textures)?;
+    let texels: &[u32] = s.slice(K::Texels)?;
+    for (i, t) in textures.iter().enumerate() {
+        let levels_ok = t.levels >= 1 && t.levels <= TextureRecord::full_chain(t.width, t.height);
+        let end = t.first as u64 + TextureRecord::chain_texels(t.width, t.height, t.levels);
+        if t.width == 0 || t.height == 0 || !levels_ok || end > texels.len() as u64 || t.wrap > TextureRecord::CLAMP {
+            return Err(SceneError::BadTexture { texture: i as u32 });
+        }
+    }
+    for (i, m) in materials.iter().enumerate() {
+        if m.texture != NULL_INDEX && m.texture >= textures.len() as u32 {
+            return Err(SceneError::IndexOutOfRange {
+                section: K::Materials,
+                record: i as u32,
+                value: m.texture,
+                limit: textures.len() as u32,
+            });
+        }
+    }
+    Ok(Shading { vertices, materials, tri_materials, tri_objects, textures, texels })
+}
