@@ -1,0 +1,15 @@
+//! Packet traversal of the 4-wide BVH: the packet visits a node if any of its rays may
+//! hit one of the node's boxes, nearest child first; a leaf intersects its triangles with
+//! exactly the rays that enter its box, in groups of four lanes (SIMD registers) for the
+//! box test and, where the intersector has a four-ray form, for the triangles too. Rays
+//! of one origin (a camera's) meet each triangle made ready once for it, eight lanes at a
+//! time where the CPU has AVX (`simd::watertight8`).
+
+mod frustum;
+pub(crate) mod groups;
+mod leaf;
+mod prepared;
+mod walk;
+
+pub(crate) use groups::{Groups, GROUPS};
+pub use walk::trace_bvh4_packet;

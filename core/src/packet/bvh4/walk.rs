@@ -1,0 +1,211 @@
+//! The packet's walk through the 4-wide BVH: one node per step for the whole packet,
+//! culled by its frustum (or ray by ray), needed children nearest first, a leaf's
+//! triangles tested by the rays that enter its box.
+
+use crate::counters::RayCounters;
+use crate::hit::Hit;
+use crate::image::{Bvh4View, SceneView, MAX_WIDE_DEPTH};
+use crate::intersect::triangle::Intersector;
+use crate::packet::{ray_by_ray, Lanes, PacketCounters, PacketHits, RayPacket};
+use crate::probe::MemoryProbe;
+use crate::ray::Ray;
+use crate::traverse::boxes::datapath::NodeTests;
+use crate::traverse::boxes::slab::RayBox;
+use crate::traverse::wide_bvh::node4::slab4_exact;
+use crate::traverse::wide_bvh::node4::trace_bvh4;
+use glam::{BVec4A, Vec3, Vec3A, Vec4};
+
+use super::frustum::Frustum;
+use super::groups::{groups_of, Groups};
+use super::leaf::{leaf_entries, test_leaf, test_leaf_shared};
+use super::prepared::Preps;
+
+pub(super) const STACK: usize = 3 * MAX_WIDE_DEPTH as usize + 4;
+
+/// How the packet culls boxes: by its frustum, or ray by ray with each ray's exact box
+/// test when some ray has a zero direction component (see [`RayBox`]).
+// No heap in core to box the per-ray tests: they live on the stack for one packet, and
+// are borrowed here, so that the frustum's packets (nearly all) do not move them (a
+// copy of the whole record per packet was 2% of the bunny's packet time).
+pub(super) enum Cull<'b, const N: usize> {
+    Frustum(Frustum),
+    Exact(&'b [RayBox; N]),
+}
+
+/// The slots set in `mask`, ordered by entry distance `t` (insertion sort: at most four),
+/// and how many there are.
+#[inline(always)]
+pub(super) fn nearest_first(mask: u32, t: &[f32; 4]) -> ([usize; 4], usize) {
+    let mut order = [0usize; 4];
+    let mut m = 0;
+    for k in 0..4 {
+        if mask & (1 << k) != 0 {
+            let mut j = m;
+            // Indices masked below 4: the compiler sees them in range (no panic path).
+            while j > 0 && t[order[(j - 1) & 3] & 3] > t[k] {
+                order[j & 3] = order[(j - 1) & 3];
+                j -= 1;
+            }
+            order[j & 3] = k;
+            m += 1;
+        }
+    }
+    (order, m)
+}
+
+/// Traces all active rays of `packet`; `hits[i]` receives ray `i`'s closest hit.
+///
+/// Inner nodes are tested once for the whole packet with the interval-arithmetic
+/// `Frustum`; at a leaf each ray tests the leaf's box (up to its own best hit) and only
+/// the rays that enter it test the triangles (four rays against one triangle at once where
+/// two or more of a group of four lanes enter). Since the frustum test is conservative,
+/// every ray still tests every triangle its single-ray walk would. A packet whose rays
+/// have a zero direction component falls back to one exact 4-box test per ray and node.
+pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
+    scene: &SceneView<'_>,
+    bvh: &Bvh4View<'_>,
+    packet: &RayPacket<N>,
+    hits: &mut PacketHits<N>,
+    probe: &mut P,
+    counters: &mut PacketCounters,
+) {
+    if !<I::Nodes as NodeTests>::FLOAT {
+        let walk = |r: &Ray, c: &mut RayCounters| trace_bvh4::<I, P>(scene, bvh, r, probe, c);
+        return ray_by_ray(packet, hits, counters, walk);
+    }
+    *hits = [None; N];
+    let mask = packet.live();
+    if mask == 0 {
+        return;
+    }
+    let groups = N.div_ceil(4);
+    let full = N <= 64 && mask == u64::MAX >> (64 - N.clamp(1, 64));
+    // The lanes in SIMD registers with their reciprocals: computed when the first leaf
+    // needs them, if the frustum can do without (see `Frustum::from_full_packet`).
+    let mut lanes: Option<Groups> = None;
+    // Each ray's exact box test, where the frustum cannot serve.
+    let mut boxes: Option<[RayBox; N]> = None;
+    // `t_end`: how far any ray of the packet still looks.
+    let (cull, mut t_end): (Cull<N>, f32) = match full.then(|| Frustum::from_full_packet(packet)).flatten() {
+        Some((f, t_end)) => (Cull::Frustum(f), t_end),
+        None => {
+            let q = Groups::fill(&mut lanes, packet, groups, mask);
+            let t_end = q.largest_end();
+            match Frustum::new(q, groups, mask) {
+                Some(f) => (Cull::Frustum(f), t_end),
+                None => (Cull::Exact(boxes.insert(core::array::from_fn(|i| RayBox::new(&packet.ray(i))))), t_end),
+            }
+        }
+    };
+    // The watertight constants are computed the first time a ray enters a leaf: most
+    // rays of a frame never do.
+    let mut preps = Preps::<I, N>::new();
+    // (child or first entry, leaf count or 0, entry bound, leaf box as min xyz, max xyz)
+    let mut stack: heapless::Vec<(u32, u32, f32, [f32; 6]), STACK> = heapless::Vec::new();
+    let mut current = (0u32, 0u32, [0f32; 6], 0f32);
+    let mut c = PacketCounters::default();
+    loop {
+        let (index, count, leaf_box, leaf_t) = current;
+        c.visits += 1;
+        if count == 0 {
+            let node = bvh.node(index, probe);
+            let (tn, needed) = match &cull {
+                Cull::Frustum(f) => {
+                    c.active_lanes += mask.count_ones() as u64;
+                    f.slab4(node, t_end)
+                }
+                Cull::Exact(boxes) => {
+                    let mut needed = 0u32;
+                    let mut t = Vec4::INFINITY;
+                    for i in Lanes(mask) {
+                        let end = hits[i].map_or(packet.t_max[i], |h: Hit| h.t);
+                        let (tn, m) = slab4_exact(&boxes[i], node, packet.t_min[i], end);
+                        if m != 0 {
+                            c.active_lanes += 1;
+                            needed |= m;
+                            let hit = BVec4A::new(m & 1 != 0, m & 2 != 0, m & 4 != 0, m & 8 != 0);
+                            t = t.min(Vec4::select(hit, tn, Vec4::INFINITY));
+                        }
+                    }
+                    (t, needed)
+                }
+            };
+            let child_t = tn.to_array();
+            // Needed children, nearest first.
+            let (order, n) = nearest_first(needed, &child_t);
+            if n > 0 {
+                let slot_box = |k: usize| {
+                    let k = k & 3;
+                    [node.min_x[k], node.min_y[k], node.min_z[k], node.max_x[k], node.max_y[k], node.max_z[k]]
+                };
+                for &k in order.get(1..n).unwrap_or_default().iter().rev() {
+                    let k = k & 3;
+                    let _ = stack.push((node.child[k], node.count[k], child_t[k], slot_box(k)));
+                }
+                let k = order[0] & 3;
+                current = (node.child[k], node.count[k], slot_box(k), child_t[k]);
+                continue;
+            }
+        } else {
+            let q = match lanes {
+                Some(ref mut q) => q,
+                None => Groups::fill(&mut lanes, packet, groups, mask),
+            };
+            let enter = match &cull {
+                Cull::Exact(boxes) => {
+                    let lo = Vec3A::new(leaf_box[0], leaf_box[1], leaf_box[2]);
+                    let hi = Vec3A::new(leaf_box[3], leaf_box[4], leaf_box[5]);
+                    let mut enter = 0u64;
+                    for i in Lanes(mask) {
+                        let end = hits[i].map_or(packet.t_max[i], |h: Hit| h.t);
+                        if boxes[i].entry(lo, hi, packet.t_min[i], end).is_some() {
+                            enter |= 1 << i;
+                        }
+                    }
+                    enter
+                }
+                Cull::Frustum(f) => leaf_entries(q, groups, mask, &leaf_box, leaf_t, f.origin()),
+            };
+            c.active_lanes += enter.count_ones() as u64;
+            if enter != 0 {
+                preps.fours.prepare(packet, q, mask, enter);
+                let shared = match &cull {
+                    Cull::Frustum(f) => f.origin().map(Vec3::from).is_some_and(|o| {
+                        test_leaf_shared::<I, P, N>(scene, bvh, packet, &mut preps, enter, index, count, o, hits, probe)
+                    }),
+                    Cull::Exact(_) => false,
+                };
+                if !shared {
+                    test_leaf::<I, P, N>(scene, bvh, packet, &mut preps, enter, index, count, hits, probe);
+                }
+                c.tri_tests += count as u64 * enter.count_ones() as u64;
+                // The ends of the groups that entered, all four lanes from their hits (the
+                // other lanes' hits are unchanged, and inactive lanes have none: their
+                // ends stay their rays' ends).
+                for g in Lanes(groups_of(enter)) {
+                    let end = |k: usize| {
+                        let i = (4 * g + k).min(N - 1);
+                        hits[i].map_or(packet.t_max[i], |h: Hit| h.t)
+                    };
+                    if let Some(e) = q.ends.get_mut(g) {
+                        *e = Vec4::new(end(0), end(1), end(2), end(3));
+                        q.update_end(g, mask);
+                    }
+                }
+                t_end = q.largest_end();
+            }
+        }
+        // Pop the next entry whose entry bound is not beyond every ray's best hit.
+        loop {
+            let Some((child, count, t, b)) = stack.pop() else {
+                counters.add(&c);
+                return;
+            };
+            if t > t_end {
+                continue;
+            }
+            current = (child, count, b, t);
+            break;
+        }
+    }
+}
