@@ -128,24 +128,6 @@ pub struct HitRecord {
     pub prim: i32,
 }
 
-/// Writes hits as a structured array `[('t','<f4'),('u','<f4'),('v','<f4'),('prim','<i4')]`.
-pub fn write_hits(path: &Path, hits: &[HitRecord]) -> Result<()> {
-    let header = header_bytes(&format!(
-        "{{'descr': [('t', '<f4'), ('u', '<f4'), ('v', '<f4'), ('prim', '<i4')], 'fortran_order': False, 'shape': ({},), }}",
-        hits.len()
-    ));
-    write_atomic(path, |w| {
-        w.write_all(&header)?;
-        for h in hits {
-            w.write_all(&h.t.to_le_bytes())?;
-            w.write_all(&h.u.to_le_bytes())?;
-            w.write_all(&h.v.to_le_bytes())?;
-            w.write_all(&h.prim.to_le_bytes())?;
-        }
-        Ok(())
-    })
-}
-
 /// Writes a structured array of `rows` records: `fields` as `(name, dtype)` (a dtype such
 /// as `'<f4'`, or `('<f4', (3,))` for a sub-array), `data` the records packed in order.
 pub fn write_records(path: &Path, fields: &[(&str, &str)], rows: usize, data: &[u8]) -> Result<()> {
