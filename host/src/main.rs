@@ -1,3 +1,3 @@
 fn main() -> std::process::ExitCode {
-    raypipe::commands::main()
+    raypipe::cli::main()
 }

@@ -1,7 +1,7 @@
 //! `raypipe bench`: timed runs of the host renderer.
 
 use crate::build::grid::GridResolution;
-use crate::cli::{BenchArgs, CameraArgs};
+
 use crate::hw::chip;
 use crate::render::packets::PacketSize;
 use crate::render::tracer::IntersectorKind;
@@ -14,6 +14,59 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use super::{camera_for, structure_summary};
+
+use super::args::parse_size;
+use super::args::AlgoArgs;
+use super::args::CameraArgs;
+use crate::scene::TriangleLayout;
+use clap::Args;
+
+/// `raypipe bench`.
+#[derive(Args, Debug)]
+pub struct BenchArgs {
+    /// OBJ files or scene images to measure besides the built-in Cornell box.
+    pub scenes: Vec<PathBuf>,
+    /// Structures to build and measure (for OBJ scenes; an image has its own).
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Accel::Grid, Accel::Kd, Accel::Bvh, Accel::Bvh4, Accel::Bvh8])]
+    pub accel: Vec<Accel>,
+    /// Image size of the primary-ray frame.
+    #[arg(long, value_name = "WxH", value_parser = parse_size, default_value = "1024x1024")]
+    pub size: (u32, u32),
+    /// Packet sizes to measure (1 = single rays).
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [PacketSize::Single, PacketSize::P16])]
+    pub packet: Vec<PacketSize>,
+    /// Camera file for every scene's view (default: each scene's own camera).
+    #[arg(long, value_name = "FILE")]
+    pub camera: Option<PathBuf>,
+    /// Timed runs per figure (the median is reported).
+    #[arg(long, default_value_t = 5)]
+    pub runs: usize,
+    /// Threads for the all-threads figure (default: all cores).
+    #[arg(long, value_name = "N")]
+    pub threads: Option<usize>,
+    /// Leave out the built-in Cornell box.
+    #[arg(long)]
+    pub no_default: bool,
+    /// Grid cells along the shortest axis (default: derived from the triangle count).
+    #[arg(long, value_name = "N")]
+    pub grid_min_dim: Option<u32>,
+    /// Triangle layout: indexed vertices, or also Wald's 48-byte precomputed triangles, or
+    /// also leaf blocks of four triangles (bvh4, bvh8; fastest for single rays).
+    #[arg(long, value_enum, default_value_t = TriangleLayout::Indexed)]
+    pub triangles: TriangleLayout,
+    /// Ray–triangle intersection test (default: wald for an image with Wald triangles,
+    /// watertight otherwise).
+    #[arg(long, value_enum)]
+    pub intersector: Option<IntersectorKind>,
+    /// Also run the hardware model with this preset (saarcor, minimal) on each frame and
+    /// report its wall time against the host's fastest single-thread frame.
+    #[arg(long, value_name = "PRESET")]
+    pub simulate: Option<String>,
+    /// Also time a whole frame of this algorithm: every ray it traces (shadow, secondary,
+    /// path rays) per second.
+    #[command(flatten)]
+    pub algo: AlgoArgs,
+}
 
 pub(crate) fn cmd_bench(a: BenchArgs) -> Result<()> {
     if a.threads == Some(0) {

@@ -1,6 +1,5 @@
 //! `raypipe build`: an OBJ file (or a generated scene) into a scene image.
 
-use crate::cli::BuildArgs;
 use crate::output;
 use crate::render;
 use crate::scene::{self, Accel};
@@ -8,6 +7,34 @@ use anyhow::{anyhow, bail, Result};
 use std::time::Instant;
 
 use super::{accel_name, fmt_bytes, warn};
+
+use super::args::CameraArgs;
+use super::args::StructureArgs;
+use clap::Args;
+use std::path::PathBuf;
+
+/// `raypipe build`.
+#[derive(Args, Debug)]
+pub struct BuildArgs {
+    /// The OBJ file to compile (or --generate).
+    #[arg(required_unless_present = "generate", conflicts_with = "generate")]
+    pub scene: Option<PathBuf>,
+    /// Generate a scene instead: building[:floors=F,rooms=R,seed=S] (a Soda Hall
+    /// stand-in, ~1M triangles) or forest[:trees=T,leaves=L,seed=S] (~1M triangles).
+    #[arg(long, value_name = "NAME[:PARAMS]")]
+    pub generate: Option<String>,
+    /// The generated scene's view, the image's default camera: building: outside,
+    /// inside; forest: top, inside.
+    #[arg(long, value_name = "NAME", requires = "generate")]
+    pub view: Option<String>,
+    /// Where to write the scene image (.rpsi).
+    #[arg(short, long, value_name = "OUT")]
+    pub output: PathBuf,
+    #[command(flatten)]
+    pub structure: StructureArgs,
+    #[command(flatten)]
+    pub camera: CameraArgs,
+}
 
 pub(crate) fn cmd_build(a: BuildArgs) -> Result<()> {
     let start = Instant::now();

@@ -1,12 +1,36 @@
 //! `raypipe fixed-point`: the fixed-point datapaths against `f32` on the same rays.
 
-use crate::cli::{CameraArgs, FixedPointArgs};
 use crate::render;
 use crate::scene::{self, Accel, BuildOptions};
 use anyhow::{bail, Result};
 use std::path::Path;
 
 use super::{accel_name, camera_for, warn};
+
+use super::args::parse_size;
+use super::args::CameraArgs;
+use clap::Args;
+use std::path::PathBuf;
+
+/// `raypipe fixed-point`.
+#[derive(Args, Debug)]
+pub struct FixedPointArgs {
+    /// OBJ files or scene images (with a BVH); the built-in Cornell box when none.
+    pub scenes: Vec<PathBuf>,
+    /// Fixed-point formats to compare with f32 (q16.16, q20.12, q12.20, q24.8 in 32
+    /// bits; q12.12, q8.16, q16.8 in 24).
+    #[arg(long, value_delimiter = ',', default_values = ["q16.16", "q12.12", "q8.16"])]
+    pub datapath: Vec<raypipe_hw::Datapath>,
+    /// Structure to build for OBJ scenes (a BVH: the fixed-point box test is for BVHs).
+    #[arg(long, value_enum, default_value_t = Accel::Bvh4)]
+    pub accel: Accel,
+    /// Image size of each scene's view.
+    #[arg(long, value_name = "WxH", value_parser = parse_size, default_value = "512x512")]
+    pub size: (u32, u32),
+    /// Camera file for every scene's view (default: each scene's own camera).
+    #[arg(long, value_name = "FILE")]
+    pub camera: Option<PathBuf>,
+}
 
 pub(crate) fn cmd_fixed_point(a: FixedPointArgs) -> Result<()> {
     use crate::study::fixed_point::{compare, fits, rays, RayKind};

@@ -1,12 +1,27 @@
 //! `raypipe info`: what a scene is — bounds, triangles, materials, lights, camera, the
 //! structure's statistics and the image's sections — without rendering anything.
 
-use crate::cli::InfoArgs;
 use anyhow::Result;
 use raypipe_core::image::{LightRecord, SectionEntry, SectionKind};
 use raypipe_core::NoProbe;
 
 use super::{lights_summary, load_scene, structure_summary, warn};
+
+use super::args::CameraArgs;
+use super::args::StructureArgs;
+use clap::Args;
+use std::path::PathBuf;
+
+/// `raypipe info`.
+#[derive(Args, Debug)]
+pub struct InfoArgs {
+    /// An OBJ file or a scene image; the built-in Cornell box when omitted.
+    pub scene: Option<PathBuf>,
+    #[command(flatten)]
+    pub structure: StructureArgs,
+    #[command(flatten)]
+    pub camera: CameraArgs,
+}
 
 pub(crate) fn cmd_info(a: InfoArgs) -> Result<()> {
     let scene = load_scene(a.scene.as_deref(), &a.structure, &a.camera)?;

@@ -2,10 +2,49 @@
 
 use anyhow::{anyhow, bail, Result};
 
-use crate::cli::PlotArgs;
 use crate::output;
 use crate::study::sweep_plot::{self, Plot};
 use crate::study::sweep_table::{self, label};
+
+use clap::Args;
+use std::path::PathBuf;
+
+/// `raypipe plot`.
+#[derive(Args, Debug)]
+pub struct PlotArgs {
+    /// A sweep's rows (.jsonl, from `raypipe sweep` or `sweep merge`).
+    #[arg(value_name = "SWEEP.jsonl")]
+    pub rows: PathBuf,
+    /// The plot: .svg, or .png (rendered from the SVG).
+    #[arg(short, long, value_name = "FILE")]
+    pub output: PathBuf,
+    /// The parameter along the x axis.
+    #[arg(long, value_name = "PARAM")]
+    pub x: String,
+    /// Line plot: the metric on the y axis (e.g. fps, bytes_per_ray.nodes,
+    /// hit_rate.triangles); heatmap: the second parameter.
+    #[arg(long, value_name = "NAME", required_unless_present = "stack")]
+    pub y: Option<String>,
+    /// Line plot: one line per value of this parameter.
+    #[arg(long, value_name = "PARAM", conflicts_with_all = ["value", "stack"])]
+    pub series: Option<String>,
+    /// Heatmap: the metric coloured over the --x × --y grid.
+    #[arg(long, value_name = "METRIC", conflicts_with = "stack")]
+    pub value: Option<String>,
+    /// Stacked bars: every metric PREFIX.<part> (e.g. stall.traversal, bytes_per_ray).
+    #[arg(long, value_name = "PREFIX", conflicts_with = "y")]
+    pub stack: Option<String>,
+    /// Line plot: a logarithmic x axis (cache sizes, thread counts).
+    #[arg(long)]
+    pub log_x: bool,
+    /// Only rows whose parameter KEY has VALUE (repeatable; `*` matches any run of
+    /// characters, e.g. `scene=*bunny.obj`).
+    #[arg(long = "where", value_name = "KEY=VALUE")]
+    pub filters: Vec<String>,
+    /// The title (default: what is plotted against what).
+    #[arg(long)]
+    pub title: Option<String>,
+}
 
 pub(crate) fn cmd_plot(a: PlotArgs) -> Result<()> {
     let png = match a.output.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {

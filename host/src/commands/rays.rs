@@ -1,11 +1,34 @@
 //! `raypipe rays`: writes a batch of rays (eye or bounce rays of a view).
 
-use crate::cli::RaysArgs;
 use crate::render;
 use crate::scene::{self, Accel, BuildOptions};
 use anyhow::Result;
 
 use super::camera_for;
+
+use super::args::CameraArgs;
+use clap::Args;
+use std::path::PathBuf;
+
+/// `raypipe rays`.
+#[derive(Args, Debug)]
+pub struct RaysArgs {
+    /// An OBJ file or a scene image (for its default camera); the built-in Cornell box when omitted.
+    pub scene: Option<PathBuf>,
+    /// Output .npy file.
+    #[arg(short, long, value_name = "NPY")]
+    pub output: PathBuf,
+    /// Also write the scene's triangles, in id order, as a (T, 9) float32 array.
+    #[arg(long, value_name = "NPY")]
+    pub triangles: Option<PathBuf>,
+    /// Write the rays in square blocks of this side (e.g. 8: each run of 64 rays is an 8×8
+    /// pixel block, ready for `trace --packet 64`), in the Z-order of the host's packet
+    /// lanes within a block (runs of 4 are 2×2 pixels); 1 = row by row.
+    #[arg(long, value_name = "SIDE", default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub block: u32,
+    #[command(flatten)]
+    pub camera: CameraArgs,
+}
 
 pub(crate) fn cmd_rays(a: RaysArgs) -> Result<()> {
     let scene = scene::load(a.scene.as_deref(), &BuildOptions { accel: Accel::None, ..Default::default() })?;

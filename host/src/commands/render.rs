@@ -1,6 +1,5 @@
 //! `raypipe render`: a PNG of the scene on the host renderer.
 
-use crate::cli::RenderArgs;
 use crate::output;
 use crate::render::packets::PacketSize;
 use crate::render::tracer::IntersectorKind;
@@ -9,6 +8,42 @@ use anyhow::Result;
 use std::time::Instant;
 
 use super::{camera_for, check_image_path, lights_summary, load_scene, warn};
+
+use super::args::AlgoArgs;
+use super::args::CameraArgs;
+use super::args::DisplayArgs;
+use super::args::RunArgs;
+use super::args::StructureArgs;
+use super::args::WalkArgs;
+use clap::Args;
+use std::path::PathBuf;
+
+/// `raypipe render`.
+#[derive(Args, Debug)]
+pub struct RenderArgs {
+    /// Rays per packet: 1 (single rays), 4 (2×2), 16 (4×4) or 64 (8×8); the image is the
+    /// same. Default: the faster one for the structure.
+    #[arg(long, value_enum)]
+    pub packet: Option<PacketSize>,
+    #[command(flatten)]
+    pub algo: AlgoArgs,
+    /// An OBJ file or a scene image; the built-in Cornell box when omitted.
+    pub scene: Option<PathBuf>,
+    /// Output image: .png (8-bit sRGB through --exposure and --tonemap), .exr (OpenEXR)
+    /// or .pfm, both linear radiance.
+    #[arg(short, long, value_name = "IMAGE", default_value = "raypipe.png")]
+    pub output: PathBuf,
+    #[command(flatten)]
+    pub display: DisplayArgs,
+    #[command(flatten)]
+    pub camera: CameraArgs,
+    #[command(flatten)]
+    pub structure: StructureArgs,
+    #[command(flatten)]
+    pub run: RunArgs,
+    #[command(flatten)]
+    pub walk: WalkArgs,
+}
 
 pub(crate) fn cmd_render(a: RenderArgs) -> Result<()> {
     a.run.check()?;

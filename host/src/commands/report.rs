@@ -5,8 +5,39 @@ use std::path::Path;
 use anyhow::{anyhow, Result};
 use serde_json::Value;
 
-use crate::cli::{ReportArgs, ReportCommand, ReportDiffArgs};
 use crate::study::report_diff::{diff, is_headline, show, Change};
+
+use clap::Args;
+use clap::Subcommand;
+use std::path::PathBuf;
+
+/// `raypipe report`.
+#[derive(Args, Debug)]
+pub struct ReportArgs {
+    /// What to do with reports.
+    #[command(subcommand)]
+    pub command: ReportCommand,
+}
+
+/// `raypipe report …`.
+#[derive(Subcommand, Debug)]
+pub enum ReportCommand {
+    /// What changed between two reports: the configuration keys, then every number with
+    /// its ratio, largest effect first.
+    Diff(ReportDiffArgs),
+}
+
+/// `raypipe report diff`.
+#[derive(Args, Debug)]
+pub struct ReportDiffArgs {
+    /// The first report (the baseline).
+    pub a: PathBuf,
+    /// The second report.
+    pub b: PathBuf,
+    /// Show only the N largest changes (default: all).
+    #[arg(long, value_name = "N")]
+    pub top: Option<usize>,
+}
 
 pub(crate) fn cmd_report(a: ReportArgs) -> Result<()> {
     match a.command {

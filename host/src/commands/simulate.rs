@@ -4,7 +4,6 @@ use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
-use crate::cli::SimulateArgs;
 use crate::hw::chip::{self, FrameRun, Measure};
 use crate::output;
 use crate::render::tracer::IntersectorKind;
@@ -14,6 +13,120 @@ use anyhow::{bail, Result};
 use raypipe_hw::Report;
 
 use super::{camera_for, check_image_path, load_scene, structure_summary, warn};
+
+use super::args::AlgoArgs;
+use super::args::CameraArgs;
+use super::args::DisplayArgs;
+use super::args::StructureArgs;
+use super::args::WalkArgs;
+use clap::Args;
+use std::path::PathBuf;
+
+/// `raypipe simulate`'s arguments from a command line that starts with `simulate` (a
+/// sweep point's), with clap's own errors, as `raypipe` itself would parse it.
+pub fn parse_simulate_line(args: &[String]) -> Result<SimulateArgs, clap::Error> {
+    /// `raypipe` with only its `simulate` subcommand.
+    #[derive(clap::Parser)]
+    #[command(name = "raypipe")]
+    struct Line {
+        #[command(subcommand)]
+        command: Only,
+    }
+    #[derive(clap::Subcommand)]
+    enum Only {
+        Simulate(Box<SimulateArgs>),
+    }
+    let line =
+        <Line as clap::Parser>::try_parse_from(std::iter::once("raypipe".to_string()).chain(args.iter().cloned()))?;
+    let Only::Simulate(a) = line.command;
+    Ok(*a)
+}
+
+/// `raypipe simulate`.
+#[derive(Args, Debug, Clone)]
+pub struct SimulateArgs {
+    /// An OBJ file or a scene image; the built-in Cornell box when omitted.
+    pub scene: Option<PathBuf>,
+    /// Hardware configuration file (TOML; see fixtures/hw/ and docs/hw-model.md).
+    #[arg(long, value_name = "FILE.toml", conflicts_with = "preset")]
+    pub config: Option<PathBuf>,
+    /// A shipped configuration: saarcor or minimal (default: the built-in defaults).
+    #[arg(long, value_name = "NAME")]
+    pub preset: Option<String>,
+    /// Override one parameter, e.g. `--set traversal.threads=16` (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+    /// Output image: .png (8-bit sRGB through --exposure and --tonemap), .exr (OpenEXR)
+    /// or .pfm, both linear radiance.
+    #[arg(short, long, value_name = "IMAGE", default_value = "raypipe-sim.png")]
+    pub output: PathBuf,
+    #[command(flatten)]
+    pub display: DisplayArgs,
+    /// The report as JSON (schema in docs/hw-model.md).
+    #[arg(long, value_name = "JSON", default_value = "raypipe-sim.json")]
+    pub report: PathBuf,
+    #[command(flatten)]
+    pub camera: CameraArgs,
+    #[command(flatten)]
+    pub structure: StructureArgs,
+    /// Ray–triangle test (default: the one the image's triangle layout is for).
+    #[arg(long, value_enum)]
+    pub intersector: Option<IntersectorKind>,
+    #[command(flatten)]
+    pub algo: AlgoArgs,
+    #[command(flatten)]
+    pub walk: WalkArgs,
+    #[command(flatten)]
+    pub measure: MeasureArgs,
+}
+
+/// What `simulate` measures: warm-up, region of interest, intervals.
+#[derive(Args, Debug, Clone, Default)]
+pub struct MeasureArgs {
+    /// Simulate the view this many times first, caches and DRAM rows kept warm, and
+    /// measure the next (a walkthrough: its first K frames are warm-up).
+    #[arg(long, value_name = "K", default_value_t = 0)]
+    pub warmup_frames: usize,
+    /// Region of interest: the report covers cycles A..B of each measured frame (from its
+    /// start) only.
+    #[arg(long, value_name = "A..B", value_parser = parse_roi)]
+    pub roi: Option<(u64, u64)>,
+    /// Write the report's counters every N cycles of the measured part, as JSON lines
+    /// (--intervals); the rows of a frame sum to its report.
+    #[arg(long, value_name = "N")]
+    pub interval: Option<u64>,
+    /// Where --interval writes.
+    #[arg(long, value_name = "JSONL", default_value = "raypipe-sim.intervals.jsonl")]
+    pub intervals: PathBuf,
+    /// Waveforms as VCD (GTKWave, Surfer): FIFO occupancies, unit activities, traversal
+    /// threads by state, requests waiting in ports and the memory's queue, per cycle.
+    #[arg(long, value_name = "FILE.vcd")]
+    pub vcd: Option<PathBuf>,
+    /// Only cycles A..B of the run in the VCD.
+    #[arg(long, value_name = "A..B", value_parser = parse_roi, requires = "vcd")]
+    pub vcd_window: Option<(u64, u64)>,
+    /// Only the signals whose names start with these (e.g. traversal0,fifos.rays,memory).
+    #[arg(long, value_name = "LIST", value_delimiter = ',', requires = "vcd")]
+    pub vcd_units: Vec<String>,
+    /// A Chrome/Perfetto trace (JSON): packet lifetimes (issue, traversal, intersection,
+    /// shading) and memory transactions.
+    #[arg(long, value_name = "FILE.json")]
+    pub trace: Option<PathBuf>,
+    /// Per-pixel cost heatmaps of the (last) frame: PREFIX-cycles.png (cycles its packets
+    /// were in flight), PREFIX-steps.png (ray–node tests), PREFIX-tests.png (ray–triangle
+    /// tests), PREFIX-bytes.png (scene bytes read for it).
+    #[arg(long, value_name = "PREFIX")]
+    pub cost_image: Option<PathBuf>,
+    /// Walkthroughs: one JSON line per frame (cycles, frames/s, bytes loaded, hit rates).
+    #[arg(long, value_name = "JSONL", default_value = "raypipe-sim.frames.jsonl")]
+    pub frames: PathBuf,
+}
+
+pub(crate) fn parse_roi(s: &str) -> Result<(u64, u64), String> {
+    let (a, b) = s.split_once("..").ok_or_else(|| format!("{s:?}: expected A..B (cycles)"))?;
+    let parse = |t: &str| t.trim().parse::<u64>().map_err(|_| format!("{s:?}: {t:?} is not a cycle number"));
+    Ok((parse(a)?, parse(b)?))
+}
 
 pub(crate) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
     check_image_path(&a.output)?;
@@ -31,7 +144,7 @@ pub(crate) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
     if walk {
         output::check_dir(&a.measure.frames)?;
     }
-    let run = simulate_args(&a, None, true)?;
+    let run = run_simulation(&a, None, true)?;
     let measured: Vec<&FrameRun> = run.frames.iter().filter(|f| !f.warmup).collect();
     if walk {
         for (k, f) in run.frames.iter().enumerate() {
@@ -202,7 +315,7 @@ impl SceneCache {
 /// Runs what `a` describes: the configuration is checked before the scene is even
 /// loaded (through `cache` when given). `raypipe simulate` and every sweep point go
 /// through here, so a sweep point's report is the stand-alone run's.
-pub(crate) fn simulate_args(a: &SimulateArgs, cache: Option<&SceneCache>, show_progress: bool) -> Result<Simulated> {
+pub(crate) fn run_simulation(a: &SimulateArgs, cache: Option<&SceneCache>, show_progress: bool) -> Result<Simulated> {
     let cfg = chip::load_config(a.preset.as_deref(), a.config.as_deref(), &a.set)?;
     if let (Some(k), true) = (a.intersector, cfg.datapath != raypipe_hw::Datapath::F32) {
         bail!(

@@ -1,6 +1,5 @@
 //! `raypipe stats`: Purcell's scene statistics for a view.
 
-use crate::cli::StatsArgs;
 use crate::render::packets::PacketSize;
 use crate::render::tracer::IntersectorKind;
 use crate::render::{Algorithm, RenderOptions};
@@ -9,6 +8,37 @@ use anyhow::Result;
 use raypipe_core::DataClass;
 
 use super::{camera_for, lights_summary, load_scene, structure_summary, warn};
+
+use super::args::AlgoArgs;
+use super::args::CameraArgs;
+use super::args::RunArgs;
+use super::args::StructureArgs;
+use clap::Args;
+use std::path::PathBuf;
+
+/// `raypipe stats`.
+#[derive(Args, Debug)]
+pub struct StatsArgs {
+    /// Also trace the view as packets of this many rays and report their SIMD efficiency.
+    #[arg(long, value_enum, default_value_t = PacketSize::Single)]
+    pub packet: PacketSize,
+    /// Also report what an algorithm costs against ray casting (rays per pixel by kind,
+    /// traversal steps, triangle tests, shading, scene bytes).
+    #[command(flatten)]
+    pub algo: AlgoArgs,
+    /// An OBJ file or a scene image; the built-in Cornell box when omitted.
+    pub scene: Option<PathBuf>,
+    #[command(flatten)]
+    pub camera: CameraArgs,
+    #[command(flatten)]
+    pub structure: StructureArgs,
+    #[command(flatten)]
+    pub run: RunArgs,
+    /// Per-pixel cost heatmaps of the primary rays: PREFIX-steps.png (nodes visited),
+    /// PREFIX-tests.png (triangle tests), PREFIX-bytes.png (scene bytes read).
+    #[arg(long, value_name = "PREFIX")]
+    pub cost_image: Option<PathBuf>,
+}
 
 pub(crate) fn cmd_stats(a: StatsArgs) -> Result<()> {
     a.run.check()?;

@@ -1,6 +1,5 @@
 //! `raypipe stream`: a frame on Purcell's GPU seen as a stream processor.
 
-use crate::cli::{AlgoArgs, CameraArgs, StreamArgs};
 use crate::output;
 use crate::render::tracer::IntersectorKind;
 use crate::render::{self, Algorithm, RenderOptions};
@@ -8,6 +7,78 @@ use anyhow::{anyhow, bail, Result};
 use std::time::Instant;
 
 use super::{camera_for, check_image_path, load_scene, structure_summary, warn};
+
+use super::args::AlgoArgs;
+use super::args::CameraArgs;
+use super::args::DisplayArgs;
+use super::args::StructureArgs;
+use clap::Args;
+use std::path::PathBuf;
+
+/// `raypipe stream`.
+#[derive(Args, Debug)]
+pub struct StreamArgs {
+    /// An OBJ file or a scene image with a uniform grid; the built-in Cornell box when
+    /// omitted.
+    pub scene: Option<PathBuf>,
+    /// Architecture: multipass (stencil-routed passes) or branching (fused kernels).
+    #[arg(long, default_value = "multipass")]
+    pub arch: raypipe_hw::stream::Architecture,
+    /// Multipass oracle: delany[:FRACTION] (intersect once that fraction of active rays
+    /// waits; 0.2), naive (alternate), optimal (clairvoyant).
+    #[arg(long, default_value = "delany")]
+    pub oracle: raypipe_hw::stream::Oracle,
+    /// Multipass loop unrolling: kernel iterations per pass, "traverse=N,intersect=M".
+    #[arg(long, value_name = "traverse=N,intersect=M", default_value = "traverse=1,intersect=1")]
+    pub unroll: raypipe_hw::stream::Unroll,
+    /// Suppress the memory references of unrolled iterations after a ray has finished.
+    #[arg(long)]
+    pub suppress: bool,
+    /// Branching: fragments in lock step (1: each fragment branches alone).
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    pub simd: u32,
+    /// Texture cache "SIZE,WAYS,LINE" (e.g. 64K,1,48, the default) or "off".
+    #[arg(long, value_name = "SIZE,WAYS,LINE", default_value = "64K,1,48")]
+    pub cache: raypipe_hw::stream::TextureCacheConfig,
+    /// State-texture reads go through the texture cache too (default: they bypass it).
+    #[arg(long)]
+    pub cache_state: bool,
+    /// Kernel cost table (TOML) over raypipe's counted one: [kernel] instructions, r, w, m.
+    #[arg(long, value_name = "FILE.toml")]
+    pub costs: Option<PathBuf>,
+    /// Machine rates "INSTR_PER_S,BYTES_PER_S" (default: Radeon 9700 Pro, 2.6e9,19.84e9).
+    #[arg(long, value_name = "I,B")]
+    pub machine: Option<raypipe_hw::stream::Machine>,
+    /// The algorithm and its settings (here --samples defaults to 1 for every algorithm:
+    /// Purcell's frames trace one eye ray per pixel).
+    #[command(flatten)]
+    pub algo: AlgoArgs,
+    /// Ray–triangle test (default: the one the image's triangle layout is for).
+    #[arg(long, value_enum)]
+    pub intersector: Option<IntersectorKind>,
+    /// Output image: .png (8-bit sRGB through --exposure and --tonemap), .exr (OpenEXR)
+    /// or .pfm, both linear radiance.
+    #[arg(short, long, value_name = "IMAGE", default_value = "raypipe-stream.png")]
+    pub output: PathBuf,
+    #[command(flatten)]
+    pub display: DisplayArgs,
+    /// The report as JSON.
+    #[arg(long, value_name = "JSON", default_value = "raypipe-stream.json")]
+    pub report: PathBuf,
+    /// Directory for the charts (Figures 7–9 and active rays per pass, SVG and PNG).
+    #[arg(long, value_name = "DIR", default_value = "raypipe-stream-charts")]
+    pub charts: PathBuf,
+    /// Write no charts.
+    #[arg(long)]
+    pub no_charts: bool,
+    /// Skip the ray-casting frame that Table 3's ratios need (other algorithms).
+    #[arg(long)]
+    pub no_table3: bool,
+    #[command(flatten)]
+    pub camera: CameraArgs,
+    #[command(flatten)]
+    pub structure: StructureArgs,
+}
 
 pub(crate) fn cmd_stream(a: StreamArgs) -> Result<()> {
     use raypipe_hw::stream::{CostModel, StreamConfig};

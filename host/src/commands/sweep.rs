@@ -11,12 +11,64 @@ use std::sync::Mutex;
 use anyhow::{anyhow, bail, Result};
 use rayon::prelude::*;
 
-use crate::cli::{SweepArgs, SweepCommand, SweepMergeArgs};
 use crate::study::sweep::{Point, Spec};
 use crate::study::sweep_table::{self, Row};
 use crate::{hw::chip, output, output::progress};
 
-use super::simulate::{simulate_args, SceneCache};
+use super::simulate::{run_simulation, SceneCache};
+
+use clap::Args;
+use clap::Subcommand;
+use std::path::PathBuf;
+
+/// `raypipe sweep`.
+#[derive(Args, Debug)]
+#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
+pub struct SweepArgs {
+    /// Join shards' outputs.
+    #[command(subcommand)]
+    pub merge: Option<SweepCommand>,
+    /// The spec: [fixed] parameters, a [grid] of lists (their cartesian product) and
+    /// [[points]] (each crossed with the grid); keys are simulate flags or --set keys.
+    #[arg(required = true, value_name = "SPEC.toml")]
+    pub spec: Option<PathBuf>,
+    /// Output prefix: PREFIX.jsonl and PREFIX.csv. Points already in PREFIX.jsonl are
+    /// not run again (resume).
+    #[arg(short, long, value_name = "PREFIX", default_value = "sweep")]
+    pub output: PathBuf,
+    /// Run only shard I of N (points whose number is I modulo N, I from 0): one task of a
+    /// Slurm job array or of GNU parallel.
+    #[arg(long, value_name = "I/N")]
+    pub shard: Option<crate::study::sweep::Shard>,
+    /// Points run at once (default: all cores).
+    #[arg(long, value_name = "N")]
+    pub jobs: Option<usize>,
+    /// Also write each point's full report, DIR/point-<index>.json (the stand-alone
+    /// `simulate --report` file).
+    #[arg(long, value_name = "DIR")]
+    pub reports: Option<PathBuf>,
+    /// Run every point again, ignoring rows already in PREFIX.jsonl.
+    #[arg(long)]
+    pub restart: bool,
+}
+
+/// `raypipe sweep merge`.
+#[derive(Subcommand, Debug)]
+pub enum SweepCommand {
+    /// Join the JSON-lines outputs of shards into the files one run would have written.
+    Merge(SweepMergeArgs),
+}
+
+/// `raypipe sweep merge`.
+#[derive(Args, Debug)]
+pub struct SweepMergeArgs {
+    /// The shards' .jsonl files.
+    #[arg(required = true, value_name = "SHARD.jsonl")]
+    pub inputs: Vec<PathBuf>,
+    /// Output prefix: PREFIX.jsonl and PREFIX.csv.
+    #[arg(short, long, value_name = "PREFIX", default_value = "sweep")]
+    pub output: PathBuf,
+}
 
 pub(crate) fn cmd_sweep(a: SweepArgs) -> Result<()> {
     if let Some(SweepCommand::Merge(m)) = a.merge {
@@ -116,7 +168,7 @@ pub(crate) fn cmd_sweep(a: SweepArgs) -> Result<()> {
 /// its error (a deadlocked corner of the space must not stop the others).
 fn run_point(p: &Point, dir: &Path, cache: &SceneCache, reports: Option<&Path>) -> Result<Row> {
     let args = p.simulate_args(dir)?;
-    match simulate_args(&args, Some(cache), false) {
+    match run_simulation(&args, Some(cache), false) {
         Ok(run) => {
             if let Some(d) = reports {
                 output::write_bytes(&d.join(format!("point-{}.json", p.index)), run.report.to_json().as_bytes())?;

@@ -1,7 +1,6 @@
 //! `raypipe trace`: traces a batch of rays from a file and writes their hits (or their
 //! occlusion), with the fields asked for.
 
-use crate::cli::{Query, TraceArgs};
 use crate::render::batch::{incoherent_share, rays_from_array};
 use crate::render::packets::PacketSize;
 use crate::render::tracer::IntersectorKind;
@@ -17,7 +16,58 @@ use std::time::Instant;
 
 use super::{structure_summary, warn, warn_range};
 
+use super::args::RunArgs;
+use super::args::StructureArgs;
+use clap::Args;
 /// An output field of a closest-hit query.
+use std::path::PathBuf;
+
+/// `raypipe trace`.
+#[derive(Args, Debug)]
+pub struct TraceArgs {
+    /// An OBJ file or a scene image.
+    pub scene: PathBuf,
+    /// Rays: float32 or float64 array of shape (N, 6) — origin, direction — or (N, 8) with
+    /// t_min, t_max. A row that is no ray (NaN, zero direction, empty interval) is a miss,
+    /// counted.
+    #[arg(long, value_name = "NPY")]
+    pub rays: PathBuf,
+    /// Output: structured array of N records with the --fields chosen (closest: t, u, v
+    /// float32 and prim int32, -1 on a miss, by default; any: occluded uint8).
+    #[arg(long, value_name = "NPY")]
+    pub hits: PathBuf,
+    /// What each ray asks: the closest hit, or whether anything lies in its interval
+    /// (occlusion, cheaper: traversal stops at the first hit).
+    #[arg(long, value_enum, default_value_t = Query::Closest)]
+    pub query: Query,
+    /// Output fields, comma-separated. Closest: t, u, v, prim, ng (geometric normal,
+    /// winding order, unit), ns (shading normal facing the ray, unit), material (id, -1
+    /// on a miss), object (OBJ o/g name, glTF node or scene-file mesh, in input order; -1
+    /// on a miss); default t,u,v,prim. Any: occluded.
+    #[arg(long, value_name = "LIST", value_delimiter = ',')]
+    pub fields: Vec<String>,
+    #[command(flatten)]
+    pub structure: StructureArgs,
+    #[command(flatten)]
+    pub run: RunArgs,
+    /// Trace the batch this many times and report the median time.
+    #[arg(long, default_value_t = 1)]
+    pub runs: usize,
+    /// Trace consecutive rays in packets of this many (1 = single rays); hits are the same.
+    #[arg(long, value_enum, default_value_t = PacketSize::Single)]
+    pub packet: PacketSize,
+}
+
+/// What `raypipe trace` asks of each ray.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Query {
+    /// The closest hit.
+    #[default]
+    Closest,
+    /// Any hit in the interval (occlusion).
+    Any,
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Field {
     T,

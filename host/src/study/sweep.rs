@@ -23,9 +23,9 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{anyhow, bail, Context, Result};
-use clap::{Args, Parser};
+use clap::Args;
 
-use crate::cli::{Cli, SimulateArgs};
+use crate::commands::simulate::{parse_simulate_line, SimulateArgs};
 
 /// Most points a spec may expand to.
 pub const MAX_POINTS: usize = 1_000_000;
@@ -120,13 +120,9 @@ impl Point {
     /// This point as parsed `raypipe simulate` arguments, writing nowhere it is told to.
     pub fn simulate_args(&self, dir: &Path) -> Result<SimulateArgs> {
         let args = self.args(dir)?;
-        let cli = Cli::try_parse_from(std::iter::once("raypipe".to_string()).chain(args.iter().cloned()))
+        parse_simulate_line(&args)
             .map_err(|e| anyhow!("{}", e.to_string().lines().next().unwrap_or("").trim_start_matches("error: ")))
-            .with_context(|| format!("sweep point {} ({})", self.index, self.id()))?;
-        match cli.command {
-            crate::cli::Command::Simulate(a) => Ok(*a),
-            _ => bail!("sweep point {}: not a simulate command", self.index),
-        }
+            .with_context(|| format!("sweep point {} ({})", self.index, self.id()))
     }
 }
 
