@@ -328,8 +328,8 @@ impl Default for DramConfig {
 
 /// The presets shipped with the model (the files in `fixtures/hw/`).
 pub const PRESETS: [(&str, &str); 2] = [
-    ("saarcor", include_str!("../../fixtures/hw/saarcor.toml")),
-    ("minimal", include_str!("../../fixtures/hw/minimal.toml")),
+    ("saarcor", include_str!("../../../fixtures/hw/saarcor.toml")),
+    ("minimal", include_str!("../../../fixtures/hw/minimal.toml")),
 ];
 
 impl HwConfig {
