@@ -570,7 +570,7 @@ impl<'s, I: Intersector> Simulator<'s, I> {
             rays: (self.rgs.rays_issued, self.rgs.rays_retired),
             tests: self.ius.iter().map(|i| i.tests).sum(),
             rays_by_kind: self.rgs.rays_by_kind,
-            stream_peak: self.rgs.stream_peak,
+            queue_peak: self.rgs.queue_peak,
         });
         report.energy = Some(self.cfg.energy.estimate(&self.cfg, &report, node));
         report

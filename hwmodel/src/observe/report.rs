@@ -266,7 +266,7 @@ pub struct Sources<'a> {
     /// Rays by kind, in `RayKind::ALL` order.
     pub rays_by_kind: [u64; RayKind::COUNT],
     /// Peak of the shading unit's ray stream.
-    pub stream_peak: usize,
+    pub queue_peak: usize,
 }
 
 fn ratio(a: f64, b: f64) -> f64 {
@@ -395,7 +395,7 @@ impl Report {
             frames_per_second: 1.0 / seconds,
             rays_per_second: rays as f64 / seconds,
             rays_by_kind: RayKind::ALL.iter().map(|k| (k.name().to_string(), s.rays_by_kind[*k as usize])).collect(),
-            ray_stream_peak: s.stream_peak,
+            ray_stream_peak: s.queue_peak,
             run: RunIdentity::default(),
             bottleneck,
             traversal_steps,

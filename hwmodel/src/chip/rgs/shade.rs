@@ -1,0 +1,276 @@
+//! The shade pipeline of the ray generation & shading unit: finished packets come back
+//! — up to `rgs.shade_jobs` at once — and core's shading kernel runs on them at once; its
+//! reads are fetched through the shading cache, `shade_per_cycle` rays are shaded per
+//! cycle once the data has arrived, and only then is the framebuffer written (a posted
+//! write per packet) and the rays the shader emitted released.
+
+use raypipe_core::shade::lambert::shade;
+use raypipe_core::shade::ray_record::{RayKind, RayRecord};
+use raypipe_core::SceneView;
+
+use super::{Rgs, FRAMEBUFFER_BASE};
+use crate::chip::fifo::Fifo;
+use crate::chip::jobs::{lanes, HitPacket};
+use crate::memory::port::{Fetch, Recorder};
+use crate::memory::traffic::FRAMEBUFFER;
+use crate::observe::stall::Stall;
+use crate::observe::unit_stats::Activity;
+
+/// Where a shading job stands.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Stage {
+    Fetching,
+    Queued,
+    Shading(u64),
+}
+
+/// A packet being shaded.
+pub(super) struct ShadeJob {
+    /// Packet number (for traces).
+    packet: u32,
+    /// Cycle the packet was started, and the pixels its lanes belong to (cost images).
+    issued: u64,
+    pixels: Vec<u32>,
+    /// Shading bytes the job reads.
+    bytes: u64,
+    pub(super) fetch: Fetch,
+    pub(super) stage: Stage,
+    data_at: u64,
+    primary: bool,
+    /// Rays to shade (cycles in the datapath: `rays / shade_per_cycle`).
+    rays: u64,
+    /// Records the shader emitted, released when the job is done.
+    emitted: Vec<RayRecord>,
+    /// Framebuffer bytes written when done, at this address.
+    write: (u64, u32),
+}
+
+/// What a finished trace leaves for its shading job.
+struct Shaded {
+    /// Lane → pixel (`u32::MAX`: no pixel), for the cost images.
+    pixels: Vec<u32>,
+    /// The shading kernel's reads.
+    probe: Recorder,
+    /// Rays to shade.
+    rays: u64,
+    /// Records the shader emitted.
+    emitted: Vec<RayRecord>,
+    /// Framebuffer bytes to write when done, at this address.
+    write: (u64, u32),
+    /// A packet of primary rays.
+    primary: bool,
+}
+
+impl Rgs {
+    /// The shader's cycle: jobs done leave (framebuffer write, emitted rays released), the
+    /// datapath takes the oldest job whose data is there, a new packet comes in if a job
+    /// slot is free, and waiting jobs fetch. Returns true if anything moved.
+    pub(super) fn tick_shade(&mut self, now: u64, scene: &SceneView<'_>, hits: &mut [Fifo<Box<HitPacket>>]) -> bool {
+        let mut moved = false;
+        let mut k = 0;
+        while k < self.shading.len() {
+            if matches!(self.shading[k].stage, Stage::Shading(d) if d <= now) {
+                let j = self.shading.remove(k);
+                if let Some(log) = self.done_log.as_mut() {
+                    log.push(j.packet);
+                }
+                let share = j.bytes as f64 / j.pixels.iter().filter(|&&p| p != u32::MAX).count().max(1) as f64;
+                for &p in &j.pixels {
+                    if let Some(c) = self.cost.get_mut(p as usize) {
+                        c[0] += now.saturating_sub(j.issued) as f64;
+                        c[3] += share;
+                    }
+                }
+                if j.primary {
+                    self.packets_done += 1;
+                }
+                for r in j.emitted {
+                    self.queue.push(r);
+                }
+                self.queue_peak = self.queue_peak.max(self.queue.len());
+                if j.write.1 > 0 {
+                    self.port.write(FRAMEBUFFER, j.write.0, j.write.1, now);
+                }
+                moved = true;
+            } else {
+                k += 1;
+            }
+        }
+        // The datapath takes the oldest job whose data is there.
+        if self.shade_busy_until <= now {
+            let next = self.shading.iter().position(|j| j.stage == Stage::Queued);
+            if let Some(k) = next {
+                let j = &mut self.shading[k];
+                debug_assert!(j.data_at <= now, "shaded before the shading data arrived");
+                let cycles = j.rays.div_ceil(self.shade_per_cycle).max(1);
+                self.shade_busy_until = now + cycles;
+                j.stage = Stage::Shading(now + cycles);
+                moved = true;
+            }
+        }
+        // A new packet to shade, if a job slot is free.
+        if self.shading.len() < self.shade_jobs {
+            let n = hits.len();
+            if let Some(packet) = self.direct.pop_front() {
+                self.shade(now, scene, &packet);
+                moved = true;
+            } else if let Some(u) = (0..n).map(|k| (self.next_hits + k) % n).find(|&u| hits[u].peek().is_some()) {
+                self.next_hits = (u + 1) % n;
+                if let Some(packet) = hits[u].pop() {
+                    if (packet.index as usize) < self.blocks.len() {
+                        self.shade(now, scene, &packet);
+                    } else {
+                        self.shade_secondary(now, scene, &packet);
+                    }
+                    moved = true;
+                }
+            }
+        }
+        // Jobs are kept oldest first.
+        for j in self.shading.iter_mut().filter(|j| j.stage == Stage::Fetching) {
+            let (progress, data) = self.port.step_fetch(&mut j.fetch, now);
+            moved |= progress;
+            if let Some(at) = data {
+                j.data_at = at;
+                j.stage = Stage::Queued;
+                moved = true;
+            }
+        }
+        let shade_activity = if self.shade_busy_until > now {
+            Activity::Busy
+        } else if self.shading.is_empty() {
+            Activity::Idle
+        } else {
+            let fetching = self.shading.iter().find(|j| j.stage == Stage::Fetching);
+            Activity::Stalled(match fetching {
+                Some(j) => self.port.stall_of(&j.fetch, Stall::ShadingData),
+                None => Stall::PipelineLatency,
+            })
+        };
+        self.shade_stats.cycle(shade_activity);
+        moved
+    }
+
+    /// Shades one finished packet into the framebuffer.
+    fn shade(&mut self, now: u64, scene: &SceneView<'_>, packet: &HitPacket) {
+        let b = packet.index as usize;
+        let mut where_: [Option<(u32, u32)>; 64] = [None; 64];
+        for (j, p) in where_.iter_mut().enumerate().take(self.packet_size as usize) {
+            *p = self.pixel(b, j);
+        }
+        // Lane → pixel, for the cost images (`u32::MAX`: no pixel).
+        let lane_pixels: Vec<u32> = where_[..self.packet_size as usize]
+            .iter()
+            .map(|p| p.map_or(u32::MAX, |(x, y)| y * self.eye.width + x))
+            .collect();
+        let mut probe = Recorder::default();
+        let mut emitted = Vec::new();
+        let mut pixels = 0u64;
+        let mut first_pixel = None;
+        for (j, p) in where_.iter().enumerate() {
+            let Some((x, y)) = *p else { continue };
+            pixels += 1;
+            // Each pixel's reads are a chain of their own.
+            probe.at_level(0);
+            let pixel = (y * self.eye.width + x) as usize;
+            first_pixel.get_or_insert(pixel);
+            let (s, samples) = (self.sample_of(b), self.eye.samples());
+            let ray = if packet.lanes & (1 << j) == 0 {
+                None
+            } else if self.visibility.is_some() {
+                Some(self.eye.sample_ray(x, y, s))
+            } else {
+                self.eye.sample_ray_in_scene(x, y, s, self.bounds.0, self.bounds.1)
+            };
+            let share = 1.0 / samples as f32;
+            match (&self.shader, ray) {
+                (None, Some(ray)) => {
+                    let color = shade(scene, &ray, self.eye.cone(), packet.hits[j], self.background, &mut probe);
+                    match self.radiance.get_mut(pixel) {
+                        Some(sum) => sum.add(color * share),
+                        None => self.framebuffer[pixel] = color,
+                    }
+                }
+                (None, None) => match self.radiance.get_mut(pixel) {
+                    Some(sum) => sum.add(self.background * share),
+                    None => self.framebuffer[pixel] = self.background,
+                },
+                (Some(shader), Some(ray)) => {
+                    let sum = &mut self.radiance[pixel];
+                    shader.shade_primary(
+                        scene,
+                        RayRecord::eye_sample(ray, pixel as u32, s, samples, self.eye.cone()),
+                        packet.hits[j],
+                        sum,
+                        &mut probe,
+                        &mut |r| emitted.push(r),
+                    );
+                }
+                (Some(_), None) => self.radiance[pixel].add(self.background * share),
+            }
+            if s == 0 {
+                self.hits[pixel] = if packet.lanes & (1 << j) != 0 { packet.hits[j] } else { None };
+            }
+        }
+        if self.visibility.is_none() {
+            self.rays_retired += lanes(packet.lanes);
+        }
+        self.shade_stats.issue(lanes(packet.lanes), self.packet_size);
+        let write = (FRAMEBUFFER_BASE + 4 * first_pixel.unwrap_or(0) as u64, 4 * pixels as u32);
+        let done = Shaded { pixels: lane_pixels, probe, rays: pixels, emitted, write, primary: true };
+        self.push_job(now, packet, done);
+    }
+
+    /// Starts a shading job for the reads `probe` recorded.
+    fn push_job(&mut self, now: u64, packet: &HitPacket, done: Shaded) {
+        let Shaded { pixels, probe, rays, emitted, write, primary } = done;
+        // The trace's cost: each lane's own tests, the shared reads split evenly.
+        let share = packet.cost.bytes as f64 / lanes(packet.lanes).max(1) as f64;
+        for (j, &p) in pixels.iter().enumerate() {
+            if let (Some(c), true) = (self.cost.get_mut(p as usize), packet.lanes & (1 << j) != 0) {
+                c[1] += packet.cost.steps[j] as f64;
+                c[2] += packet.cost.tests[j] as f64;
+                c[3] += share;
+            }
+        }
+        let bytes = probe.reads().map(|a| a.bytes as u64).sum();
+        self.shading.push(ShadeJob {
+            packet: packet.index,
+            issued: packet.cost.issued,
+            pixels,
+            bytes,
+            fetch: Fetch::new(probe.into_levels()),
+            stage: Stage::Fetching,
+            data_at: now,
+            primary,
+            rays,
+            emitted,
+            write,
+        });
+    }
+    /// Takes a secondary packet back: unblocked shadow rays add their weight, the others
+    /// are shaded (and may emit more records).
+    fn shade_secondary(&mut self, now: u64, scene: &SceneView<'_>, packet: &HitPacket) {
+        let records = self.in_flight.remove(&packet.index).unwrap_or_default();
+        let mut probe = Recorder::default();
+        let mut emitted = Vec::new();
+        for (j, rec) in records.iter().enumerate() {
+            probe.at_level(0);
+            let hit = packet.hits[j];
+            let Some(slot) = self.radiance.get_mut(rec.pixel as usize) else { continue };
+            if rec.kind == RayKind::Shadow {
+                if hit.is_none() {
+                    slot.add(rec.weight);
+                }
+            } else if let Some(shader) = &self.shader {
+                slot.add(shader.shade(scene, rec, hit, &mut probe, &mut |r| emitted.push(r)));
+            }
+        }
+        self.rays_retired += lanes(packet.lanes);
+        self.shade_stats.issue(lanes(packet.lanes), self.packet_size);
+        let rays = records.len() as u64;
+        let lane_pixels = records.iter().map(|r| r.pixel).collect();
+        let done = Shaded { pixels: lane_pixels, probe, rays, emitted, write: (0, 0), primary: false };
+        self.push_job(now, packet, done);
+    }
+}
