@@ -6,8 +6,10 @@
 
 use serde::{Deserialize, Serialize};
 
+pub mod energy;
+mod validate;
+
 use crate::chip::datapath::Datapath;
-use crate::chip::fifo::MAX_FIFO_DEPTH;
 
 /// Largest packet (the active mask is a `u64`).
 pub const MAX_PACKET: u32 = 64;
@@ -47,7 +49,7 @@ pub struct HwConfig {
     /// The memory channel.
     pub memory: MemoryConfig,
     /// Energy and area figures (docs/hw-model.md, "Energy and area").
-    pub energy: crate::observe::energy::EnergyConfig,
+    pub energy: energy::EnergyConfig,
 }
 
 /// The ray generation & shading unit.
@@ -239,7 +241,7 @@ impl Default for HwConfig {
             fifo: FifoConfig::default(),
             cache: CachesConfig::default(),
             memory: MemoryConfig::default(),
-            energy: crate::observe::energy::EnergyConfig::default(),
+            energy: energy::EnergyConfig::default(),
         }
     }
 }
@@ -376,183 +378,6 @@ impl HwConfig {
             _ => return Err(no_such()),
         }
         *self = doc.try_into().map_err(|e: toml::de::Error| format!("--set {key}: {}", one_line(&e.to_string())))?;
-        Ok(())
-    }
-
-    /// Rejects configurations that cannot be built or cannot work, with the reason.
-    pub fn validate(&self) -> Result<(), String> {
-        let err = |m: String| Err(m);
-        if !(self.clock_mhz.is_finite() && self.clock_mhz > 0.0 && self.clock_mhz <= 1e6) {
-            return err(format!("clock_mhz must be a positive number of at most 1e6 (got {})", self.clock_mhz));
-        }
-        if ![1, 4, 16, 64].contains(&self.packet_size) {
-            return err(format!("packet_size must be 1, 4, 16 or 64 (got {})", self.packet_size));
-        }
-        let positive = [
-            ("rgs.rays_per_cycle", self.rgs.rays_per_cycle),
-            ("rgs.shade_per_cycle", self.rgs.shade_per_cycle),
-            ("rgs.shade_jobs", self.rgs.shade_jobs),
-            ("traversal.units", self.traversal.units),
-            ("traversal.threads", self.traversal.threads),
-            ("traversal.step_latency", self.traversal.step_latency),
-            ("traversal.lanes_per_cycle", self.traversal.lanes_per_cycle),
-            ("intersection.latency", self.intersection.latency),
-            ("intersection.initiation_interval", self.intersection.initiation_interval),
-            ("intersection.lanes_per_cycle", self.intersection.lanes_per_cycle),
-            ("intersection.jobs", self.intersection.jobs),
-            ("memory.bytes_per_cycle", self.memory.bytes_per_cycle),
-            ("memory.queue_depth", self.memory.queue_depth),
-            ("memory.min_burst_bytes", self.memory.min_burst_bytes),
-        ];
-        for (name, v) in positive {
-            if v == 0 {
-                return err(format!("{name} must be at least 1"));
-            }
-        }
-        let capped = [
-            ("traversal.units", self.traversal.units, 64),
-            // A thread is a bit of the unit's 64-bit state masks.
-            ("traversal.threads", self.traversal.threads, 64),
-            ("traversal.lanes_per_cycle", self.traversal.lanes_per_cycle, 64),
-            ("intersection.lanes_per_cycle", self.intersection.lanes_per_cycle, 4096),
-            ("intersection.jobs", self.intersection.jobs, 64),
-            ("rgs.shade_jobs", self.rgs.shade_jobs, 64),
-            ("rgs.rays_per_cycle", self.rgs.rays_per_cycle, 4096),
-            ("rgs.shade_per_cycle", self.rgs.shade_per_cycle, 4096),
-            ("memory.queue_depth", self.memory.queue_depth, 4096),
-            ("memory.min_burst_bytes", self.memory.min_burst_bytes, 4096),
-            ("traversal.step_latency", self.traversal.step_latency, 1_000_000),
-            ("intersection.latency", self.intersection.latency, 1_000_000),
-            ("intersection.initiation_interval", self.intersection.initiation_interval, 1_000_000),
-            ("memory.latency", self.memory.latency, 1_000_000),
-        ];
-        for (name, v, max) in capped {
-            if v > max {
-                return err(format!("{name} {v} is more than the {max} the model supports"));
-            }
-        }
-        let fifos = [
-            ("fifo.rays", self.fifo.rays),
-            ("fifo.leaves", self.fifo.leaves),
-            ("fifo.results", self.fifo.results),
-            ("fifo.hits", self.fifo.hits),
-        ];
-        for (name, depth) in fifos {
-            if depth == 0 {
-                return err(format!("{name}: a FIFO needs a depth of at least 1"));
-            }
-            if depth as usize > MAX_FIFO_DEPTH {
-                return err(format!("{name}: depth {depth} exceeds the {MAX_FIFO_DEPTH} entries a FIFO can hold"));
-            }
-        }
-        for (name, c) in self.caches() {
-            if c.line_bytes < 4 || c.line_bytes % 4 != 0 || c.line_bytes > 4096 {
-                return err(format!("{name}.line_bytes must be a multiple of 4 from 4 to 4096 (got {})", c.line_bytes));
-            }
-            for (key, v, max) in
-                [("ports", c.ports, 64), ("mshrs", c.mshrs, 1024), ("hit_latency", c.hit_latency, 1_000_000)]
-            {
-                if v > max {
-                    return err(format!("{name}.{key} {v} is more than the {max} the model supports"));
-                }
-            }
-            if c.ports == 0 {
-                return err(format!("{name}.ports must be at least 1"));
-            }
-            if c.size_bytes == 0 {
-                continue;
-            }
-            if c.mshrs == 0 {
-                return err(format!("{name}.mshrs must be at least 1"));
-            }
-            if c.size_bytes < c.line_bytes {
-                return err(format!("{name}: {} bytes is smaller than one {}-byte line", c.size_bytes, c.line_bytes));
-            }
-            if c.ways == 0 {
-                return err(format!("{name}.ways must be at least 1"));
-            }
-            let lines = c.size_bytes / c.line_bytes;
-            if c.size_bytes % c.line_bytes != 0 || lines % c.ways != 0 {
-                return err(format!(
-                    "{name}: {} bytes in {}-byte lines and {} ways does not give a whole number of sets",
-                    c.size_bytes, c.line_bytes, c.ways
-                ));
-            }
-        }
-        if self.memory.model == MemoryModel::Dram {
-            let d = &self.memory.dram;
-            if !(d.clock_mhz.is_finite() && d.clock_mhz > 0.0 && d.clock_mhz <= 1e5) {
-                return err(format!("memory.dram.clock_mhz must be a positive number (got {})", d.clock_mhz));
-            }
-            for (key, v, max) in [
-                ("channels", d.channels, 64),
-                ("banks", d.banks, 256),
-                ("bus_bytes", d.bus_bytes, 1024),
-                ("burst_length", d.burst_length, 64),
-                ("row_bytes", d.row_bytes, 1 << 20),
-            ] {
-                if v == 0 || v > max {
-                    return err(format!("memory.dram.{key} must be from 1 to {max} (got {v})"));
-                }
-            }
-            if !d.burst_length.is_multiple_of(2) {
-                return err(format!("memory.dram.burst_length must be even (got {})", d.burst_length));
-            }
-            if !d.row_bytes.is_multiple_of(d.bus_bytes * d.burst_length) {
-                return err(format!(
-                    "memory.dram.row_bytes {} is not a whole number of {}-byte bursts",
-                    d.row_bytes,
-                    d.bus_bytes * d.burst_length
-                ));
-            }
-            if d.t_refi > 0 && d.t_rfc >= d.t_refi {
-                return err(format!("memory.dram.t_rfc {} must be shorter than t_refi {}", d.t_rfc, d.t_refi));
-            }
-            for (key, v) in [
-                ("t_rcd", d.t_rcd),
-                ("t_rp", d.t_rp),
-                ("t_cl", d.t_cl),
-                ("t_ras", d.t_ras),
-                ("t_wr", d.t_wr),
-                ("t_rfc", d.t_rfc),
-                ("controller_latency", d.controller_latency),
-            ] {
-                if v > 100_000 {
-                    return err(format!("memory.dram.{key} {v} is more than the 100000 cycles the model supports"));
-                }
-            }
-        }
-        let state = self.modelled_bytes();
-        if state > MAX_MODELLED_BYTES {
-            return err(format!(
-                "the chip would need {:.1} GiB of simulator state (caches, thread registers), more than the {} GiB limit",
-                state as f64 / (1u64 << 30) as f64,
-                MAX_MODELLED_BYTES >> 30
-            ));
-        }
-        if self.watchdog_cycles == 0 {
-            return err("watchdog_cycles must be at least 1".to_string());
-        }
-        let e = &self.energy;
-        for (key, v) in [
-            ("process_nm", e.process_nm),
-            ("fp_add_pj", e.fp_add_pj),
-            ("fp_mul_pj", e.fp_mul_pj),
-            ("fp_add_um2", e.fp_add_um2),
-            ("fp_mul_um2", e.fp_mul_um2),
-            ("sram_8k_pj", e.sram_8k_pj),
-            ("sram_32k_pj", e.sram_32k_pj),
-            ("sram_1m_pj", e.sram_1m_pj),
-            ("sram_mm2_per_kib", e.sram_mm2_per_kib),
-            ("dram_access_pj", e.dram_access_pj),
-            ("dram_activate_pj", e.dram_activate_pj),
-            ("leakage_mw_per_mm2", e.leakage_mw_per_mm2),
-            ("ray_state_bytes", e.ray_state_bytes),
-        ] {
-            if !(v.is_finite() && (0.0..=1e12).contains(&v)) {
-                return err(format!("energy.{key} must be a finite number from 0 to 1e12 (got {v})"));
-            }
-        }
         Ok(())
     }
 
