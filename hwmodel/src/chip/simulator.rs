@@ -18,15 +18,13 @@ use crate::chip::intersection_unit::IntersectionUnit;
 use crate::chip::jobs::{HitPacket, LeafJob, RayPacketJob};
 use crate::chip::rgs::Rgs;
 use crate::chip::traversal_unit::TraversalUnit;
-use crate::chip::traversal_unit::STATE_NAMES;
 use crate::config::HwConfig;
 use crate::memory::port::{LatencyStats, MemPort};
-use crate::memory::traffic::{CLASSES, CLASS_NAMES};
+use crate::memory::traffic::CLASSES;
 use crate::memory::Memory;
 use crate::observe::energy::NodeTest;
 use crate::observe::report::{Report, Sources};
-use crate::observe::stall::STALLS;
-use crate::observe::waves::{activity_code, Signal, TraceEvent, TraceLog, Waves};
+use crate::observe::waves::{TraceLog, Waves};
 
 /// A unit, for the tick order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -38,16 +36,16 @@ enum UnitRef {
 
 /// The modelled chip with its scene and frame.
 pub struct Simulator<'s, I: Intersector> {
-    cfg: HwConfig,
+    pub(crate) cfg: HwConfig,
     scene: SceneView<'s>,
-    rgs: Rgs,
-    tus: Vec<TraversalUnit<I::Nodes>>,
-    ius: Vec<IntersectionUnit<I>>,
-    ray_fifos: Vec<Fifo<Box<RayPacketJob>>>,
-    leaf_fifos: Vec<Fifo<Box<LeafJob>>>,
-    result_fifos: Vec<Fifo<Box<LeafJob>>>,
-    hit_fifos: Vec<Fifo<Box<HitPacket>>>,
-    memory: Memory,
+    pub(crate) rgs: Rgs,
+    pub(crate) tus: Vec<TraversalUnit<I::Nodes>>,
+    pub(crate) ius: Vec<IntersectionUnit<I>>,
+    pub(crate) ray_fifos: Vec<Fifo<Box<RayPacketJob>>>,
+    pub(crate) leaf_fifos: Vec<Fifo<Box<LeafJob>>>,
+    pub(crate) result_fifos: Vec<Fifo<Box<LeafJob>>>,
+    pub(crate) hit_fifos: Vec<Fifo<Box<HitPacket>>>,
+    pub(crate) memory: Memory,
     /// Scene bytes read at least once, one bit per 4-byte word.
     touched: Vec<u64>,
     order: Vec<UnitRef>,
@@ -58,13 +56,13 @@ pub struct Simulator<'s, I: Intersector> {
     /// frame): the report covers `stats_from..`.
     stats_from: u64,
     /// Waveforms being written, if asked for.
-    waves: Option<Waves>,
+    pub(crate) waves: Option<Waves>,
     /// The trace being recorded, if asked for.
-    trace: Option<TraceLog>,
+    pub(crate) trace: Option<TraceLog>,
     /// Frames started (walkthroughs), for the trace.
-    frame: u32,
+    pub(crate) frame: u32,
     /// Requests the memory accepted in the last cycle (a waveform signal).
-    accepted: u64,
+    pub(crate) accepted: u64,
 }
 
 impl<'s, I: Intersector> Simulator<'s, I> {
@@ -291,129 +289,8 @@ impl<'s, I: Intersector> Simulator<'s, I> {
         moved
     }
 
-    /// Every waveform signal, in [`Simulator::sample_signals`] order: FIFO occupancies,
-    /// unit activities (0 idle, 1 busy, 2 + stall reason), traversal threads by state,
-    /// requests waiting in each port, the memory's queue and the requests it took.
-    pub fn signals(&self) -> Vec<Signal> {
-        let bits = |max: u64| 64 - max.max(1).leading_zeros();
-        let mut s: Vec<Signal> = self
-            .fifos()
-            .map(|f| Signal { name: format!("fifos.{}.occupancy", f.name()), width: bits(f.depth() as u64) })
-            .collect();
-        let activity = |unit: &str| Signal { name: format!("{unit}.activity"), width: bits(1 + STALLS as u64) };
-        s.push(activity("rgs.generate"));
-        s.push(activity("rgs.shade"));
-        for t in &self.tus {
-            s.push(activity(&format!("traversal{}", t.id)));
-            for name in STATE_NAMES {
-                s.push(Signal {
-                    name: format!("traversal{}.threads.{name}", t.id),
-                    width: bits(self.cfg.traversal.threads as u64),
-                });
-            }
-        }
-        for i in &self.ius {
-            s.push(activity(&format!("intersection{}", i.id)));
-        }
-        for p in self.ports() {
-            s.push(Signal { name: format!("memory.ports.{}.waiting", port_label(p)), width: 16 });
-        }
-        s.push(Signal { name: "memory.queue".into(), width: bits(self.cfg.memory.queue_depth as u64) });
-        s.push(Signal { name: "memory.requests".into(), width: 16 });
-        s
-    }
-
-    /// The signals' current values.
-    pub fn sample_signals(&self, out: &mut Vec<u64>) {
-        out.clear();
-        out.extend(self.fifos().map(|f| f.occupancy() as u64));
-        out.push(activity_code(&self.rgs.gen_stats));
-        out.push(activity_code(&self.rgs.shade_stats));
-        for t in &self.tus {
-            out.push(activity_code(&t.stats));
-            out.extend(t.thread_states());
-        }
-        out.extend(self.ius.iter().map(|i| activity_code(&i.stats)));
-        out.extend(self.ports().map(|p| p.staged.len() as u64));
-        out.push(self.memory.queue_len() as u64);
-        out.push(self.accepted);
-    }
-
-    fn ports(&self) -> impl Iterator<Item = &MemPort> {
-        std::iter::once(&self.rgs.port).chain(self.tus.iter().map(|t| &t.port)).chain(self.ius.iter().map(|i| &i.port))
-    }
-
-    /// Writes waveforms to `waves` from now on.
-    pub fn set_waves(&mut self, waves: Waves) {
-        self.waves = Some(waves);
-    }
-
-    /// Stops writing waveforms: the sampler, to be finished by the caller.
-    pub fn take_waves(&mut self) -> Option<Waves> {
-        self.waves.take()
-    }
-
-    /// Records packet lifetimes and memory transactions from now on.
-    pub fn enable_trace(&mut self) {
-        self.trace = Some(TraceLog::default());
-        self.ray_fifos.iter_mut().for_each(|f| f.enable_log(|j| j.index));
-        self.leaf_fifos.iter_mut().for_each(|f| f.enable_log(|j| j.packet));
-        self.result_fifos.iter_mut().for_each(|f| f.enable_log(|j| j.packet));
-        self.hit_fifos.iter_mut().for_each(|f| f.enable_log(|j| j.index));
-        self.rgs.done_log = Some(Vec::new());
-        self.rgs.port.log = Some(Vec::new());
-        self.tus.iter_mut().for_each(|t| t.port.log = Some(Vec::new()));
-        self.ius.iter_mut().for_each(|i| i.port.log = Some(Vec::new()));
-    }
-
-    /// The trace recorded so far.
-    pub fn take_trace(&mut self) -> Option<TraceLog> {
-        self.trace.take()
-    }
-
-    /// Moves this cycle's logged events into the trace, stamped with `now`.
-    fn record_trace(&mut self, now: u64) {
-        let Some(mut trace) = self.trace.take() else { return };
-        let frame = self.frame;
-        let mut entries = Vec::new();
-        for f in self.fifos_mut() {
-            f.take_log(&mut entries);
-            let name = f.name().to_string();
-            for (push, packet) in entries.drain(..) {
-                trace.events.push(TraceEvent::Fifo { cycle: now, fifo: name.clone(), push, packet });
-                trace.frames.push(frame);
-            }
-        }
-        if let Some(done) = self.rgs.done_log.as_mut() {
-            for packet in done.drain(..) {
-                trace.events.push(TraceEvent::Shaded { cycle: now, packet });
-                trace.frames.push(frame);
-            }
-        }
-        let ports = std::iter::once(&mut self.rgs.port)
-            .chain(self.tus.iter_mut().map(|t| &mut t.port))
-            .chain(self.ius.iter_mut().map(|i| &mut i.port));
-        for p in ports {
-            let label = port_label(p);
-            if let Some(log) = p.log.as_mut() {
-                for (r, ready) in log.drain(..) {
-                    trace.events.push(TraceEvent::Memory {
-                        port: label.clone(),
-                        issued: r.issued,
-                        ready,
-                        class: CLASS_NAMES[r.class],
-                        bytes: r.bytes,
-                        write: r.write,
-                    });
-                    trace.frames.push(frame);
-                }
-            }
-        }
-        self.trace = Some(trace);
-    }
-
     /// Every FIFO: ray, leaf, result and hit FIFOs, unit by unit.
-    fn fifos(&self) -> impl Iterator<Item = &dyn AnyFifo> {
+    pub(crate) fn fifos(&self) -> impl Iterator<Item = &dyn AnyFifo> {
         let (r, l) =
             (self.ray_fifos.iter().map(|f| f as &dyn AnyFifo), self.leaf_fifos.iter().map(|f| f as &dyn AnyFifo));
         let (q, h) =
@@ -422,7 +299,7 @@ impl<'s, I: Intersector> Simulator<'s, I> {
     }
 
     /// Every FIFO, to commit or account.
-    fn fifos_mut(&mut self) -> impl Iterator<Item = &mut dyn AnyFifo> {
+    pub(crate) fn fifos_mut(&mut self) -> impl Iterator<Item = &mut dyn AnyFifo> {
         let r = self.ray_fifos.iter_mut().map(|f| f as &mut dyn AnyFifo);
         let l = self.leaf_fifos.iter_mut().map(|f| f as &mut dyn AnyFifo);
         let q = self.result_fifos.iter_mut().map(|f| f as &mut dyn AnyFifo);
@@ -593,7 +470,7 @@ fn mark_touched(touched: &mut [u64], port: &mut MemPort) {
 }
 
 /// A port's name in reports and traces: its unit's name.
-fn port_label(p: &MemPort) -> String {
+pub(crate) fn port_label(p: &MemPort) -> String {
     if p.name == "shading" {
         "rgs.shade".to_string()
     } else {
