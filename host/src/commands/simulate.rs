@@ -196,7 +196,7 @@ pub(crate) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
     } else if a.measure.warmup_frames > 0 {
         println!("after {} warm-up frame(s), caches warm:", a.measure.warmup_frames);
     }
-    print!("{}", run.report.summary());
+    print!("{}", crate::hw::chip_summary::summary(&run.report));
     let rays: u64 = measured.iter().map(|f| f.report.rays).sum();
     println!(
         "simulator      {:.2} s wall, {:.3} Mrays/s simulated; report -> {}{}{}",
