@@ -1296,7 +1296,7 @@ fn plots_of_a_small_sweep_decode() {
     }
     for svg in ["heat.svg", "bytes.svg"] {
         let text = std::fs::read_to_string(d.join(svg)).unwrap();
-        let png = raypipe::hw::stream_charts::to_png(&text).expect("the SVG parses and renders");
+        let png = raypipe::output::chart_raster::to_png(&text).expect("the SVG parses and renders");
         assert!(png.starts_with(b"\x89PNG"), "{svg}");
     }
     // Rows the plot cannot tell apart are refused, naming what differs.

@@ -79,7 +79,7 @@ pub(crate) fn cmd_plot(a: PlotArgs) -> Result<()> {
     let title = a.title.clone().unwrap_or(what);
     let svg = sweep_plot::draw(&plot, &rows, &title).map_err(|e| anyhow!("{}: {e:#}", a.rows.display()))?;
     if png {
-        output::write_bytes(&a.output, &crate::hw::stream_charts::to_png(&svg)?)?;
+        output::write_bytes(&a.output, &crate::output::chart_raster::to_png(&svg)?)?;
     } else {
         output::write_bytes(&a.output, svg.as_bytes())?;
     }

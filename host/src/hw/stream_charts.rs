@@ -4,6 +4,7 @@
 //! (random-access words by data type), Figure 9 (bandwidth with and without the texture
 //! cache, by data type) and the active rays after each pass.
 
+use crate::output::chart_raster::to_png;
 use std::path::Path;
 
 use anyhow::{anyhow, Result};
@@ -37,34 +38,6 @@ pub fn write_all(dir: &Path, r: &StreamReport) -> Result<usize> {
         n += 2;
     }
     Ok(n)
-}
-
-/// Renders an SVG to PNG bytes.
-pub fn to_png(svg: &str) -> Result<Vec<u8>> {
-    to_pixmap(svg)?.encode_png().map_err(|e| anyhow!("cannot encode the PNG: {e}"))
-}
-
-/// Renders an SVG to pixels.
-pub fn to_pixmap(svg: &str) -> Result<resvg::tiny_skia::Pixmap> {
-    let mut opt = resvg::usvg::Options::default();
-    let db = opt.fontdb_mut();
-    db.load_system_fonts();
-    // plotters asks for "sans-serif": map it to a sans face the system has.
-    let family = db
-        .faces()
-        .flat_map(|f| f.families.iter().map(|(name, _)| name.clone()))
-        .filter(|n| n.contains("Sans") || n.contains("Arial") || n.contains("Helvetica"))
-        .min_by_key(|n| (!n.contains("DejaVu Sans"), n.len()));
-    if let Some(family) = family {
-        db.set_sans_serif_family(family.clone());
-        opt.font_family = family;
-    }
-    let tree = resvg::usvg::Tree::from_str(svg, &opt).map_err(|e| anyhow!("cannot read the SVG: {e}"))?;
-    let size = tree.size().to_int_size();
-    let mut pixmap =
-        resvg::tiny_skia::Pixmap::new(size.width(), size.height()).ok_or_else(|| anyhow!("empty chart"))?;
-    resvg::render(&tree, resvg::tiny_skia::Transform::default(), &mut pixmap.as_mut());
-    Ok(pixmap)
 }
 
 fn label(r: &StreamReport) -> String {

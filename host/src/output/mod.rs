@@ -2,6 +2,7 @@
 //! in the target directory, then rename it over the target.
 
 pub mod chart_numbers;
+pub mod chart_raster;
 pub mod progress;
 pub mod tone_map;
 pub mod trace_events;

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{anyhow, bail, Result};
 
 use crate::output;
-use crate::study::sweep_plot::viridis;
+use crate::output::chart_raster::{to_pixmap, viridis};
 
 /// The file of the cost `what` for a prefix: `PREFIX-what.png`.
 pub fn path(prefix: &Path, what: &str) -> PathBuf {
@@ -60,7 +60,7 @@ pub fn write(path: &Path, width: u32, height: u32, values: &[f64], title: &str) 
         l1 = bar.1 + bar.3 / 2 + 4,
         l2 = bar.1 + bar.3,
     );
-    let mut pixmap = crate::hw::stream_charts::to_pixmap(&svg)?;
+    let mut pixmap = to_pixmap(&svg)?;
     let stride = pixmap.width() as usize * 4;
     let data = pixmap.data_mut();
     for y in 0..h {

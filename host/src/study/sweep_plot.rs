@@ -7,6 +7,7 @@ use anyhow::{anyhow, bail, Result};
 use plotters::prelude::*;
 
 use crate::output::chart_numbers::si;
+use crate::output::chart_raster::viridis;
 use crate::study::sweep_table::{label, number, Row};
 
 const SIZE: (u32, u32) = (960, 600);
@@ -201,17 +202,6 @@ fn category_at(vals: &[String], v: f64) -> String {
     } else {
         String::new()
     }
-}
-
-/// Viridis at `t` in 0..=1 (five anchors, linear between them).
-pub(crate) fn viridis(t: f64) -> RGBColor {
-    const A: [(f64, f64, f64); 5] =
-        [(68.0, 1.0, 84.0), (59.0, 82.0, 139.0), (33.0, 145.0, 140.0), (94.0, 201.0, 98.0), (253.0, 231.0, 37.0)];
-    let t = if t.is_finite() { t.clamp(0.0, 1.0) } else { 0.0 } * 4.0;
-    let i = (t.floor() as usize).min(3);
-    let f = t - i as f64;
-    let mix = |a: f64, b: f64| (a + (b - a) * f).round() as u8;
-    RGBColor(mix(A[i].0, A[i + 1].0), mix(A[i].1, A[i + 1].1), mix(A[i].2, A[i + 1].2))
 }
 
 fn heatmap(svg: &mut String, rows: &[&Row], x: &str, y: &str, value: &str, title: &str) -> Drawn {
