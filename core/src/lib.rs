@@ -115,7 +115,10 @@ pub use counters::RayCounters;
 pub use hit::Hit;
 pub use image::{SceneError, SceneView};
 pub use intersect::fixed_watertight::{FixedWatertight, Q12_12, Q16_16};
-pub use intersect::triangle::{Intersector, MollerTrumbore, WaldProjection, Watertight};
+pub use intersect::moller_trumbore::MollerTrumbore;
+pub use intersect::triangle::Intersector;
+pub use intersect::wald::WaldProjection;
+pub use intersect::watertight::Watertight;
 pub use probe::{DataClass, MemoryProbe, NoProbe};
 pub use ray::Ray;
 

@@ -114,7 +114,7 @@ impl<const BITS: u32, const FRAC: u32> Intersector for FixedWatertight<BITS, FRA
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::intersect::triangle::Watertight;
+    use crate::intersect::watertight::Watertight;
     use crate::test_lcg::Lcg;
 
     /// Rays through a shared edge or vertex of a fan of triangles hit at least one of

@@ -8,10 +8,6 @@ use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::traverse::boxes::datapath::NodeTests;
 
-pub use crate::intersect::moller_trumbore::MollerTrumbore;
-pub use crate::intersect::wald::WaldProjection;
-pub use crate::intersect::watertight::Watertight;
-
 /// A ray–triangle test. `prepare` computes the per-ray constants once (the watertight
 /// test's shear), `intersect` tests one triangle. The result depends only on the ray and
 /// the three vertices, so every structure that tests the same triangle gets the same bits.

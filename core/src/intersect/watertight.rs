@@ -303,6 +303,19 @@ pub struct ShearedRays4 {
     k: [usize; 3],
 }
 
+/// The shear constants of two groups of four rays as the eight lanes of the AVX test.
+#[cfg(target_arch = "x86_64")]
+impl SharedShear {
+    /// The constants of groups `lo` (lanes 0–3) and `hi` (lanes 4–7), with `lanes`.
+    pub(crate) fn pair(lo: &ShearedRays4, hi: &ShearedRays4, lanes: u32) -> SharedShear {
+        let eight = |a: Vec4, b: Vec4| {
+            let (a, b) = (a.to_array(), b.to_array());
+            [a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3]]
+        };
+        SharedShear { s: [eight(lo.sx, hi.sx), eight(lo.sy, hi.sy), eight(lo.sz, hi.sz)], lanes }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -120,6 +120,22 @@ impl<const N: usize> RayPacket<N> {
         self.active = (self.active & !(0xF << i)) | (valid as u64) << i;
     }
 
+    /// The eight lane arrays, in a ray record's order (what the AVX transpose stores).
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn lane_arrays(&mut self) -> [&mut [f32; N]; 8] {
+        [
+            &mut self.ox,
+            &mut self.oy,
+            &mut self.oz,
+            &mut self.dx,
+            &mut self.dy,
+            &mut self.dz,
+            &mut self.t_min,
+            &mut self.t_max,
+        ]
+    }
+
     /// Stores `rays` in lanes `0 ..` (at most `N`) and makes exactly their valid ones
     /// active, as [`RayPacket::set`] one by one would after clearing the mask.
     #[inline]
@@ -130,7 +146,7 @@ impl<const N: usize> RayPacket<N> {
         #[cfg(target_arch = "x86_64")]
         if let Some(avx) = crate::simd::Avx::reported() {
             for octet in all.chunks_exact(8) {
-                let valid = crate::simd::transpose::fill8(avx, self, i, octet);
+                let valid = crate::simd::transpose::fill8(avx, self.lane_arrays(), i, octet);
                 active |= valid << i;
                 i += 8;
             }
@@ -324,7 +340,7 @@ mod tests {
                 let mut active = 0u64;
                 let whole = len.min(N) / 8 * 8;
                 for k in (0..whole).step_by(8) {
-                    let valid = crate::simd::transpose::fill8(avx8, &mut avx, k, &rays[k..k + 8]);
+                    let valid = crate::simd::transpose::fill8(avx8, avx.lane_arrays(), k, &rays[k..k + 8]);
                     active |= valid << k;
                 }
                 for (i, r) in rays.iter().enumerate().take(N).skip(whole) {

@@ -3,7 +3,7 @@
 
 use super::Avx;
 use crate::image::Bvh8Node;
-use crate::traverse::wide_bvh::{NodeRay, OCTANTS};
+use crate::traverse::boxes::wide_slab::{NodeRay, OCTANTS};
 
 /// Entry distances into `n`'s eight child boxes within `[t0, t1]`, written to `out`, and
 /// the mask of the boxes hit: [`crate::traverse::wide_bvh::node8::slab8`]'s bits, for a ray with

@@ -1,15 +1,18 @@
 //! Eight rays into a packet's lanes in AVX: one 8×8 transpose of their records
-//! ([`RayPacket::fill`]'s fast form).
+//! (`RayPacket::fill`'s fast form).
 
 use super::Avx;
-use crate::packet::RayPacket;
 use crate::ray::Ray;
 
-/// Stores the eight rays of `octet` in lanes `i .. i + 8` of `p` and returns the bits of
+/// A packet's eight lane arrays, in a ray record's order: origin x, y, z, direction x,
+/// y, z, `t_min`, `t_max`.
+pub(crate) type LaneArrays<'a, const N: usize> = [&'a mut [f32; N]; 8];
+
+/// Stores the eight rays of `octet` in lanes `i .. i + 8` of the arrays `p` and returns the bits of
 /// the valid ones (`Ray::is_valid`, lane for lane); nothing, and 0, where `octet` is not
 /// eight rays or the lanes do not fit.
 #[inline(always)]
-pub(crate) fn fill8<const N: usize>(avx: Avx, p: &mut RayPacket<N>, i: usize, octet: &[Ray]) -> u64 {
+pub(crate) fn fill8<const N: usize>(avx: Avx, p: LaneArrays<'_, N>, i: usize, octet: &[Ray]) -> u64 {
     let Avx(()) = avx;
     // SAFETY: an `Avx` token exists only where the CPU has AVX (see `Avx`).
     #[allow(unsafe_code)]
@@ -28,7 +31,7 @@ pub(crate) fn fill8<const N: usize>(avx: Avx, p: &mut RayPacket<N>, i: usize, oc
 /// The CPU must support AVX.
 #[allow(unsafe_code)]
 #[target_feature(enable = "avx")]
-unsafe fn fill8_avx<const N: usize>(p: &mut RayPacket<N>, i: usize, octet: &[Ray]) -> u64 {
+unsafe fn fill8_avx<const N: usize>(p: LaneArrays<'_, N>, i: usize, octet: &[Ray]) -> u64 {
     use core::arch::x86_64::*;
     if octet.len() < 8 || i + 8 > N {
         return 0;
@@ -53,16 +56,8 @@ unsafe fn fill8_avx<const N: usize>(p: &mut RayPacket<N>, i: usize, octet: &[Ray
     let dz = _mm256_permute2f128_ps::<0x31>(u1, u5);
     let t_min = _mm256_permute2f128_ps::<0x31>(u2, u6);
     let t_max = _mm256_permute2f128_ps::<0x31>(u3, u7);
-    let lanes = [
-        (ox, &mut p.ox),
-        (oy, &mut p.oy),
-        (oz, &mut p.oz),
-        (dx, &mut p.dx),
-        (dy, &mut p.dy),
-        (dz, &mut p.dz),
-        (t_min, &mut p.t_min),
-        (t_max, &mut p.t_max),
-    ];
+    let [pox, poy, poz, pdx, pdy, pdz, pt0, pt1] = p;
+    let lanes = [(ox, pox), (oy, poy), (oz, poz), (dx, pdx), (dy, pdy), (dz, pdz), (t_min, pt0), (t_max, pt1)];
     for (v, a) in lanes {
         // SAFETY: `i + 8 <= N` (checked above); `storeu` needs no alignment.
         unsafe { _mm256_storeu_ps(a[i..i + 8].as_mut_ptr(), v) };

@@ -7,8 +7,6 @@
 
 use super::Avx;
 use crate::intersect::triangle::{Hits8, SharedTris};
-use crate::intersect::watertight::ShearedRays4;
-use glam::Vec4;
 
 /// Two groups of four rays' shear constants as eight lanes (sx, sy, sz: lanes 0–3 the
 /// first group's, 4–7 the second's), and the lanes that take part.
@@ -16,17 +14,6 @@ use glam::Vec4;
 pub(crate) struct SharedShear {
     pub(crate) s: [[f32; 8]; 3],
     pub(crate) lanes: u32,
-}
-
-impl SharedShear {
-    /// The constants of groups `lo` (lanes 0–3) and `hi` (lanes 4–7), with `lanes`.
-    pub(crate) fn pair(lo: &ShearedRays4, hi: &ShearedRays4, lanes: u32) -> SharedShear {
-        let eight = |a: Vec4, b: Vec4| {
-            let (a, b) = (a.to_array(), b.to_array());
-            [a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3]]
-        };
-        SharedShear { s: [eight(lo.sx, hi.sx), eight(lo.sy, hi.sy), eight(lo.sz, hi.sz)], lanes }
-    }
 }
 
 /// Per triangle of the first `n` of `tris`, and per pair of ray groups of `pairs`, the
@@ -129,7 +116,7 @@ mod tests {
     use crate::intersect::triangle::Intersector;
     use crate::intersect::watertight::Watertight;
     use crate::test_lcg::Lcg;
-    use glam::Vec3;
+    use glam::{Vec3, Vec4};
 
     /// Small lattice values, so that edge functions are often exactly zero (lanes the
     /// test leaves to the scalar form) and triangles are often hit.

@@ -11,5 +11,6 @@ mod leaf;
 mod prepared;
 mod walk;
 
+#[cfg(target_arch = "x86_64")]
 pub(crate) use groups::{Groups, GROUPS};
 pub use walk::trace_bvh4_packet;

@@ -13,26 +13,9 @@ use crate::image::{Bvh4Node, Bvh8Node};
 use crate::ray::Ray;
 use crate::traverse::boxes::fixed_slab::FixedRayBox;
 use crate::traverse::boxes::slab::RayBox;
-use crate::traverse::wide_bvh::{NodeRay, WideSlab};
+use crate::traverse::boxes::wide_slab::{NodeRay, WideSlab};
 
-/// One ray's test against one box (the binary BVH's nodes).
-pub trait BoxTest: Clone + Debug {
-    /// Per-ray constants.
-    fn for_ray(ray: &Ray) -> Self;
-    /// Entry distance of the ray into `[lo, hi]` within `[t0, t1]`, or `None`. Never
-    /// `None` for a box that holds a hit of the matching triangle test in `[t0, t1]`;
-    /// never more than such a hit's distance.
-    fn entry(&self, lo: Vec3A, hi: Vec3A, t0: f32, t1: f32) -> Option<f32>;
-}
-
-/// One ray's test against the boxes of a wide node.
-pub trait WideRay<N: WideSlab>: Clone + Debug {
-    /// Per-ray constants.
-    fn for_ray(ray: &Ray) -> Self;
-    /// Entry distances into `tn` and the mask of the slots entered within `[t0, t1]`
-    /// (never an empty slot), with [`BoxTest::entry`]'s guarantees per slot.
-    fn slab(&self, node: &N, t0: f32, t1: f32, tn: &mut N::Dist) -> u32;
-}
+pub use crate::traverse::boxes::box_test::{BoxTest, WideRay};
 
 /// A datapath's box tests, for each kind of BVH node.
 pub trait NodeTests: Clone + Debug + 'static {

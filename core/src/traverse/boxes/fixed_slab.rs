@@ -33,8 +33,8 @@ use glam::Vec3A;
 use crate::fixed_ray::FixedRay;
 use crate::math::fixed_point::{Round, SATURATE};
 use crate::ray::Ray;
-use crate::traverse::boxes::datapath::{BoxTest, WideRay};
-use crate::traverse::wide_bvh::WideSlab;
+use crate::traverse::boxes::box_test::{BoxTest, WideRay};
+use crate::traverse::boxes::wide_slab::WideSlab;
 
 /// Per-ray constants of the fixed-point slab test.
 #[derive(Clone, Copy, Debug, Default)]
