@@ -28,11 +28,9 @@
 //!   up to the high figure (1.3 nJ more). The fixed and perfect models count no rows, so
 //!   their DRAM energy is a lower bound.
 
-use serde::Serialize;
-
 use crate::config::energy::EnergyConfig;
 use crate::config::HwConfig;
-use crate::observe::report::Report;
+use crate::observe::report::{EnergyReport, Report};
 
 /// Floating-point operations: (multiplies, additions).
 type Ops = (f64, f64);
@@ -70,26 +68,6 @@ impl NodeTest {
             NodeTest::None => (0.0, 0.0),
         }
     }
-}
-
-/// Energy per frame by part, and area by part.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
-pub struct EnergyReport {
-    /// Process node of the figures (nm).
-    pub process_nm: f64,
-    /// Joules for the frame (the report's cycles).
-    pub joules_per_frame: f64,
-    /// Joules per traced ray.
-    pub joules_per_ray: f64,
-    /// Average power at the clock, running frame after frame (W).
-    pub watts: f64,
-    /// Chip area (mm²).
-    pub area_mm2: f64,
-    /// Joules by part: traversal, intersection, shading datapaths, caches, l2, dram,
-    /// leakage.
-    pub joules: std::collections::BTreeMap<String, f64>,
-    /// mm² by part: the datapaths, caches, thread and FIFO registers.
-    pub area: std::collections::BTreeMap<String, f64>,
 }
 
 impl EnergyConfig {

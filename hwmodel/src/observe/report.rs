@@ -224,7 +224,27 @@ pub struct Report {
     pub conservation: Conservation,
     /// Energy and area estimates (`config.energy`'s figures over the counters).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub energy: Option<crate::observe::energy::EnergyReport>,
+    pub energy: Option<EnergyReport>,
+}
+
+/// Energy per frame by part, and area by part.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct EnergyReport {
+    /// Process node of the figures (nm).
+    pub process_nm: f64,
+    /// Joules for the frame (the report's cycles).
+    pub joules_per_frame: f64,
+    /// Joules per traced ray.
+    pub joules_per_ray: f64,
+    /// Average power at the clock, running frame after frame (W).
+    pub watts: f64,
+    /// Chip area (mm²).
+    pub area_mm2: f64,
+    /// Joules by part: traversal, intersection, shading datapaths, caches, l2, dram,
+    /// leakage.
+    pub joules: std::collections::BTreeMap<String, f64>,
+    /// mm² by part: the datapaths, caches, thread and FIFO registers.
+    pub area: std::collections::BTreeMap<String, f64>,
 }
 
 /// Everything [`Report::gather`] reads.

@@ -17,8 +17,9 @@ use crate::stream::config::{Architecture, StreamConfig};
 use crate::stream::cost_model::{CostModel, Kernel};
 use crate::stream::counters::{ByKernel, PassKind, PassRecord, RayWork};
 use crate::stream::ray_state::StreamRay;
-use crate::stream::report::{LoopTotals, StreamReport};
+use crate::stream::report::{ratio, ClassRow, KernelRow, LoopTotals, StreamReport, Table2, Traffic};
 use crate::stream::texture_cache::TextureCache;
+use crate::stream::texture_cache::{CLASSES, CLASS_NAMES, STATE};
 
 /// What a fragment of a screen holds: a ray to trace, or a primary hit that visibility
 /// already decided (the shadow caster's G-buffer).
@@ -284,7 +285,91 @@ impl<'s, I: Intersector> StreamMachine<'s, I> {
 
     /// The report of the frame so far.
     pub fn report(&self) -> StreamReport {
-        StreamReport::new(self)
+        let m = self;
+        let cfg = m.config().clone();
+        let passes = m.passes.clone();
+        let count = |k: PassKind| passes.iter().filter(|p| p.kind == Some(k)).count() as u64;
+        let sum = |k: PassKind, f: fn(&PassRecord) -> u64| -> u64 {
+            passes.iter().filter(|p| p.kind == Some(k)).map(f).sum()
+        };
+        let (tp, ip) = (count(PassKind::Traverse), count(PassKind::Intersect));
+        let (tu, ti) = (sum(PassKind::Traverse, |p| p.useful), sum(PassKind::Traverse, |p| p.idle));
+        let (iu, ii) = (sum(PassKind::Intersect, |p| p.useful), sum(PassKind::Intersect, |p| p.idle));
+        let fused = passes.iter().filter(|p| p.kind == Some(PassKind::Fused));
+        let (fu, fi) = fused.fold((0, 0), |(u, i), p| (u + p.useful, i + p.idle));
+        let multipass = cfg.arch == Architecture::Multipass;
+        let table2 = Table2 {
+            traverse_passes: tp,
+            intersect_passes: ip,
+            other_passes: passes.len() as u64 - tp - ip,
+            total_passes: passes.len() as u64,
+            max_steps: m.max_work.steps,
+            max_intersections: m.max_work.intersections,
+            optimal_passes: m.loops.bound,
+            ratio_to_optimal: if multipass { ratio(tp + ip, m.loops.bound) } else { None },
+            simd_traverse: ratio(tu, tu + ti),
+            simd_intersect: ratio(iu, iu + ii),
+            simd_overall: if multipass { ratio(tu + iu, tu + ti + iu + ii) } else { ratio(fu, fu + fi) },
+        };
+        let costs = m.costs().clone();
+        let kernels = Kernel::ALL
+            .iter()
+            .map(|&k| {
+                let c = costs.get(k);
+                let t = *m.kernels.get(k);
+                let mean = if t.invocations > 0 { t.random_words / t.invocations as f64 } else { 0.0 };
+                let (r, w) = if multipass { (c.r, c.w) } else { (0, 0) };
+                KernelRow { kernel: k.name(), instructions: c.instructions, r, w, m: c.m.unwrap_or(mean), totals: t }
+            })
+            .collect();
+        let cache = m.texture_cache();
+        let stats = cache.stats;
+        let classes: Vec<ClassRow> = (0..CLASSES)
+            .filter(|&c| c != STATE || cfg.cache_state)
+            .map(|c| ClassRow {
+                class: CLASS_NAMES[c],
+                words: stats.words[c],
+                hit_rate: if cache.enabled() { stats.hit_rate(c) } else { None },
+                bytes_without_cache: stats.words[c] * 4,
+                bytes_with_cache: cache.bytes_fetched(c),
+            })
+            .collect();
+        let state_read: u64 = passes.iter().map(|p| p.state_read).sum();
+        let state_written: u64 = passes.iter().map(|p| p.state_written).sum();
+        let stencil_reads: u64 = passes.iter().map(|p| p.stencil.reads).sum();
+        let stencil_writes: u64 = passes.iter().map(|p| p.stencil.writes).sum();
+        let scene_classes = 0..STATE;
+        let random: u64 = scene_classes.clone().map(|c| cache.bytes_fetched(c)).sum();
+        let random_uncached: u64 = scene_classes.map(|c| stats.words[c] * 4).sum();
+        // With a table that fixes M, the table's words stand for the scene reads.
+        let fixed_m = costs.kernels.values().any(|c| c.m.is_some());
+        let table_words: f64 = m.kernels.0.iter().map(|t| t.random_words).sum();
+        let random = if fixed_m { (table_words * 4.0) as u64 } else { random };
+        let state_reads_bytes = if cfg.cache_state { cache.bytes_fetched(STATE) } else { state_read * 4 };
+        let state = state_reads_bytes + state_written * 4;
+        let stencil = stencil_reads + stencil_writes;
+        let traffic = Traffic { random, random_uncached, state, stencil, total: random + state + stencil };
+        let instructions = m.kernels.instructions();
+        StreamReport {
+            width: m.size().0,
+            height: m.size().1,
+            frame_time: cfg.machine.frame_time(instructions, traffic.total),
+            config: cfg,
+            costs,
+            table2,
+            kernels,
+            classes,
+            instructions,
+            state_read,
+            state_written,
+            stencil_reads,
+            stencil_writes,
+            traffic,
+            cache: stats,
+            rays_by_wave: m.rays_by_wave.clone(),
+            max_work: m.max_work,
+            passes,
+        }
     }
 
     /// Image size.
