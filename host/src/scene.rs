@@ -13,10 +13,12 @@ use raypipe_core::{NoProbe, Ray, RayCounters, SceneView, Watertight};
 
 use crate::render::tracer::trace;
 
-use crate::build::bvh::{align_leaves, build_bvh, build_wide_bvh, BvhParams};
+use crate::build::bvh::build_bvh;
 use crate::build::grid::{build_grid, GridResolution};
 use crate::build::image_writer::ImageWriter;
 use crate::build::kdtree::{build_kdtree, KdParams};
+use crate::build::sah::BvhParams;
+use crate::build::wide_bvh::{align_leaves, build_wide_bvh};
 use crate::input::camera_file::CameraSpec;
 use crate::input::default_scene;
 use crate::input::mesh::Mesh;

@@ -7,8 +7,8 @@
 //! rejected by the parse.
 
 use proptest::prelude::*;
-use raypipe::build::bvh::BuiltWideBvh;
 use raypipe::build::image_writer::ImageWriter;
+use raypipe::build::wide_bvh::BuiltWideBvh;
 use raypipe::input::mesh::Mesh;
 use raypipe::platform::aligned::AlignedBytes;
 use raypipe::render::tracer::trace;

@@ -11,9 +11,10 @@ use raypipe_core::image::{
 use raypipe_core::image::{TriBlock4, WaldTriangle, WideNode};
 use raypipe_core::Vec3;
 
-use crate::build::bvh::{BuiltBvh, BuiltWideBvh};
+use crate::build::bvh::BuiltBvh;
 use crate::build::grid::BuiltGrid;
 use crate::build::kdtree::BuiltKd;
+use crate::build::wide_bvh::BuiltWideBvh;
 use crate::input::mesh::Mesh;
 use crate::platform::aligned::AlignedBytes;
 

@@ -7,6 +7,10 @@ pub mod image_writer;
 pub mod kdtree;
 pub mod light_distribution;
 pub mod mipmap;
+pub mod sah;
 pub mod spatial_split;
+#[cfg(test)]
+mod test_meshes;
 pub mod tri_box;
 pub mod tri_clip;
+pub mod wide_bvh;

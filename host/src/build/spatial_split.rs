@@ -9,7 +9,7 @@
 
 use glam::DVec3;
 
-use crate::build::bvh::{children_cost, split_cost, Bounds, BvhParams, Ref, Sides, Split};
+use crate::build::sah::{children_cost, split_cost, Bounds, BvhParams, Ref, Sides, Split};
 use crate::build::tri_clip::split_bounds;
 
 /// The boxes of the parts of a reference's triangle below and above the plane `axis =

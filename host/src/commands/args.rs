@@ -9,9 +9,9 @@ use clap::Args;
 use raypipe_core::image::{CameraRecord, LightRecord};
 use raypipe_core::pixel_filter::Filter;
 
-use crate::build::bvh::BvhParams;
 use crate::build::grid::{GridResolution, DEFAULT_CELLS_PER_TRIANGLE};
 use crate::build::kdtree::KdParams;
+use crate::build::sah::BvhParams;
 use crate::input::camera_file::CameraSpec;
 use crate::output::tone_map::{Display, ToneMap};
 use crate::render::tracer::IntersectorKind;
