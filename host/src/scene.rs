@@ -185,7 +185,11 @@ pub fn load_source(path: Option<&Path>) -> Result<Source> {
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
     let file_name = path.file_name().and_then(|f| f.to_str()).unwrap_or("").to_ascii_lowercase();
     if crate::input::scene_file::is_scene_file(path) {
-        let (mesh, warnings, camera) = crate::input::scene_file::load_scene_file(path)?;
+        let load_mesh = |child: &Path| match load_source(Some(child))? {
+            Source::Mesh { mesh, warnings, .. } => Ok(Some((mesh, warnings))),
+            Source::Image(_) => Ok(None),
+        };
+        let (mesh, warnings, camera) = crate::input::scene_file::load_scene_file(path, &load_mesh)?;
         return Ok(Source::Mesh { name, mesh, warnings, camera });
     }
     if file_name.ends_with(".ply") || file_name.ends_with(".ply.gz") {

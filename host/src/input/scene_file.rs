@@ -115,9 +115,14 @@ pub fn is_scene_file(path: &Path) -> bool {
     path.extension().is_some_and(|e| e.eq_ignore_ascii_case("toml"))
 }
 
+/// A mesh file's loader for the meshes a scene file lists: the mesh and its warnings, or
+/// `None` for a file that is a scene image (which a scene file cannot list).
+pub type MeshLoader<'a> = &'a dyn Fn(&Path) -> Result<Option<(Mesh, Vec<String>)>>;
+
 /// Reads a scene file: the merged mesh (with its lights, if the file lists any, followed
 /// by a dim ambient term and the emitters as area lights), warnings, and the camera.
-pub fn load_scene_file(path: &Path) -> Result<(Mesh, Vec<String>, CameraSpec)> {
+/// Each listed file is read by `load_mesh`, whatever its format.
+pub fn load_scene_file(path: &Path, load_mesh: MeshLoader<'_>) -> Result<(Mesh, Vec<String>, CameraSpec)> {
     let name = path.display().to_string();
     let text = std::fs::read_to_string(path).map_err(|e| anyhow!("{name}: cannot read: {e}"))?;
     let file: SceneFile = toml::from_str(&text)
@@ -137,7 +142,7 @@ pub fn load_scene_file(path: &Path) -> Result<(Mesh, Vec<String>, CameraSpec)> {
         if is_scene_file(&child) {
             bail!("{what}: a scene file cannot include another");
         }
-        let crate::scene::Source::Mesh { mesh, warnings: w, .. } = crate::scene::load_source(Some(&child))? else {
+        let Some((mesh, w)) = load_mesh(&child)? else {
             bail!("{what}: is a scene image; a scene file lists meshes (OBJ, PLY, glTF)");
         };
         warnings.extend(w);
