@@ -1,0 +1,16 @@
+//! The command line as a user meets it: defaults that work with no arguments, `--help`
+//! everywhere, and bad input answered with one line on stderr, a non-zero exit, no panic
+//! and no output file.
+
+mod bad_input;
+mod build;
+mod common;
+mod fixed_point;
+mod info;
+mod render;
+mod report;
+mod simulate;
+mod stats;
+mod stream;
+mod sweep;
+mod trace;

@@ -1,0 +1,187 @@
+//! `raypipe sweep` and `raypipe plot`.
+
+use crate::common::*;
+use std::path::{Path, PathBuf};
+
+/// A small sweep: two axes crossed with two listed points, on the tetrahedron.
+fn sweep_spec(dir: &Path) -> PathBuf {
+    let tetra = fixtures().join("tetra.obj");
+    write(
+        dir,
+        "spec.toml",
+        &format!(
+            "[fixed]\nscene = {:?}\nsize = \"24x16\"\n[grid]\n\"traversal.units\" = [1, 2]\npacket_size = [4, 16]\n\
+             [[points]]\naccel = \"kd\"\n[[points]]\naccel = \"bvh4\"\n\"memory.model\" = \"dram\"\n",
+            tetra.display().to_string()
+        ),
+    )
+}
+
+#[test]
+fn sweep_points_are_stand_alone_runs_and_shards_merge_to_the_whole() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let spec = sweep_spec(d);
+    std::fs::create_dir(d.join("reports")).unwrap();
+    let o = raypipe(d, &["sweep", "spec.toml", "-o", "all", "--reports", "reports", "--jobs", "2"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let csv = std::fs::read_to_string(d.join("all.csv")).unwrap();
+    let lines: Vec<&str> = csv.lines().collect();
+    assert_eq!(lines.len(), 9, "{csv}");
+    // Columns: parameters in spec order, then the verdict and the metrics.
+    assert!(
+        lines[0].starts_with("index,scene,size,traversal.units,packet_size,accel,memory.model,bottleneck,error,fps,")
+    );
+    // Point 7 = accel bvh4 on DRAM, units 2, packets of 16: the same report, byte for
+    // byte, as the stand-alone command.
+    assert_eq!(spec.parent(), Some(d));
+    let tetra = fixtures().join("tetra.obj");
+    let o = raypipe(
+        d,
+        &[
+            "simulate",
+            tetra.to_str().unwrap(),
+            "--size",
+            "24x16",
+            "--set",
+            "traversal.units=2",
+            "--set",
+            "packet_size=16",
+            "--accel",
+            "bvh4",
+            "--set",
+            "memory.model=\"dram\"",
+            "--report",
+            "alone.json",
+            "-o",
+            "alone.png",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(std::fs::read(d.join("alone.json")).unwrap(), std::fs::read(d.join("reports/point-7.json")).unwrap());
+    assert!(lines[8].starts_with("7,"), "{}", lines[8]);
+    // Shards (written in any order) merged = the single run, byte for byte.
+    for i in 0..3 {
+        let shard = format!("{i}/3");
+        let out = format!("part{i}");
+        let o = raypipe(d, &["sweep", "spec.toml", "--shard", &shard, "-o", &out]);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let o = raypipe(d, &["sweep", "merge", "part2.jsonl", "part0.jsonl", "part1.jsonl", "-o", "merged"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for ext in ["csv", "jsonl"] {
+        let (a, b) = (d.join(format!("all.{ext}")), d.join(format!("merged.{ext}")));
+        assert_eq!(std::fs::read(a).unwrap(), std::fs::read(b).unwrap(), "{ext}");
+    }
+    // Resuming recomputes nothing: no point runs (its report would be written again),
+    // and the outputs are unchanged.
+    std::fs::remove_dir_all(d.join("reports")).unwrap();
+    std::fs::create_dir(d.join("reports")).unwrap();
+    let o = raypipe(d, &["sweep", "spec.toml", "-o", "all", "--reports", "reports"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("8 already done, 0 to run"));
+    assert!(only_files(&d.join("reports")).is_empty());
+    assert_eq!(std::fs::read_to_string(d.join("all.csv")).unwrap(), csv);
+    // A run stopped half-way resumes with the missing points only.
+    let jsonl = std::fs::read_to_string(d.join("all.jsonl")).unwrap();
+    let kept: Vec<&str> = jsonl.lines().take(5).collect();
+    std::fs::write(d.join("all.jsonl"), format!("{}\n{{\"index\":5,\"poi", kept.join("\n"))).unwrap();
+    let o = raypipe(d, &["sweep", "spec.toml", "-o", "all", "--reports", "reports"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        String::from_utf8_lossy(&o.stdout).contains("5 already done, 3 to run"),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+    assert_eq!(only_files(&d.join("reports")), ["point-5.json", "point-6.json", "point-7.json"]);
+    assert_eq!(std::fs::read_to_string(d.join("all.csv")).unwrap(), csv);
+}
+
+#[test]
+fn sweep_rejects_bad_specs_before_running_anything() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let cases: [(&str, &str); 6] = [
+        ("[grid]\n\"traversal.unitz\" = [1]\n", "no such parameter"),
+        ("[grid]\n\"traversal.units\" = []\n", "non-empty list"),
+        ("[fixed]\npacket_size = 3\n", "packet_size"),
+        ("[fixed]\nscene = \"missing.obj\"\n", "no such file"),
+        ("[fixed]\noutput = \"x.png\"\n", "cannot be a sweep parameter"),
+        ("[grids]\n", "unknown section"),
+    ];
+    for (text, needle) in cases {
+        write(d, "bad.toml", text);
+        let o = raypipe(d, &["sweep", "bad.toml", "-o", "out"]);
+        assert_one_line_error(&o, needle);
+        assert!(!d.join("out.csv").exists() && !d.join("out.jsonl").exists(), "{text}");
+    }
+    let o = raypipe(d, &["sweep", "bad.toml", "--shard", "3/3"]);
+    assert!(!o.status.success());
+}
+
+#[test]
+fn plots_of_a_small_sweep_decode() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    sweep_spec(d);
+    let o = raypipe(d, &["sweep", "spec.toml", "-o", "s"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let plots: [&[&str]; 4] = [
+        &["--x", "traversal.units", "--y", "fps", "--series", "packet_size", "--where", "accel=kd", "-o", "line.png"],
+        &[
+            "--x",
+            "traversal.units",
+            "--y",
+            "packet_size",
+            "--value",
+            "bytes_per_ray",
+            "--where",
+            "accel=bvh4",
+            "-o",
+            "heat.svg",
+        ],
+        &[
+            "--x",
+            "packet_size",
+            "--stack",
+            "stall.traversal",
+            "--where",
+            "accel=kd",
+            "--where",
+            "traversal.units=2",
+            "-o",
+            "bars.png",
+        ],
+        &[
+            "--x",
+            "traversal.units",
+            "--stack",
+            "bytes_per_ray",
+            "--where",
+            "accel=kd",
+            "--where",
+            "packet_size=16",
+            "-o",
+            "bytes.svg",
+        ],
+    ];
+    for args in plots {
+        let mut all = vec!["plot", "s.jsonl"];
+        all.extend_from_slice(args);
+        let o = raypipe(d, &all);
+        assert!(o.status.success(), "{args:?}: {}", stderr(&o));
+    }
+    for png in ["line.png", "bars.png"] {
+        let (w, h, _) = decode(&d.join(png));
+        assert!(w > 100 && h > 100, "{png}");
+    }
+    for svg in ["heat.svg", "bytes.svg"] {
+        let text = std::fs::read_to_string(d.join(svg)).unwrap();
+        let png = raypipe::output::chart_raster::to_png(&text).expect("the SVG parses and renders");
+        assert!(png.starts_with(b"\x89PNG"), "{svg}");
+    }
+    // Rows the plot cannot tell apart are refused, naming what differs.
+    let o = raypipe(d, &["plot", "s.jsonl", "--x", "traversal.units", "--y", "fps", "-o", "x.svg"]);
+    assert_one_line_error(&o, "differ in packet_size");
+    assert!(!d.join("x.svg").exists());
+}
