@@ -72,22 +72,29 @@ pub(super) fn leaf_entries_portable(
     enter
 }
 
+/// A leaf the packet reached: the scene and tree it is in, the packet, the rays of the
+/// packet that enter its box, and its list entries `first .. first + count`.
+#[derive(Clone, Copy)]
+pub(super) struct LeafVisit<'v, 's, const N: usize> {
+    pub(super) scene: &'v SceneView<'s>,
+    pub(super) bvh: &'v Bvh4View<'s>,
+    pub(super) packet: &'v RayPacket<N>,
+    pub(super) enter: u64,
+    pub(super) first: u32,
+    pub(super) count: u32,
+}
+
 /// Tests the leaf's triangles (list entries `first .. first + count`) with the rays of
 /// `enter`, each triangle read once: four rays at a time where two or more of a group
 /// enter and the intersector has a four-ray form, one by one otherwise.
-#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(super) fn test_leaf<I: Intersector, P: MemoryProbe, const N: usize>(
-    scene: &SceneView<'_>,
-    bvh: &Bvh4View<'_>,
-    packet: &RayPacket<N>,
+    leaf: &LeafVisit<'_, '_, N>,
     preps: &mut Preps<I, N>,
-    enter: u64,
-    first: u32,
-    count: u32,
     hits: &mut PacketHits<N>,
     probe: &mut P,
 ) {
+    let LeafVisit { scene, bvh, packet, enter, first, count } = *leaf;
     let groups = groups_of(enter);
     for e in first..first.wrapping_add(count) {
         let prim = bvh.prim(e, probe);
@@ -99,7 +106,8 @@ pub(super) fn test_leaf<I: Intersector, P: MemoryProbe, const N: usize>(
                 Some(rays) if m4.count_ones() >= 2 => {
                     let r = I::intersect_rays4(rays, &verts);
                     for k in Lanes(m4 & (r.hit | r.redo) as u64) {
-                        keep_lane(packet, &mut preps.ones, hits, &r, k, (4 * g + k).min(N - 1), prim, || verts);
+                        let lane = LaneOutcome { hits: &r, lane: k, ray: (4 * g + k).min(N - 1) };
+                        keep_lane(packet, &mut preps.ones, hits, lane, prim, || verts);
                     }
                 }
                 _ => {
@@ -113,21 +121,30 @@ pub(super) fn test_leaf<I: Intersector, P: MemoryProbe, const N: usize>(
     }
 }
 
+/// One lane of a multi-lane test's outcome, and the packet ray it belongs to.
+#[derive(Clone, Copy)]
+pub(super) struct LaneOutcome<'r, const L: usize> {
+    /// The test's outcome for all its lanes.
+    pub(super) hits: &'r LaneHits<L>,
+    /// The lane.
+    pub(super) lane: usize,
+    /// The packet ray the lane tested.
+    pub(super) ray: usize,
+}
+
 /// Keeps lane `k` of a multi-lane test's outcome `r` on triangle `prim` for packet ray
-/// `i`: its hit if in the ray's range, or, where the lane was left undecided, the one-ray
-/// test's verdict on the triangle `tri()`.
-#[allow(clippy::too_many_arguments)]
+/// `i` (`outcome`): its hit if in the ray's range, or, where the lane was left undecided,
+/// the one-ray test's verdict on the triangle `tri()`.
 #[inline(always)]
 pub(super) fn keep_lane<I: Intersector, const N: usize, const L: usize>(
     packet: &RayPacket<N>,
     ones: &mut Ones<I, N>,
     hits: &mut PacketHits<N>,
-    r: &LaneHits<L>,
-    k: usize,
-    i: usize,
+    outcome: LaneOutcome<'_, L>,
     prim: u32,
     tri: impl FnOnce() -> I::Triangle,
 ) {
+    let LaneOutcome { hits: r, lane: k, ray: i } = outcome;
     let ray = packet.ray(i);
     if r.redo & (1 << k) != 0 {
         test_triangle::<I>(&ones.get(packet, i), &ray, &tri(), prim, &mut hits[i]);
@@ -143,20 +160,15 @@ pub(super) fn keep_lane<I: Intersector, const N: usize, const L: usize>(
 /// and one-ray forms' bits, and a lane's closest hit does not depend on the order its
 /// triangles are tested in. Returns false, having tested nothing, where it does not apply
 /// (the test has no such form, this CPU lacks it, or the groups do not share one frame).
-#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(super) fn test_leaf_shared<I: Intersector, P: MemoryProbe, const N: usize>(
-    scene: &SceneView<'_>,
-    bvh: &Bvh4View<'_>,
-    packet: &RayPacket<N>,
-    preps: &mut Preps<I, N>,
-    enter: u64,
-    first: u32,
-    count: u32,
+    leaf: &LeafVisit<'_, '_, N>,
     origin: Vec3,
+    preps: &mut Preps<I, N>,
     hits: &mut PacketHits<N>,
     probe: &mut P,
 ) -> bool {
+    let LeafVisit { scene, bvh, packet, enter, first, count } = *leaf;
     if !I::SHARED8 {
         return false;
     }
@@ -231,7 +243,7 @@ pub(super) fn test_leaf_shared<I: Intersector, P: MemoryProbe, const N: usize>(
                     Some(Some(v)) => *v,
                     _ => I::fetch(scene, prim, probe),
                 };
-                keep_lane(packet, &mut preps.ones, hits, o, lane, i, prim, tri);
+                keep_lane(packet, &mut preps.ones, hits, LaneOutcome { hits: o, lane, ray: i }, prim, tri);
             }
         });
         if !tested {

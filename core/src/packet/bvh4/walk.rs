@@ -4,7 +4,7 @@
 
 use crate::counters::RayCounters;
 use crate::hit::Hit;
-use crate::image::{Bvh4View, SceneView, MAX_WIDE_DEPTH};
+use crate::image::{Bvh4Node, Bvh4View, SceneView, MAX_WIDE_DEPTH};
 use crate::intersect::triangle::Intersector;
 use crate::packet::{ray_by_ray, Lanes, PacketCounters, PacketHits, RayPacket};
 use crate::probe::MemoryProbe;
@@ -17,7 +17,7 @@ use glam::{BVec4A, Vec3, Vec3A, Vec4};
 
 use super::frustum::Frustum;
 use super::groups::{groups_of, Groups};
-use super::leaf::{leaf_entries, test_leaf, test_leaf_shared};
+use super::leaf::{leaf_entries, test_leaf, test_leaf_shared, LeafVisit};
 use super::prepared::Preps;
 
 pub(super) const STACK: usize = 3 * MAX_WIDE_DEPTH as usize + 4;
@@ -78,134 +78,191 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
     if mask == 0 {
         return;
     }
-    let groups = N.div_ceil(4);
-    let full = N <= 64 && mask == u64::MAX >> (64 - N.clamp(1, 64));
-    // The lanes in SIMD registers with their reciprocals: computed when the first leaf
-    // needs them, if the frustum can do without (see `Frustum::from_full_packet`).
-    let mut lanes: Option<Groups> = None;
     // Each ray's exact box test, where the frustum cannot serve.
     let mut boxes: Option<[RayBox; N]> = None;
-    // `t_end`: how far any ray of the packet still looks.
-    let (cull, mut t_end): (Cull<N>, f32) = match full.then(|| Frustum::from_full_packet(packet)).flatten() {
-        Some((f, t_end)) => (Cull::Frustum(f), t_end),
-        None => {
-            let q = Groups::fill(&mut lanes, packet, groups, mask);
-            let t_end = q.largest_end();
-            match Frustum::new(q, groups, mask) {
-                Some(f) => (Cull::Frustum(f), t_end),
-                None => (Cull::Exact(boxes.insert(core::array::from_fn(|i| RayBox::new(&packet.ray(i))))), t_end),
-            }
-        }
-    };
-    // The watertight constants are computed the first time a ray enters a leaf: most
-    // rays of a frame never do.
-    let mut preps = Preps::<I, N>::new();
+    let mut walk = PacketWalk::<I, N>::start(packet, mask, &mut boxes);
     // (child or first entry, leaf count or 0, entry bound, leaf box as min xyz, max xyz)
     let mut stack: heapless::Vec<(u32, u32, f32, [f32; 6]), STACK> = heapless::Vec::new();
     let mut current = (0u32, 0u32, [0f32; 6], 0f32);
-    let mut c = PacketCounters::default();
     loop {
         let (index, count, leaf_box, leaf_t) = current;
-        c.visits += 1;
+        walk.c.visits += 1;
         if count == 0 {
-            let node = bvh.node(index, probe);
-            let (tn, needed) = match &cull {
-                Cull::Frustum(f) => {
-                    c.active_lanes += mask.count_ones() as u64;
-                    f.slab4(node, t_end)
-                }
-                Cull::Exact(boxes) => {
-                    let mut needed = 0u32;
-                    let mut t = Vec4::INFINITY;
-                    for i in Lanes(mask) {
-                        let end = hits[i].map_or(packet.t_max[i], |h: Hit| h.t);
-                        let (tn, m) = slab4_exact(&boxes[i], node, packet.t_min[i], end);
-                        if m != 0 {
-                            c.active_lanes += 1;
-                            needed |= m;
-                            let hit = BVec4A::new(m & 1 != 0, m & 2 != 0, m & 4 != 0, m & 8 != 0);
-                            t = t.min(Vec4::select(hit, tn, Vec4::INFINITY));
-                        }
-                    }
-                    (t, needed)
-                }
-            };
-            let child_t = tn.to_array();
-            // Needed children, nearest first.
-            let (order, n) = nearest_first(needed, &child_t);
-            if n > 0 {
-                let slot_box = |k: usize| {
-                    let k = k & 3;
-                    [node.min_x[k], node.min_y[k], node.min_z[k], node.max_x[k], node.max_y[k], node.max_z[k]]
-                };
-                for &k in order.get(1..n).unwrap_or_default().iter().rev() {
-                    let k = k & 3;
-                    let _ = stack.push((node.child[k], node.count[k], child_t[k], slot_box(k)));
-                }
-                let k = order[0] & 3;
-                current = (node.child[k], node.count[k], slot_box(k), child_t[k]);
+            if let Some(next) = walk.inner(bvh.node(index, probe), packet, hits, &mut stack) {
+                current = next;
                 continue;
             }
         } else {
-            let q = match lanes {
-                Some(ref mut q) => q,
-                None => Groups::fill(&mut lanes, packet, groups, mask),
-            };
-            let enter = match &cull {
-                Cull::Exact(boxes) => {
-                    let lo = Vec3A::new(leaf_box[0], leaf_box[1], leaf_box[2]);
-                    let hi = Vec3A::new(leaf_box[3], leaf_box[4], leaf_box[5]);
-                    let mut enter = 0u64;
-                    for i in Lanes(mask) {
-                        let end = hits[i].map_or(packet.t_max[i], |h: Hit| h.t);
-                        if boxes[i].entry(lo, hi, packet.t_min[i], end).is_some() {
-                            enter |= 1 << i;
-                        }
-                    }
-                    enter
-                }
-                Cull::Frustum(f) => leaf_entries(q, groups, mask, &leaf_box, leaf_t, f.origin()),
-            };
-            c.active_lanes += enter.count_ones() as u64;
-            if enter != 0 {
-                preps.fours.prepare(packet, q, mask, enter);
-                let shared = match &cull {
-                    Cull::Frustum(f) => f.origin().map(Vec3::from).is_some_and(|o| {
-                        test_leaf_shared::<I, P, N>(scene, bvh, packet, &mut preps, enter, index, count, o, hits, probe)
-                    }),
-                    Cull::Exact(_) => false,
-                };
-                if !shared {
-                    test_leaf::<I, P, N>(scene, bvh, packet, &mut preps, enter, index, count, hits, probe);
-                }
-                c.tri_tests += count as u64 * enter.count_ones() as u64;
-                // The ends of the groups that entered, all four lanes from their hits (the
-                // other lanes' hits are unchanged, and inactive lanes have none: their
-                // ends stay their rays' ends).
-                for g in Lanes(groups_of(enter)) {
-                    let end = |k: usize| {
-                        let i = (4 * g + k).min(N - 1);
-                        hits[i].map_or(packet.t_max[i], |h: Hit| h.t)
-                    };
-                    if let Some(e) = q.ends.get_mut(g) {
-                        *e = Vec4::new(end(0), end(1), end(2), end(3));
-                        q.update_end(g, mask);
-                    }
-                }
-                t_end = q.largest_end();
-            }
+            let leaf = LeafVisit { scene, bvh, packet, enter: 0, first: index, count };
+            walk.leaf(leaf, &leaf_box, leaf_t, hits, probe);
         }
         // Pop the next entry whose entry bound is not beyond every ray's best hit.
         loop {
             let Some((child, count, t, b)) = stack.pop() else {
-                counters.add(&c);
+                counters.add(&walk.c);
                 return;
             };
-            if t > t_end {
+            if t > walk.t_end {
                 continue;
             }
             current = (child, count, b, t);
             break;
         }
+    }
+}
+
+/// The packet's walk state: how it culls, its lanes in registers (made when a leaf first
+/// needs them), its rays' intersection constants, how far any ray still looks, and its
+/// counters.
+struct PacketWalk<'b, I: Intersector, const N: usize> {
+    cull: Cull<'b, N>,
+    lanes: Option<Groups>,
+    preps: Preps<I, N>,
+    mask: u64,
+    groups: usize,
+    /// How far any ray of the packet still looks.
+    t_end: f32,
+    c: PacketCounters,
+}
+
+impl<'b, I: Intersector, const N: usize> PacketWalk<'b, I, N> {
+    /// The walk of the rays of `mask`: culled by the frustum where one bounds them, else
+    /// ray by ray with the exact tests kept in `boxes`.
+    #[inline(always)]
+    fn start(packet: &RayPacket<N>, mask: u64, boxes: &'b mut Option<[RayBox; N]>) -> Self {
+        let groups = N.div_ceil(4);
+        let full = N <= 64 && mask == u64::MAX >> (64 - N.clamp(1, 64));
+        // The lanes in SIMD registers with their reciprocals: computed when the first leaf
+        // needs them, if the frustum can do without (see `Frustum::from_full_packet`).
+        let mut lanes: Option<Groups> = None;
+        let (cull, t_end): (Cull<N>, f32) = match full.then(|| Frustum::from_full_packet(packet)).flatten() {
+            Some((f, t_end)) => (Cull::Frustum(f), t_end),
+            None => {
+                let q = Groups::fill(&mut lanes, packet, groups, mask);
+                let t_end = q.largest_end();
+                match Frustum::new(q, groups, mask) {
+                    Some(f) => (Cull::Frustum(f), t_end),
+                    None => (Cull::Exact(boxes.insert(core::array::from_fn(|i| RayBox::new(&packet.ray(i))))), t_end),
+                }
+            }
+        };
+        // The watertight constants are computed the first time a ray enters a leaf: most
+        // rays of a frame never do.
+        let preps = Preps::<I, N>::new();
+        PacketWalk { cull, lanes, preps, mask, groups, t_end, c: PacketCounters::default() }
+    }
+
+    /// An inner node: its four boxes culled for the packet, the needed children pushed
+    /// but the nearest, which is returned as the next entry (none if no child is needed).
+    #[inline(always)]
+    fn inner(
+        &mut self,
+        node: &Bvh4Node,
+        packet: &RayPacket<N>,
+        hits: &PacketHits<N>,
+        stack: &mut heapless::Vec<(u32, u32, f32, [f32; 6]), STACK>,
+    ) -> Option<(u32, u32, [f32; 6], f32)> {
+        let mask = self.mask;
+        let (tn, needed) = match &self.cull {
+            Cull::Frustum(f) => {
+                self.c.active_lanes += mask.count_ones() as u64;
+                f.slab4(node, self.t_end)
+            }
+            Cull::Exact(boxes) => {
+                let mut needed = 0u32;
+                let mut t = Vec4::INFINITY;
+                for i in Lanes(mask) {
+                    let end = hits[i].map_or(packet.t_max[i], |h: Hit| h.t);
+                    let (tn, m) = slab4_exact(&boxes[i], node, packet.t_min[i], end);
+                    if m != 0 {
+                        self.c.active_lanes += 1;
+                        needed |= m;
+                        let hit = BVec4A::new(m & 1 != 0, m & 2 != 0, m & 4 != 0, m & 8 != 0);
+                        t = t.min(Vec4::select(hit, tn, Vec4::INFINITY));
+                    }
+                }
+                (t, needed)
+            }
+        };
+        let child_t = tn.to_array();
+        // Needed children, nearest first.
+        let (order, n) = nearest_first(needed, &child_t);
+        if n == 0 {
+            return None;
+        }
+        let slot_box = |k: usize| {
+            let k = k & 3;
+            [node.min_x[k], node.min_y[k], node.min_z[k], node.max_x[k], node.max_y[k], node.max_z[k]]
+        };
+        for &k in order.get(1..n).unwrap_or_default().iter().rev() {
+            let k = k & 3;
+            let _ = stack.push((node.child[k], node.count[k], child_t[k], slot_box(k)));
+        }
+        let k = order[0] & 3;
+        Some((node.child[k], node.count[k], slot_box(k), child_t[k]))
+    }
+
+    /// A leaf (`leaf`, its box `leaf_box` entered at `leaf_t`): the rays that enter its
+    /// box test its triangles, and the groups that did update their ends.
+    #[inline(always)]
+    fn leaf<P: MemoryProbe>(
+        &mut self,
+        mut leaf: LeafVisit<'_, '_, N>,
+        leaf_box: &[f32; 6],
+        leaf_t: f32,
+        hits: &mut PacketHits<N>,
+        probe: &mut P,
+    ) {
+        let (packet, mask, groups) = (leaf.packet, self.mask, self.groups);
+        let q = match self.lanes {
+            Some(ref mut q) => q,
+            None => Groups::fill(&mut self.lanes, packet, groups, mask),
+        };
+        let enter = match &self.cull {
+            Cull::Exact(boxes) => {
+                let lo = Vec3A::new(leaf_box[0], leaf_box[1], leaf_box[2]);
+                let hi = Vec3A::new(leaf_box[3], leaf_box[4], leaf_box[5]);
+                let mut enter = 0u64;
+                for i in Lanes(mask) {
+                    let end = hits[i].map_or(packet.t_max[i], |h: Hit| h.t);
+                    if boxes[i].entry(lo, hi, packet.t_min[i], end).is_some() {
+                        enter |= 1 << i;
+                    }
+                }
+                enter
+            }
+            Cull::Frustum(f) => leaf_entries(q, groups, mask, leaf_box, leaf_t, f.origin()),
+        };
+        self.c.active_lanes += enter.count_ones() as u64;
+        if enter == 0 {
+            return;
+        }
+        leaf.enter = enter;
+        self.preps.fours.prepare(packet, q, mask, enter);
+        let shared = match &self.cull {
+            Cull::Frustum(f) => f
+                .origin()
+                .map(Vec3::from)
+                .is_some_and(|o| test_leaf_shared::<I, P, N>(&leaf, o, &mut self.preps, hits, probe)),
+            Cull::Exact(_) => false,
+        };
+        if !shared {
+            test_leaf::<I, P, N>(&leaf, &mut self.preps, hits, probe);
+        }
+        self.c.tri_tests += leaf.count as u64 * enter.count_ones() as u64;
+        // The ends of the groups that entered, all four lanes from their hits (the other
+        // lanes' hits are unchanged, and inactive lanes have none: their ends stay their
+        // rays' ends).
+        for g in Lanes(groups_of(enter)) {
+            let end = |k: usize| {
+                let i = (4 * g + k).min(N - 1);
+                hits[i].map_or(packet.t_max[i], |h: Hit| h.t)
+            };
+            if let Some(e) = q.ends.get_mut(g) {
+                *e = Vec4::new(end(0), end(1), end(2), end(3));
+                q.update_end(g, mask);
+            }
+        }
+        self.t_end = q.largest_end();
     }
 }
