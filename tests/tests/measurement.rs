@@ -3,7 +3,7 @@
 //! and walkthroughs whose frames are each the host's image while the caches stay warm.
 
 use raypipe::hw::chip::{simulate_frames, FrameRun, Measure};
-use raypipe::render::tracer::IntersectorKind;
+use raypipe::hw::frame_setup::FrameSetup;
 use raypipe::render::{render, Algorithm, RenderOptions};
 use raypipe::scene::{Accel, BuildOptions};
 use raypipe_core::image::CameraRecord;
@@ -29,7 +29,7 @@ fn frames(
     let view = scene.view().unwrap();
     let opts = RenderOptions { algo, max_depth: 2, ..Default::default() };
     let shader = opts.shader(Vec3::from(views[0].background));
-    simulate_frames(&view, views, measure, cfg, IntersectorKind::Watertight, shader, false, opts.sampler(), false)
+    simulate_frames(&view, views, measure, cfg, &FrameSetup { shader, sampler: opts.sampler(), ..Default::default() })
         .unwrap()
 }
 

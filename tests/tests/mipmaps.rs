@@ -170,11 +170,7 @@ fn the_models_read_the_same_mipmap_levels_as_the_host() {
             &cam,
             &raypipe_hw::stream::StreamConfig::default(),
             &raypipe_hw::stream::CostModel::default(),
-            raypipe::render::tracer::IntersectorKind::Watertight,
-            shader,
-            false,
-            opts.sampler(),
-            false,
+            &raypipe::hw::frame_setup::FrameSetup { shader, sampler: opts.sampler(), ..Default::default() },
         )
         .unwrap();
         assert!(frame.pixels == host.pixels, "stream {algo:?} {samples}");

@@ -7,8 +7,9 @@
 //! words.
 
 use proptest::prelude::*;
+use raypipe::hw::frame_setup::FrameSetup;
 use raypipe::hw::stream::run_stream;
-use raypipe::render::tracer::{trace, IntersectorKind};
+use raypipe::render::tracer::trace;
 use raypipe::render::{render, Algorithm, RenderOptions};
 use raypipe::scene::{self, Accel, BuildOptions};
 use raypipe_core::camera::{Camera, EyeRays};
@@ -121,11 +122,12 @@ fn the_image_is_the_hosts_for_every_architecture_oracle_and_algorithm() {
                 &cam,
                 &cfg,
                 &CostModel::default(),
-                IntersectorKind::Watertight,
-                shader,
-                algo == Algorithm::Shadow,
-                opts.sampler(),
-                false,
+                &FrameSetup {
+                    shader,
+                    shadow_caster: algo == Algorithm::Shadow,
+                    sampler: opts.sampler(),
+                    ..Default::default()
+                },
             )
             .unwrap();
             assert!(frame.pixels == host.pixels, "{input:?} {algo:?} {samples} samples {cfg:?}");

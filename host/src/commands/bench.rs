@@ -1,6 +1,7 @@
 //! `raypipe bench`: timed runs of the host renderer.
 
 use crate::build::grid::GridResolution;
+use crate::hw::frame_setup::FrameSetup;
 
 use crate::hw::chip;
 use crate::render::packets::PacketSize;
@@ -189,17 +190,8 @@ pub(crate) fn cmd_bench(a: BenchArgs) -> Result<()> {
                 for _ in 0..a.runs.min(3) {
                     let start = Instant::now();
                     let measure = chip::Measure::default();
-                    let mut out = chip::simulate_frames(
-                        &view,
-                        std::slice::from_ref(&cam),
-                        &measure,
-                        cfg,
-                        kind,
-                        None,
-                        false,
-                        Default::default(),
-                        false,
-                    )?;
+                    let setup = FrameSetup { intersector: kind, ..Default::default() };
+                    let mut out = chip::simulate_frames(&view, std::slice::from_ref(&cam), &measure, cfg, &setup)?;
                     walls.push(start.elapsed().as_secs_f64());
                     last = out.pop().map(|f| f.report);
                 }

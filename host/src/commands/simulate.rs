@@ -5,6 +5,7 @@ use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use crate::hw::chip::{self, FrameRun, Measure};
+use crate::hw::frame_setup::FrameSetup;
 use crate::output;
 use crate::render::tracer::IntersectorKind;
 use crate::render::{Algorithm, RenderOptions};
@@ -359,17 +360,8 @@ pub(crate) fn run_simulation(a: &SimulateArgs, cache: Option<&SceneCache>, show_
     }
     let start = Instant::now();
     let shadow_caster = opts.algo == Algorithm::Shadow;
-    let mut frames = chip::simulate_frames(
-        &view,
-        &views,
-        &measure,
-        &cfg,
-        kind,
-        shader,
-        shadow_caster,
-        opts.sampler(),
-        show_progress,
-    )?;
+    let setup = FrameSetup { intersector: kind, shader, shadow_caster, sampler: opts.sampler(), show_progress };
+    let mut frames = chip::simulate_frames(&view, &views, &measure, &cfg, &setup)?;
     let seconds = start.elapsed().as_secs_f64();
     for (f, cam) in frames.iter_mut().zip(&views) {
         f.report.run = raypipe_hw::observe::report::RunIdentity {

@@ -1,5 +1,6 @@
 //! `raypipe stream`: a frame on Purcell's GPU seen as a stream processor.
 
+use crate::hw::frame_setup::FrameSetup;
 use crate::output;
 use crate::render::tracer::IntersectorKind;
 use crate::render::{self, Algorithm, RenderOptions};
@@ -125,8 +126,13 @@ pub(crate) fn cmd_stream(a: StreamArgs) -> Result<()> {
     let shader = opts.shader(background);
     let shadow_caster = opts.algo == Algorithm::Shadow;
     let start = Instant::now();
-    let (frame, report) =
-        crate::hw::stream::run_stream(&view, &cam, &cfg, &costs, kind, shader, shadow_caster, opts.sampler(), true)?;
+    let (frame, report) = crate::hw::stream::run_stream(
+        &view,
+        &cam,
+        &cfg,
+        &costs,
+        &FrameSetup { intersector: kind, shader, shadow_caster, sampler: opts.sampler(), show_progress: true },
+    )?;
     let secs = start.elapsed().as_secs_f64();
     // The same frame from the host renderer: the model must agree bit for bit.
     opts.intersector = kind;
@@ -134,7 +140,16 @@ pub(crate) fn cmd_stream(a: StreamArgs) -> Result<()> {
     let host = render::render(&view, &cam, &opts)?;
     let same = host.pixels == frame.pixels;
     let cast = if opts.algo != Algorithm::Cast && !a.no_table3 {
-        Some(crate::hw::stream::run_stream(&view, &cam, &cfg, &costs, kind, None, false, opts.sampler(), true)?.1)
+        Some(
+            crate::hw::stream::run_stream(
+                &view,
+                &cam,
+                &cfg,
+                &costs,
+                &FrameSetup { intersector: kind, sampler: opts.sampler(), show_progress: true, ..Default::default() },
+            )?
+            .1,
+        )
     } else {
         None
     };

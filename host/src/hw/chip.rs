@@ -6,16 +6,16 @@ use std::path::Path;
 
 use anyhow::{anyhow, bail, Result};
 use raypipe_core::image::CameraRecord;
-use raypipe_core::pixel_filter::PixelSampler;
 use raypipe_core::shade::shader::Shader;
 use raypipe_core::{Intersector, SceneView};
 use raypipe_hw::observe::counters::{counters, delta};
 use raypipe_hw::observe::waves::Waves;
 use raypipe_hw::{Datapath, HwConfig, Report, Simulator};
 
+use crate::hw::frame_setup::FrameSetup;
 use crate::output::progress;
 use crate::render::gbuffer::gbuffer_visibility;
-use crate::render::tracer::{fixed_point_unsupported, IntersectorKind};
+use crate::render::tracer::fixed_point_unsupported;
 use crate::render::{eye_rays, Frame};
 use crate::{with_datapath, with_intersector};
 
@@ -94,18 +94,14 @@ pub struct Interval {
 
 /// Simulates the frames `views` one after the other on one chip — a walkthrough, or one
 /// view repeated for warm-up — measured as `measure` says.
-#[allow(clippy::too_many_arguments)]
 pub fn simulate_frames(
     scene: &SceneView<'_>,
     views: &[CameraRecord],
     measure: &Measure,
     cfg: &HwConfig,
-    intersector: IntersectorKind,
-    shader: Option<Shader>,
-    shadow_caster: bool,
-    sampler: PixelSampler,
-    show_progress: bool,
+    setup: &FrameSetup,
 ) -> Result<Vec<FrameRun>> {
+    let FrameSetup { intersector, shader, shadow_caster, sampler, show_progress } = *setup;
     let eyes = views
         .iter()
         .enumerate()

@@ -2,5 +2,6 @@
 
 pub mod chip;
 pub mod chip_summary;
+pub mod frame_setup;
 pub mod stream;
 pub mod stream_charts;

@@ -6,46 +6,37 @@
 use anyhow::{anyhow, Result};
 use raypipe_core::camera::EyeRays;
 use raypipe_core::image::CameraRecord;
-use raypipe_core::pixel_filter::PixelSampler;
-use raypipe_core::shade::shader::Shader;
 use raypipe_core::{Intersector, SceneView, Vec3};
 use raypipe_hw::stream::{CostModel, StreamConfig, StreamMachine, StreamReport};
 
+use crate::hw::frame_setup::FrameSetup;
 use crate::output::progress;
 use crate::render::gbuffer::gbuffer_visibility;
-use crate::render::tracer::IntersectorKind;
 use crate::render::{eye_rays, Frame};
 use crate::with_intersector;
 
 /// One frame on the stream machine: the image and the report.
-#[allow(clippy::too_many_arguments)]
 pub fn run_stream(
     scene: &SceneView<'_>,
     camera: &CameraRecord,
     cfg: &StreamConfig,
     costs: &CostModel,
-    intersector: IntersectorKind,
-    shader: Option<Shader>,
-    shadow_caster: bool,
-    sampler: PixelSampler,
-    show_progress: bool,
+    setup: &FrameSetup,
 ) -> Result<(Frame, StreamReport)> {
-    let eye = eye_rays(camera, "camera")?.with_sampler(sampler);
+    let eye = eye_rays(camera, "camera")?.with_sampler(setup.sampler);
     let background = Vec3::from(camera.background);
-    with_intersector!(intersector, I => run_with::<I>(scene, eye, background, cfg, costs, shader, shadow_caster, show_progress))
+    with_intersector!(setup.intersector, I => run_with::<I>(scene, eye, background, cfg, costs, setup))
 }
 
-#[allow(clippy::too_many_arguments)]
 fn run_with<I: Intersector>(
     scene: &SceneView<'_>,
     eye: EyeRays,
     background: Vec3,
     cfg: &StreamConfig,
     costs: &CostModel,
-    shader: Option<Shader>,
-    shadow_caster: bool,
-    show_progress: bool,
+    setup: &FrameSetup,
 ) -> Result<(Frame, StreamReport)> {
+    let FrameSetup { shader, shadow_caster, show_progress, .. } = *setup;
     let mut m = StreamMachine::<I>::new(*scene, eye, background, shader, cfg, costs.clone()).map_err(|e| anyhow!(e))?;
     if shadow_caster {
         // Visibility from the host's rasterizer (the G-buffer pass), as on the host.

@@ -20,8 +20,8 @@ use raypipe_core::shade::ray_cone::RayCone;
 use raypipe_core::{Intersector, NoProbe, Ray, RayCounters, SceneView};
 
 use crate::render::gbuffer::{gbuffer_hit, rasterize, GBuffer};
-use crate::render::packets::{trace_tile, PacketSize};
-use crate::render::ray_stream::{shade_tile, StreamCounts, TileGeometry};
+use crate::render::packets::{trace_tile, PacketSize, TileRays};
+use crate::render::ray_stream::{shade_tile, StreamCounts, TileGeometry, TileShading};
 use raypipe_core::pixel_filter::{Filter, PixelSampler};
 use raypipe_core::shade::path::PathOptions;
 use raypipe_core::shade::radiance_sum::RadianceSum;
@@ -236,17 +236,8 @@ fn render_with<I: Intersector>(
                                 totals.primary += ray.is_some() as u64;
                                 primaries[at(x, y)] = (ray, hit);
                             };
-                            trace_tile::<I>(
-                                scene,
-                                eye,
-                                (lo, hi),
-                                tile,
-                                s,
-                                opts.packet,
-                                &mut counters,
-                                &mut pc,
-                                &mut put,
-                            );
+                            let rays = TileRays { eye, bounds: (lo, hi), tile, sample: s };
+                            trace_tile::<I>(scene, rays, opts.packet, &mut counters, &mut pc, &mut put);
                         }
                     }
                 }
@@ -255,17 +246,9 @@ fn render_with<I: Intersector>(
                     Some(shader) => {
                         let geometry = TileGeometry { x0, y0, width: tw as u32, image_width: w };
                         let mut counts = StreamCounts::default();
-                        let radiance = shade_tile::<I, _>(
-                            scene,
-                            &shader,
-                            background,
-                            geometry,
-                            samples,
-                            eye.cone(),
-                            &primaries,
-                            &mut NoProbe,
-                            &mut counts,
-                        );
+                        let shading = TileShading { shader: &shader, background, samples, cone: eye.cone() };
+                        let radiance =
+                            shade_tile::<I, _>(scene, &shading, geometry, &primaries, &mut NoProbe, &mut counts);
                         totals.secondary = counts.rays.iter().sum();
                         radiance
                     }

@@ -91,13 +91,9 @@ impl PacketSize {
 /// Calls `f(x, y, ray, hit)` for every pixel of the tile with the pixel's eye ray
 /// `sample`, tracing as `size` says; rays that miss the scene bounds (Purcell's test)
 /// come as `None`.
-#[allow(clippy::too_many_arguments)]
 pub fn trace_tile<I: Intersector>(
     scene: &SceneView<'_>,
-    eye: &EyeRays,
-    bounds: (Vec3, Vec3),
-    tile: (u32, u32, u32, u32),
-    sample: u32,
+    rays: TileRays<'_>,
     size: PacketSize,
     counters: &mut RayCounters,
     packet_counters: &mut PacketCounters,
@@ -105,24 +101,37 @@ pub fn trace_tile<I: Intersector>(
 ) {
     crate::platform::isa::report_cpu();
     match size.usable_for(scene) {
-        PacketSize::Single => singles::<I>(scene, eye, bounds, tile, sample, counters, f),
-        PacketSize::P4 => blocks::<I, 4>(scene, eye, bounds, tile, sample, 2, packet_counters, f),
-        PacketSize::P16 => blocks::<I, 16>(scene, eye, bounds, tile, sample, 4, packet_counters, f),
-        PacketSize::P64 => blocks::<I, 64>(scene, eye, bounds, tile, sample, 8, packet_counters, f),
+        PacketSize::Single => singles::<I>(scene, rays, counters, f),
+        PacketSize::P4 => blocks::<I, 4>(scene, rays, 2, packet_counters, f),
+        PacketSize::P16 => blocks::<I, 16>(scene, rays, 4, packet_counters, f),
+        PacketSize::P64 => blocks::<I, 64>(scene, rays, 8, packet_counters, f),
     }
+}
+
+/// The eye rays of one tile: the camera's, clipped by the scene bounds `bounds`
+/// (Purcell's test), for the pixels `tile` = `(x0, y0, x1, y1)` (exclusive ends), eye ray
+/// `sample` of each.
+#[derive(Clone, Copy, Debug)]
+pub struct TileRays<'e> {
+    /// The camera's eye rays.
+    pub eye: &'e EyeRays,
+    /// The scene bounds of the bounding-box test.
+    pub bounds: (Vec3, Vec3),
+    /// The tile's pixels.
+    pub tile: (u32, u32, u32, u32),
+    /// Which of each pixel's eye rays.
+    pub sample: u32,
 }
 
 /// The tile's rays one by one.
 #[inline(always)]
 fn singles<I: Intersector>(
     scene: &SceneView<'_>,
-    eye: &EyeRays,
-    (lo, hi): (Vec3, Vec3),
-    (x0, y0, x1, y1): (u32, u32, u32, u32),
-    sample: u32,
+    rays: TileRays<'_>,
     counters: &mut RayCounters,
     f: &mut impl FnMut(u32, u32, Option<Ray>, Option<Hit>),
 ) {
+    let TileRays { eye, bounds: (lo, hi), tile: (x0, y0, x1, y1), sample } = rays;
     // Pixels in rows, `i` counting from the tile's corner.
     let w = x1.saturating_sub(x0);
     let n = (w * y1.saturating_sub(y0)) as usize;
@@ -146,17 +155,14 @@ fn singles<I: Intersector>(
     });
 }
 
-#[allow(clippy::too_many_arguments)]
 fn blocks<I: Intersector, const N: usize>(
     scene: &SceneView<'_>,
-    eye: &EyeRays,
-    (lo, hi): (Vec3, Vec3),
-    (x0, y0, x1, y1): (u32, u32, u32, u32),
-    sample: u32,
+    rays: TileRays<'_>,
     side: u32,
     counters: &mut PacketCounters,
     f: &mut impl FnMut(u32, u32, Option<Ray>, Option<Hit>),
 ) {
+    let TileRays { eye, bounds: (lo, hi), tile: (x0, y0, x1, y1), sample } = rays;
     let mut hits = [None; N];
     // Each lane's pixel in the block, worked out once.
     let offsets: [(u32, u32); N] = core::array::from_fn(|lane| lane_pixel(lane as u32, side));

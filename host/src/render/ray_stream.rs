@@ -68,21 +68,32 @@ impl TileGeometry {
     }
 }
 
+/// How a tile is shaded: the ray-emitting shader, the background, eye rays per pixel and
+/// the eye rays' cone (for texture filtering).
+#[derive(Clone, Copy, Debug)]
+pub struct TileShading<'s> {
+    /// The shader.
+    pub shader: &'s Shader,
+    /// What a ray that misses sees.
+    pub background: Vec3,
+    /// Eye rays per pixel.
+    pub samples: u32,
+    /// The eye rays' cone.
+    pub cone: RayCone,
+}
+
 /// Radiance of a tile's pixels (row-major in the tile) from their eye rays and hits:
 /// `samples` per pixel, sample-major (`primaries[s * pixels + p]`); a `None` ray missed
 /// the scene's bounds and brings the background.
-#[allow(clippy::too_many_arguments)]
 pub fn shade_tile<I: Intersector, P: MemoryProbe>(
     scene: &SceneView<'_>,
-    shader: &Shader,
-    background: Vec3,
+    shading: &TileShading<'_>,
     tile: TileGeometry,
-    samples: u32,
-    cone: RayCone,
     primaries: &[(Option<Ray>, Option<Hit>)],
     probe: &mut P,
     counts: &mut StreamCounts,
 ) -> Vec<Vec3> {
+    let TileShading { shader, background, samples, cone } = *shading;
     let samples = samples.max(1);
     let pixels = primaries.len() / samples as usize;
     let mut radiance = vec![RadianceSum::default(); pixels];

@@ -12,7 +12,7 @@ use raypipe_core::packet::PacketCounters;
 use raypipe_core::shade::ray_record::RayKind;
 use raypipe_core::{Intersector, RayCounters, SceneView};
 
-use crate::render::packets::{trace_tile, PacketSize};
+use crate::render::packets::{trace_tile, PacketSize, TileRays};
 use crate::render::tracer::IntersectorKind;
 use crate::render::{eye_rays, in_pool, tiles, RenderOptions};
 use crate::with_intersector;
@@ -68,7 +68,8 @@ fn trace_all<I: Intersector>(
         .map(|&tile| {
             let (mut c, mut pc) = (RayCounters::default(), PacketCounters::default());
             // Each hit goes through black_box so that no tracing can be optimised away.
-            trace_tile::<I>(scene, eye, bounds, tile, 0, packet, &mut c, &mut pc, &mut |_, _, _, h| {
+            let rays = TileRays { eye, bounds, tile, sample: 0 };
+            trace_tile::<I>(scene, rays, packet, &mut c, &mut pc, &mut |_, _, _, h| {
                 std::hint::black_box(h);
             });
             pc

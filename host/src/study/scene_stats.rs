@@ -11,8 +11,8 @@ use raypipe_core::{Intersector, RayCounters, SceneView};
 use raypipe_core::packet::PacketCounters;
 
 use crate::render::gbuffer::{gbuffer_hit, rasterize};
-use crate::render::packets::{trace_tile, PacketSize};
-use crate::render::ray_stream::{shade_tile, StreamCounts, TileGeometry};
+use crate::render::packets::{trace_tile, PacketSize, TileRays};
+use crate::render::ray_stream::{shade_tile, StreamCounts, TileGeometry, TileShading};
 use crate::render::tracer::trace;
 use crate::render::{eye_rays, in_pool, tiles, Algorithm, RenderOptions};
 use crate::with_intersector;
@@ -193,7 +193,8 @@ fn gather_packets_with<I: Intersector>(
             .par_iter()
             .map(|&tile| {
                 let (mut c, mut pc) = (RayCounters::default(), PacketCounters::default());
-                trace_tile::<I>(scene, eye, bounds, tile, 0, size, &mut c, &mut pc, &mut |_, _, _, _| {});
+                let rays = TileRays { eye, bounds, tile, sample: 0 };
+                trace_tile::<I>(scene, rays, size, &mut c, &mut pc, &mut |_, _, _, _| {});
                 let (w, h) = (tile.2 - tile.0, tile.3 - tile.1);
                 PacketStats { packets: (w.div_ceil(side) * h.div_ceil(side)) as u64, counters: pc }
             })
@@ -293,16 +294,9 @@ fn costs_with<I: Intersector>(
                     Some(shader) => {
                         let geometry = TileGeometry { x0, y0, width: x1 - x0, image_width: eye.width };
                         let mut s = StreamCounts::default();
+                        let shading = TileShading { shader, background, samples, cone: eye.cone() };
                         std::hint::black_box(shade_tile::<I, _>(
-                            scene,
-                            shader,
-                            background,
-                            geometry,
-                            samples,
-                            eye.cone(),
-                            &primaries,
-                            &mut probe,
-                            &mut s,
+                            scene, &shading, geometry, &primaries, &mut probe, &mut s,
                         ));
                         for (a, b) in c.rays.iter_mut().zip(s.rays) {
                             *a += b;
