@@ -5,7 +5,7 @@
 pub mod batch;
 pub mod gbuffer;
 pub mod packets;
-pub mod ray_stream;
+pub mod shading;
 pub mod tracer;
 
 use anyhow::{anyhow, Result};
@@ -21,7 +21,7 @@ use raypipe_core::{Intersector, NoProbe, Ray, RayCounters, SceneView};
 
 use crate::render::gbuffer::{gbuffer_hit, rasterize, GBuffer};
 use crate::render::packets::{trace_tile, PacketSize, TileRays};
-use crate::render::ray_stream::{shade_tile, StreamCounts, TileGeometry, TileShading};
+use crate::render::shading::{shade_tile, StreamCounts, TileGeometry, TileShading};
 use raypipe_core::pixel_filter::{Filter, PixelSampler};
 use raypipe_core::shade::path::PathOptions;
 use raypipe_core::shade::radiance_sum::RadianceSum;

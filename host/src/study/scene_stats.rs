@@ -12,7 +12,7 @@ use raypipe_core::packet::PacketCounters;
 
 use crate::render::gbuffer::{gbuffer_hit, rasterize};
 use crate::render::packets::{trace_tile, PacketSize, TileRays};
-use crate::render::ray_stream::{shade_tile, StreamCounts, TileGeometry, TileShading};
+use crate::render::shading::{shade_tile, StreamCounts, TileGeometry, TileShading};
 use crate::render::tracer::trace;
 use crate::render::{eye_rays, in_pool, tiles, Algorithm, RenderOptions};
 use crate::with_intersector;
