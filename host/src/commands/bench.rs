@@ -2,6 +2,8 @@
 
 use crate::build::grid::GridResolution;
 use crate::hw::frame_setup::FrameSetup;
+use raypipe_core::SceneView;
+use raypipe_hw::HwConfig;
 
 use crate::hw::chip;
 use crate::render::packets::PacketSize;
@@ -107,110 +109,148 @@ pub(crate) fn cmd_bench(a: BenchArgs) -> Result<()> {
             scene::Source::Mesh { .. } => a.accel.iter().copied().map(Some).collect(),
         };
         for accel in accels {
-            let opts = BuildOptions {
-                accel: accel.unwrap_or_default(),
-                grid: match a.grid_min_dim {
-                    Some(n) => GridResolution::MinDim(n),
-                    None => GridResolution::default(),
-                },
-                triangles: a.triangles,
-                ..Default::default()
-            };
-            // Structure build time: median of up to three builds (one for large scenes).
-            let mut builds = Vec::new();
-            let mut built = None;
-            for _ in 0..3 {
-                let s = source.build(&opts)?;
-                let big = s.view()?.triangle_count() > 20_000;
-                builds.push(s.report.as_ref().map_or(0.0, |r| r.grid_seconds));
-                built = Some(s);
-                if big {
-                    break;
-                }
-            }
-            let scene = built.ok_or_else(|| anyhow!("no scene"))?;
-            let view = scene.view()?;
-            let cam_args = CameraArgs { camera: a.camera.clone(), ..Default::default() };
-            let base = camera_for(&view, &cam_args)?;
-            let cam = CameraRecord { width: a.size.0, height: a.size.1, ..base };
-            let bytes_per_tri = scene.report.as_ref().map_or(view.bytes().len(), |r| r.structure_bytes) as f64
-                / view.triangle_count().max(1) as f64;
-            let kind = IntersectorKind::resolve(a.intersector, &view);
-            let mut best_single = 0.0f64;
-            for &packet in &a.packet {
-                let r = bench::primary_rays(&view, &cam, kind, packet, a.runs, a.threads)?;
-                best_single = best_single.max(r.mrays_single);
-                let simd = if packet == PacketSize::Single {
-                    "-".to_string()
-                } else if !crate::render::tracer::has_packet_kernel(&view) {
-                    // Traced ray by ray: no lock-step, no SIMD efficiency to report.
-                    "by ray".to_string()
-                } else {
-                    format!("{:.0}%", 100.0 * r.simd_efficiency)
-                };
-                println!(
-                    "{:<24} {:>8} {:<30} {:>8.3} {:>8.1} {:<7} {:>10.2} {:>10.2} {:>8} {:>6}",
-                    name,
-                    view.triangle_count(),
-                    structure_summary(&view),
-                    median(&builds),
-                    bytes_per_tri,
-                    packet.label(),
-                    r.mrays_single,
-                    r.mrays_all,
-                    r.threads,
-                    simd
-                );
-            }
-            if a.algo.algo != Algorithm::Cast {
-                let mut opts =
-                    RenderOptions { intersector: kind, packet: PacketSize::auto_for(&view), ..Default::default() };
-                a.algo.apply(&mut opts)?;
-                let r = bench::algorithm_rays(&view, &cam, &opts, a.runs, a.threads)?;
-                let px = cam.width as f64 * cam.height as f64;
-                let kinds: Vec<String> = raypipe_core::shade::ray_record::RayKind::ALL
-                    .iter()
-                    .filter(|k| r.rays[**k as usize] > 0)
-                    .map(|k| format!("{} {:.2}", k.name(), r.rays[*k as usize] as f64 / px))
-                    .collect();
-                println!(
-                    "{:<24} {:?}: rays per pixel {}; all rays {:.2} Mrays/s 1 thread, {:.2} Mrays/s {} threads",
-                    name,
-                    a.algo.algo,
-                    kinds.join(", "),
-                    r.mrays_single,
-                    r.mrays_all,
-                    r.threads
-                );
-            }
-            if let (Some(cfg), Some(preset)) = (&chip, &a.simulate) {
-                // The simulator is deterministic; its wall time is the median of up to 3 runs.
-                let mut walls = Vec::new();
-                let mut last = None;
-                for _ in 0..a.runs.min(3) {
-                    let start = Instant::now();
-                    let measure = chip::Measure::default();
-                    let setup = FrameSetup { intersector: kind, ..Default::default() };
-                    let mut out = chip::simulate_frames(&view, std::slice::from_ref(&cam), &measure, cfg, &setup)?;
-                    walls.push(start.elapsed().as_secs_f64());
-                    last = out.pop().map(|f| f.report);
-                }
-                let report = last.ok_or_else(|| anyhow!("no simulation"))?;
-                let wall = median(&walls);
-                let host = (a.size.0 as f64 * a.size.1 as f64) / (best_single * 1e6);
-                println!(
-                    "{:<24} simulate --preset {preset}: {} cycles ({:.1} frames/s at {} MHz); simulator {:.2} s wall, {:.3} Mrays/s; host 1 thread {:.3} s: {:.1}x slower",
-                    name,
-                    report.cycles,
-                    report.frames_per_second,
-                    cfg.clock_mhz,
-                    wall,
-                    report.rays as f64 / wall / 1e6,
-                    host,
-                    wall / host
-                );
-            }
+            bench_structure(&a, chip.as_ref(), &source, &name, accel)?;
         }
     }
+    Ok(())
+}
+
+/// One scene with one structure (`accel`; `None`: the image's own): its build, then a
+/// row per packet size, the algorithm's rays if one is asked for, and the simulator.
+fn bench_structure(
+    a: &BenchArgs,
+    chip: Option<&HwConfig>,
+    source: &scene::Source,
+    name: &str,
+    accel: Option<Accel>,
+) -> Result<()> {
+    let opts = BuildOptions {
+        accel: accel.unwrap_or_default(),
+        grid: match a.grid_min_dim {
+            Some(n) => GridResolution::MinDim(n),
+            None => GridResolution::default(),
+        },
+        triangles: a.triangles,
+        ..Default::default()
+    };
+    // Structure build time: median of up to three builds (one for large scenes).
+    let mut builds = Vec::new();
+    let mut built = None;
+    for _ in 0..3 {
+        let s = source.build(&opts)?;
+        let big = s.view()?.triangle_count() > 20_000;
+        builds.push(s.report.as_ref().map_or(0.0, |r| r.grid_seconds));
+        built = Some(s);
+        if big {
+            break;
+        }
+    }
+    let scene = built.ok_or_else(|| anyhow!("no scene"))?;
+    let view = scene.view()?;
+    let cam_args = CameraArgs { camera: a.camera.clone(), ..Default::default() };
+    let base = camera_for(&view, &cam_args)?;
+    let cam = CameraRecord { width: a.size.0, height: a.size.1, ..base };
+    let bytes_per_tri = scene.report.as_ref().map_or(view.bytes().len(), |r| r.structure_bytes) as f64
+        / view.triangle_count().max(1) as f64;
+    let kind = IntersectorKind::resolve(a.intersector, &view);
+    let mut best_single = 0.0f64;
+    for &packet in &a.packet {
+        let r = bench::primary_rays(&view, &cam, kind, packet, a.runs, a.threads)?;
+        best_single = best_single.max(r.mrays_single);
+        let simd = if packet == PacketSize::Single {
+            "-".to_string()
+        } else if !crate::render::tracer::has_packet_kernel(&view) {
+            // Traced ray by ray: no lock-step, no SIMD efficiency to report.
+            "by ray".to_string()
+        } else {
+            format!("{:.0}%", 100.0 * r.simd_efficiency)
+        };
+        println!(
+            "{:<24} {:>8} {:<30} {:>8.3} {:>8.1} {:<7} {:>10.2} {:>10.2} {:>8} {:>6}",
+            name,
+            view.triangle_count(),
+            structure_summary(&view),
+            median(&builds),
+            bytes_per_tri,
+            packet.label(),
+            r.mrays_single,
+            r.mrays_all,
+            r.threads,
+            simd
+        );
+    }
+    if a.algo.algo != Algorithm::Cast {
+        bench_algorithm(a, &view, &cam, kind, name)?;
+    }
+    if let (Some(cfg), Some(preset)) = (chip, &a.simulate) {
+        bench_simulator(a, &view, &cam, kind, (cfg, preset), (name, best_single))?;
+    }
+    Ok(())
+}
+
+/// The algorithm's rays of a whole frame: rays per pixel by kind and throughput.
+fn bench_algorithm(
+    a: &BenchArgs,
+    view: &SceneView<'_>,
+    cam: &CameraRecord,
+    kind: IntersectorKind,
+    name: &str,
+) -> Result<()> {
+    let mut opts = RenderOptions { intersector: kind, packet: PacketSize::auto_for(view), ..Default::default() };
+    a.algo.apply(&mut opts)?;
+    let r = bench::algorithm_rays(view, cam, &opts, a.runs, a.threads)?;
+    let px = cam.width as f64 * cam.height as f64;
+    let kinds: Vec<String> = raypipe_core::shade::ray_record::RayKind::ALL
+        .iter()
+        .filter(|k| r.rays[**k as usize] > 0)
+        .map(|k| format!("{} {:.2}", k.name(), r.rays[*k as usize] as f64 / px))
+        .collect();
+    println!(
+        "{:<24} {:?}: rays per pixel {}; all rays {:.2} Mrays/s 1 thread, {:.2} Mrays/s {} threads",
+        name,
+        a.algo.algo,
+        kinds.join(", "),
+        r.mrays_single,
+        r.mrays_all,
+        r.threads
+    );
+    Ok(())
+}
+
+/// The chip model on the same frame: its cycles and frame rate, and how much slower the
+/// simulator runs than the host's fastest single-thread frame (`best_single` Mrays/s).
+fn bench_simulator(
+    a: &BenchArgs,
+    view: &SceneView<'_>,
+    cam: &CameraRecord,
+    kind: IntersectorKind,
+    (cfg, preset): (&HwConfig, &String),
+    (name, best_single): (&str, f64),
+) -> Result<()> {
+    // The simulator is deterministic; its wall time is the median of up to 3 runs.
+    let mut walls = Vec::new();
+    let mut last = None;
+    for _ in 0..a.runs.min(3) {
+        let start = Instant::now();
+        let measure = chip::Measure::default();
+        let setup = FrameSetup { intersector: kind, ..Default::default() };
+        let mut out = chip::simulate_frames(view, std::slice::from_ref(cam), &measure, cfg, &setup)?;
+        walls.push(start.elapsed().as_secs_f64());
+        last = out.pop().map(|f| f.report);
+    }
+    let report = last.ok_or_else(|| anyhow!("no simulation"))?;
+    let wall = median(&walls);
+    let host = (a.size.0 as f64 * a.size.1 as f64) / (best_single * 1e6);
+    println!(
+        "{:<24} simulate --preset {preset}: {} cycles ({:.1} frames/s at {} MHz); simulator {:.2} s wall, {:.3} Mrays/s; host 1 thread {:.3} s: {:.1}x slower",
+        name,
+        report.cycles,
+        report.frames_per_second,
+        cfg.clock_mhz,
+        wall,
+        report.rays as f64 / wall / 1e6,
+        host,
+        wall / host
+    );
     Ok(())
 }

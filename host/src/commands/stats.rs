@@ -1,11 +1,15 @@
 //! `raypipe stats`: Purcell's scene statistics for a view.
 
+use std::path::Path;
+
 use crate::render::packets::PacketSize;
 use crate::render::tracer::IntersectorKind;
 use crate::render::{Algorithm, RenderOptions};
 use crate::study::scene_stats;
 use anyhow::Result;
+use raypipe_core::image::CameraRecord;
 use raypipe_core::DataClass;
+use raypipe_core::SceneView;
 
 use super::{camera_for, lights_summary, load_scene, structure_summary, warn};
 
@@ -59,24 +63,7 @@ pub(crate) fn cmd_stats(a: StatsArgs) -> Result<()> {
     }
     let s = scene_stats::gather(&view, &cam, &opts)?;
     if let Some(prefix) = &a.cost_image {
-        let c = scene_stats::cost_image(&view, &cam, &opts)?;
-        for (k, (what, title)) in [
-            ("steps", "nodes visited per pixel"),
-            ("tests", "triangle tests per pixel"),
-            ("bytes", "scene bytes read per pixel"),
-        ]
-        .into_iter()
-        .enumerate()
-        {
-            let values: Vec<f64> = c.iter().map(|v| v[k]).collect();
-            crate::study::cost_image::write(
-                &crate::study::cost_image::path(prefix, what),
-                cam.width,
-                cam.height,
-                &values,
-                title,
-            )?;
-        }
+        write_cost_images(prefix, &view, &cam, &opts)?;
     }
     println!("scene                     {} ({} triangles)", scene.name, view.triangle_count());
     println!("structure                 {}", structure_summary(&view));
@@ -96,53 +83,92 @@ pub(crate) fn cmd_stats(a: StatsArgs) -> Result<()> {
     let classes: Vec<String> =
         DataClass::ALL.iter().map(|c| format!("{} {:.1}", c.name(), s.per_ray(s.bytes.bytes[*c as usize]))).collect();
     println!("bytes read per ray        {}", classes.join(", "));
-    if a.packet != PacketSize::Single && !crate::render::tracer::has_packet_kernel(&view) {
-        println!("packets {:<17} none: the structure has no packet kernel (rays traced one by one)", a.packet.label());
-    } else if a.packet != PacketSize::Single {
-        let p = scene_stats::gather_packets(&view, &cam, &opts, a.packet)?;
-        let n = a.packet.rays() as f64;
-        println!(
-            "packets {:<17} {} packets, {:.1} node visits per packet, SIMD efficiency {:.1}%, {:.2} triangle tests per ray",
-            a.packet.label(),
-            p.packets,
-            p.counters.visits as f64 / p.packets.max(1) as f64,
-            100.0 * p.counters.active_lanes as f64 / (p.counters.visits.max(1) as f64 * n),
-            p.counters.tri_tests as f64 / s.rays.max(1) as f64
-        );
-    }
+    print_packets(&view, &cam, &opts, a.packet, s.rays)?;
     if a.algo.algo != Algorithm::Cast {
         let mut algo_opts = opts;
         a.algo.apply(&mut algo_opts)?;
-        let cast = scene_stats::algorithm_costs(&view, &cam, &RenderOptions { algo: Algorithm::Cast, ..algo_opts })?;
-        let c = scene_stats::algorithm_costs(&view, &cam, &algo_opts)?;
-        let px = c.pixels.max(1) as f64;
-        let kinds: Vec<String> = raypipe_core::shade::ray_record::RayKind::ALL
-            .iter()
-            .map(|k| format!("{} {:.2}", k.name(), c.rays[*k as usize] as f64 / px))
-            .collect();
-        let ratio = |a: u64, b: u64| if b == 0 { 0.0 } else { a as f64 / b as f64 };
-        println!("algorithm                 {:?}", a.algo.algo);
-        println!("rays per pixel            {}; total {:.2}", kinds.join(", "), c.rays.iter().sum::<u64>() as f64 / px);
+        print_algorithm(&view, &cam, &algo_opts)?;
+    }
+    Ok(())
+}
+
+/// Writes the host's cost images: nodes, triangle tests and scene bytes per pixel.
+fn write_cost_images(prefix: &Path, view: &SceneView<'_>, cam: &CameraRecord, opts: &RenderOptions) -> Result<()> {
+    let c = scene_stats::cost_image(view, cam, opts)?;
+    let images = [
+        ("steps", "nodes visited per pixel"),
+        ("tests", "triangle tests per pixel"),
+        ("bytes", "scene bytes read per pixel"),
+    ];
+    for (k, (what, title)) in images.into_iter().enumerate() {
+        let values: Vec<f64> = c.iter().map(|v| v[k]).collect();
+        crate::study::cost_image::write(
+            &crate::study::cost_image::path(prefix, what),
+            cam.width,
+            cam.height,
+            &values,
+            title,
+        )?;
+    }
+    Ok(())
+}
+
+/// Prints the packets' figures (`packet` lanes; `rays` primary rays traced).
+fn print_packets(
+    view: &SceneView<'_>,
+    cam: &CameraRecord,
+    opts: &RenderOptions,
+    packet: PacketSize,
+    rays: u64,
+) -> Result<()> {
+    if packet != PacketSize::Single && !crate::render::tracer::has_packet_kernel(view) {
+        println!("packets {:<17} none: the structure has no packet kernel (rays traced one by one)", packet.label());
+    } else if packet != PacketSize::Single {
+        let p = scene_stats::gather_packets(view, cam, opts, packet)?;
+        let n = packet.rays() as f64;
         println!(
-            "relative to ray casting   traversal steps x{:.2}, triangle tests x{:.2}, shading x{:.2}, scene bytes x{:.2}",
-            ratio(c.steps, cast.steps),
-            ratio(c.tests, cast.tests),
-            ratio(c.shades, cast.shades),
-            ratio(c.bytes, cast.bytes)
+            "packets {:<17} {} packets, {:.1} node visits per packet, SIMD efficiency {:.1}%, {:.2} triangle tests per ray",
+            packet.label(),
+            p.packets,
+            p.counters.visits as f64 / p.packets.max(1) as f64,
+            100.0 * p.counters.active_lanes as f64 / (p.counters.visits.max(1) as f64 * n),
+            p.counters.tri_tests as f64 / rays.max(1) as f64
         );
-        if a.algo.algo == Algorithm::Shadow {
-            let m = scene_stats::coverage_mismatch(&view, &cam, &algo_opts)?;
-            let pct = |n: u64| 100.0 * n as f64 / m.pixels.max(1) as f64;
-            println!(
-                "shadow caster coverage    rasterization and ray casting disagree at {:.4}% of pixels ({} of {}); {:.4}% at another depth, {} where both see the same point of overlapping coplanar triangles; {} triangles clipped at the near plane",
-                pct(m.differ),
-                m.differ,
-                m.pixels,
-                pct(m.differ - m.coplanar),
-                m.coplanar,
-                m.clipped
-            );
-        }
+    }
+    Ok(())
+}
+
+/// Prints what the algorithm of `algo_opts` costs against ray casting.
+fn print_algorithm(view: &SceneView<'_>, cam: &CameraRecord, algo_opts: &RenderOptions) -> Result<()> {
+    let cast = scene_stats::algorithm_costs(view, cam, &RenderOptions { algo: Algorithm::Cast, ..*algo_opts })?;
+    let c = scene_stats::algorithm_costs(view, cam, algo_opts)?;
+    let px = c.pixels.max(1) as f64;
+    let kinds: Vec<String> = raypipe_core::shade::ray_record::RayKind::ALL
+        .iter()
+        .map(|k| format!("{} {:.2}", k.name(), c.rays[*k as usize] as f64 / px))
+        .collect();
+    let ratio = |a: u64, b: u64| if b == 0 { 0.0 } else { a as f64 / b as f64 };
+    println!("algorithm                 {:?}", algo_opts.algo);
+    println!("rays per pixel            {}; total {:.2}", kinds.join(", "), c.rays.iter().sum::<u64>() as f64 / px);
+    println!(
+        "relative to ray casting   traversal steps x{:.2}, triangle tests x{:.2}, shading x{:.2}, scene bytes x{:.2}",
+        ratio(c.steps, cast.steps),
+        ratio(c.tests, cast.tests),
+        ratio(c.shades, cast.shades),
+        ratio(c.bytes, cast.bytes)
+    );
+    if algo_opts.algo == Algorithm::Shadow {
+        let m = scene_stats::coverage_mismatch(view, cam, algo_opts)?;
+        let pct = |n: u64| 100.0 * n as f64 / m.pixels.max(1) as f64;
+        println!(
+            "shadow caster coverage    rasterization and ray casting disagree at {:.4}% of pixels ({} of {}); {:.4}% at another depth, {} where both see the same point of overlapping coplanar triangles; {} triangles clipped at the near plane",
+            pct(m.differ),
+            m.differ,
+            m.pixels,
+            pct(m.differ - m.coplanar),
+            m.coplanar,
+            m.clipped
+        );
     }
     Ok(())
 }

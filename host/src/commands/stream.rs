@@ -5,6 +5,7 @@ use crate::output;
 use crate::render::tracer::IntersectorKind;
 use crate::render::{self, Algorithm, RenderOptions};
 use anyhow::{anyhow, bail, Result};
+use raypipe_hw::stream::{CostModel, StreamConfig};
 use std::time::Instant;
 
 use super::{camera_for, check_image_path, load_scene, structure_summary, warn};
@@ -82,29 +83,11 @@ pub struct StreamArgs {
 }
 
 pub(crate) fn cmd_stream(a: StreamArgs) -> Result<()> {
-    use raypipe_hw::stream::{CostModel, StreamConfig};
     check_image_path(&a.output)?;
     let display = a.display.display()?;
     output::check_dir(&a.output)?;
     output::check_dir(&a.report)?;
-    let cfg = StreamConfig {
-        arch: a.arch,
-        oracle: a.oracle,
-        unroll: a.unroll,
-        suppress: a.suppress,
-        simd: a.simd,
-        cache: a.cache,
-        cache_state: a.cache_state,
-        machine: a.machine.unwrap_or_default(),
-    };
-    cfg.validate().map_err(|e| anyhow!("stream configuration: {e}"))?;
-    let costs = match &a.costs {
-        Some(p) => {
-            let text = std::fs::read_to_string(p).map_err(|e| anyhow!("{}: {e}", p.display()))?;
-            CostModel::from_toml(&text, &p.display().to_string()).map_err(|e| anyhow!("{}: {e}", p.display()))?
-        }
-        None => CostModel::default(),
-    };
+    let (cfg, costs) = machine_of(&a)?;
     let algo = AlgoArgs { samples: Some(a.algo.samples.unwrap_or(1)), ..a.algo.clone() };
     let mut opts = RenderOptions::default();
     algo.apply(&mut opts)?;
@@ -163,16 +146,7 @@ pub(crate) fn cmd_stream(a: StreamArgs) -> Result<()> {
         frame.width,
         frame.height,
         format!("{:?}", opts.algo).to_lowercase(),
-        match cfg.arch {
-            raypipe_hw::stream::Architecture::Multipass => format!(
-                "multipass, oracle {}, unroll traverse={},intersect={}{}",
-                cfg.oracle,
-                cfg.unroll.traverse,
-                cfg.unroll.intersect,
-                if cfg.suppress { ", suppressed" } else { "" }
-            ),
-            raypipe_hw::stream::Architecture::Branching => format!("branching, simd {}", cfg.simd),
-        }
+        architecture_label(&cfg)
     );
     let label = format!("{} {}", scene.name, cfg.arch);
     print!("{}", crate::hw::stream::table2(&report, &label));
@@ -197,4 +171,42 @@ pub(crate) fn cmd_stream(a: StreamArgs) -> Result<()> {
         bail!("internal error: the stream machine's image differs from the host renderer's");
     }
     Ok(())
+}
+
+/// The machine the flags describe: its architecture and cache, and the kernels' costs
+/// (Purcell's Table 1 unless a file gives others).
+fn machine_of(a: &StreamArgs) -> Result<(StreamConfig, CostModel)> {
+    let cfg = StreamConfig {
+        arch: a.arch,
+        oracle: a.oracle,
+        unroll: a.unroll,
+        suppress: a.suppress,
+        simd: a.simd,
+        cache: a.cache,
+        cache_state: a.cache_state,
+        machine: a.machine.unwrap_or_default(),
+    };
+    cfg.validate().map_err(|e| anyhow!("stream configuration: {e}"))?;
+    let costs = match &a.costs {
+        Some(p) => {
+            let text = std::fs::read_to_string(p).map_err(|e| anyhow!("{}: {e}", p.display()))?;
+            CostModel::from_toml(&text, &p.display().to_string()).map_err(|e| anyhow!("{}: {e}", p.display()))?
+        }
+        None => CostModel::default(),
+    };
+    Ok((cfg, costs))
+}
+
+/// The architecture in a few words, for the summary's first line.
+fn architecture_label(cfg: &StreamConfig) -> String {
+    match cfg.arch {
+        raypipe_hw::stream::Architecture::Multipass => format!(
+            "multipass, oracle {}, unroll traverse={},intersect={}{}",
+            cfg.oracle,
+            cfg.unroll.traverse,
+            cfg.unroll.intersect,
+            if cfg.suppress { ", suppressed" } else { "" }
+        ),
+        raypipe_hw::stream::Architecture::Branching => format!("branching, simd {}", cfg.simd),
+    }
 }
