@@ -330,8 +330,22 @@ impl<D: NodeTests> TraversalUnit<D> {
         results: &mut Fifo<Box<LeafJob>>,
         hits: &mut Fifo<Box<HitPacket>>,
     ) -> bool {
+        // The stages in the order their effects must be seen within a cycle.
+        let mut moved = self.take_results(results);
+        moved |= self.send_finished(hits);
+        moved |= self.send_leaves(leaves);
+        moved |= self.take_packet(scene, rays);
+        moved |= self.retire_steps(now);
+        moved |= self.start_datapath(now);
+        moved |= self.issue_step(now, scene);
+        moved |= self.fetch_nodes(now);
+        self.account(now);
+        moved
+    }
+
+    /// A packet back from the intersection unit: its rays finish the leaf. Returns true if anything moved.
+    fn take_results(&mut self, results: &mut Fifo<Box<LeafJob>>) -> bool {
         let mut moved = false;
-        // A packet back from the intersection unit: its rays finish the leaf.
         if self.masks[State::AtIntersection as usize] != 0 {
             if let Some(job) = results.pop() {
                 let k = job.thread as usize;
@@ -371,7 +385,12 @@ impl<D: NodeTests> TraversalUnit<D> {
                 moved = true;
             }
         }
-        // A finished packet to shading.
+        moved
+    }
+
+    /// A finished packet to shading. Returns true if anything moved.
+    fn send_finished(&mut self, hits: &mut Fifo<Box<HitPacket>>) -> bool {
+        let mut moved = false;
         if let Some(k) = first_from(self.masks[State::Finished as usize], 0) {
             if hits.can_push() {
                 let t = &self.threads[k];
@@ -390,7 +409,12 @@ impl<D: NodeTests> TraversalUnit<D> {
                 hits.note_full();
             }
         }
-        // A packet at its leaves to the intersection unit.
+        moved
+    }
+
+    /// A packet at its leaves to the intersection unit. Returns true if anything moved.
+    fn send_leaves(&mut self, leaves: &mut Fifo<Box<LeafJob>>) -> bool {
+        let mut moved = false;
         if let Some(k) = first_from(self.masks[State::SendLeaf as usize], 0) {
             if leaves.can_push() {
                 let t = &self.threads[k];
@@ -418,7 +442,12 @@ impl<D: NodeTests> TraversalUnit<D> {
                 leaves.note_full();
             }
         }
-        // A new packet into a free thread.
+        moved
+    }
+
+    /// A new packet into a free thread. Returns true if anything moved.
+    fn take_packet(&mut self, scene: &SceneView<'_>, rays: &mut Fifo<Box<RayPacketJob>>) -> bool {
+        let mut moved = false;
         if let Some(k) = first_from(self.masks[State::Free as usize], 0) {
             if let Some(job) = rays.pop() {
                 self.start(k, scene, &job);
@@ -426,7 +455,12 @@ impl<D: NodeTests> TraversalUnit<D> {
                 moved = true;
             }
         }
-        // Results out of the step pipeline.
+        moved
+    }
+
+    /// Results out of the step pipeline. Returns true if anything moved.
+    fn retire_steps(&mut self, now: u64) -> bool {
+        let mut moved = false;
         for k in crate::lane_iter(self.masks[State::Pipeline as usize]) {
             if self.threads[k].result_at <= now {
                 let next = self.after_step(k);
@@ -434,7 +468,12 @@ impl<D: NodeTests> TraversalUnit<D> {
                 moved = true;
             }
         }
-        // The datapath takes the oldest step whose data is there.
+        moved
+    }
+
+    /// The datapath takes the oldest step whose data is there. Returns true if anything moved.
+    fn start_datapath(&mut self, now: u64) -> bool {
+        let mut moved = false;
         if self.busy_until <= now {
             if let Some(k) = self.queued.pop_front() {
                 let t = &mut self.threads[k];
@@ -447,13 +486,23 @@ impl<D: NodeTests> TraversalUnit<D> {
                 moved = true;
             }
         }
-        // Issue one step of one ready packet (round robin).
+        moved
+    }
+
+    /// Issue one step of one ready packet (round robin). Returns true if anything moved.
+    fn issue_step(&mut self, now: u64, scene: &SceneView<'_>) -> bool {
+        let mut moved = false;
         if let Some(k) = first_from(self.masks[State::Ready as usize], self.next_issue) {
             self.next_issue = (k as u32 + 1) % 64;
             self.issue(k, now, scene);
             moved = true;
         }
-        // Fetches: lookups while the port has them, oldest thread first.
+        moved
+    }
+
+    /// Fetches: lookups while the port has them, oldest thread first. Returns true if anything moved.
+    fn fetch_nodes(&mut self, now: u64) -> bool {
+        let mut moved = false;
         for k in crate::lane_iter(self.masks[State::Fetching as usize]) {
             let (progress, data) = self.port.step_fetch(&mut self.threads[k].fetch, now);
             moved |= progress;
@@ -469,6 +518,11 @@ impl<D: NodeTests> TraversalUnit<D> {
                 moved = true;
             }
         }
+        moved
+    }
+
+    /// The cycle's accounting: activity and threads by state.
+    fn account(&mut self, now: u64) {
         let activity = if self.busy_until > now {
             Activity::Busy
         } else if self.is_empty() {
@@ -481,7 +535,6 @@ impl<D: NodeTests> TraversalUnit<D> {
             self.last_states[s] = self.masks[s].count_ones() as u64;
             self.tstats.thread_state_cycles[s] += self.last_states[s];
         }
-        moved
     }
 
     /// Why the unit stalls this cycle: what its waiting work waits for, memory first.

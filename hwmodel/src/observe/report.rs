@@ -303,107 +303,12 @@ impl Report {
         let cycles = s.cycles.max(1);
         let seconds = cycles as f64 / (s.cfg.clock_mhz * 1e6);
         let rays = s.rays.0;
-        let units = s
-            .units
-            .iter()
-            .map(|(name, u)| {
-                let tr = s.traversal.iter().find(|(n, _)| n == name).map(|(_, t)| *t);
-                let ticked = (u.busy_cycles + u.stall_cycles + u.idle_cycles).max(1) as f64;
-                UnitReport {
-                    name: name.clone(),
-                    busy_cycles: u.busy_cycles,
-                    stall_cycles: u.stall_cycles,
-                    idle_cycles: u.idle_cycles,
-                    issues: u.issues,
-                    simd_efficiency: u.simd_efficiency(),
-                    active_lanes: u.active_lanes,
-                    stall_reasons: Stall::ALL
-                        .iter()
-                        .map(|r| (r.name().to_string(), u.stall_reasons[*r as usize]))
-                        .collect(),
-                    node_reads_per_step: tr.map(|t| ratio(t.node_reads as f64, t.steps as f64)),
-                    thread_states: tr.map(|t| {
-                        STATE_NAMES
-                            .iter()
-                            .zip(t.thread_state_cycles.iter())
-                            .map(|(n, c)| (n.to_string(), *c as f64 / ticked))
-                            .collect()
-                    }),
-                    bytes: s.port_bytes.iter().find(|(n, _)| n == name).map_or(0, |(_, b)| *b),
-                }
-            })
-            .collect::<Vec<_>>();
+        let units = unit_reports(&s);
         let traversal_steps =
             s.units.iter().filter(|(n, _)| n.starts_with("traversal")).map(|(_, u)| u.issues).sum::<u64>();
-        let fifos = s
-            .fifos
-            .iter()
-            .map(|(name, depth, st)| {
-                let total: u64 = st.occupancy.iter().sum();
-                let weighted: u64 = st.occupancy.iter().enumerate().map(|(k, c)| k as u64 * c).sum();
-                FifoReport {
-                    name: name.clone(),
-                    depth: *depth,
-                    mean_occupancy: ratio(weighted as f64, total as f64),
-                    stats: (*st).clone(),
-                }
-            })
-            .collect();
-        let caches = s
-            .caches
-            .iter()
-            .map(|(name, cache)| (name, &cache.stats, cache))
-            .map(|(name, c, cache)| CacheReport {
-                name: name.clone(),
-                size_bytes: cache.size_bytes(),
-                line_bytes: cache.line_bytes(),
-                classes: (0..CLASSES)
-                    .filter(|&k| c.hits[k] + c.merged[k] + c.misses[k] > 0)
-                    .map(|k| {
-                        let all = (c.hits[k] + c.merged[k] + c.misses[k]) as f64;
-                        let r = CacheClassReport {
-                            hits: c.hits[k],
-                            merged: c.merged[k],
-                            misses: c.misses[k],
-                            hit_rate: ratio(c.hits[k] as f64, all),
-                        };
-                        (CLASS_NAMES[k].to_string(), r)
-                    })
-                    .collect(),
-            })
-            .collect();
-        let total_bytes: u64 = s.channel.bytes.iter().sum();
-        let scene_bytes = total_bytes - s.channel.bytes[FRAMEBUFFER];
-        let memory = MemoryReport {
-            bytes: (0..CLASSES).map(|k| (CLASS_NAMES[k].to_string(), s.channel.bytes[k])).collect(),
-            total_bytes,
-            bytes_per_ray: ratio(total_bytes as f64, rays as f64),
-            requests: s.channel.requests.iter().sum(),
-            utilization: s.utilization,
-            distinct_scene_bytes: s.distinct,
-            traffic_over_compulsory: ratio(scene_bytes as f64, s.distinct as f64),
-            model: format!("{:?}", s.cfg.memory.model).to_lowercase(),
-            latency: (0..CLASSES)
-                .filter(|&k| s.latency[k].count > 0)
-                .map(|k| {
-                    let l = &s.latency[k];
-                    let histogram = l
-                        .histogram
-                        .iter()
-                        .enumerate()
-                        .filter(|(_, &n)| n > 0)
-                        .map(|(b, &n)| (format!("<{}", 1u64 << b), n))
-                        .collect();
-                    let r = LatencyReport { count: l.count, mean: ratio(l.sum as f64, l.count as f64), histogram };
-                    (CLASS_NAMES[k].to_string(), r)
-                })
-                .collect(),
-            l2: [("hits", s.channel.l2[0]), ("merged", s.channel.l2[1]), ("misses", s.channel.l2[2])]
-                .into_iter()
-                .map(|(k, v)| (k.to_string(), v))
-                .collect(),
-            dram: s.dram.map(|d| DramReport { row_hit_rate: d.row_hit_rate(), banks: d.stats.clone() }),
-        };
+        let fifos = fifo_reports(&s);
+        let caches = cache_reports(&s);
+        let memory = memory_report(&s, rays);
         let bottleneck = verdict(&units, memory.utilization);
         Report {
             schema: SCHEMA,
@@ -507,5 +412,118 @@ fn verdict(units: &[UnitReport], utilization: f64) -> String {
             100.0 * utilization
         ),
         None => "no traversal units".to_string(),
+    }
+}
+
+/// Each unit's line: activity, stall reasons, SIMD efficiency, threads by state, bytes.
+fn unit_reports(s: &Sources<'_>) -> Vec<UnitReport> {
+    s.units
+        .iter()
+        .map(|(name, u)| {
+            let tr = s.traversal.iter().find(|(n, _)| n == name).map(|(_, t)| *t);
+            let ticked = (u.busy_cycles + u.stall_cycles + u.idle_cycles).max(1) as f64;
+            UnitReport {
+                name: name.clone(),
+                busy_cycles: u.busy_cycles,
+                stall_cycles: u.stall_cycles,
+                idle_cycles: u.idle_cycles,
+                issues: u.issues,
+                simd_efficiency: u.simd_efficiency(),
+                active_lanes: u.active_lanes,
+                stall_reasons: Stall::ALL
+                    .iter()
+                    .map(|r| (r.name().to_string(), u.stall_reasons[*r as usize]))
+                    .collect(),
+                node_reads_per_step: tr.map(|t| ratio(t.node_reads as f64, t.steps as f64)),
+                thread_states: tr.map(|t| {
+                    STATE_NAMES
+                        .iter()
+                        .zip(t.thread_state_cycles.iter())
+                        .map(|(n, c)| (n.to_string(), *c as f64 / ticked))
+                        .collect()
+                }),
+                bytes: s.port_bytes.iter().find(|(n, _)| n == name).map_or(0, |(_, b)| *b),
+            }
+        })
+        .collect::<Vec<_>>()
+}
+
+/// Each FIFO's line, with its mean occupancy.
+fn fifo_reports(s: &Sources<'_>) -> Vec<FifoReport> {
+    s.fifos
+        .iter()
+        .map(|(name, depth, st)| {
+            let total: u64 = st.occupancy.iter().sum();
+            let weighted: u64 = st.occupancy.iter().enumerate().map(|(k, c)| k as u64 * c).sum();
+            FifoReport {
+                name: name.clone(),
+                depth: *depth,
+                mean_occupancy: ratio(weighted as f64, total as f64),
+                stats: (*st).clone(),
+            }
+        })
+        .collect()
+}
+
+/// Each cache's hits, merges and misses by data class.
+fn cache_reports(s: &Sources<'_>) -> Vec<CacheReport> {
+    s.caches
+        .iter()
+        .map(|(name, cache)| (name, &cache.stats, cache))
+        .map(|(name, c, cache)| CacheReport {
+            name: name.clone(),
+            size_bytes: cache.size_bytes(),
+            line_bytes: cache.line_bytes(),
+            classes: (0..CLASSES)
+                .filter(|&k| c.hits[k] + c.merged[k] + c.misses[k] > 0)
+                .map(|k| {
+                    let all = (c.hits[k] + c.merged[k] + c.misses[k]) as f64;
+                    let r = CacheClassReport {
+                        hits: c.hits[k],
+                        merged: c.merged[k],
+                        misses: c.misses[k],
+                        hit_rate: ratio(c.hits[k] as f64, all),
+                    };
+                    (CLASS_NAMES[k].to_string(), r)
+                })
+                .collect(),
+        })
+        .collect()
+}
+
+/// The memory channel: bytes by class and per ray, requests, utilization, traffic over
+/// the compulsory floor, read latencies, the L2 and the DRAM's rows.
+fn memory_report(s: &Sources<'_>, rays: u64) -> MemoryReport {
+    let total_bytes: u64 = s.channel.bytes.iter().sum();
+    let scene_bytes = total_bytes - s.channel.bytes[FRAMEBUFFER];
+    MemoryReport {
+        bytes: (0..CLASSES).map(|k| (CLASS_NAMES[k].to_string(), s.channel.bytes[k])).collect(),
+        total_bytes,
+        bytes_per_ray: ratio(total_bytes as f64, rays as f64),
+        requests: s.channel.requests.iter().sum(),
+        utilization: s.utilization,
+        distinct_scene_bytes: s.distinct,
+        traffic_over_compulsory: ratio(scene_bytes as f64, s.distinct as f64),
+        model: format!("{:?}", s.cfg.memory.model).to_lowercase(),
+        latency: (0..CLASSES)
+            .filter(|&k| s.latency[k].count > 0)
+            .map(|k| {
+                let l = &s.latency[k];
+                let histogram = l
+                    .histogram
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, &n)| n > 0)
+                    .map(|(b, &n)| (format!("<{}", 1u64 << b), n))
+                    .collect();
+                let r = LatencyReport { count: l.count, mean: ratio(l.sum as f64, l.count as f64), histogram };
+                (CLASS_NAMES[k].to_string(), r)
+            })
+            .collect(),
+        l2: [("hits", s.channel.l2[0]), ("merged", s.channel.l2[1]), ("misses", s.channel.l2[2])]
+            .into_iter()
+            .map(|(k, v)| (k.to_string(), v))
+            .collect(),
+        dram: s.dram.map(|d| DramReport { row_hit_rate: d.row_hit_rate(), banks: d.stats.clone() }),
     }
 }

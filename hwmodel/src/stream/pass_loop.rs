@@ -94,38 +94,13 @@ impl<I: Intersector> StreamMachine<'_, I> {
         let new_pass =
             |kind, iterations| PassRecord { wave, screen, kind: Some(kind), iterations, ..Default::default() };
         if generate {
-            // Every fragment runs the eye-ray kernel; it writes the stencil of the rays
-            // that hit the scene box.
-            let mut p = new_pass(PassKind::Generate, 1);
-            (p.processed, p.useful) = (covered, covered);
-            for (i, r) in rays.iter().enumerate() {
-                if r.is_some() {
-                    stencil.set(i, RayStage::Traverse);
-                }
-            }
-            p.stencil = stencil.take_counts();
-            self.charge(Kernel::Generate, covered, covered, [0; 4], &mut p);
-            self.passes.push(p);
+            self.generate_pass(new_pass(PassKind::Generate, 1), rays, &mut stencil, covered);
         }
-        // Traversal setup.
-        let mut p = new_pass(PassKind::Setup, 1);
-        stencil.test_pass();
-        let mut state: Vec<Option<StreamRay<I>>> = Vec::with_capacity(n);
-        for (i, r) in rays.iter().enumerate() {
-            state.push(r.map(|(ray, any_hit)| {
-                let s = StreamRay::<I>::setup(&self.grid, ray, any_hit);
-                stencil.set(i, s.stage);
-                s
-            }));
-        }
-        p.processed = state.iter().flatten().count() as u64;
-        p.useful = p.processed;
-        p.stencil = stencil.take_counts();
-        let processed = p.processed;
-        self.charge(Kernel::Setup, processed, processed, [0; 4], &mut p);
+        let mut state = self.setup_pass(new_pass(PassKind::Setup, 1), rays, &mut stencil);
         let mut alive: Vec<usize> = (0..n).filter(|&i| state[i].is_some_and(|s| s.stage != RayStage::Done)).collect();
-        p.active_after = alive.len() as u64;
-        self.passes.push(p);
+        if let Some(p) = self.passes.last_mut() {
+            p.active_after = alive.len() as u64;
+        }
 
         let per_pass = (self.cfg.unroll.traverse, self.cfg.unroll.intersect);
         let mut work = vec![RayWork::default(); n];
@@ -209,15 +184,60 @@ impl<I: Intersector> StreamMachine<'_, I> {
                 return Err("internal error: the pass loop makes no progress".into());
             }
         }
+        self.close_screen(&work);
+        Ok(state)
+    }
+
+    /// The eye-ray pass: every fragment runs the eye-ray kernel, which writes the stencil
+    /// of the rays that hit the scene box (`covered` fragments).
+    fn generate_pass(&mut self, mut p: PassRecord, rays: &[Option<(Ray, bool)>], stencil: &mut Stencil, covered: u64) {
+        (p.processed, p.useful) = (covered, covered);
+        for (i, r) in rays.iter().enumerate() {
+            if r.is_some() {
+                stencil.set(i, RayStage::Traverse);
+            }
+        }
+        p.stencil = stencil.take_counts();
+        self.charge(Kernel::Generate, covered, covered, [0; 4], &mut p);
+        self.passes.push(p);
+    }
+
+    /// The traversal setup pass: each ray's state, and the stencil of its stage.
+    fn setup_pass(
+        &mut self,
+        mut p: PassRecord,
+        rays: &[Option<(Ray, bool)>],
+        stencil: &mut Stencil,
+    ) -> Vec<Option<StreamRay<I>>> {
+        stencil.test_pass();
+        let mut state: Vec<Option<StreamRay<I>>> = Vec::with_capacity(rays.len());
+        for (i, r) in rays.iter().enumerate() {
+            state.push(r.map(|(ray, any_hit)| {
+                let s = StreamRay::<I>::setup(&self.grid, ray, any_hit);
+                stencil.set(i, s.stage);
+                s
+            }));
+        }
+        p.processed = state.iter().flatten().count() as u64;
+        p.useful = p.processed;
+        p.stencil = stencil.take_counts();
+        let processed = p.processed;
+        self.charge(Kernel::Setup, processed, processed, [0; 4], &mut p);
+        self.passes.push(p);
+        state
+    }
+
+    /// A screen's loop is over: every ray's work is noted, and the optimal bound (the
+    /// most traversal plus the most intersection passes any ray needed) added.
+    fn close_screen(&mut self, work: &[RayWork]) {
         let (mut max_t, mut max_i) = (0, 0);
-        for w in &work {
+        for w in work {
             max_t = max_t.max(w.traverse_passes);
             max_i = max_i.max(w.intersect_passes);
             self.note_work(w);
         }
         self.loops.bound += max_t + max_i;
         self.loops.loops += 1;
-        Ok(state)
     }
 }
 
