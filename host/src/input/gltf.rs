@@ -21,39 +21,9 @@ pub fn load_gltf_file(path: &Path) -> Result<(Mesh, LoadNotes, CameraSpec)> {
     let (doc, buffers, images) = gltf::import(path).map_err(|e| anyhow!("{name}: malformed glTF: {e}"))?;
     let mut mesh = Mesh::default();
     let mut notes = LoadNotes::default();
-    // Materials, in document order; one default at the end for primitives without one.
     let mut textures: Vec<Option<u32>> = vec![None; images.len()];
     for m in doc.materials() {
-        let pbr = m.pbr_metallic_roughness();
-        let [r, g, b, a] = pbr.base_color_factor();
-        let strength = m.emissive_strength().unwrap_or(1.0);
-        let mut record = MaterialRecord {
-            diffuse: [r, g, b],
-            emission: m.emissive_factor().map(|e| e * strength),
-            dissolve: if m.alpha_mode() == gltf::material::AlphaMode::Blend { a } else { 1.0 },
-            texture: NULL_INDEX,
-            ..MaterialRecord::DEFAULT
-        };
-        if let Some(info) = pbr.base_color_texture() {
-            let image = info.texture().source().index();
-            if let Some(slot) = textures.get_mut(image) {
-                if slot.is_none() {
-                    match images.get(image).map(to_rgba) {
-                        Some(Ok(t)) => {
-                            mesh.textures.push(t);
-                            *slot = Some(mesh.textures.len() as u32 - 1);
-                        }
-                        Some(Err(e)) => {
-                            notes.warnings.push(format!("{name}: image {image}: {e}; its base colour is used"))
-                        }
-                        None => {}
-                    }
-                }
-                if let Some(t) = *slot {
-                    record.texture = t;
-                }
-            }
-        }
+        let record = material_of(&m, &images, &mut textures, &mut mesh, &mut notes, &name);
         mesh.materials.push(record);
         mesh.material_names.push(m.name().unwrap_or("material").to_string());
     }
@@ -77,14 +47,7 @@ pub fn load_gltf_file(path: &Path) -> Result<(Mesh, LoadNotes, CameraSpec)> {
         }
         let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
         if let (Some(cam), None) = (node.camera(), camera.eye) {
-            if let gltf::camera::Projection::Perspective(p) = cam.projection() {
-                let eye = world.transform_point3(Vec3::ZERO);
-                let ahead = world.transform_point3(-Vec3::Z);
-                camera.eye = Some(eye.to_array());
-                camera.look_at = Some(ahead.to_array());
-                camera.up = Some(world.transform_vector3(Vec3::Y).normalize_or_zero().to_array());
-                camera.fov = Some(p.yfov().to_degrees());
-            }
+            camera_of(&cam, world, &mut camera);
         }
         if let Some(m) = node.mesh() {
             // Each node that places a mesh is an object.
@@ -96,42 +59,8 @@ pub fn load_gltf_file(path: &Path) -> Result<(Mesh, LoadNotes, CameraSpec)> {
                     skipped_modes += 1;
                     continue;
                 }
-                let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
-                let Some(positions) = reader.read_positions() else { continue };
-                let base = mesh.positions.len() as u32;
-                let positions: Vec<[f32; 3]> =
-                    positions.map(|p| world.transform_point3(Vec3::from(p)).to_array()).collect();
-                let n = positions.len();
-                mesh.positions.extend(positions);
-                let normals: Option<Vec<[f32; 3]>> = reader
-                    .read_normals()
-                    .map(|ns| ns.map(|v| (normal_matrix * Vec3::from(v)).normalize_or_zero().to_array()).collect());
-                let uvs: Option<Vec<[f32; 2]>> =
-                    reader.read_tex_coords(0).map(|t| t.into_f32().map(|[u, v]| [u, 1.0 - v]).collect());
-                let colors: Option<Vec<[f32; 3]>> = reader.read_colors(0).map(|c| c.into_rgb_f32().collect());
-                for i in 0..n {
-                    mesh.shading.push(ShadingVertex {
-                        normal: normals.as_ref().and_then(|v| v.get(i).copied()).unwrap_or([0.0; 3]),
-                        uv: uvs.as_ref().and_then(|v| v.get(i).copied()).unwrap_or([0.0; 2]),
-                        color: colors.as_ref().and_then(|v| v.get(i).copied()).unwrap_or([1.0; 3]),
-                    });
-                }
-                let material = prim.material().index().map_or(default_material, |i| i as u32);
-                let indices: Vec<u32> = match reader.read_indices() {
-                    Some(ix) => ix.into_u32().collect(),
-                    None => (0..n as u32).collect(),
-                };
-                if indices.iter().any(|&i| i as usize >= n) {
-                    return Err(anyhow!(
-                        "{name}: malformed glTF: a primitive of mesh {} indexes a missing vertex",
-                        m.index()
-                    ));
-                }
-                for t in indices.chunks_exact(3) {
-                    mesh.triangles.push([t[0] + base, t[1] + base, t[2] + base]);
-                    mesh.tri_materials.push(material);
-                    mesh.objects.push(object);
-                }
+                let placed = Placement { world, normal_matrix, object, default_material, mesh_index: m.index() };
+                add_primitive(&prim, &buffers, placed, &mut mesh).map_err(|e| anyhow!("{name}: {e}"))?;
             }
         }
         stack.extend(node.children().map(|c| (c, world)));
@@ -142,6 +71,115 @@ pub fn load_gltf_file(path: &Path) -> Result<(Mesh, LoadNotes, CameraSpec)> {
     mesh.validate(&name)?;
     notes.warnings.extend(mesh.degenerate_warning(&name));
     Ok((mesh, notes, camera))
+}
+
+/// A material's record: base colour, emission, blending, and its base-colour texture
+/// (converted once per image: `textures` maps images to the mesh's textures).
+fn material_of(
+    m: &gltf::Material<'_>,
+    images: &[gltf::image::Data],
+    textures: &mut [Option<u32>],
+    mesh: &mut Mesh,
+    notes: &mut LoadNotes,
+    name: &str,
+) -> MaterialRecord {
+    let pbr = m.pbr_metallic_roughness();
+    let [r, g, b, a] = pbr.base_color_factor();
+    let strength = m.emissive_strength().unwrap_or(1.0);
+    let mut record = MaterialRecord {
+        diffuse: [r, g, b],
+        emission: m.emissive_factor().map(|e| e * strength),
+        dissolve: if m.alpha_mode() == gltf::material::AlphaMode::Blend { a } else { 1.0 },
+        texture: NULL_INDEX,
+        ..MaterialRecord::DEFAULT
+    };
+    if let Some(info) = pbr.base_color_texture() {
+        let image = info.texture().source().index();
+        if let Some(slot) = textures.get_mut(image) {
+            if slot.is_none() {
+                match images.get(image).map(to_rgba) {
+                    Some(Ok(t)) => {
+                        mesh.textures.push(t);
+                        *slot = Some(mesh.textures.len() as u32 - 1);
+                    }
+                    Some(Err(e)) => notes.warnings.push(format!("{name}: image {image}: {e}; its base colour is used")),
+                    None => {}
+                }
+            }
+            if let Some(t) = *slot {
+                record.texture = t;
+            }
+        }
+    }
+    record
+}
+
+/// The first perspective camera's eye, aim, up and field of view, placed by `world`.
+fn camera_of(cam: &gltf::Camera<'_>, world: Mat4, camera: &mut CameraSpec) {
+    if let gltf::camera::Projection::Perspective(p) = cam.projection() {
+        let eye = world.transform_point3(Vec3::ZERO);
+        let ahead = world.transform_point3(-Vec3::Z);
+        camera.eye = Some(eye.to_array());
+        camera.look_at = Some(ahead.to_array());
+        camera.up = Some(world.transform_vector3(Vec3::Y).normalize_or_zero().to_array());
+        camera.fov = Some(p.yfov().to_degrees());
+    }
+}
+
+/// Where a mesh's primitives go: the node's transform (and its normals'), the object the
+/// node makes, and the material of primitives without one.
+#[derive(Clone, Copy)]
+struct Placement {
+    world: Mat4,
+    normal_matrix: Mat3,
+    object: u32,
+    default_material: u32,
+    /// The mesh's index in the document (for messages).
+    mesh_index: usize,
+}
+
+/// Appends a triangle primitive's vertices (placed in the world), shading data and
+/// triangles to `mesh`.
+fn add_primitive(
+    prim: &gltf::Primitive<'_>,
+    buffers: &[gltf::buffer::Data],
+    placed: Placement,
+    mesh: &mut Mesh,
+) -> Result<()> {
+    let Placement { world, normal_matrix, object, default_material, mesh_index } = placed;
+    let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+    let Some(positions) = reader.read_positions() else { return Ok(()) };
+    let base = mesh.positions.len() as u32;
+    let positions: Vec<[f32; 3]> = positions.map(|p| world.transform_point3(Vec3::from(p)).to_array()).collect();
+    let n = positions.len();
+    mesh.positions.extend(positions);
+    let normals: Option<Vec<[f32; 3]>> = reader
+        .read_normals()
+        .map(|ns| ns.map(|v| (normal_matrix * Vec3::from(v)).normalize_or_zero().to_array()).collect());
+    let uvs: Option<Vec<[f32; 2]>> =
+        reader.read_tex_coords(0).map(|t| t.into_f32().map(|[u, v]| [u, 1.0 - v]).collect());
+    let colors: Option<Vec<[f32; 3]>> = reader.read_colors(0).map(|c| c.into_rgb_f32().collect());
+    for i in 0..n {
+        mesh.shading.push(ShadingVertex {
+            normal: normals.as_ref().and_then(|v| v.get(i).copied()).unwrap_or([0.0; 3]),
+            uv: uvs.as_ref().and_then(|v| v.get(i).copied()).unwrap_or([0.0; 2]),
+            color: colors.as_ref().and_then(|v| v.get(i).copied()).unwrap_or([1.0; 3]),
+        });
+    }
+    let material = prim.material().index().map_or(default_material, |i| i as u32);
+    let indices: Vec<u32> = match reader.read_indices() {
+        Some(ix) => ix.into_u32().collect(),
+        None => (0..n as u32).collect(),
+    };
+    if indices.iter().any(|&i| i as usize >= n) {
+        return Err(anyhow!("malformed glTF: a primitive of mesh {mesh_index} indexes a missing vertex"));
+    }
+    for t in indices.chunks_exact(3) {
+        mesh.triangles.push([t[0] + base, t[1] + base, t[2] + base]);
+        mesh.tri_materials.push(material);
+        mesh.objects.push(object);
+    }
+    Ok(())
 }
 
 /// A glTF image as 8-bit RGBA texels.

@@ -114,42 +114,7 @@ fn convert(name: &str, dir: Option<&Path>, result: tobj::LoadResult) -> Result<(
     };
 
     let mut mesh = Mesh::default();
-    // One load (and at most one warning) per texture file, however many materials use
-    // it: Sponza's 2 missing files were 45 warnings. `Ok`: the texture's index; `Err`:
-    // the failure's index in `failed`, with the materials that asked for it.
-    let mut loaded: std::collections::HashMap<&str, Result<u32, usize>> = std::collections::HashMap::new();
-    let mut failed: Vec<(String, Vec<&str>)> = Vec::new();
-    for m in &materials {
-        let mut record = material_record(m);
-        if let Some(spec) = &m.diffuse_texture {
-            let slot = *loaded.entry(spec.as_str()).or_insert_with(|| {
-                let error = match dir.map(|d| texture::load(d, spec)) {
-                    Some(Ok(t)) => {
-                        mesh.textures.push(t);
-                        return Ok(mesh.textures.len() as u32 - 1);
-                    }
-                    Some(Err(e)) => e,
-                    None => format!("texture {spec} cannot be read from memory"),
-                };
-                failed.push((error, Vec::new()));
-                Err(failed.len() - 1)
-            });
-            match slot {
-                Ok(t) => record.texture = t,
-                Err(f) => failed[f].1.push(&m.name),
-            }
-        }
-        mesh.materials.push(record);
-        mesh.material_names.push(m.name.clone());
-    }
-    unsupported_features(name, &materials, &mut notes);
-    for (e, users) in failed {
-        let who = match users.as_slice() {
-            [one] => format!("material '{one}' keeps its"),
-            many => format!("{} materials ('{}', …) keep their", many.len(), many.first().copied().unwrap_or("?")),
-        };
-        notes.warnings.push(format!("{name}: {e}; {who} diffuse colour"));
-    }
+    add_materials(name, dir, &materials, &mut mesh, &mut notes);
     let mut default_material = None;
     let any_normals = models.iter().any(|m| !m.mesh.normals.is_empty());
     let any_colors = models.iter().any(|m| !m.mesh.vertex_color.is_empty());
@@ -221,6 +186,47 @@ fn convert(name: &str, dir: Option<&Path>, result: tobj::LoadResult) -> Result<(
     mesh.validate(name)?;
     notes.warnings.extend(mesh.degenerate_warning(name));
     Ok((mesh, notes))
+}
+
+/// The MTL's materials into `mesh`, with their diffuse textures: one load (and at most
+/// one warning) per texture file, however many materials use it — Sponza's 2 missing
+/// files were 45 warnings — and one warning per feature raypipe does not render.
+fn add_materials(name: &str, dir: Option<&Path>, materials: &[tobj::Material], mesh: &mut Mesh, notes: &mut LoadNotes) {
+    // `Ok`: the texture's index; `Err`: the failure's index in `failed`, with the
+    // materials that asked for it.
+    let mut loaded: std::collections::HashMap<&str, Result<u32, usize>> = std::collections::HashMap::new();
+    let mut failed: Vec<(String, Vec<&str>)> = Vec::new();
+    for m in materials {
+        let mut record = material_record(m);
+        if let Some(spec) = &m.diffuse_texture {
+            let slot = *loaded.entry(spec.as_str()).or_insert_with(|| {
+                let error = match dir.map(|d| texture::load(d, spec)) {
+                    Some(Ok(t)) => {
+                        mesh.textures.push(t);
+                        return Ok(mesh.textures.len() as u32 - 1);
+                    }
+                    Some(Err(e)) => e,
+                    None => format!("texture {spec} cannot be read from memory"),
+                };
+                failed.push((error, Vec::new()));
+                Err(failed.len() - 1)
+            });
+            match slot {
+                Ok(t) => record.texture = t,
+                Err(f) => failed[f].1.push(&m.name),
+            }
+        }
+        mesh.materials.push(record);
+        mesh.material_names.push(m.name.clone());
+    }
+    unsupported_features(name, materials, notes);
+    for (e, users) in failed {
+        let who = match users.as_slice() {
+            [one] => format!("material '{one}' keeps its"),
+            many => format!("{} materials ('{}', …) keep their", many.len(), many.first().copied().unwrap_or("?")),
+        };
+        notes.warnings.push(format!("{name}: {e}; {who} diffuse colour"));
+    }
 }
 
 /// One warning per MTL feature raypipe does not render, naming how many materials use it
