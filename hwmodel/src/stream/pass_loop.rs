@@ -112,18 +112,7 @@ impl<I: Intersector> StreamMachine<'_, I> {
         let mut last: Option<LoopPass> = None;
         let mut idle_passes = 0;
         while !alive.is_empty() {
-            let mut w = Waiting::default();
-            for &i in &alive {
-                match state[i].map(|s| s.stage) {
-                    Some(RayStage::Traverse) => w.traverse += 1,
-                    Some(RayStage::Intersect) => w.intersect += 1,
-                    _ => {}
-                }
-            }
-            if !future.is_empty() {
-                w.bound_after = Some(bounds_after(&alive, &state, &future));
-            }
-            let kind = self.cfg.oracle.next(&w, last);
+            let kind = self.cfg.oracle.next(&waiting(&alive, &state, &future), last);
             last = Some(kind);
             let (kernel, iterations, stage, pass_kind) = match kind {
                 LoopPass::Traverse => (Kernel::Traverse, per_pass.0, RayStage::Traverse, PassKind::Traverse),
@@ -239,6 +228,24 @@ impl<I: Intersector> StreamMachine<'_, I> {
         self.loops.bound += max_t + max_i;
         self.loops.loops += 1;
     }
+}
+
+/// What the oracle sees before a pass: how many live rays wait to traverse and to
+/// intersect, and (for the optimal oracle, which knows each ray's future) the bound on
+/// the passes left after either choice.
+fn waiting<I: Intersector>(alive: &[usize], state: &[Option<StreamRay<I>>], future: &[(u64, u64)]) -> Waiting {
+    let mut w = Waiting::default();
+    for &i in alive {
+        match state[i].map(|s| s.stage) {
+            Some(RayStage::Traverse) => w.traverse += 1,
+            Some(RayStage::Intersect) => w.intersect += 1,
+            _ => {}
+        }
+    }
+    if !future.is_empty() {
+        w.bound_after = Some(bounds_after(alive, state, future));
+    }
+    w
 }
 
 /// The lower bound on the passes left after a traversal pass and after an intersection
