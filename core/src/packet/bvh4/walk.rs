@@ -6,7 +6,7 @@ use crate::counters::RayCounters;
 use crate::hit::Hit;
 use crate::image::{Bvh4Node, Bvh4View, SceneView, MAX_WIDE_DEPTH};
 use crate::intersect::triangle::Intersector;
-use crate::packet::{ray_by_ray, Lanes, PacketCounters, PacketHits, RayPacket};
+use crate::packet::{ray_by_ray, Lanes, LanesOf, PacketCounters, PacketHits, RayPacket};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::traverse::boxes::datapath::NodeTests;
@@ -171,7 +171,7 @@ impl<'b, I: Intersector, const N: usize> PacketWalk<'b, I, N> {
             Cull::Exact(boxes) => {
                 let mut needed = 0u32;
                 let mut t = Vec4::INFINITY;
-                for i in Lanes(mask) {
+                for i in LanesOf::<N>(mask) {
                     let end = hits[i].map_or(packet.t_max[i], |h: Hit| h.t);
                     let (tn, m) = slab4_exact(&boxes[i], node, packet.t_min[i], end);
                     if m != 0 {
@@ -223,7 +223,7 @@ impl<'b, I: Intersector, const N: usize> PacketWalk<'b, I, N> {
                 let lo = Vec3A::new(leaf_box[0], leaf_box[1], leaf_box[2]);
                 let hi = Vec3A::new(leaf_box[3], leaf_box[4], leaf_box[5]);
                 let mut enter = 0u64;
-                for i in Lanes(mask) {
+                for i in LanesOf::<N>(mask) {
                     let end = hits[i].map_or(packet.t_max[i], |h: Hit| h.t);
                     if boxes[i].entry(lo, hi, packet.t_min[i], end).is_some() {
                         enter |= 1 << i;
