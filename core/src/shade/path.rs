@@ -29,6 +29,7 @@ use glam::Vec3;
 use crate::hit::Hit;
 use crate::image::{LightRecord, SceneView};
 use crate::probe::MemoryProbe;
+use crate::shade::blinn_phong::BlinnPhong;
 use crate::shade::hemisphere::cosine_direction;
 use crate::shade::ray_record::{RayKind, RayRecord};
 use crate::shade::rng::uniform;
@@ -85,59 +86,11 @@ pub fn shade_path<P: MemoryProbe>(
         return now;
     }
     let (diffuse, glossy) = s.lobes();
-    // Next-event estimation through both lobes: the point and directional lights and one
-    // point on one emitting triangle picked by power. The sky through the diffuse lobe
-    // only (its cosine-distributed direction rarely falls in a narrow glossy lobe): the
-    // glossy bounce sees the sky itself.
     let depth = rec.depth as u32;
     let u = |dim: u32| uniform(rec.pixel, rec.sample, depth, dim);
     let to_eye = -rec.ray.dir.normalize_or_zero();
-    let lit = diffuse.max_element() > 0.0 || glossy.is_some();
-    if lit {
-        for i in 0..scene.shading_light_count() {
-            let l = scene.light(i, probe);
-            match l.kind {
-                LightRecord::POINT | LightRecord::DIRECTIONAL => {
-                    if let Some(shadow) = s.point_light_shadow(rec, &l, diffuse, glossy.as_ref()) {
-                        emit(shadow);
-                    }
-                }
-                LightRecord::ENVIRONMENT if diffuse.max_element() > 0.0 => {
-                    // A cosine-distributed direction: the Lambert BRDF, the cosine and
-                    // the density cancel to diffuse × sky radiance.
-                    let dir = cosine_direction(n, u(3), u(4));
-                    let weight = rec.weight * diffuse * l.sky(dir);
-                    if weight.max_element() > 0.0 && weight.is_finite() && dir != Vec3::ZERO {
-                        emit(rec.child(s.ray_along(dir), weight, RayKind::Shadow, rec.depth, s.cone));
-                    }
-                }
-                _ => {}
-            }
-        }
-        if let Some((k, pdf)) = scene.pick_area_light(u(5), u(6), probe) {
-            let l = scene.light(scene.shading_light_count() + k, probe);
-            let [a, b, c] = scene.triangle(l.triangle, probe);
-            let (r1, r2) = (libm::sqrtf(u(7)), u(8));
-            let q = a * (1.0 - r1) + b * (r1 * (1.0 - r2)) + c * (r1 * r2);
-            let e = (b - a).cross(c - a);
-            let to = q - s.point;
-            let d2 = to.length_squared();
-            let dir = to.normalize_or_zero();
-            // Radiance Ke toward the side the triangle faces (its winding), area |e|/2,
-            // BRDF (kd + the glossy lobe's π f)/π; divided by the probability of picking
-            // this light.
-            let cos_l = -e.normalize_or_zero().dot(dir);
-            let g = n.dot(dir).max(0.0) * cos_l.max(0.0) * 0.5 * e.length() / (core::f32::consts::PI * d2);
-            let reflectance = match glossy {
-                Some(gl) => diffuse + gl.eval_pi(n, dir, to_eye),
-                None => diffuse,
-            };
-            let weight = rec.weight * reflectance * Vec3::from(l.color) * (g / pdf);
-            if pdf > 0.0 && weight.max_element() > 0.0 && weight.is_finite() {
-                // The sample lies on its triangle: stop just short of it.
-                emit(rec.child(s.ray_toward(q, 1.0 - 1e-4), weight, RayKind::Shadow, rec.depth, s.cone));
-            }
-        }
+    if diffuse.max_element() > 0.0 || glossy.is_some() {
+        next_event(scene, rec, &s, (diffuse, glossy), probe, emit);
     }
     if rec.depth >= opts.bounces {
         return now;
@@ -187,4 +140,67 @@ pub fn shade_path<P: MemoryProbe>(
     let d = rec.ray.dir.normalize_or_zero();
     specular_rays(&m, d, n, s.entering, |dir, factor, kind| bounce(dir, rec.weight * factor, kind));
     now
+}
+
+/// Next-event estimation through both lobes: the point and directional lights and one
+/// point on one emitting triangle picked by power. The sky through the diffuse lobe
+/// only (its cosine-distributed direction rarely falls in a narrow glossy lobe): the
+/// glossy bounce sees the sky itself.
+#[inline(always)]
+fn next_event<P: MemoryProbe>(
+    scene: &SceneView<'_>,
+    rec: &RayRecord,
+    s: &Surface,
+    (diffuse, glossy): (Vec3, Option<BlinnPhong>),
+    probe: &mut P,
+    emit: &mut impl FnMut(RayRecord),
+) {
+    let n = s.normal;
+    let depth = rec.depth as u32;
+    let u = |dim: u32| uniform(rec.pixel, rec.sample, depth, dim);
+    let to_eye = -rec.ray.dir.normalize_or_zero();
+    for i in 0..scene.shading_light_count() {
+        let l = scene.light(i, probe);
+        match l.kind {
+            LightRecord::POINT | LightRecord::DIRECTIONAL => {
+                if let Some(shadow) = s.point_light_shadow(rec, &l, diffuse, glossy.as_ref()) {
+                    emit(shadow);
+                }
+            }
+            LightRecord::ENVIRONMENT if diffuse.max_element() > 0.0 => {
+                // A cosine-distributed direction: the Lambert BRDF, the cosine and
+                // the density cancel to diffuse × sky radiance.
+                let dir = cosine_direction(n, u(3), u(4));
+                let weight = rec.weight * diffuse * l.sky(dir);
+                if weight.max_element() > 0.0 && weight.is_finite() && dir != Vec3::ZERO {
+                    emit(rec.child(s.ray_along(dir), weight, RayKind::Shadow, rec.depth, s.cone));
+                }
+            }
+            _ => {}
+        }
+    }
+    if let Some((k, pdf)) = scene.pick_area_light(u(5), u(6), probe) {
+        let l = scene.light(scene.shading_light_count() + k, probe);
+        let [a, b, c] = scene.triangle(l.triangle, probe);
+        let (r1, r2) = (libm::sqrtf(u(7)), u(8));
+        let q = a * (1.0 - r1) + b * (r1 * (1.0 - r2)) + c * (r1 * r2);
+        let e = (b - a).cross(c - a);
+        let to = q - s.point;
+        let d2 = to.length_squared();
+        let dir = to.normalize_or_zero();
+        // Radiance Ke toward the side the triangle faces (its winding), area |e|/2,
+        // BRDF (kd + the glossy lobe's π f)/π; divided by the probability of picking
+        // this light.
+        let cos_l = -e.normalize_or_zero().dot(dir);
+        let g = n.dot(dir).max(0.0) * cos_l.max(0.0) * 0.5 * e.length() / (core::f32::consts::PI * d2);
+        let reflectance = match glossy {
+            Some(gl) => diffuse + gl.eval_pi(n, dir, to_eye),
+            None => diffuse,
+        };
+        let weight = rec.weight * reflectance * Vec3::from(l.color) * (g / pdf);
+        if pdf > 0.0 && weight.max_element() > 0.0 && weight.is_finite() {
+            // The sample lies on its triangle: stop just short of it.
+            emit(rec.child(s.ray_toward(q, 1.0 - 1e-4), weight, RayKind::Shadow, rec.depth, s.cone));
+        }
+    }
 }
