@@ -16,7 +16,7 @@ use crate::ray::Ray;
 use crate::traverse::boxes::slab::RayBox;
 use crate::traverse::walk::Leaf;
 
-use super::{existing, lane_end, PacketEvent, PacketStep};
+use super::interface::{existing, lane_end, PacketEvent, PacketStep};
 
 /// The registers of a packet in the binary BVH.
 #[derive(Clone, Debug)]

@@ -17,7 +17,7 @@ use crate::ray::Ray;
 use crate::traverse::boxes::clip::clip_ray;
 use crate::traverse::walk::Leaf;
 
-use super::{existing, PacketEvent, PacketStep};
+use super::interface::{existing, PacketEvent, PacketStep};
 
 /// A shared-stack entry: a node, the rays that need it, and their intervals in it.
 #[derive(Clone, Copy, Debug)]

@@ -14,7 +14,7 @@ use crate::ray::Ray;
 use crate::traverse::walk::Leaf;
 use crate::traverse::wide_bvh::{stack_capacity, NodeRay, WideSlab};
 
-use super::{existing, lane_end, PacketEvent, PacketStep};
+use super::interface::{existing, lane_end, PacketEvent, PacketStep};
 
 /// A shared-stack entry: child (or first list entry), leaf count or 0, the nearest
 /// entry distance of the rays that need it, and their mask.
