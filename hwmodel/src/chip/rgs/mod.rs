@@ -16,9 +16,10 @@ use std::collections::{HashMap, VecDeque};
 mod generate;
 mod ray_queue;
 mod shade;
+mod shade_job;
 
 use ray_queue::RayQueue;
-use shade::{ShadeJob, Stage};
+use shade_job::{ShadeJob, Stage};
 
 use raypipe_core::camera::EyeRays;
 use raypipe_core::shade::color::rgb8;

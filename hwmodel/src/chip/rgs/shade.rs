@@ -8,6 +8,7 @@ use raypipe_core::shade::lambert::shade;
 use raypipe_core::shade::ray_record::{RayKind, RayRecord};
 use raypipe_core::SceneView;
 
+use super::shade_job::{ShadeJob, Stage};
 use super::{Rgs, FRAMEBUFFER_BASE};
 use crate::chip::fifo::Fifo;
 use crate::chip::jobs::{lanes, HitPacket};
@@ -15,35 +16,6 @@ use crate::memory::port::{Fetch, Recorder};
 use crate::memory::traffic::FRAMEBUFFER;
 use crate::observe::stall::Stall;
 use crate::observe::unit_stats::Activity;
-
-/// Where a shading job stands.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(super) enum Stage {
-    Fetching,
-    Queued,
-    Shading(u64),
-}
-
-/// A packet being shaded.
-pub(super) struct ShadeJob {
-    /// Packet number (for traces).
-    packet: u32,
-    /// Cycle the packet was started, and the pixels its lanes belong to (cost images).
-    issued: u64,
-    pixels: Vec<u32>,
-    /// Shading bytes the job reads.
-    bytes: u64,
-    pub(super) fetch: Fetch,
-    pub(super) stage: Stage,
-    data_at: u64,
-    primary: bool,
-    /// Rays to shade (cycles in the datapath: `rays / shade_per_cycle`).
-    rays: u64,
-    /// Records the shader emitted, released when the job is done.
-    emitted: Vec<RayRecord>,
-    /// Framebuffer bytes written when done, at this address.
-    write: (u64, u32),
-}
 
 /// What a finished trace leaves for its shading job.
 struct Shaded {
