@@ -285,9 +285,8 @@ impl<'s, I: Intersector> StreamMachine<'s, I> {
 
     /// The report of the frame so far.
     pub fn report(&self) -> StreamReport {
-        let m = self;
-        let cfg = m.config().clone();
-        let passes = m.passes.clone();
+        let cfg = self.config().clone();
+        let passes = self.passes.clone();
         let count = |k: PassKind| passes.iter().filter(|p| p.kind == Some(k)).count() as u64;
         let sum = |k: PassKind, f: fn(&PassRecord) -> u64| -> u64 {
             passes.iter().filter(|p| p.kind == Some(k)).map(f).sum()
@@ -303,26 +302,26 @@ impl<'s, I: Intersector> StreamMachine<'s, I> {
             intersect_passes: ip,
             other_passes: passes.len() as u64 - tp - ip,
             total_passes: passes.len() as u64,
-            max_steps: m.max_work.steps,
-            max_intersections: m.max_work.intersections,
-            optimal_passes: m.loops.bound,
-            ratio_to_optimal: if multipass { ratio(tp + ip, m.loops.bound) } else { None },
+            max_steps: self.max_work.steps,
+            max_intersections: self.max_work.intersections,
+            optimal_passes: self.loops.bound,
+            ratio_to_optimal: if multipass { ratio(tp + ip, self.loops.bound) } else { None },
             simd_traverse: ratio(tu, tu + ti),
             simd_intersect: ratio(iu, iu + ii),
             simd_overall: if multipass { ratio(tu + iu, tu + ti + iu + ii) } else { ratio(fu, fu + fi) },
         };
-        let costs = m.costs().clone();
+        let costs = self.costs().clone();
         let kernels = Kernel::ALL
             .iter()
             .map(|&k| {
                 let c = costs.get(k);
-                let t = *m.kernels.get(k);
+                let t = *self.kernels.get(k);
                 let mean = if t.invocations > 0 { t.random_words / t.invocations as f64 } else { 0.0 };
                 let (r, w) = if multipass { (c.r, c.w) } else { (0, 0) };
                 KernelRow { kernel: k.name(), instructions: c.instructions, r, w, m: c.m.unwrap_or(mean), totals: t }
             })
             .collect();
-        let cache = m.texture_cache();
+        let cache = self.texture_cache();
         let stats = cache.stats;
         let classes: Vec<ClassRow> = (0..CLASSES)
             .filter(|&c| c != STATE || cfg.cache_state)
@@ -343,16 +342,16 @@ impl<'s, I: Intersector> StreamMachine<'s, I> {
         let random_uncached: u64 = scene_classes.map(|c| stats.words[c] * 4).sum();
         // With a table that fixes M, the table's words stand for the scene reads.
         let fixed_m = costs.kernels.values().any(|c| c.m.is_some());
-        let table_words: f64 = m.kernels.0.iter().map(|t| t.random_words).sum();
+        let table_words: f64 = self.kernels.0.iter().map(|t| t.random_words).sum();
         let random = if fixed_m { (table_words * 4.0) as u64 } else { random };
         let state_reads_bytes = if cfg.cache_state { cache.bytes_fetched(STATE) } else { state_read * 4 };
         let state = state_reads_bytes + state_written * 4;
         let stencil = stencil_reads + stencil_writes;
         let traffic = Traffic { random, random_uncached, state, stencil, total: random + state + stencil };
-        let instructions = m.kernels.instructions();
+        let instructions = self.kernels.instructions();
         StreamReport {
-            width: m.size().0,
-            height: m.size().1,
+            width: self.size().0,
+            height: self.size().1,
             frame_time: cfg.machine.frame_time(instructions, traffic.total),
             config: cfg,
             costs,
@@ -366,8 +365,8 @@ impl<'s, I: Intersector> StreamMachine<'s, I> {
             stencil_writes,
             traffic,
             cache: stats,
-            rays_by_wave: m.rays_by_wave.clone(),
-            max_work: m.max_work,
+            rays_by_wave: self.rays_by_wave.clone(),
+            max_work: self.max_work,
             passes,
         }
     }

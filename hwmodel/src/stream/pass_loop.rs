@@ -96,11 +96,7 @@ impl<I: Intersector> StreamMachine<'_, I> {
         if generate {
             self.generate_pass(new_pass(PassKind::Generate, 1), rays, &mut stencil, covered);
         }
-        let mut state = self.setup_pass(new_pass(PassKind::Setup, 1), rays, &mut stencil);
-        let mut alive: Vec<usize> = (0..n).filter(|&i| state[i].is_some_and(|s| s.stage != RayStage::Done)).collect();
-        if let Some(p) = self.passes.last_mut() {
-            p.active_after = alive.len() as u64;
-        }
+        let (mut state, mut alive) = self.setup_pass(new_pass(PassKind::Setup, 1), rays, &mut stencil);
 
         let per_pass = (self.cfg.unroll.traverse, self.cfg.unroll.intersect);
         let mut work = vec![RayWork::default(); n];
@@ -191,13 +187,14 @@ impl<I: Intersector> StreamMachine<'_, I> {
         self.passes.push(p);
     }
 
-    /// The traversal setup pass: each ray's state, and the stencil of its stage.
+    /// The traversal setup pass: each ray's state and the stencil of its stage; returns
+    /// the states and the rays still to trace.
     fn setup_pass(
         &mut self,
         mut p: PassRecord,
         rays: &[Option<(Ray, bool)>],
         stencil: &mut Stencil,
-    ) -> Vec<Option<StreamRay<I>>> {
+    ) -> (Vec<Option<StreamRay<I>>>, Vec<usize>) {
         stencil.test_pass();
         let mut state: Vec<Option<StreamRay<I>>> = Vec::with_capacity(rays.len());
         for (i, r) in rays.iter().enumerate() {
@@ -212,8 +209,11 @@ impl<I: Intersector> StreamMachine<'_, I> {
         p.stencil = stencil.take_counts();
         let processed = p.processed;
         self.charge(Kernel::Setup, processed, processed, [0; 4], &mut p);
+        let alive: Vec<usize> =
+            (0..rays.len()).filter(|&i| state[i].is_some_and(|s| s.stage != RayStage::Done)).collect();
+        p.active_after = alive.len() as u64;
         self.passes.push(p);
-        state
+        (state, alive)
     }
 
     /// A screen's loop is over: every ray's work is noted, and the optimal bound (the
