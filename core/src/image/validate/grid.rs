@@ -10,6 +10,8 @@ use crate::image::records::{GridRecord, NULL_INDEX};
 use crate::image::sections::{finite3, Sections};
 use crate::image::structure_views::GridView;
 
+use super::indices::indices_below;
+
 /// The grid of an image whose scene bounds are `bmin..bmax` and which holds `nt` triangles.
 pub(in crate::image) fn grid<'a>(
     s: &Sections<'a>,
@@ -71,11 +73,7 @@ pub(in crate::image) fn grid<'a>(
     if lists.last().is_some_and(|&l| l != NULL_INDEX) {
         return Err(SceneError::UnterminatedList);
     }
-    for (i, &e) in lists.iter().enumerate() {
-        if e != NULL_INDEX && e >= nt {
-            return Err(SceneError::IndexOutOfRange { section: K::PrimLists, record: i as u32, value: e, limit: nt });
-        }
-    }
+    indices_below(K::PrimLists, lists.iter().copied(), nt, true)?;
     Ok(GridView {
         min: gmin,
         max: gmax,

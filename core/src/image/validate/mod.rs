@@ -5,6 +5,7 @@
 pub(in crate::image) mod bvh;
 pub(in crate::image) mod geometry;
 pub(in crate::image) mod grid;
+pub(in crate::image) mod indices;
 pub(in crate::image) mod kdtree;
 pub(in crate::image) mod lights;
 pub(in crate::image) mod prim_lists;

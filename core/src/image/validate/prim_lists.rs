@@ -4,18 +4,11 @@ use crate::image::error::SceneError;
 use crate::image::header::SectionKind;
 use crate::image::sections::Sections;
 
+use super::indices::indices_below;
+
 /// The trees' leaf lists, each entry below `nt`.
 pub(in crate::image) fn prim_lists<'a>(s: &Sections<'a>, nt: u32) -> Result<&'a [u32], SceneError> {
     let prims: &[u32] = s.required(SectionKind::PrimLists)?;
-    for (i, &e) in prims.iter().enumerate() {
-        if e >= nt {
-            return Err(SceneError::IndexOutOfRange {
-                section: SectionKind::PrimLists,
-                record: i as u32,
-                value: e,
-                limit: nt,
-            });
-        }
-    }
+    indices_below(SectionKind::PrimLists, prims.iter().copied(), nt, false)?;
     Ok(prims)
 }

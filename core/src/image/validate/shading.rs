@@ -5,8 +5,10 @@
 
 use crate::image::error::SceneError;
 use crate::image::header::SectionKind;
-use crate::image::records::{MaterialRecord, ShadingVertex, TextureRecord, NULL_INDEX};
+use crate::image::records::{MaterialRecord, ShadingVertex, TextureRecord};
 use crate::image::sections::Sections;
+
+use super::indices::indices_below;
 
 /// The validated shading data.
 pub(in crate::image) struct Shading<'a> {
@@ -35,16 +37,7 @@ pub(in crate::image) fn shading<'a>(s: &Sections<'a>, nv: u32, nt: u32) -> Resul
     let tri_materials: &[u32] = s.slice(K::TriangleMaterials)?;
     one_each(K::TriangleMaterials, tri_materials.len(), nt)?;
     let nm = materials.len() as u32;
-    for (i, &m) in tri_materials.iter().enumerate() {
-        if m >= nm {
-            return Err(SceneError::IndexOutOfRange {
-                section: K::TriangleMaterials,
-                record: i as u32,
-                value: m,
-                limit: nm,
-            });
-        }
-    }
+    indices_below(K::TriangleMaterials, tri_materials.iter().copied(), nm, false)?;
     let tri_objects: &[u32] = s.slice(K::TriangleObjects)?;
     one_each(K::TriangleObjects, tri_objects.len(), nt)?;
     let textures: &[TextureRecord] = s.slice(K::Textures)?;
@@ -56,15 +49,6 @@ pub(in crate::image) fn shading<'a>(s: &Sections<'a>, nv: u32, nt: u32) -> Resul
             return Err(SceneError::BadTexture { texture: i as u32 });
         }
     }
-    for (i, m) in materials.iter().enumerate() {
-        if m.texture != NULL_INDEX && m.texture >= textures.len() as u32 {
-            return Err(SceneError::IndexOutOfRange {
-                section: K::Materials,
-                record: i as u32,
-                value: m.texture,
-                limit: textures.len() as u32,
-            });
-        }
-    }
+    indices_below(K::Materials, materials.iter().map(|m| m.texture), textures.len() as u32, true)?;
     Ok(Shading { vertices, materials, tri_materials, tri_objects, textures, texels })
 }
