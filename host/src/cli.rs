@@ -1,8 +1,5 @@
-//! The `raypipe` command line's arguments: clap parses into one options struct per
-//! subcommand, each defined beside what it does in [`crate::commands`].
-// The argument docs are `--help` text, written for a terminal: `[fixed]` and `<part>`
-// there are TOML tables and placeholders, not rustdoc links or HTML.
-#![allow(rustdoc::broken_intra_doc_links, rustdoc::invalid_html_tags)]
+//! The `raypipe` command line: the parser (one options struct per subcommand, each defined
+//! beside what it does in [`crate::commands`]), `main`, and the dispatch.
 
 use std::process::ExitCode;
 
