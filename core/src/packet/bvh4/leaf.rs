@@ -72,14 +72,13 @@ pub(super) fn leaf_entries_portable(
     enter
 }
 
-/// A leaf the packet reached: the scene and tree it is in, the packet, the rays of the
-/// packet that enter its box, and its list entries `first .. first + count`.
+/// A leaf the packet reached: the scene and tree it is in, the packet, and its list
+/// entries `first .. first + count`.
 #[derive(Clone, Copy)]
 pub(super) struct LeafVisit<'v, 's, const N: usize> {
     pub(super) scene: &'v SceneView<'s>,
     pub(super) bvh: &'v Bvh4View<'s>,
     pub(super) packet: &'v RayPacket<N>,
-    pub(super) enter: u64,
     pub(super) first: u32,
     pub(super) count: u32,
 }
@@ -90,11 +89,12 @@ pub(super) struct LeafVisit<'v, 's, const N: usize> {
 #[inline(always)]
 pub(super) fn test_leaf<I: Intersector, P: MemoryProbe, const N: usize>(
     leaf: &LeafVisit<'_, '_, N>,
+    enter: u64,
     preps: &mut Preps<I, N>,
     hits: &mut PacketHits<N>,
     probe: &mut P,
 ) {
-    let LeafVisit { scene, bvh, packet, enter, first, count } = *leaf;
+    let LeafVisit { scene, bvh, packet, first, count } = *leaf;
     let groups = groups_of(enter);
     for e in first..first.wrapping_add(count) {
         let prim = bvh.prim(e, probe);
@@ -163,12 +163,13 @@ pub(super) fn keep_lane<I: Intersector, const N: usize, const L: usize>(
 #[inline(always)]
 pub(super) fn test_leaf_shared<I: Intersector, P: MemoryProbe, const N: usize>(
     leaf: &LeafVisit<'_, '_, N>,
+    enter: u64,
     origin: Vec3,
     preps: &mut Preps<I, N>,
     hits: &mut PacketHits<N>,
     probe: &mut P,
 ) -> bool {
-    let LeafVisit { scene, bvh, packet, enter, first, count } = *leaf;
+    let LeafVisit { scene, bvh, packet, first, count } = *leaf;
     if !I::SHARED8 {
         return false;
     }

@@ -93,7 +93,7 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
                 continue;
             }
         } else {
-            let leaf = LeafVisit { scene, bvh, packet, enter: 0, first: index, count };
+            let leaf = LeafVisit { scene, bvh, packet, first: index, count };
             walk.leaf(leaf, &leaf_box, leaf_t, hits, probe);
         }
         // Pop the next entry whose entry bound is not beyond every ray's best hit.
@@ -119,18 +119,20 @@ struct PacketWalk<'b, I: Intersector, const N: usize> {
     lanes: Option<Groups>,
     preps: Preps<I, N>,
     mask: u64,
-    groups: usize,
     /// How far any ray of the packet still looks.
     t_end: f32,
     c: PacketCounters,
 }
 
 impl<'b, I: Intersector, const N: usize> PacketWalk<'b, I, N> {
+    /// Groups of four lanes in a packet of `N`.
+    const GROUPS: usize = N.div_ceil(4);
+
     /// The walk of the rays of `mask`: culled by the frustum where one bounds them, else
     /// ray by ray with the exact tests kept in `boxes`.
     #[inline(always)]
     fn start(packet: &RayPacket<N>, mask: u64, boxes: &'b mut Option<[RayBox; N]>) -> Self {
-        let groups = N.div_ceil(4);
+        let groups = Self::GROUPS;
         let full = N <= 64 && mask == u64::MAX >> (64 - N.clamp(1, 64));
         // The lanes in SIMD registers with their reciprocals: computed when the first leaf
         // needs them, if the frustum can do without (see `Frustum::from_full_packet`).
@@ -149,7 +151,7 @@ impl<'b, I: Intersector, const N: usize> PacketWalk<'b, I, N> {
         // The watertight constants are computed the first time a ray enters a leaf: most
         // rays of a frame never do.
         let preps = Preps::<I, N>::new();
-        PacketWalk { cull, lanes, preps, mask, groups, t_end, c: PacketCounters::default() }
+        PacketWalk { cull, lanes, preps, mask, t_end, c: PacketCounters::default() }
     }
 
     /// An inner node: its four boxes culled for the packet, the needed children pushed
@@ -207,13 +209,13 @@ impl<'b, I: Intersector, const N: usize> PacketWalk<'b, I, N> {
     #[inline(always)]
     fn leaf<P: MemoryProbe>(
         &mut self,
-        mut leaf: LeafVisit<'_, '_, N>,
+        leaf: LeafVisit<'_, '_, N>,
         leaf_box: &[f32; 6],
         leaf_t: f32,
         hits: &mut PacketHits<N>,
         probe: &mut P,
     ) {
-        let (packet, mask, groups) = (leaf.packet, self.mask, self.groups);
+        let (packet, mask, groups) = (leaf.packet, self.mask, Self::GROUPS);
         let q = match self.lanes {
             Some(ref mut q) => q,
             None => Groups::fill(&mut self.lanes, packet, groups, mask),
@@ -237,17 +239,16 @@ impl<'b, I: Intersector, const N: usize> PacketWalk<'b, I, N> {
         if enter == 0 {
             return;
         }
-        leaf.enter = enter;
         self.preps.fours.prepare(packet, q, mask, enter);
         let shared = match &self.cull {
             Cull::Frustum(f) => f
                 .origin()
                 .map(Vec3::from)
-                .is_some_and(|o| test_leaf_shared::<I, P, N>(&leaf, o, &mut self.preps, hits, probe)),
+                .is_some_and(|o| test_leaf_shared::<I, P, N>(&leaf, enter, o, &mut self.preps, hits, probe)),
             Cull::Exact(_) => false,
         };
         if !shared {
-            test_leaf::<I, P, N>(&leaf, &mut self.preps, hits, probe);
+            test_leaf::<I, P, N>(&leaf, enter, &mut self.preps, hits, probe);
         }
         self.c.tri_tests += leaf.count as u64 * enter.count_ones() as u64;
         // The ends of the groups that entered, all four lanes from their hits (the other
