@@ -182,8 +182,8 @@ fn bench_structure(
     if a.algo.algo != Algorithm::Cast {
         bench_algorithm(a, &view, &cam, kind, name)?;
     }
-    if let (Some(cfg), Some(preset)) = (chip, &a.simulate) {
-        bench_simulator(a, &view, &cam, kind, (cfg, preset), (name, best_single))?;
+    if let Some(cfg) = chip {
+        bench_simulator(a, &view, &cam, kind, cfg, name, best_single)?;
     }
     Ok(())
 }
@@ -224,9 +224,11 @@ fn bench_simulator(
     view: &SceneView<'_>,
     cam: &CameraRecord,
     kind: IntersectorKind,
-    (cfg, preset): (&HwConfig, &String),
-    (name, best_single): (&str, f64),
+    cfg: &HwConfig,
+    name: &str,
+    best_single: f64,
 ) -> Result<()> {
+    let preset = a.simulate.as_deref().unwrap_or_default();
     // The simulator is deterministic; its wall time is the median of up to 3 runs.
     let mut walls = Vec::new();
     let mut last = None;
