@@ -52,7 +52,7 @@ pub(crate) fn cmd_plot(a: PlotArgs) -> Result<()> {
         Some("png") => true,
         _ => bail!("{}: the plot is written as .svg or .png", a.output.display()),
     };
-    output::check_dir(&a.output)?;
+    output::check_writable(&a.output)?;
     let mut filters = Vec::new();
     for f in &a.filters {
         let (k, v) = f.split_once('=').ok_or_else(|| anyhow!("--where {f:?}: expected KEY=VALUE"))?;

@@ -31,39 +31,49 @@ pub struct RaysArgs {
 }
 
 pub(crate) fn cmd_rays(a: RaysArgs) -> Result<()> {
+    // Both outputs can be written before either is: never one without the other.
+    crate::output::check_writable(&a.output)?;
+    if let Some(path) = &a.triangles {
+        crate::output::check_writable(path)?;
+    }
     let scene = scene::load(a.scene.as_deref(), &BuildOptions { accel: Accel::None, ..Default::default() })?;
     let view = scene.view()?;
     let cam = camera_for(&view, &a.camera)?;
     let eye = render::eye_rays(&cam, "camera")?;
-    let mut data = Vec::with_capacity(cam.width as usize * cam.height as usize * 8);
+    let outputs = crate::output::batch::Batch::begin();
+    let rows = cam.width as usize * cam.height as usize;
     let b = a.block;
-    for by in (0..cam.height).step_by(b as usize) {
-        for bx in (0..cam.width).step_by(b as usize) {
-            // The lane order of the host's packets (Z-order within the block).
-            for lane in 0..b * b {
-                let (i, j) = crate::render::packets::lane_pixel(lane, b);
-                let (x, y) = (bx + i, by + j);
-                if x < cam.width && y < cam.height {
-                    let r = eye.ray(x, y);
-                    data.extend_from_slice(&[
-                        r.origin.x, r.origin.y, r.origin.z, r.dir.x, r.dir.y, r.dir.z, r.t_min, r.t_max,
-                    ]);
+    // Streamed: a batch at the largest size (268 M rays, 8.6 GB) is never held in memory.
+    crate::input::npy::write_f32_rows(&a.output, rows, 8, |out| {
+        for by in (0..cam.height).step_by(b as usize) {
+            for bx in (0..cam.width).step_by(b as usize) {
+                // The lane order of the host's packets (Z-order within the block).
+                for lane in 0..b * b {
+                    let (i, j) = crate::render::packets::lane_pixel(lane, b);
+                    let (x, y) = (bx + i, by + j);
+                    if x < cam.width && y < cam.height {
+                        let r = eye.ray(x, y);
+                        let (o, d) = (r.origin, r.dir);
+                        out.push(&[o.x, o.y, o.z, d.x, d.y, d.z, r.t_min, r.t_max])?;
+                    }
                 }
             }
         }
-    }
-    let rows = data.len() / 8;
-    crate::input::npy::write_f32_2d(&a.output, &crate::input::npy::Array2 { rows, cols: 8, data })?;
+        Ok(())
+    })?;
     if let Some(path) = &a.triangles {
-        let mut data = Vec::with_capacity(view.triangle_count() as usize * 9);
-        for prim in 0..view.triangle_count() {
-            for v in view.triangle(prim, &mut raypipe_core::NoProbe) {
-                data.extend_from_slice(&v.to_array());
+        let count = view.triangle_count() as usize;
+        crate::input::npy::write_f32_rows(path, count, 9, |out| {
+            for prim in 0..view.triangle_count() {
+                let [p, q, r] = view.triangle(prim, &mut raypipe_core::NoProbe);
+                out.push(&[p.x, p.y, p.z, q.x, q.y, q.z, r.x, r.y, r.z])?;
             }
-        }
-        let tris = crate::input::npy::Array2 { rows: view.triangle_count() as usize, cols: 9, data };
-        crate::input::npy::write_f32_2d(path, &tris)?;
-        println!("wrote {} triangles -> {}", tris.rows, path.display());
+            Ok(())
+        })?;
+    }
+    outputs.commit()?;
+    if let Some(path) = &a.triangles {
+        println!("wrote {} triangles -> {}", view.triangle_count(), path.display());
     }
     println!("wrote {rows} primary rays ({}x{}) -> {}", cam.width, cam.height, a.output.display());
     Ok(())

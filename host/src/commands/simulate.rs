@@ -133,18 +133,20 @@ pub(crate) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
     check_image_path(&a.output)?;
     let display = a.display.display()?;
     // Every output's directory before anything is written: never one without the other.
-    output::check_dir(&a.output)?;
-    output::check_dir(&a.report)?;
+    output::check_writable(&a.output)?;
+    output::check_writable(&a.report)?;
     if a.measure.interval.is_some() {
-        output::check_dir(&a.measure.intervals)?;
+        output::check_writable(&a.measure.intervals)?;
     }
     for p in a.measure.vcd.iter().chain(&a.measure.trace).chain(&a.measure.cost_image) {
-        output::check_dir(p)?;
+        output::check_writable(p)?;
     }
     let walk = a.walk.camera_path.is_some() || a.walk.orbit.is_some();
     if walk {
-        output::check_dir(&a.measure.frames)?;
+        output::check_writable(&a.measure.frames)?;
     }
+    // All outputs or none: a failure on the last (a full disk) leaves none of the others.
+    let outputs = output::batch::Batch::begin();
     let run = run_simulation(&a, None, true)?;
     let measured: Vec<&FrameRun> = run.frames.iter().filter(|f| !f.warmup).collect();
     if walk {
@@ -185,6 +187,7 @@ pub(crate) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
         }
     }
     output::write_bytes(&a.report, run.report.to_json().as_bytes())?;
+    outputs.commit()?;
     let target = if walk {
         format!("{} frames, {}", run.frames.len(), output::frame_path(&a.output, 0).display())
     } else {

@@ -59,7 +59,7 @@ pub(crate) fn cmd_stats(a: StatsArgs) -> Result<()> {
         ..Default::default()
     };
     if let Some(prefix) = &a.cost_image {
-        crate::output::check_dir(prefix)?;
+        crate::output::check_writable(prefix)?;
     }
     let s = scene_stats::gather(&view, &cam, &opts)?;
     if let Some(prefix) = &a.cost_image {

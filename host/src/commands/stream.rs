@@ -85,8 +85,8 @@ pub struct StreamArgs {
 pub(crate) fn cmd_stream(a: StreamArgs) -> Result<()> {
     check_image_path(&a.output)?;
     let display = a.display.display()?;
-    output::check_dir(&a.output)?;
-    output::check_dir(&a.report)?;
+    output::check_writable(&a.output)?;
+    output::check_writable(&a.report)?;
     let (cfg, costs) = machine_of(&a)?;
     let algo = AlgoArgs { samples: Some(a.algo.samples.unwrap_or(1)), ..a.algo.clone() };
     let mut opts = RenderOptions::default();
@@ -136,8 +136,10 @@ pub(crate) fn cmd_stream(a: StreamArgs) -> Result<()> {
     } else {
         None
     };
+    let outputs = output::batch::Batch::begin();
     output::write_frame(&a.output, &frame, &display)?;
     output::write_bytes(&a.report, report.to_json().as_bytes())?;
+    outputs.commit()?;
     println!(
         "stream {} ({} triangles, {}), {}x{}, {} {}",
         scene.name,

@@ -92,7 +92,7 @@ pub(crate) fn cmd_sweep(a: SweepArgs) -> Result<()> {
         }
     }
     let (jsonl, _) = sweep_table::outputs(&a.output);
-    output::check_dir(&jsonl)?;
+    output::check_writable(&jsonl)?;
     if let Some(dir) = &a.reports {
         if !dir.is_dir() {
             bail!("--reports {}: no such directory", dir.display());

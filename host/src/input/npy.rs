@@ -64,11 +64,14 @@ pub fn parse_f32_2d(bytes: &[u8]) -> Result<Array2> {
     if body.len() < need {
         bail!("truncated array: shape {shape} needs {need} bytes of data, file has {}", body.len());
     }
-    let data = if width == 4 {
-        body[..need].chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect()
+    // Fallible: an array the machine cannot hold is an error, not an abort.
+    let mut data = Vec::new();
+    data.try_reserve_exact(rows * cols).map_err(|_| anyhow!("array of shape {shape} does not fit in memory"))?;
+    if width == 4 {
+        data.extend(body[..need].chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])));
     } else {
-        body[..need].chunks_exact(8).map(|c| f64::from_le_bytes(c.try_into().unwrap_or([0; 8])) as f32).collect()
-    };
+        data.extend(body[..need].chunks_exact(8).map(|c| f64::from_le_bytes(c.try_into().unwrap_or([0; 8])) as f32));
+    }
     Ok(Array2 { rows, cols, data })
 }
 
@@ -104,12 +107,45 @@ fn header_bytes(dict: &str) -> Vec<u8> {
 
 /// Writes a 2-D float32 array atomically.
 pub fn write_f32_2d(path: &Path, a: &Array2) -> Result<()> {
-    let header =
-        header_bytes(&format!("{{'descr': '<f4', 'fortran_order': False, 'shape': ({}, {}), }}", a.rows, a.cols));
+    write_f32_rows(path, a.rows, a.cols, |out| a.data.chunks(a.cols.max(1)).try_for_each(|row| out.push(row)))
+}
+
+/// The rows of an array being written by [`write_f32_rows`].
+pub struct RowWriter<'a> {
+    w: &'a mut dyn std::io::Write,
+    cols: usize,
+    rows: usize,
+}
+
+impl RowWriter<'_> {
+    /// Appends one row (exactly the array's column count of values).
+    pub fn push(&mut self, row: &[f32]) -> Result<()> {
+        if row.len() != self.cols {
+            bail!("internal error: a row of {} values in an array of {} columns", row.len(), self.cols);
+        }
+        for v in row {
+            self.w.write_all(&v.to_le_bytes()).map_err(|e| anyhow!("cannot write: {e}"))?;
+        }
+        self.rows += 1;
+        Ok(())
+    }
+}
+
+/// Writes a `rows × cols` float32 array atomically, its rows produced by `fill` as they
+/// are made (a batch of 268 M rays is never held in memory).
+pub fn write_f32_rows(
+    path: &Path,
+    rows: usize,
+    cols: usize,
+    fill: impl FnOnce(&mut RowWriter<'_>) -> Result<()>,
+) -> Result<()> {
+    let header = header_bytes(&format!("{{'descr': '<f4', 'fortran_order': False, 'shape': ({rows}, {cols}), }}"));
     write_atomic(path, |w| {
         w.write_all(&header)?;
-        for v in &a.data {
-            w.write_all(&v.to_le_bytes())?;
+        let mut out = RowWriter { w, cols, rows: 0 };
+        fill(&mut out)?;
+        if out.rows != rows {
+            bail!("internal error: {} rows written for a header of {rows}", out.rows);
         }
         Ok(())
     })

@@ -1,9 +1,11 @@
-//! Writing output files without ever leaving a half-written one: write a temporary file
-//! in the target directory, then rename it over the target.
+//! Writing output files without ever leaving a half-written one, nor replacing what is
+//! not a regular file ([`target`]), and all of a command's outputs or none ([`batch`]).
 
+pub mod batch;
 pub mod chart_numbers;
 pub mod chart_raster;
 pub mod progress;
+pub mod target;
 pub mod tone_map;
 pub mod trace_events;
 pub mod waveform;
@@ -13,43 +15,19 @@ use std::path::Path;
 
 use anyhow::{anyhow, Result};
 
-/// The directory `path` is written in (`.` for a bare file name).
-fn dir_of(path: &Path) -> &Path {
-    match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    }
-}
+pub use target::check_writable;
 
-/// Checks that `path`'s directory exists, so that a command writing several outputs can
-/// refuse before it writes any (`simulate --report <bad dir>` left the PNG
-/// behind).
-pub fn check_dir(path: &Path) -> Result<()> {
-    let dir = dir_of(path);
-    if !dir.is_dir() {
-        return Err(anyhow!("{}: directory {} does not exist", path.display(), dir.display()));
-    }
-    Ok(())
-}
-
-/// Writes `path` atomically by calling `fill` on a temporary file next to it.
+/// Writes `path` by calling `fill` on a temporary file beside it (or on the device it
+/// names), then naming it (see [`target`] and [`batch`]).
 pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut dyn Write) -> Result<()>) -> Result<()> {
     let name = path.display();
-    check_dir(path)?;
-    let dir = dir_of(path);
-    let mut tmp = tempfile::Builder::new()
-        .prefix(".raypipe-")
-        .tempfile_in(dir)
-        .map_err(|e| anyhow!("{name}: cannot create a file in {}: {e}", dir.display()))?;
+    let mut file = target::Pending::create(path)?;
     {
-        let mut w = std::io::BufWriter::new(tmp.as_file_mut());
+        let mut w = std::io::BufWriter::new(file.file());
         fill(&mut w).map_err(|e| anyhow!("{name}: {e}"))?;
         w.flush().map_err(|e| anyhow!("{name}: cannot write: {e}"))?;
     }
-    // A temporary file is created 0600; the output gets what any new file would.
-    set_default_permissions(tmp.as_file()).map_err(|e| anyhow!("{name}: cannot set permissions: {e}"))?;
-    tmp.persist(path).map_err(|e| anyhow!("{name}: cannot write: {}", e.error))?;
-    Ok(())
+    batch::finish(file)
 }
 
 /// Gives `file` the permissions a newly created file gets: 0666 less the umask.
@@ -178,34 +156,22 @@ pub fn frame_path(path: &Path, k: usize) -> std::path::PathBuf {
     path.with_file_name(name)
 }
 
-/// A file written as it goes, that appears under its name only when complete: a
-/// temporary file beside the target, renamed over it by [`Streamed::commit`].
-pub struct Streamed {
-    path: std::path::PathBuf,
-    tmp: tempfile::NamedTempFile,
-}
+/// A file written as it goes, that appears under its name only when complete.
+pub struct Streamed(target::Pending);
 
 impl Streamed {
     /// Starts `path`.
     pub fn create(path: &Path) -> Result<Streamed> {
-        check_dir(path)?;
-        let tmp = tempfile::Builder::new()
-            .prefix(".raypipe-")
-            .tempfile_in(dir_of(path))
-            .map_err(|e| anyhow!("{}: cannot create a file in {}: {e}", path.display(), dir_of(path).display()))?;
-        Ok(Streamed { path: path.to_path_buf(), tmp })
+        target::Pending::create(path).map(Streamed)
     }
 
     /// The file to write to.
     pub fn file(&mut self) -> &mut std::fs::File {
-        self.tmp.as_file_mut()
+        self.0.file()
     }
 
-    /// Gives the file its name.
+    /// Gives the file its name (when the open [`batch::Batch`] commits, if there is one).
     pub fn commit(self) -> Result<()> {
-        let name = self.path.display().to_string();
-        set_default_permissions(self.tmp.as_file()).map_err(|e| anyhow!("{name}: cannot set permissions: {e}"))?;
-        self.tmp.persist(&self.path).map_err(|e| anyhow!("{name}: cannot write: {}", e.error))?;
-        Ok(())
+        batch::finish(self.0)
     }
 }

@@ -1,0 +1,228 @@
+//! Where an output goes, and how it gets there without harm: a regular file (or a new
+//! one) is written to a temporary file beside it, flushed to disk and renamed over it;
+//! a character device or FIFO (`/dev/null`, `/dev/stdout`, a named pipe) is written
+//! through, never replaced; anything else is refused with one line.
+//!
+//! Durability: the temporary file is `fsync`ed before the rename and its folder after,
+//! so once a command says it wrote a file, the file survives a power loss (on a file
+//! system that honours `fsync`).
+//!
+//! Temporary files are named `.NAME.raypipe-PID-XXXXXX` beside their target `NAME`, so a
+//! killed run's leftovers are found next to what they were for; the next write of `NAME`
+//! removes those whose process is gone.
+
+use std::fs::File;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use anyhow::{anyhow, Result};
+
+/// What a path to be written is now.
+#[derive(Debug, PartialEq, Eq)]
+pub enum Target {
+    /// A regular file or nothing yet: write beside it and rename. Holds the path to
+    /// rename to (a symbolic link's target, so the link stays a link).
+    Replace(PathBuf),
+    /// A character device or a FIFO: open it and write through.
+    WriteThrough,
+}
+
+/// Classifies `path` for writing, or says in one line why it cannot be written.
+pub fn classify(path: &Path) -> Result<Target> {
+    let name = path.display();
+    match std::fs::metadata(path) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            // A dangling symbolic link is written through to where it points.
+            let resolved = match std::fs::read_link(path) {
+                Ok(to) => dir_of(path).join(to),
+                Err(_) => path.to_path_buf(),
+            };
+            check_parent(&resolved)?;
+            Ok(Target::Replace(resolved))
+        }
+        Err(e) => Err(anyhow!("{name}: cannot be written: {e}")),
+        Ok(m) if m.is_file() => {
+            let resolved = if path.is_symlink() {
+                std::fs::canonicalize(path).map_err(|e| anyhow!("{name}: cannot resolve the link: {e}"))?
+            } else {
+                path.to_path_buf()
+            };
+            Ok(Target::Replace(resolved))
+        }
+        Ok(m) if m.is_dir() => Err(anyhow!("{name}: is a directory, not a file")),
+        Ok(m) => special_kind(&m)
+            .map(|_| Target::WriteThrough)
+            .map_err(|kind| anyhow!("{name}: is a {kind}; outputs go to regular files, character devices or FIFOs")),
+    }
+}
+
+/// `Ok` for the kinds written through; otherwise the kind's name.
+#[cfg(unix)]
+fn special_kind(m: &std::fs::Metadata) -> Result<(), &'static str> {
+    use std::os::unix::fs::FileTypeExt;
+    let t = m.file_type();
+    if t.is_char_device() || t.is_fifo() {
+        Ok(())
+    } else if t.is_block_device() {
+        Err("block device")
+    } else if t.is_socket() {
+        Err("socket")
+    } else {
+        Err("special file")
+    }
+}
+
+#[cfg(not(unix))]
+fn special_kind(_: &std::fs::Metadata) -> Result<(), &'static str> {
+    Err("special file")
+}
+
+/// The directory `path` is written in (`.` for a bare file name).
+pub(crate) fn dir_of(path: &Path) -> &Path {
+    match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    }
+}
+
+/// Checks that `path` can be written — its directory exists, and it is not a directory,
+/// block device or socket — so that a command writing several outputs refuses before
+/// it writes any.
+pub fn check_writable(path: &Path) -> Result<()> {
+    classify(path).map(drop)
+}
+
+fn check_parent(path: &Path) -> Result<()> {
+    let dir = dir_of(path);
+    if !dir.is_dir() {
+        return Err(anyhow!("{}: directory {} does not exist", path.display(), dir.display()));
+    }
+    Ok(())
+}
+
+/// A file on its way to its name: a temporary file beside the target, or the opened
+/// device it writes through to.
+pub struct Pending {
+    path: PathBuf,
+    sink: Sink,
+}
+
+enum Sink {
+    Temporary { tmp: tempfile::NamedTempFile, to: PathBuf },
+    Device(File),
+}
+
+impl Pending {
+    /// Starts writing `path`.
+    pub fn create(path: &Path) -> Result<Pending> {
+        let name = path.display();
+        let sink = match classify(path)? {
+            Target::WriteThrough => {
+                let file = std::fs::OpenOptions::new()
+                    .write(true)
+                    .open(path)
+                    .map_err(|e| anyhow!("{name}: cannot open for writing: {e}"))?;
+                Sink::Device(file)
+            }
+            Target::Replace(to) => {
+                let dir = dir_of(&to);
+                let stem = temp_stem(&to);
+                remove_stale(dir, &stem);
+                let tmp = tempfile::Builder::new()
+                    .prefix(&format!("{stem}{}-", std::process::id()))
+                    .rand_bytes(6)
+                    .tempfile_in(dir)
+                    .map_err(|e| anyhow!("{name}: cannot create a file in {}: {e}", dir.display()))?;
+                Sink::Temporary { tmp, to }
+            }
+        };
+        Ok(Pending { path: path.to_path_buf(), sink })
+    }
+
+    /// The file to write to.
+    pub fn file(&mut self) -> &mut File {
+        match &mut self.sink {
+            Sink::Temporary { tmp, .. } => tmp.as_file_mut(),
+            Sink::Device(f) => f,
+        }
+    }
+
+    /// The path the output is for.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Makes the contents durable (the temporary file's data on disk) without naming it
+    /// yet: the slow, failing part of [`Pending::commit`], done first for every output
+    /// of a command before any is renamed.
+    pub fn sync(&mut self) -> Result<()> {
+        let name = self.path.display();
+        match &mut self.sink {
+            Sink::Temporary { tmp, .. } => {
+                let f = tmp.as_file_mut();
+                f.flush().map_err(|e| anyhow!("{name}: cannot write: {e}"))?;
+                // A temporary file is created 0600; the output gets what any new file would.
+                super::set_default_permissions(f).map_err(|e| anyhow!("{name}: cannot set permissions: {e}"))?;
+                f.sync_all().map_err(|e| anyhow!("{name}: cannot write: {e}"))
+            }
+            Sink::Device(f) => f.flush().map_err(|e| anyhow!("{name}: cannot write: {e}")),
+        }
+    }
+
+    /// Gives the file its name, durably (the folder is synced after the rename).
+    pub fn commit(mut self) -> Result<()> {
+        self.sync()?;
+        self.rename()
+    }
+
+    /// The rename alone, after [`Pending::sync`].
+    pub(crate) fn rename(self) -> Result<()> {
+        let name = self.path.display().to_string();
+        if let Sink::Temporary { tmp, to } = self.sink {
+            tmp.persist(&to).map_err(|e| anyhow!("{name}: cannot write: {}", e.error))?;
+            sync_dir(dir_of(&to));
+        }
+        Ok(())
+    }
+}
+
+/// `.NAME.raypipe-`: the start of every temporary file for `NAME`.
+fn temp_stem(to: &Path) -> String {
+    let file = to.file_name().map_or_else(|| "output".into(), |s| s.to_string_lossy().into_owned());
+    format!(".{file}.raypipe-")
+}
+
+/// Removes `dir`'s temporaries of `stem` whose writing process no longer runs (a run
+/// killed before its rename). Best effort: whatever cannot be read or removed stays.
+fn remove_stale(dir: &Path, stem: &str) {
+    let Ok(entries) = std::fs::read_dir(dir) else { return };
+    for e in entries.flatten() {
+        let file = e.file_name();
+        let Some(rest) = file.to_str().and_then(|f| f.strip_prefix(stem)) else { continue };
+        let Some(pid) = rest.split('-').next().and_then(|p| p.parse::<u32>().ok()) else { continue };
+        if !process_alive(pid) {
+            let _ = std::fs::remove_file(e.path());
+        }
+    }
+}
+
+#[cfg(unix)]
+fn process_alive(pid: u32) -> bool {
+    let Ok(pid) = libc::pid_t::try_from(pid) else { return true };
+    // SAFETY: kill with signal 0 only checks that the process exists.
+    let r = unsafe { libc::kill(pid, 0) };
+    r == 0 || std::io::Error::last_os_error().raw_os_error() != Some(libc::ESRCH)
+}
+
+#[cfg(not(unix))]
+fn process_alive(_: u32) -> bool {
+    true
+}
+
+/// Syncs a folder so that a rename in it survives a power loss. Best effort: some file
+/// systems refuse to sync a folder, and the data itself is already on disk.
+fn sync_dir(dir: &Path) {
+    if let Ok(d) = File::open(dir) {
+        let _ = d.sync_all();
+    }
+}
