@@ -212,7 +212,11 @@ pub fn load_source(path: Option<&Path>) -> Result<Source> {
         _ => starts_with_magic(path)?,
     };
     if is_image {
-        let image = AlignedBytes::read_file(path).map_err(|e| anyhow!("{name}: cannot read: {e}"))?;
+        let (file, len) = crate::input::read_file::open_regular(path)?;
+        if len > crate::input::read_file::DATA_LIMIT {
+            bail!("{name}: {len} bytes is more than any scene image holds");
+        }
+        let image = AlignedBytes::read_file(file, len).map_err(|e| anyhow!("{name}: cannot read: {e}"))?;
         SceneView::parse(&image).map_err(|e| anyhow!("{name}: {e}"))?;
         return Ok(Source::Image(Scene { name, image, report: None }));
     }
@@ -228,7 +232,7 @@ pub fn load_source(path: Option<&Path>) -> Result<Source> {
 fn starts_with_magic(path: &Path) -> Result<bool> {
     use std::io::Read;
     let name = path.display();
-    let mut f = std::fs::File::open(path).map_err(|e| anyhow!("{name}: cannot open: {e}"))?;
+    let (mut f, _) = crate::input::read_file::open_regular(path)?;
     let mut head = [0u8; 8];
     let got = f.read(&mut head).map_err(|e| anyhow!("{name}: cannot read: {e}"))?;
     Ok(got == head.len() && head == MAGIC)

@@ -46,7 +46,7 @@ pub(crate) fn cmd_report(a: ReportArgs) -> Result<()> {
 }
 
 fn read(path: &Path) -> Result<Value> {
-    let text = std::fs::read_to_string(path).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+    let text = crate::input::read_file::read_text(path, crate::input::read_file::TEXT_LIMIT)?;
     let v: Value = serde_json::from_str(&text).map_err(|e| anyhow!("{}: not a JSON report: {e}", path.display()))?;
     if !v.is_object() {
         return Err(anyhow!("{}: not a JSON report (not an object)", path.display()));

@@ -191,7 +191,7 @@ fn machine_of(a: &StreamArgs) -> Result<(StreamConfig, CostModel)> {
     cfg.validate().map_err(|e| anyhow!("stream configuration: {e}"))?;
     let costs = match &a.costs {
         Some(p) => {
-            let text = std::fs::read_to_string(p).map_err(|e| anyhow!("{}: {e}", p.display()))?;
+            let text = crate::input::read_file::read_text(p, crate::input::read_file::TEXT_LIMIT)?;
             CostModel::from_toml(&text, &p.display().to_string()).map_err(|e| anyhow!("{}: {e}", p.display()))?
         }
         None => CostModel::default(),

@@ -25,7 +25,7 @@ pub fn load_config(preset: Option<&str>, file: Option<&Path>, sets: &[String]) -
     let mut cfg = match (preset, file) {
         (Some(name), _) => HwConfig::preset(name).map_err(|e| anyhow!(e))?,
         (None, Some(path)) => {
-            let text = std::fs::read_to_string(path).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+            let text = crate::input::read_file::read_text(path, crate::input::read_file::TEXT_LIMIT)?;
             HwConfig::from_toml(&text).map_err(|e| anyhow!("{}: {e}", path.display()))?
         }
         (None, None) => HwConfig::default(),

@@ -13,7 +13,7 @@
 
 use std::path::Path;
 
-use anyhow::{anyhow, bail, Context, Result};
+use anyhow::{anyhow, bail, Result};
 use raypipe_core::image::CameraRecord;
 
 /// Camera settings, each optional, applied over a base camera.
@@ -79,8 +79,7 @@ impl CameraSpec {
 
     /// Reads and parses a camera file.
     pub fn load(path: &Path) -> Result<CameraSpec> {
-        let text =
-            std::fs::read_to_string(path).with_context(|| format!("{}: cannot read camera file", path.display()))?;
+        let text = crate::input::read_file::read_text(path, crate::input::read_file::TEXT_LIMIT)?;
         CameraSpec::parse(&path.display().to_string(), &text)
     }
 

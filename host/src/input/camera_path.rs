@@ -14,7 +14,7 @@
 
 use std::path::Path;
 
-use anyhow::{anyhow, bail, Context, Result};
+use anyhow::{anyhow, bail, Result};
 use raypipe_core::image::CameraRecord;
 
 use crate::input::camera_file::CameraSpec;
@@ -92,8 +92,7 @@ impl CameraPath {
 
     /// Reads and parses a camera path file.
     pub fn load(path: &Path) -> Result<CameraPath> {
-        let text =
-            std::fs::read_to_string(path).with_context(|| format!("{}: cannot read camera path", path.display()))?;
+        let text = crate::input::read_file::read_text(path, crate::input::read_file::TEXT_LIMIT)?;
         CameraPath::parse(&path.display().to_string(), &text)
     }
 

@@ -8,22 +8,47 @@ use std::path::Path;
 
 use anyhow::{anyhow, Result};
 use glam::{Mat3, Mat4, Vec3};
-use raypipe_core::image::{MaterialRecord, ShadingVertex, TextureRecord, NULL_INDEX};
+use raypipe_core::image::{MaterialRecord, ShadingVertex, NULL_INDEX};
 
 use crate::input::camera_file::CameraSpec;
 use crate::input::mesh::Mesh;
 use crate::input::obj::LoadNotes;
 use crate::input::texture::TextureImage;
+use crate::input::{gltf_checks, limits, read_file};
 
 /// Loads a glTF file into a [`Mesh`] and the camera it holds (if any).
 pub fn load_gltf_file(path: &Path) -> Result<(Mesh, LoadNotes, CameraSpec)> {
     let name = path.display().to_string();
-    let (doc, buffers, images) = gltf::import(path).map_err(|e| anyhow!("{name}: malformed glTF: {e}"))?;
+    let bytes = read_file::read_bytes(path, read_file::DATA_LIMIT)?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    crate::input::panic_guard::guarded(&name, "glTF", || load_gltf_bytes(&name, &bytes, base))
+}
+
+/// Loads the glTF (or GLB) `bytes` of the file `name`, its other files in `base`.
+pub fn load_gltf_bytes(name: &str, bytes: &[u8], base: &Path) -> Result<(Mesh, LoadNotes, CameraSpec)> {
+    let malformed = |e: String| anyhow!("{name}: malformed glTF: {e}");
+    let gltf::Gltf { document: doc, blob } = gltf::Gltf::from_slice(bytes).map_err(|e| malformed(e.to_string()))?;
+    let buffers = gltf_checks::read_buffers(&doc, base, blob, name)?;
+    let scene = doc
+        .default_scene()
+        .or_else(|| doc.scenes().next())
+        .ok_or_else(|| anyhow!("{name}: the glTF file has no scene"))?;
+    for m in doc.meshes() {
+        for prim in m.primitives().filter(|p| p.mode() == gltf::mesh::Mode::Triangles) {
+            gltf_checks::check_primitive(&prim, &buffers)
+                .map_err(|e| anyhow!("{name}: malformed glTF: mesh {}: {e}", m.index()))?;
+        }
+    }
+    // Counted before anything is read: each mesh once per node that places it.
+    let (triangles, vertices) = gltf_checks::check_nodes(&doc, &scene).map_err(malformed)?;
+    limits::check_triangles(name, triangles)?;
+    limits::check_vertices(name, vertices)?;
     let mut mesh = Mesh::default();
     let mut notes = LoadNotes::default();
-    let mut textures: Vec<Option<u32>> = vec![None; images.len()];
+    let mut textures: Vec<Option<u32>> = vec![None; doc.images().len()];
+    let images = Images { doc: &doc, buffers: &buffers, base };
     for m in doc.materials() {
-        let record = material_of(&m, &images, &mut textures, &mut mesh, &mut notes, &name);
+        let record = material_of(&m, &images, &mut textures, &mut mesh, &mut notes, name);
         mesh.materials.push(record);
         mesh.material_names.push(m.name().unwrap_or("material").to_string());
     }
@@ -32,19 +57,11 @@ pub fn load_gltf_file(path: &Path) -> Result<(Mesh, LoadNotes, CameraSpec)> {
     mesh.material_names.push("default".into());
 
     let mut camera = CameraSpec::default();
-    let scene = doc
-        .default_scene()
-        .or_else(|| doc.scenes().next())
-        .ok_or_else(|| anyhow!("{name}: the glTF file has no scene"))?;
+    // A set of trees (checked above): every node is reached once.
     let mut stack: Vec<(gltf::Node, Mat4)> = scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
     let mut skipped_modes = 0usize;
-    let mut visited = 0usize;
     let mut objects = 0u32;
     while let Some((node, parent)) = stack.pop() {
-        visited += 1;
-        if visited > doc.nodes().len() * 4 + 16 {
-            return Err(anyhow!("{name}: malformed glTF: the node hierarchy has a cycle"));
-        }
         let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
         if let (Some(cam), None) = (node.camera(), camera.eye) {
             camera_of(&cam, world, &mut camera);
@@ -68,8 +85,8 @@ pub fn load_gltf_file(path: &Path) -> Result<(Mesh, LoadNotes, CameraSpec)> {
     if skipped_modes > 0 {
         notes.warnings.push(format!("{name}: {skipped_modes} primitives of points, lines or strips left out"));
     }
-    mesh.validate(&name)?;
-    notes.warnings.extend(mesh.degenerate_warning(&name));
+    mesh.validate(name)?;
+    notes.warnings.extend(mesh.degenerate_warning(name));
     Ok((mesh, notes, camera))
 }
 
@@ -77,7 +94,7 @@ pub fn load_gltf_file(path: &Path) -> Result<(Mesh, LoadNotes, CameraSpec)> {
 /// (converted once per image: `textures` maps images to the mesh's textures).
 fn material_of(
     m: &gltf::Material<'_>,
-    images: &[gltf::image::Data],
+    images: &Images<'_>,
     textures: &mut [Option<u32>],
     mesh: &mut Mesh,
     notes: &mut LoadNotes,
@@ -97,13 +114,12 @@ fn material_of(
         let image = info.texture().source().index();
         if let Some(slot) = textures.get_mut(image) {
             if slot.is_none() {
-                match images.get(image).map(to_rgba) {
-                    Some(Ok(t)) => {
+                match images.read(image) {
+                    Ok(t) => {
                         mesh.textures.push(t);
                         *slot = Some(mesh.textures.len() as u32 - 1);
                     }
-                    Some(Err(e)) => notes.warnings.push(format!("{name}: image {image}: {e}; its base colour is used")),
-                    None => {}
+                    Err(e) => notes.warnings.push(format!("{name}: image {image}: {e}; its base colour is used")),
                 }
             }
             if let Some(t) = *slot {
@@ -182,27 +198,31 @@ fn add_primitive(
     Ok(())
 }
 
-/// A glTF image as 8-bit RGBA texels.
-fn to_rgba(d: &gltf::image::Data) -> Result<TextureImage, String> {
-    use gltf::image::Format;
-    let channels = match d.format {
-        Format::R8 => 1,
-        Format::R8G8 => 2,
-        Format::R8G8B8 => 3,
-        Format::R8G8B8A8 => 4,
-        other => return Err(format!("unsupported pixel format {other:?}")),
-    };
-    let mut rgba = Vec::with_capacity(d.pixels.len() / channels * 4);
-    for px in d.pixels.chunks_exact(channels) {
-        rgba.extend_from_slice(&match channels {
-            1 => [px[0], px[0], px[0], 255],
-            2 => [px[0], px[0], px[0], px[1]],
-            3 => [px[0], px[1], px[2], 255],
-            _ => [px[0], px[1], px[2], px[3]],
-        });
+/// Where a document's images are read from: its buffers, or files beside it.
+struct Images<'a> {
+    doc: &'a gltf::Document,
+    buffers: &'a [gltf::buffer::Data],
+    base: &'a Path,
+}
+
+impl Images<'_> {
+    /// Image `index` decoded as 8-bit RGBA texels (PNG or JPEG).
+    fn read(&self, index: usize) -> Result<TextureImage, String> {
+        let image = self.doc.images().nth(index).ok_or("no such image")?;
+        match image.source() {
+            gltf::image::Source::View { view, mime_type } => {
+                let data = self.buffers.get(view.buffer().index()).ok_or("its buffer view has no buffer")?;
+                let bytes = data
+                    .0
+                    .get(view.offset()..view.offset().saturating_add(view.length()))
+                    .ok_or("its buffer view lies outside its buffer")?;
+                crate::input::texture::decode(bytes, mime_type)
+            }
+            gltf::image::Source::Uri { uri, mime_type } => {
+                let bytes = gltf_checks::read_uri(uri, self.base).map_err(|e| e.to_string())?;
+                let ext = Path::new(uri).extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+                crate::input::texture::decode(&bytes, mime_type.unwrap_or(&ext))
+            }
+        }
     }
-    if d.width == 0 || d.height == 0 || rgba.len() != (d.width * d.height * 4) as usize {
-        return Err(format!("impossible size {}x{}", d.width, d.height));
-    }
-    Ok(TextureImage { width: d.width, height: d.height, rgba, wrap: TextureRecord::REPEAT })
 }

@@ -38,6 +38,8 @@ impl Mesh {
         if self.triangles.is_empty() {
             bail!("{name}: the mesh has no triangles");
         }
+        crate::input::limits::check_triangles(name, self.triangles.len() as u64)?;
+        crate::input::limits::check_vertices(name, self.positions.len() as u64)?;
         if let Some(i) = self.positions.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
             bail!("{name}: vertex {} has a NaN or infinite coordinate", i + 1);
         }

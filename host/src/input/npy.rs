@@ -22,7 +22,7 @@ pub struct Array2 {
 /// Reads a C-order, little-endian float32 array of two dimensions.
 pub fn read_f32_2d(path: &Path) -> Result<Array2> {
     let name = path.display();
-    let bytes = std::fs::read(path).map_err(|e| anyhow!("{name}: cannot read: {e}"))?;
+    let bytes = crate::input::read_file::read_bytes(path, crate::input::read_file::DATA_LIMIT)?;
     parse_f32_2d(&bytes).map_err(|e| anyhow!("{name}: {e}"))
 }
 

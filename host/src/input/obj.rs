@@ -28,6 +28,10 @@ fn load_options() -> tobj::LoadOptions {
 /// Loads an OBJ file (and the MTL files it names) into a [`Mesh`].
 pub fn load_obj_file(path: &Path) -> Result<(Mesh, LoadNotes)> {
     let name = path.display().to_string();
+    crate::input::panic_guard::guarded(&name, "OBJ", || load_obj_unguarded(path, name.clone()))
+}
+
+fn load_obj_unguarded(path: &Path, name: String) -> Result<(Mesh, LoadNotes)> {
     let meta = std::fs::metadata(path).map_err(|e| anyhow!("{name}: cannot read: {e}"))?;
     if meta.is_dir() {
         bail!("{name}: is a directory, not an OBJ file");
@@ -35,13 +39,15 @@ pub fn load_obj_file(path: &Path) -> Result<(Mesh, LoadNotes)> {
     if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("gz")) {
         return load_obj_gz(path, &name);
     }
-    let text = std::fs::read(path).map_err(|e| anyhow!("{name}: cannot read: {e}"))?;
+    let text = crate::input::read_file::read_bytes(path, crate::input::read_file::DATA_LIMIT)?;
     obj_indices::check_face_indices(&name, &text)?;
     let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
     let mut reader = std::io::BufReader::new(text.as_slice());
-    let result = tobj::load_obj_buf(&mut reader, &load_options(), |mtl| match std::fs::read(dir.join(mtl)) {
-        Ok(bytes) => load_mtl(&bytes),
-        Err(_) => Err(tobj::LoadError::OpenFileFailed),
+    let result = tobj::load_obj_buf(&mut reader, &load_options(), |mtl| {
+        match crate::input::read_file::read_bytes(&dir.join(mtl), crate::input::read_file::TEXT_LIMIT) {
+            Ok(bytes) => load_mtl(&bytes),
+            Err(_) => Err(tobj::LoadError::OpenFileFailed),
+        }
     });
     convert(&name, Some(path.parent().unwrap_or(Path::new("."))), result)
 }
@@ -63,10 +69,7 @@ fn load_mtl(bytes: &[u8]) -> tobj::MTLLoadResult {
 /// A gzip-compressed OBJ (`scene.obj.gz`); its MTL files are read from beside it,
 /// compressed or not.
 fn load_obj_gz(path: &Path, name: &str) -> Result<(Mesh, LoadNotes)> {
-    use std::io::Read;
-    let file = std::fs::File::open(path).map_err(|e| anyhow!("{name}: cannot read: {e}"))?;
-    let mut text = Vec::new();
-    flate2::read::GzDecoder::new(file).read_to_end(&mut text).map_err(|e| anyhow!("{name}: cannot decompress: {e}"))?;
+    let text = crate::input::read_file::read_gzip(path, crate::input::read_file::DATA_LIMIT)?;
     obj_indices::check_face_indices(name, &text)?;
     let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
     let mut reader = std::io::BufReader::new(text.as_slice());
@@ -74,12 +77,11 @@ fn load_obj_gz(path: &Path, name: &str) -> Result<(Mesh, LoadNotes)> {
         let plain = dir.join(mtl);
         let mut gz = plain.clone().into_os_string();
         gz.push(".gz");
-        if let Ok(bytes) = std::fs::read(&plain) {
+        if let Ok(bytes) = crate::input::read_file::read_bytes(&plain, crate::input::read_file::TEXT_LIMIT) {
             load_mtl(&bytes)
-        } else if let Ok(f) = std::fs::File::open(&gz) {
-            let mut bytes = Vec::new();
-            match flate2::read::GzDecoder::new(f).read_to_end(&mut bytes) {
-                Ok(_) => load_mtl(&bytes),
+        } else if std::path::Path::new(&gz).exists() {
+            match crate::input::read_file::read_gzip(Path::new(&gz), crate::input::read_file::TEXT_LIMIT) {
+                Ok(bytes) => load_mtl(&bytes),
                 Err(_) => Err(tobj::LoadError::ReadError),
             }
         } else {

@@ -2,7 +2,6 @@
 //! `ply-rs-bw` crate: vertex positions, optional normals, texture coordinates and
 //! colours, polygon faces (triangulated by [`crate::input::polygon`]), one default material.
 
-use std::io::Read;
 use std::path::Path;
 
 use anyhow::{anyhow, bail, Result};
@@ -47,16 +46,12 @@ fn indices(p: &Property) -> Option<Vec<u32>> {
 /// Loads a `.ply` or `.ply.gz` file into a [`Mesh`].
 pub fn load_ply_file(path: &Path) -> Result<(Mesh, LoadNotes)> {
     let name = path.display().to_string();
-    let file = std::fs::File::open(path).map_err(|e| anyhow!("{name}: cannot read: {e}"))?;
-    let mut bytes = Vec::new();
-    if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("gz")) {
-        flate2::read::GzDecoder::new(file)
-            .read_to_end(&mut bytes)
-            .map_err(|e| anyhow!("{name}: cannot decompress: {e}"))?;
+    let bytes = if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("gz")) {
+        crate::input::read_file::read_gzip(path, crate::input::read_file::DATA_LIMIT)?
     } else {
-        std::io::BufReader::new(file).read_to_end(&mut bytes).map_err(|e| anyhow!("{name}: cannot read: {e}"))?;
-    }
-    parse_ply(&name, &bytes)
+        crate::input::read_file::read_bytes(path, crate::input::read_file::DATA_LIMIT)?
+    };
+    crate::input::panic_guard::guarded(&name, "PLY", || parse_ply(&name, &bytes))
 }
 
 /// Parses the bytes of a PLY file; `name` is the input named in errors.

@@ -31,6 +31,7 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
+use crate::input::limits::MAX_TRIANGLES;
 use anyhow::{anyhow, bail, Result};
 use glam::{EulerRot, Mat3, Mat4, Quat, Vec3};
 use raypipe_core::image::{LightRecord, MaterialRecord, ShadingVertex, NULL_INDEX};
@@ -124,7 +125,7 @@ pub type MeshLoader<'a> = &'a dyn Fn(&Path) -> Result<Option<(Mesh, Vec<String>)
 /// Each listed file is read by `load_mesh`, whatever its format.
 pub fn load_scene_file(path: &Path, load_mesh: MeshLoader<'_>) -> Result<(Mesh, Vec<String>, CameraSpec)> {
     let name = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| anyhow!("{name}: cannot read: {e}"))?;
+    let text = crate::input::read_file::read_text(path, crate::input::read_file::TEXT_LIMIT)?;
     let file: SceneFile = toml::from_str(&text)
         .map_err(|e| anyhow!("{name}: {}", e.to_string().split_whitespace().collect::<Vec<_>>().join(" ")))?;
     if file.mesh.is_empty() {
@@ -134,18 +135,35 @@ pub fn load_scene_file(path: &Path, load_mesh: MeshLoader<'_>) -> Result<(Mesh, 
         bail!("{name}: {} meshes is more than {MAX_MESHES}", file.mesh.len());
     }
     let dir = path.parent().unwrap_or(Path::new("."));
-    let mut merged = Mesh::default();
     let mut warnings = Vec::new();
+    // Each file is read once, however often it is listed, and every copy is counted
+    // against the scene's limit before any is made (a small scene file can name a big
+    // mesh thousands of times).
+    let mut loaded: std::collections::HashMap<std::path::PathBuf, Mesh> = Default::default();
+    let mut total = 0u64;
     for (i, entry) in file.mesh.iter().enumerate() {
         let what = format!("{name}: mesh {} ({})", i + 1, entry.file);
         let child = dir.join(&entry.file);
         if is_scene_file(&child) {
             bail!("{what}: a scene file cannot include another");
         }
-        let Some((mesh, w)) = load_mesh(&child)? else {
-            bail!("{what}: is a scene image; a scene file lists meshes (OBJ, PLY, glTF)");
-        };
-        warnings.extend(w);
+        if !loaded.contains_key(&child) {
+            let Some((mesh, w)) = load_mesh(&child)? else {
+                bail!("{what}: is a scene image; a scene file lists meshes (OBJ, PLY, glTF)");
+            };
+            warnings.extend(w);
+            loaded.insert(child.clone(), mesh);
+        }
+        total += loaded[&child].triangles.len() as u64;
+        if total > MAX_TRIANGLES {
+            bail!(
+                "{what}: brings the scene to {total} triangles, more than {MAX_TRIANGLES}, the most one scene may hold"
+            );
+        }
+    }
+    let mut merged = Mesh::default();
+    for (i, entry) in file.mesh.iter().enumerate() {
+        let what = format!("{name}: mesh {} ({})", i + 1, entry.file);
         let transform = transform_of(entry).map_err(|e| anyhow!("{what}: {e}"))?;
         let material = match &entry.material {
             Some(m) => {
@@ -155,7 +173,7 @@ pub fn load_scene_file(path: &Path, load_mesh: MeshLoader<'_>) -> Result<(Mesh, 
             }
             None => None,
         };
-        append(&mut merged, mesh, transform, material);
+        append(&mut merged, loaded[&dir.join(&entry.file)].clone(), transform, material);
     }
     let lights: Vec<LightRecord> = file
         .light

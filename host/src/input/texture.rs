@@ -28,19 +28,29 @@ const MAX_SIDE: u32 = 16384;
 pub fn load(dir: &Path, spec: &str) -> Result<TextureImage, String> {
     let (file, wrap) = parse_spec(spec);
     let path = dir.join(&file);
-    let bytes = std::fs::read(&path).map_err(|e| format!("texture {}: {e}", path.display()))?;
+    let bytes = crate::input::read_file::read_bytes(&path, crate::input::read_file::DATA_LIMIT)
+        .map_err(|e| format!("texture {e}"))?;
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
-    let mut img = match ext.as_str() {
-        "png" => decode_png(&bytes),
-        "jpg" | "jpeg" => decode_jpeg(&bytes),
-        _ => Err("unsupported image format (PNG and JPEG are read)".to_string()),
-    }
-    .map_err(|e| format!("texture {}: {e}", path.display()))?;
-    if img.width == 0 || img.height == 0 || img.width > MAX_SIDE || img.height > MAX_SIDE {
-        return Err(format!("texture {}: impossible size {}x{}", path.display(), img.width, img.height));
-    }
+    let mut img = decode(&bytes, &ext).map_err(|e| format!("texture {}: {e}", path.display()))?;
     img.wrap = wrap;
     Ok(img)
+}
+
+/// Decodes a PNG or JPEG (`kind`: an extension or MIME type), refusing a size beyond
+/// [`MAX_SIDE`] from the header, before the texels are allocated.
+pub fn decode(bytes: &[u8], kind: &str) -> Result<TextureImage, String> {
+    match kind {
+        "png" | "image/png" => decode_png(bytes),
+        "jpg" | "jpeg" | "image/jpeg" => decode_jpeg(bytes),
+        _ => Err("unsupported image format (PNG and JPEG are read)".to_string()),
+    }
+}
+
+fn check_size(width: u32, height: u32) -> Result<(), String> {
+    if width == 0 || height == 0 || width > MAX_SIDE || height > MAX_SIDE {
+        return Err(format!("impossible size {width}x{height}"));
+    }
+    Ok(())
 }
 
 /// The file name of a `map_Kd` value and its wrap mode (`-clamp on`); other options are
@@ -70,6 +80,7 @@ fn decode_png(bytes: &[u8]) -> Result<TextureImage, String> {
     let mut dec = png::Decoder::new(std::io::Cursor::new(bytes));
     dec.set_transformations(png::Transformations::EXPAND | png::Transformations::STRIP_16);
     let mut reader = dec.read_info().map_err(|e| e.to_string())?;
+    check_size(reader.info().width, reader.info().height)?;
     let size = reader.output_buffer_size().ok_or("image too large")?;
     let mut buf = vec![0; size];
     let info = reader.next_frame(&mut buf).map_err(|e| e.to_string())?;
@@ -80,6 +91,9 @@ fn decode_png(bytes: &[u8]) -> Result<TextureImage, String> {
 
 fn decode_jpeg(bytes: &[u8]) -> Result<TextureImage, String> {
     let mut dec = jpeg_decoder::Decoder::new(bytes);
+    dec.read_info().map_err(|e| e.to_string())?;
+    let info = dec.info().ok_or("no image information")?;
+    check_size(info.width as u32, info.height as u32)?;
     let pixels = dec.decode().map_err(|e| e.to_string())?;
     let info = dec.info().ok_or("no image information")?;
     let channels = match info.pixel_format {

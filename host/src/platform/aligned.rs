@@ -22,11 +22,11 @@ impl AlignedBytes {
         AlignedBytes { lines, len: bytes.len() }
     }
 
-    /// Reads a whole file into an aligned buffer.
-    pub fn read_file(path: &std::path::Path) -> std::io::Result<AlignedBytes> {
+    /// Reads the first `len` bytes of `f` (a whole file, opened by the caller) into an
+    /// aligned buffer.
+    pub fn read_file(mut f: std::fs::File, len: u64) -> std::io::Result<AlignedBytes> {
         use std::io::Read;
-        let mut f = std::fs::File::open(path)?;
-        let len = f.metadata()?.len() as usize;
+        let len = usize::try_from(len).map_err(|_| std::io::Error::other("too large for this machine"))?;
         let mut lines = crate::platform::huge_pages::filled_vec(len.div_ceil(64), Line([0; 64]));
         let buf = &mut bytemuck::cast_slice_mut::<Line, u8>(&mut lines)[..len];
         f.read_exact(buf)?;

@@ -155,7 +155,7 @@ fn simulate_flags() -> &'static [String] {
 impl Spec {
     /// Reads and expands the spec at `path`.
     pub fn load(path: &Path) -> Result<Spec> {
-        let text = std::fs::read_to_string(path).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+        let text = crate::input::read_file::read_text(path, crate::input::read_file::TEXT_LIMIT)?;
         let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         let dir = if dir.as_os_str().is_empty() { PathBuf::from(".") } else { dir };
         Spec::parse(&text, dir).map_err(|e| anyhow!("{}: {e:#}", path.display()))

@@ -77,7 +77,7 @@ fn toml_to_json(v: &toml::Value) -> Value {
 /// Reads the rows of a JSON-lines file. A line that does not parse is skipped when it is
 /// the last one (a run stopped while writing it) and an error otherwise.
 pub fn read_rows(path: &Path) -> Result<Vec<Row>> {
-    let text = std::fs::read_to_string(path).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+    let text = crate::input::read_file::read_text(path, crate::input::read_file::TEXT_LIMIT)?;
     let lines: Vec<&str> = text.lines().filter(|l| !l.trim().is_empty()).collect();
     let mut rows = Vec::new();
     for (n, line) in lines.iter().enumerate() {

@@ -7,6 +7,7 @@ mod build;
 mod common;
 mod fixed_point;
 mod info;
+mod inputs;
 mod outputs;
 mod render;
 mod report;

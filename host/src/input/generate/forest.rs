@@ -22,6 +22,7 @@ const GROUND: u32 = 0;
 const BARK: u32 = 1;
 const LEAF: u32 = 2;
 const CELLS: u32 = 64;
+const TRUNK_SIDES: u32 = 8;
 
 impl Forest {
     /// Side of the square patch of ground: about 36 m² per tree.
@@ -33,6 +34,12 @@ impl Forest {
     fn ground(&self, x: f32, z: f32) -> f32 {
         let s = self.side();
         1.5 * ((x / s * 6.0).sin() + (z / s * 5.0 + 1.0).cos()) + 0.8 * ((x + z) / s * 13.0).sin()
+    }
+
+    /// How many triangles [`Forest::mesh`] makes: the ground's 64 × 64 quads, and per
+    /// tree an 8-sided trunk and its leaves.
+    pub fn triangle_count(&self) -> u64 {
+        (2 * CELLS * CELLS) as u64 + self.trees as u64 * (2 * TRUNK_SIDES as u64 + self.leaves as u64)
     }
 
     /// The triangles.
@@ -53,7 +60,7 @@ impl Forest {
             let (x, z) = (rng.range(1.0, s - 1.0), rng.range(1.0, s - 1.0));
             let base = Vec3::new(x, self.ground(x, z) - 0.2, z);
             let height = rng.range(3.0, 6.0);
-            b.cylinder(base, rng.range(0.12, 0.25), height + 0.2, 8, BARK);
+            b.cylinder(base, rng.range(0.12, 0.25), height + 0.2, TRUNK_SIDES, BARK);
             let crown = base + Vec3::new(0.0, height + 1.0, 0.0);
             let (rx, ry) = (rng.range(1.2, 2.0), rng.range(1.5, 2.5));
             for _ in 0..self.leaves {

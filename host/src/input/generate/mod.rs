@@ -10,6 +10,7 @@ pub mod shapes;
 use anyhow::{bail, Result};
 
 use crate::input::camera_file::CameraSpec;
+use crate::input::limits;
 use crate::input::mesh::Mesh;
 
 /// A generated scene: its mesh and the camera of the chosen view.
@@ -74,6 +75,7 @@ pub fn generate(spec: &str, view: Option<&str>) -> Result<Generated> {
                 seed: p.get("seed", 1, 0, u32::MAX)?,
             };
             p.finish(&["floors", "rooms", "seed"])?;
+            limits::check_triangles(&format!("--generate {spec}"), b.triangle_bound())?;
             (b.mesh(), b.views())
         }
         "forest" => {
@@ -83,6 +85,8 @@ pub fn generate(spec: &str, view: Option<&str>) -> Result<Generated> {
                 seed: p.get("seed", 1, 0, u32::MAX)?,
             };
             p.finish(&["trees", "leaves", "seed"])?;
+            // Counted before a single leaf is made: 10⁵ trees of 10⁴ leaves is 10⁹.
+            limits::check_triangles(&format!("--generate {spec}"), f.triangle_count())?;
             (f.mesh(), f.views())
         }
         _ => bail!("--generate {spec}: unknown scene '{name}' (building, forest)"),
@@ -95,9 +99,29 @@ pub fn generate(spec: &str, view: Option<&str>) -> Result<Generated> {
             None => bail!("--view {v}: {name} has the views {}", names.join(", ")),
         },
     };
-    let limit = 20_000_000;
-    if mesh.triangles.len() > limit {
-        bail!("--generate {spec}: {} triangles is more than {limit}", mesh.triangles.len());
-    }
+    limits::check_triangles(&format!("--generate {spec}"), mesh.triangles.len() as u64)?;
     Ok(Generated { name: spec.to_string(), mesh, camera })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn triangle_counts_are_known_before_generating() {
+        for (trees, leaves) in [(1, 0), (3, 10), (40, 7)] {
+            let f = forest::Forest { trees, leaves, seed: 3 };
+            assert_eq!(f.triangle_count(), f.mesh().triangles.len() as u64);
+        }
+        for (floors, rooms, seed) in [(1, 1, 0), (2, 3, 9), (3, 2, 77)] {
+            let b = building::Building { floors, rooms, seed };
+            let made = b.mesh().triangles.len() as u64;
+            assert!(made <= b.triangle_bound() && made * 10 > b.triangle_bound() * 7, "{made} {}", b.triangle_bound());
+        }
+        // Both within their parameter ranges, together 10⁹ triangles: refused at once.
+        let e = generate("forest:trees=100000,leaves=10000", None).err().unwrap().to_string();
+        assert!(e.contains("1001608192 triangles is more than 33554432"), "{e}");
+        let e = generate("building:floors=64,rooms=64", None).err().unwrap().to_string();
+        assert!(e.contains("is more than 33554432"), "{e}");
+    }
 }
