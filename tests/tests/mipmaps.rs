@@ -146,6 +146,16 @@ fn the_image_holds_the_whole_chain_and_rejects_impossible_levels() {
     // The chain moved one texel on: its last texel would lie past TEXELS.
     let err = corrupt_image(&scene.image, |b| put_u32(b, e.offset as usize + 8, 1));
     assert_eq!(err, SceneError::BadTexture { texture: 0 });
+    // A texture of (2³² − 1)² texels with its full chain of 32 levels: the chain's
+    // length overflows u64 (a panic under overflow checks, as in this test build, or a
+    // small wrapped count that passed in release); it saturates and is refused.
+    assert_eq!(TextureRecord::chain_texels(u32::MAX, u32::MAX, 32), u64::MAX);
+    let err = corrupt_image(&scene.image, |b| {
+        put_u32(b, e.offset as usize, u32::MAX);
+        put_u32(b, e.offset as usize + 4, u32::MAX);
+        put_u32(b, e.offset as usize + 16, 32);
+    });
+    assert_eq!(err, SceneError::BadTexture { texture: 0 });
 }
 
 /// The chip and the stream machine filter with the same cones and read the same levels:

@@ -544,9 +544,13 @@ impl TextureRecord {
         (if w == 0 { 1 } else { w }, if h == 0 { 1 } else { h })
     }
 
-    /// Texels in levels `0..levels` together (u64: no overflow for any record).
+    /// Texels in levels `0..levels` together, saturating at `u64::MAX`: one level of a
+    /// hostile record holds nearly 2⁶⁴ texels, and 32 of them overflow any sum, so a
+    /// record that saturates is one no image can hold.
     pub fn chain_texels(width: u32, height: u32, levels: u32) -> u64 {
-        (0..levels.min(32)).map(|k| TextureRecord::level_size(width, height, k)).map(|(w, h)| w as u64 * h as u64).sum()
+        (0..levels.min(32))
+            .map(|k| TextureRecord::level_size(width, height, k))
+            .fold(0u64, |sum, (w, h)| sum.saturating_add(w as u64 * h as u64))
     }
 
     /// Level `k` (clamped to the last) as a one-level texture of its own.

@@ -44,7 +44,7 @@ pub(in crate::image) fn shading<'a>(s: &Sections<'a>, nv: u32, nt: u32) -> Resul
     let texels: &[u32] = s.slice(K::Texels)?;
     for (i, t) in textures.iter().enumerate() {
         let levels_ok = t.levels >= 1 && t.levels <= TextureRecord::full_chain(t.width, t.height);
-        let end = t.first as u64 + TextureRecord::chain_texels(t.width, t.height, t.levels);
+        let end = (t.first as u64).saturating_add(TextureRecord::chain_texels(t.width, t.height, t.levels));
         if t.width == 0 || t.height == 0 || !levels_ok || end > texels.len() as u64 || t.wrap > TextureRecord::CLAMP {
             return Err(SceneError::BadTexture { texture: i as u32 });
         }
