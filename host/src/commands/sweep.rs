@@ -12,6 +12,7 @@ use anyhow::{anyhow, bail, Result};
 use rayon::prelude::*;
 
 use crate::study::sweep::{Point, Spec};
+use crate::study::sweep_journal::Journal;
 use crate::study::sweep_table::{self, Row};
 use crate::{hw::chip, output, output::progress};
 
@@ -98,43 +99,26 @@ pub(crate) fn cmd_sweep(a: SweepArgs) -> Result<()> {
             bail!("--reports {}: no such directory", dir.display());
         }
     }
-    // Resume: rows already written for points of this spec are kept, not run again.
-    let mut done: Vec<Row> = Vec::new();
-    if jsonl.exists() && !a.restart {
-        let ours: HashSet<(usize, String)> = points.iter().map(|p| (p.index, p.id())).collect();
-        let (keep, other): (Vec<Row>, Vec<Row>) =
-            sweep_table::read_rows(&jsonl)?.into_iter().partition(|r| ours.contains(&(r.index, r.point.clone())));
-        if !other.is_empty() {
-            eprintln!(
-                "note: {}: {} rows are not points of this spec{} and are dropped",
-                jsonl.display(),
-                other.len(),
-                if a.shard.is_some() { " and shard" } else { "" }
-            );
-        }
-        done = sweep_table::normalize(keep);
-    }
-    let finished: HashSet<usize> = done.iter().map(|r| r.index).collect();
+    // Resume: rows already written for this run's points are kept, not run again; rows
+    // of other shards are kept as they are.
+    let journal = Journal::open(&jsonl, &spec.points, &points, a.restart)?;
+    let finished: HashSet<usize> = journal.done.iter().map(|r| r.index).collect();
     let todo: Vec<&Point> = points.iter().copied().filter(|p| !finished.contains(&p.index)).collect();
     println!(
-        "sweep {}: {} points{}, {} already done, {} to run",
+        "sweep {}: {} points{}, {} already done, {} to run{}",
         spec_path.display(),
         points.len(),
         a.shard.map_or(String::new(), |s| format!(" (shard {}/{} of {})", s.index, s.count, spec.points.len())),
-        done.len(),
-        todo.len()
+        journal.done.len(),
+        todo.len(),
+        match journal.others.len() {
+            0 => String::new(),
+            n => format!(" ({n} rows of other shards kept)"),
+        }
     );
     // The journal: the rows written so far, one line appended as each point finishes,
     // so a stopped sweep resumes where it was.
-    output::write_atomic(&jsonl, |w| {
-        for r in &done {
-            writeln!(w, "{}", r.to_line())?;
-        }
-        Ok(())
-    })?;
-    let journal = Mutex::new(
-        std::fs::OpenOptions::new().append(true).open(&jsonl).map_err(|e| anyhow!("{}: {e}", jsonl.display()))?,
-    );
+    let appender = Mutex::new(journal.start()?);
     let cache = SceneCache::default();
     let bar = progress::bar(todo.len() as u64, "sweep", true);
     let jobs = a.jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
@@ -143,7 +127,7 @@ pub(crate) fn cmd_sweep(a: SweepArgs) -> Result<()> {
         todo.par_iter()
             .map(|p| -> Result<Row> {
                 let row = run_point(p, &spec.dir, &cache, a.reports.as_deref())?;
-                let mut f = journal.lock().map_err(|_| anyhow!("sweep journal poisoned"))?;
+                let mut f = appender.lock().map_err(|_| anyhow!("sweep journal poisoned"))?;
                 f.write_all(format!("{}\n", row.to_line()).as_bytes())
                     .map_err(|e| anyhow!("{}: {e}", jsonl.display()))?;
                 bar.inc(1);
@@ -157,8 +141,7 @@ pub(crate) fn cmd_sweep(a: SweepArgs) -> Result<()> {
         eprintln!("warning: sweep point {} ({}): {}", r.index, r.point, r.error.as_deref().unwrap_or(""));
         failed += 1;
     }
-    let rows = sweep_table::normalize(done.into_iter().chain(new_rows).collect());
-    sweep_table::write(&a.output, &rows)?;
+    let rows = journal.finish(&a.output, new_rows)?;
     let (jsonl, csv) = sweep_table::outputs(&a.output);
     println!("{} rows ({} failed) -> {} and {}", rows.len(), failed, jsonl.display(), csv.display());
     Ok(())

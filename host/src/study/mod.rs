@@ -6,5 +6,6 @@ pub mod fixed_point;
 pub mod report_diff;
 pub mod scene_stats;
 pub mod sweep;
+pub mod sweep_journal;
 pub mod sweep_plot;
 pub mod sweep_table;

@@ -185,3 +185,40 @@ fn plots_of_a_small_sweep_decode() {
     assert_one_line_error(&o, "differ in packet_size");
     assert!(!d.join("x.svg").exists());
 }
+
+#[test]
+fn shards_on_one_prefix_keep_each_others_rows_and_runs_do_not_overlap() {
+    use std::os::unix::io::AsRawFd;
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    sweep_spec(d);
+    let o = raypipe(d, &["sweep", "spec.toml", "-o", "all"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // Shard 0 then shard 1 on the same prefix: the second keeps the first's rows, and
+    // the prefix ends up with the whole table.
+    let mut stdout = String::new();
+    for shard in ["0/2", "1/2"] {
+        let o = raypipe(d, &["sweep", "spec.toml", "--shard", shard, "-o", "shared"]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        stdout = String::from_utf8_lossy(&o.stdout).into_owned();
+    }
+    assert!(stdout.contains("(4 rows of other shards kept)"), "{stdout}");
+    for ext in ["csv", "jsonl"] {
+        let (a, b) = (d.join(format!("all.{ext}")), d.join(format!("shared.{ext}")));
+        assert_eq!(std::fs::read(a).unwrap(), std::fs::read(b).unwrap(), "{ext}");
+    }
+    // Another spec's rows are not dropped quietly: refused, or replaced on --restart.
+    write(d, "other.toml", &std::fs::read_to_string(d.join("spec.toml")).unwrap().replace("[1, 2]", "[1, 3]"));
+    let o = raypipe(d, &["sweep", "other.toml", "-o", "shared"]);
+    assert_one_line_error(&o, "rows are not points of this spec");
+    assert_eq!(std::fs::read(d.join("all.jsonl")).unwrap(), std::fs::read(d.join("shared.jsonl")).unwrap());
+    // While a run holds the journal, a second one is refused at once.
+    let lock = std::fs::File::open(d.join("shared.jsonl.lock")).unwrap();
+    // SAFETY: flock on an open descriptor.
+    assert_eq!(unsafe { libc::flock(lock.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) }, 0);
+    let o = raypipe(d, &["sweep", "spec.toml", "-o", "shared"]);
+    assert_one_line_error(&o, "another sweep");
+    drop(lock);
+    let o = raypipe(d, &["sweep", "other.toml", "-o", "shared", "--restart"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
