@@ -83,8 +83,25 @@ fn config() -> impl Strategy<Value = HwConfig> {
             }
             c.memory.dram.t_refi = 400;
             c.memory.dram.t_rfc = 30;
+            ordered_hierarchy(&mut c);
             c
         })
+}
+
+/// Makes each cache no slower than what is behind it, as `validate` demands: the L1s
+/// no slower than the L2, and every cache no slower than the memory's fastest answer.
+fn ordered_hierarchy(c: &mut HwConfig) {
+    let d = &c.memory.dram;
+    let fastest = match c.memory.model {
+        MemoryModel::Perfect => u32::MAX,
+        MemoryModel::Fixed => c.memory.latency + 1,
+        MemoryModel::Dram => (d.controller_latency as f64 + d.t_cl as f64 * c.clock_mhz / d.clock_mhz) as u32,
+    };
+    for cache in [&mut c.cache.nodes, &mut c.cache.triangles, &mut c.cache.lists, &mut c.cache.shading] {
+        cache.hit_latency = cache.hit_latency.min(fastest);
+    }
+    let l1 = [&c.cache.nodes, &c.cache.triangles, &c.cache.lists, &c.cache.shading].map(|x| x.hit_latency);
+    c.cache.l2.hit_latency = c.cache.l2.hit_latency.min(fastest).max(l1.into_iter().max().unwrap_or(0));
 }
 
 fn base_config() -> impl Strategy<Value = HwConfig> {
@@ -353,13 +370,46 @@ fn impossible_configurations_are_rejected_before_the_run() {
         ("traversal.threads=0", "traversal.threads"),
         ("packet_size=32", "packet_size"),
         ("memory.bytes_per_cycle=0", "memory.bytes_per_cycle"),
+        // A cache slower than the memory behind it (fixed: 100 cycles and a transfer).
+        ("cache.nodes.hit_latency=102", "slower than the memory behind it"),
+        // An L1 slower than the L2 behind it (the L2 switched on below).
+        ("cache.triangles.hit_latency=11", "slower than the one behind it"),
     ] {
         let mut cfg = HwConfig::default();
+        cfg.cache.l2.size_bytes = if key.starts_with("cache.triangles") { 4096 } else { 0 };
         cfg.set(key).unwrap();
         let eye = EyeRays::new(&Camera::from(&cam)).unwrap();
         let err = Simulator::<Watertight>::new(view, eye, Vec3::ZERO, &cfg).err().expect(key);
         assert!(err.contains(what), "{key}: {err}");
     }
+}
+
+/// Perfect memory has no queue to fill: a queue of one request, which stalls the fixed
+/// memory's units, costs it nothing, and a miss is never cheaper than a hit.
+#[test]
+fn perfect_memory_takes_every_request_at_once() {
+    let scene = build_soup(
+        vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.5]],
+        vec![[0, 1, 2], [1, 3, 2]],
+        Accel::Bvh4,
+        1,
+    );
+    let view = scene.view().unwrap();
+    let cam = camera(&view, (24, 24), [0.0; 3]);
+    let queue_stalls = |model: MemoryModel| {
+        let mut cfg = HwConfig::default();
+        cfg.memory.model = model;
+        cfg.memory.queue_depth = 1;
+        cfg.cache.nodes.size_bytes = 0;
+        let sim = run(&view, &cam, &cfg, Clocking::default());
+        let r = sim.report();
+        (r.units.iter().map(|u| u.stall_reasons.get("memory_queue_full").copied().unwrap_or(0)).sum::<u64>(), r.cycles)
+    };
+    let (perfect_stalls, perfect_cycles) = queue_stalls(MemoryModel::Perfect);
+    let (fixed_stalls, fixed_cycles) = queue_stalls(MemoryModel::Fixed);
+    assert_eq!(perfect_stalls, 0);
+    assert!(fixed_stalls > 0, "the comparison needs a queue that fills under fixed memory");
+    assert!(perfect_cycles < fixed_cycles);
 }
 
 /// Whitted ray tracing and path tracing on the chip: the shading unit emits shadow and

@@ -75,7 +75,7 @@ impl<I: Intersector> IntersectionUnit<I> {
 
     /// An idle unit.
     pub fn new(id: usize, cfg: &HwConfig) -> IntersectionUnit<I> {
-        let q = cfg.memory.queue_depth;
+        let q = cfg.memory.port_staging();
         IntersectionUnit {
             id,
             packet_size: cfg.packet_size as u64,

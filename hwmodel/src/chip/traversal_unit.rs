@@ -175,7 +175,7 @@ impl<D: NodeTests> TraversalUnit<D> {
             next_issue: 0,
             queued: VecDeque::new(),
             busy_until: 0,
-            port: MemPort::new(format!("traversal{id}"), &cfg.cache.nodes, cfg.memory.queue_depth),
+            port: MemPort::new(format!("traversal{id}"), &cfg.cache.nodes, cfg.memory.port_staging()),
             stats: UnitStats::default(),
             tstats: TraversalStats::default(),
             last_states: [0; STATES],

@@ -153,8 +153,9 @@ pub struct CachesConfig {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum MemoryModel {
-    /// Every read arrives the next cycle, without a bandwidth limit and without passing
-    /// the L2: the compute bound.
+    /// Every request is taken at the next edge and its data arrives the cycle after:
+    /// no queue, no bandwidth limit, no L2 (the units' caches still take their hit
+    /// latency): the compute bound.
     Perfect,
     /// One channel: `bytes_per_cycle`, then `latency` cycles.
     Fixed,
@@ -179,6 +180,18 @@ pub struct MemoryConfig {
     pub min_burst_bytes: u32,
     /// The DRAM model's parameters.
     pub dram: DramConfig,
+}
+
+impl MemoryConfig {
+    /// Requests a unit's port may hold for the memory to take: `queue_depth`, except
+    /// for perfect memory, which takes every request at the next edge and so has no
+    /// queue to be full.
+    pub fn port_staging(&self) -> u32 {
+        match self.model {
+            MemoryModel::Perfect => u32::MAX,
+            _ => self.queue_depth,
+        }
+    }
 }
 
 /// DRAM parameters (timings in DRAM clock cycles, as a datasheet gives them).

@@ -20,6 +20,7 @@ impl HwConfig {
         for (name, c) in self.caches() {
             c.validate(name)?;
         }
+        self.validate_hierarchy()?;
         if self.memory.model == MemoryModel::Dram {
             self.memory.dram.validate()?;
         }
@@ -102,6 +103,42 @@ impl FifoConfig {
             }
             if depth as usize > MAX_FIFO_DEPTH {
                 return Err(format!("{name}: depth {depth} exceeds the {MAX_FIFO_DEPTH} entries a FIFO can hold"));
+            }
+        }
+        Ok(())
+    }
+}
+
+impl HwConfig {
+    /// Each level no slower than the one behind it: a cache whose hit takes longer than
+    /// the L2 behind it, or than the memory's fastest answer (fixed: its latency and one
+    /// transfer cycle; DRAM: the controller and the CAS latency, in chip cycles), is no
+    /// cache anyone would build, and would make a miss cheaper than a hit.
+    fn validate_hierarchy(&self) -> Result<(), String> {
+        let m = &self.memory;
+        let memory = match m.model {
+            MemoryModel::Perfect => None,
+            MemoryModel::Fixed => Some(m.latency as f64 + 1.0),
+            MemoryModel::Dram => {
+                let d = &m.dram;
+                Some(d.controller_latency as f64 + d.t_cl as f64 * self.clock_mhz / d.clock_mhz)
+            }
+        };
+        let l2 = &self.cache.l2;
+        for (name, c) in self.caches().into_iter().filter(|(_, c)| c.size_bytes > 0) {
+            let h = c.hit_latency as f64;
+            if name != "cache.l2" && l2.size_bytes > 0 && c.hit_latency > l2.hit_latency {
+                return Err(format!(
+                    "{name}.hit_latency {} is longer than the L2's ({}): a cache slower than the one behind it",
+                    c.hit_latency, l2.hit_latency
+                ));
+            }
+            if let Some(fastest) = memory.filter(|&f| h > f) {
+                return Err(format!(
+                    "{name}.hit_latency {} is longer than the memory's fastest answer ({fastest:.1} cycles): \
+                     a cache slower than the memory behind it",
+                    c.hit_latency
+                ));
             }
         }
         Ok(())

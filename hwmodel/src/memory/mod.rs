@@ -1,8 +1,9 @@
 //! The memory behind every unit's caches: an optional shared L2, then one of three
 //! models (`memory.model`):
 //!
-//! * **perfect** — every request's data arrives the next cycle, without a bandwidth
-//!   limit and without the L2 (the compute bound);
+//! * **perfect** — every request is taken at the next edge, whatever the queue depth,
+//!   and its data arrives the cycle after, without a bandwidth limit and without the L2
+//!   (the compute bound);
 //! * **fixed** — one channel moving `bytes_per_cycle`, a request a whole number of
 //!   `min_burst_bytes`, its data `latency` cycles after its transfer;
 //! * **dram** — [`crate::memory::dram`]'s channels, banks and rows.
@@ -26,6 +27,13 @@ use crate::memory::cache::{Cache, Lookup};
 use crate::memory::dram::Dram;
 use crate::memory::port::{MemPort, Request};
 use crate::memory::traffic::CLASSES;
+
+/// Marks every request still staged in `ports` as passed over at this edge.
+fn refuse(ports: &mut [&mut MemPort]) {
+    for port in ports.iter_mut() {
+        port.staged.iter_mut().for_each(|r| r.refused = true);
+    }
+}
 
 /// What the memory carried.
 #[derive(Clone, Debug, Default, PartialEq, Eq, Serialize)]
@@ -117,9 +125,11 @@ impl Memory {
         }
         let mut l2_lookups = self.l2.as_ref().map_or(0, |l| l.ports);
         let mut took = false;
-        for port in ports.iter_mut() {
+        for p in 0..ports.len() {
+            let port = &mut *ports[p];
             while let Some(r) = port.staged.front().copied() {
                 if self.model != MemoryModel::Perfect && self.queue.len() >= self.queue_depth {
+                    refuse(&mut ports[p..]);
                     return took;
                 }
                 // Perfect memory is the compute bound: nothing behind the units' own caches
@@ -127,6 +137,7 @@ impl Memory {
                 // it, and whose fills would reorder it, making it no bound at all).
                 let ready = if self.l2.is_some() && !r.write && self.model != MemoryModel::Perfect {
                     if l2_lookups == 0 {
+                        refuse(&mut ports[p..]);
                         return took;
                     }
                     l2_lookups -= 1;

@@ -88,6 +88,9 @@ pub struct Request {
     pub write: bool,
     /// The cycle the unit made the request.
     pub issued: u64,
+    /// The memory passed it over at an edge (its queue full, or the L2's lookups used):
+    /// from then on, a unit waiting for it waits on the queue, not on data.
+    pub refused: bool,
 }
 
 /// Ready cycle of a request the memory has not accepted yet.
@@ -256,7 +259,7 @@ impl MemPort {
     fn request(&mut self, addr: u64, bytes: u32, class: usize, write: bool, now: u64) -> u32 {
         let id = self.ready.len() as u32;
         self.ready.push(UNSCHEDULED);
-        self.staged.push_back(Request { id, addr, bytes, class, write, issued: now });
+        self.staged.push_back(Request { id, addr, bytes, class, write, issued: now, refused: false });
         self.requested[class] += bytes as u64;
         id
     }
@@ -378,6 +381,8 @@ impl MemPort {
                                 f.at = f.at.max(now + cache.hit_latency as u64);
                             } else {
                                 cache.stats.merged[l.class] += 1;
+                                // The tag lookup takes the hit latency whatever it finds.
+                                f.at = f.at.max(now + cache.hit_latency as u64);
                                 f.waits.push(fill);
                             }
                         }
@@ -394,6 +399,9 @@ impl MemPort {
                             let id = self.request(l.key * line_bytes, l.bytes, l.class, false, now);
                             let cache = &mut self.caches[c].1;
                             cache.stats.misses[l.class] += 1;
+                            // A miss is known after the tag lookup: its data is never
+                            // there sooner than a hit's, however fast the memory.
+                            f.at = f.at.max(now + cache.hit_latency as u64);
                             cache.install(l.key, id);
                             cache.outstanding.push(id);
                             f.waits.push(id);
@@ -464,8 +472,9 @@ impl MemPort {
         !self.staged.is_empty()
     }
 
-    /// True if `f` waits for a request the memory has not accepted yet.
+    /// True if `f` waits for a request the memory passed over at an edge (one made this
+    /// cycle is taken at the coming edge, if there is room: a wait for data, not the queue).
     pub fn waits_on_queue(&self, f: &Fetch) -> bool {
-        f.waits.iter().any(|&id| self.ready_of(id) == UNSCHEDULED)
+        self.staged.iter().any(|r| r.refused && f.waits.contains(&r.id))
     }
 }

@@ -142,7 +142,7 @@ impl Rgs {
             shade_busy_until: 0,
             framebuffer: vec![Vec3::ZERO; pixels],
             hits: vec![None; pixels],
-            port: MemPort::new("shading".into(), &cfg.cache.shading, cfg.memory.queue_depth),
+            port: MemPort::new("shading".into(), &cfg.cache.shading, cfg.memory.port_staging()),
             gen_stats: UnitStats::default(),
             shade_stats: UnitStats::default(),
             packets_done: 0,
