@@ -237,7 +237,8 @@ struct Depths {
 
 /// Exit codes: 0 all good; 2 an image rejected; 3 no camera; 4 a kernel disagrees with
 /// brute force; 5 the any-hit query disagrees; 6 a packet disagrees; 7 implausible hits;
-/// 8 the fixed-point walk disagrees with fixed-point brute force.
+/// 8 the fixed-point walk disagrees with fixed-point brute force; 9 (from [`run`]) the
+/// guaranteed range is not the one this build documents.
 fn check(image: &[u8], depths: &mut Depths) -> i32 {
     let Ok(view) = SceneView::parse(image) else { return 2 };
     let Some(cam) = view.camera() else { return 3 };
@@ -315,6 +316,16 @@ fn check(image: &[u8], depths: &mut Depths) -> i32 {
 
 /// Checks every image built in and prints the stack each kind of kernel took.
 fn run() -> i32 {
+    // This build has no f64-fallback: its guaranteed range ends 4096 extents from the
+    // origin, where an edge function rounding to exactly 0 could lie outside the
+    // triangle's box (exit code 9 if the range says otherwise).
+    let unit = Vec3::splat(1.0);
+    let near = raypipe_core::range::check_bounds(Vec3::splat(4095.0), Vec3::splat(4095.0) + unit);
+    let far = raypipe_core::range::check_bounds(Vec3::splat(1e5), Vec3::splat(1e5) + unit);
+    if near.is_err() || far != Err(raypipe_core::range::OutOfRange::FarFromOrigin) {
+        out::line(format_args!("the embedded build's range does not end 4096 extents from the origin"));
+        return 9;
+    }
     out::line(format_args!("structure  walk B  any-hit B  packet16 B  shading B"));
     for (name, image) in IMAGES {
         let mut d = Depths::default();

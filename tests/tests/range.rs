@@ -11,7 +11,7 @@ use raypipe::render::tracer::{trace, trace_packet};
 use raypipe::scene::{Accel, TriangleLayout};
 use raypipe_core::packet::step::trace_packet_steps;
 use raypipe_core::packet::{PacketCounters, RayPacket};
-use raypipe_core::range::{check_ray, check_scene, OutOfRange, MIN_COMPONENT_RATIO, ORIGIN_EXTENTS};
+use raypipe_core::range::{check_bounds, check_ray, check_scene, OutOfRange, MIN_COMPONENT_RATIO, ORIGIN_EXTENTS};
 use raypipe_core::traverse::brute_force::trace_brute_force;
 use raypipe_core::traverse::walk::trace_walk;
 use raypipe_core::{Hit, NoProbe, Ray, RayCounters, SceneView, Vec3, Watertight};
@@ -164,4 +164,14 @@ fn rays_and_scenes_outside_the_range_are_flagged() {
         let got = check_scene(&scene.view().unwrap());
         assert_eq!(got.is_ok(), ok, "extent {s}: {got:?}");
     }
+}
+
+/// With `f64-fallback` (the host, the models) a scene's distance from the origin is no
+/// limit: zero edge functions get their true sign. The build without it (firmware)
+/// ends its range 4096 extents out; `nostd-proof` checks that side.
+#[test]
+fn only_the_build_without_f64_ends_its_range_near_the_origin() {
+    let unit = Vec3::splat(1.0);
+    assert_eq!(check_bounds(Vec3::splat(1e5), Vec3::splat(1e5) + unit), Ok(()));
+    assert_eq!(check_bounds(Vec3::ZERO, Vec3::splat(1e-9)), Err(OutOfRange::SceneScale));
 }
