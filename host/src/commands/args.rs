@@ -26,7 +26,7 @@ pub struct WalkArgs {
     #[arg(long, value_name = "FILE", conflicts_with = "orbit")]
     pub camera_path: Option<PathBuf>,
     /// A walkthrough of N frames orbiting the look-at point.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_hyphen_values = true)]
     pub orbit: Option<usize>,
 }
 
@@ -59,46 +59,46 @@ pub struct StructureArgs {
     /// A sky: constant radiance "r,g,b", or a gradient "r,g,b,R,G,B" from the horizon's
     /// r,g,b to the zenith's R,G,B (+y up). Path tracing samples it; the other
     /// algorithms add its mean as ambient light.
-    #[arg(long, value_name = "R,G,B[,R,G,B]", value_parser = parse_sky)]
+    #[arg(long, value_name = "R,G,B[,R,G,B]", value_parser = parse_sky, allow_hyphen_values = true)]
     pub sky: Option<[f32; 6]>,
     /// Acceleration structure.
     #[arg(long, value_enum, default_value_t = Accel::Grid)]
     pub accel: Accel,
     /// Grid cells along the scene's shortest axis (Purcell used 64 for the bunny);
     /// default: derived from the triangle count.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_hyphen_values = true)]
     pub grid_min_dim: Option<u32>,
     /// Target grid cells per triangle when --grid-min-dim is not given.
-    #[arg(long, value_name = "F", default_value_t = DEFAULT_CELLS_PER_TRIANGLE)]
+    #[arg(long, value_name = "F", default_value_t = DEFAULT_CELLS_PER_TRIANGLE, allow_hyphen_values = true)]
     pub grid_density: f64,
     /// Triangle layout: indexed vertices, or also Wald's 48-byte precomputed triangles, or
     /// also leaf blocks of four triangles (bvh4, bvh8; fastest for single rays).
     #[arg(long, value_enum, default_value_t = TriangleLayout::Indexed)]
     pub triangles: TriangleLayout,
     /// kd-tree SAH: cost of a traversal step (pbrt: 1).
-    #[arg(long, value_name = "C", default_value_t = KdParams::default().traversal_cost)]
+    #[arg(long, value_name = "C", default_value_t = KdParams::default().traversal_cost, allow_hyphen_values = true)]
     pub kd_traversal_cost: f64,
     /// kd-tree SAH: cost of a triangle test (pbrt: 80).
-    #[arg(long, value_name = "C", default_value_t = KdParams::default().intersection_cost)]
+    #[arg(long, value_name = "C", default_value_t = KdParams::default().intersection_cost, allow_hyphen_values = true)]
     pub kd_intersection_cost: f64,
     /// kd-tree SAH: bonus for cutting off empty space, 0–1 (pbrt: 0.5).
-    #[arg(long, value_name = "B", default_value_t = KdParams::default().empty_bonus)]
+    #[arg(long, value_name = "B", default_value_t = KdParams::default().empty_bonus, allow_hyphen_values = true)]
     pub kd_empty_bonus: f64,
     /// kd-tree: largest depth (default 8 + 1.3·log2(triangles), at most 60).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_hyphen_values = true)]
     pub kd_max_depth: Option<u32>,
     /// BVH SAH: cost of visiting a node, relative to a triangle test.
-    #[arg(long, value_name = "C", default_value_t = BvhParams::default().traversal_cost)]
+    #[arg(long, value_name = "C", default_value_t = BvhParams::default().traversal_cost, allow_hyphen_values = true)]
     pub bvh_traversal_cost: f64,
     /// BVH: largest leaf.
-    #[arg(long, value_name = "N", default_value_t = BvhParams::default().max_leaf)]
+    #[arg(long, value_name = "N", default_value_t = BvhParams::default().max_leaf, allow_hyphen_values = true)]
     pub bvh_max_leaf: usize,
     /// BVH: cut triangles longer than this fraction of the scene into pieces (0: never).
-    #[arg(long, value_name = "F", default_value_t = BvhParams::default().presplit_extent)]
+    #[arg(long, value_name = "F", default_value_t = BvhParams::default().presplit_extent, allow_hyphen_values = true)]
     pub bvh_presplit: f64,
     /// BVH: try spatial splits where an object split's children overlap by more than
     /// this fraction of the scene's surface area (Stich et al. 2009; 0: never).
-    #[arg(long, value_name = "F", default_value_t = BvhParams::default().spatial_alpha)]
+    #[arg(long, value_name = "F", default_value_t = BvhParams::default().spatial_alpha, allow_hyphen_values = true)]
     pub bvh_spatial_alpha: f64,
 }
 
@@ -191,10 +191,10 @@ pub struct CameraArgs {
     #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true)]
     pub up: Option<[f32; 3]>,
     /// Vertical field of view in degrees.
-    #[arg(long, value_name = "DEG")]
+    #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
     pub fov: Option<f32>,
     /// Image size, "WIDTHxHEIGHT".
-    #[arg(long, value_name = "WxH", value_parser = parse_size)]
+    #[arg(long, value_name = "WxH", value_parser = parse_size, allow_hyphen_values = true)]
     pub size: Option<(u32, u32)>,
 }
 
@@ -294,7 +294,7 @@ pub(crate) fn parse_size(s: &str) -> Result<(u32, u32), String> {
 #[derive(Args, Debug, Clone, Default)]
 pub struct RunArgs {
     /// Worker threads (default: all cores).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_hyphen_values = true)]
     pub threads: Option<usize>,
     /// Ray–triangle intersection test (default: wald for an image with Wald triangles,
     /// watertight otherwise).
@@ -318,15 +318,15 @@ pub struct AlgoArgs {
     #[arg(long, value_enum, default_value_t = Algorithm::Cast)]
     pub algo: Algorithm,
     /// Whitted: largest number of reflection/refraction bounces.
-    #[arg(long, value_name = "N", default_value_t = 5)]
+    #[arg(long, value_name = "N", default_value_t = 5, allow_hyphen_values = true)]
     pub max_depth: u32,
     /// Path tracing: bounces after the first hit.
-    #[arg(long, value_name = "N", default_value_t = 2)]
+    #[arg(long, value_name = "N", default_value_t = 2, allow_hyphen_values = true)]
     pub bounces: u32,
     /// Eye rays per pixel, jittered within the pixel by the filter (anti-aliasing; path
     /// tracing: one path each). Default: 16 for path tracing, 1 (the pixel centre)
     /// otherwise.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_hyphen_values = true)]
     pub samples: Option<u32>,
     /// Reconstruction filter the eye rays' offsets follow: box, tent or gaussian.
     #[arg(long, value_name = "FILTER", default_value = "box", value_parser = parse_filter)]

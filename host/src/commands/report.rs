@@ -51,7 +51,21 @@ fn read(path: &Path) -> Result<Value> {
     if !v.is_object() {
         return Err(anyhow!("{}: not a JSON report (not an object)", path.display()));
     }
-    Ok(v)
+    // A chip report names its schema; a diff of anything else (another tool's JSON, a
+    // stream report) would list every key as changed and mean nothing.
+    match v.get("schema").and_then(Value::as_str) {
+        Some(raypipe_hw::observe::report::SCHEMA) => Ok(v),
+        Some(other) => Err(anyhow!(
+            "{}: a report of schema {other}; report diff reads {} (the chip's, from simulate --report)",
+            path.display(),
+            raypipe_hw::observe::report::SCHEMA
+        )),
+        None => Err(anyhow!(
+            "{}: not a simulate report (no \"schema\": \"{}\")",
+            path.display(),
+            raypipe_hw::observe::report::SCHEMA
+        )),
+    }
 }
 
 fn cmd_diff(a: ReportDiffArgs) -> Result<()> {

@@ -80,7 +80,10 @@ impl CameraSpec {
     /// Reads and parses a camera file.
     pub fn load(path: &Path) -> Result<CameraSpec> {
         let text = crate::input::read_file::read_text(path, crate::input::read_file::TEXT_LIMIT)?;
-        CameraSpec::parse(&path.display().to_string(), &text)
+        let name = path.display().to_string();
+        let spec = CameraSpec::parse(&name, &text)?;
+        spec.check(&name)?;
+        Ok(spec)
     }
 
     /// Overrides the fields this spec sets; `other`'s set fields win over `self`'s.
@@ -93,6 +96,37 @@ impl CameraSpec {
             size: other.size.or(self.size),
             background: other.background.or(self.background),
         }
+    }
+
+    /// Fails with one line naming `name` (the file the spec came from) if what the spec
+    /// sets cannot make rays: a field of view outside (0°, 180°), an eye on the point it
+    /// looks at, an up along the view, a zero size, a non-finite value. What it leaves
+    /// unset comes from the scene later and is checked then.
+    pub fn check(&self, name: &str) -> Result<()> {
+        use raypipe_core::camera::{Camera, EyeRays};
+        use raypipe_core::Vec3;
+        let (eye, look_at) = match (self.eye.map(Vec3::from), self.look_at.map(Vec3::from)) {
+            (Some(e), Some(l)) => (e, l),
+            (Some(e), None) => (e, e - Vec3::Z),
+            (None, Some(l)) => (l + Vec3::Z, l),
+            (None, None) => (Vec3::Z, Vec3::ZERO),
+        };
+        let view = (look_at - eye).normalize_or_zero();
+        let up = match self.up.map(Vec3::from) {
+            Some(u) if self.eye.is_some() && self.look_at.is_some() => u,
+            // Without both ends the view is the scene's: an up that is no vector at all
+            // is all that can be told now.
+            Some(u) if u == Vec3::ZERO || !u.is_finite() => u,
+            _ if view.cross(Vec3::Y).length() > 1e-3 => Vec3::Y,
+            _ => Vec3::X,
+        };
+        let (width, height) = self.size.unwrap_or((1, 1));
+        let camera = Camera { eye, look_at, up, vfov_deg: self.fov.unwrap_or(45.0), width, height };
+        EyeRays::new(&camera).map(drop).map_err(|e| anyhow!("{name}: camera: {e}"))?;
+        if let Some(b) = self.background.filter(|b| b.iter().any(|c| !c.is_finite() || *c < 0.0)) {
+            bail!("{name}: camera: background {b:?} must be finite and not negative");
+        }
+        Ok(())
     }
 
     /// Applies the spec to a camera record.

@@ -86,6 +86,7 @@ pub fn load_gltf_bytes(name: &str, bytes: &[u8], base: &Path) -> Result<(Mesh, L
         notes.warnings.push(format!("{name}: {skipped_modes} primitives of points, lines or strips left out"));
     }
     mesh.validate(name)?;
+    camera.check(name)?;
     notes.warnings.extend(mesh.degenerate_warning(name));
     Ok((mesh, notes, camera))
 }

@@ -200,6 +200,7 @@ pub fn load_scene_file(path: &Path, load_mesh: MeshLoader<'_>) -> Result<(Mesh, 
         background: c.background,
     });
     merged.validate(&name)?;
+    camera.check(&name)?;
     Ok((merged, warnings, camera))
 }
 

@@ -14,6 +14,10 @@ const SIZE: (u32, u32) = (960, 600);
 
 type Drawn = std::result::Result<(), Box<dyn std::error::Error>>;
 
+/// The most series a line chart draws: beyond this the colours repeat and the legend
+/// outgrows the chart.
+const MAX_SERIES: usize = 40;
+
 /// Tableau 10, the series colours.
 const PALETTE: [RGBColor; 10] = [
     RGBColor(0x4e, 0x79, 0xa7),
@@ -42,9 +46,10 @@ pub enum Plot {
 /// The values one parameter takes, in order: numerically when all are numbers.
 fn axis_values(rows: &[&Row], key: &str) -> Result<Vec<String>> {
     let mut vals: Vec<String> = Vec::new();
+    let mut seen = std::collections::HashSet::new();
     for r in rows {
         let v = label(r, key).ok_or_else(|| anyhow!("no row has a value for {key:?}"))?;
-        if !vals.contains(&v) {
+        if seen.insert(v.clone()) {
             vals.push(v);
         }
     }
@@ -57,17 +62,17 @@ fn axis_values(rows: &[&Row], key: &str) -> Result<Vec<String>> {
 /// Refuses rows that the plot's own keys cannot tell apart (they differ in a parameter
 /// the plot does not show): the user narrows them with `--where`.
 fn check_unique(rows: &[&Row], keys: &[&str]) -> Result<()> {
-    for (i, a) in rows.iter().enumerate() {
-        for b in &rows[i + 1..] {
-            if keys.iter().all(|k| label(a, k) == label(b, k)) {
-                let differ: Vec<&String> = a.params.keys().filter(|k| a.params.get(*k) != b.params.get(*k)).collect();
-                bail!(
-                    "points {} and {} fall on the same place of the plot; they differ in {}: pick one with --where KEY=VALUE",
-                    a.index,
-                    b.index,
-                    differ.iter().map(|s| s.as_str()).collect::<Vec<_>>().join(", ")
-                );
-            }
+    let mut at: std::collections::HashMap<Vec<Option<String>>, &Row> = std::collections::HashMap::new();
+    for b in rows {
+        let place: Vec<Option<String>> = keys.iter().map(|k| label(b, k)).collect();
+        if let Some(a) = at.insert(place, b) {
+            let differ: Vec<&String> = a.params.keys().filter(|k| a.params.get(*k) != b.params.get(*k)).collect();
+            bail!(
+                "points {} and {} fall on the same place of the plot; they differ in {}: pick one with --where KEY=VALUE",
+                a.index,
+                b.index,
+                differ.iter().map(|s| s.as_str()).collect::<Vec<_>>().join(", ")
+            );
         }
     }
     Ok(())
@@ -111,17 +116,37 @@ fn line(svg: &mut String, rows: &[&Row], x: &str, y: &str, series: Option<&str>,
         Some(s) => axis_values(rows, s)?,
         None => vec![String::new()],
     };
-    let mut lines: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
-    for g in &groups {
-        let mut pts = Vec::new();
-        for r in rows.iter().filter(|r| series.is_none_or(|s| label(r, s).as_deref() == Some(g))) {
-            let xv = label(r, x).unwrap_or_default();
-            let px = if numeric { xv.parse::<f64>()? } else { xs.iter().position(|v| *v == xv).unwrap_or(0) as f64 };
-            let v = metric_of(r, y)?;
-            if v.is_finite() {
-                pts.push((px, v));
-            }
+    if groups.len() > MAX_SERIES {
+        return Err(format!(
+            "{} series ({} has that many values) is more than the {MAX_SERIES} a chart can tell apart; \
+             choose another series",
+            groups.len(),
+            series.unwrap_or_default()
+        )
+        .into());
+    }
+    // One pass over the rows, each to its series and its x position.
+    let group_of: std::collections::HashMap<&str, usize> =
+        groups.iter().enumerate().map(|(i, g)| (g.as_str(), i)).collect();
+    let x_of: std::collections::HashMap<&str, usize> = xs.iter().enumerate().map(|(i, v)| (v.as_str(), i)).collect();
+    let mut points: Vec<Vec<(f64, f64)>> = vec![Vec::new(); groups.len()];
+    for r in rows {
+        let g = match series {
+            Some(s) => match label(r, s).and_then(|l| group_of.get(l.as_str()).copied()) {
+                Some(g) => g,
+                None => continue,
+            },
+            None => 0,
+        };
+        let xv = label(r, x).unwrap_or_default();
+        let px = if numeric { xv.parse::<f64>()? } else { x_of.get(xv.as_str()).copied().unwrap_or(0) as f64 };
+        let v = metric_of(r, y)?;
+        if v.is_finite() {
+            points[g].push((px, v));
         }
+    }
+    let mut lines: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
+    for (g, mut pts) in groups.iter().zip(points) {
         pts.sort_by(|a, b| a.0.total_cmp(&b.0));
         let name = series.map_or(y.to_string(), |s| format!("{s} = {g}"));
         lines.push((name, pts));

@@ -127,3 +127,36 @@ fn failed_writes_leave_no_half_written_file() {
     assert_eq!(std::fs::read(d.join("keep.png")).unwrap(), b"old");
     assert_eq!(only_files(d), vec!["keep.png".to_string()]);
 }
+
+/// A command line clap refuses is one line too (exit 2, as clap's), saying what is
+/// wrong with the value rather than that a negative number looks like a flag.
+#[test]
+fn refused_command_lines_are_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    for (args, needle) in [
+        (vec!["render", "--size", "-5x5"], "'-5' is not a pixel count"),
+        (vec!["render", "--sky", "-1,0,0"], "radiance must be finite and not negative"),
+        (vec!["simulate", "--orbit", "-3"], "invalid value '-3' for '--orbit <N>'"),
+        (vec!["render", "--algo", "foo"], "(possible values: cast, shadow, whitted, path)"),
+        (vec!["render", "--sizee", "4x4"], "did you mean '--size'?"),
+    ] {
+        let o = raypipe(dir.path(), &args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert_eq!(err.lines().count(), 1, "{args:?}: {err}");
+        assert!(err.starts_with("error: ") && err.contains(needle), "{args:?}: {err}");
+    }
+    assert_eq!(only_files(dir.path()), Vec::<String>::new());
+}
+
+/// A camera that cannot make rays is refused naming the file it came from.
+#[test]
+fn camera_errors_name_their_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let tetra = fixtures().join("tetra.obj").display().to_string();
+    write(dir.path(), "s.toml", &format!("[[mesh]]\nfile = {tetra:?}\n[camera]\nfov = 500\n"));
+    assert_one_line_error(&raypipe(dir.path(), &["render", "s.toml", "-o", "x.png"]), "s.toml: camera: field of view");
+    write(dir.path(), "c.camera", "eye 0 0 0\nlook_at 0 0 0\n");
+    let o = raypipe(dir.path(), &["render", &tetra, "--camera", "c.camera", "-o", "x.png"]);
+    assert_one_line_error(&o, "c.camera: camera: camera eye and look-at point coincide");
+}

@@ -105,6 +105,9 @@ fn gltf_and_ply_inputs() {
     let (_, _, px) = decode(&d.join("quad.png"));
     let centre = &px[(16 * 32 + 16) * 3..(16 * 32 + 16) * 3 + 3];
     assert!(centre[1] > centre[2] && centre[0] > centre[2], "the green, red-glowing quad fills the view: {centre:?}");
+    // The file's own camera, impossible: refused naming the file.
+    std::fs::write(d.join("wide.gltf"), gltf.replace("\"yfov\": 0.8", "\"yfov\": 3.5")).unwrap();
+    assert_one_line_error(&raypipe(d, &["render", "wide.gltf", "-o", "x.png"]), "wide.gltf: camera: field of view");
     std::fs::write(d.join("bad.gltf"), "{\"asset\": {\"version\": \"2.0\"}, \"meshes\": [{]}").unwrap();
     assert_one_line_error(&raypipe(d, &["render", "bad.gltf", "-o", "x.png"]), "malformed glTF");
 

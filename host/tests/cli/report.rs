@@ -31,5 +31,16 @@ fn report_diff_names_the_changed_keys_and_every_ratio() {
     // A file that is not a report is one line of error.
     write(d, "bad.json", "[1, 2]");
     assert_one_line_error(&raypipe(d, &["report", "diff", "a.json", "bad.json"]), "bad.json: not a JSON report");
+    // JSON that is no simulate report (another tool's, or an older schema).
+    write(d, "other.json", "{\"a\": 1}");
+    assert_one_line_error(
+        &raypipe(d, &["report", "diff", "a.json", "other.json"]),
+        "other.json: not a simulate report",
+    );
+    write(d, "old.json", "{\"schema\": \"raypipe-hw-report/1\"}");
+    assert_one_line_error(
+        &raypipe(d, &["report", "diff", "old.json", "a.json"]),
+        "old.json: a report of schema raypipe-hw-report/1",
+    );
     assert_one_line_error(&raypipe(d, &["report", "diff", "a.json", "missing.json"]), "missing.json");
 }

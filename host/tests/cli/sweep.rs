@@ -101,7 +101,8 @@ fn sweep_points_are_stand_alone_runs_and_shards_merge_to_the_whole() {
 fn sweep_rejects_bad_specs_before_running_anything() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let cases: [(&str, &str); 6] = [
+    let cases: [(&str, &str); 7] = [
+        ("", "the spec sets no parameter"),
         ("[grid]\n\"traversal.unitz\" = [1]\n", "no such parameter"),
         ("[grid]\n\"traversal.units\" = []\n", "non-empty list"),
         ("[fixed]\npacket_size = 3\n", "packet_size"),
@@ -221,4 +222,32 @@ fn shards_on_one_prefix_keep_each_others_rows_and_runs_do_not_overlap() {
     drop(lock);
     let o = raypipe(d, &["sweep", "other.toml", "-o", "shared", "--restart"]);
     assert!(o.status.success(), "{}", stderr(&o));
+}
+
+#[test]
+fn a_plot_of_more_series_than_a_chart_can_show_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write(d, "one.toml", "[fixed]\nsize = \"8x8\"\n");
+    let o = raypipe(d, &["sweep", "one.toml", "-o", "one"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let row: serde_json::Value =
+        serde_json::from_str(std::fs::read_to_string(d.join("one.jsonl")).unwrap().trim()).unwrap();
+    let mut rows = String::new();
+    for i in 0..2_000 {
+        let mut r = row.clone();
+        r["index"] = i.into();
+        r["point"] = format!("seed={}, x={}", i % 1000, i / 1000).into();
+        r["params"] = serde_json::json!({ "seed": i % 1000, "x": i / 1000 });
+        rows.push_str(&format!("{r}\n"));
+    }
+    write(d, "many.jsonl", &rows);
+    let o = raypipe(d, &["plot", "many.jsonl", "--x", "x", "--y", "fps", "--series", "seed", "-o", "p.svg"]);
+    assert_one_line_error(&o, "1000 series (seed has that many values) is more than the 40");
+    // Narrowed to 11 series (seeds 99 and 990-999), the same rows are drawn.
+    let args =
+        ["plot", "many.jsonl", "--x", "x", "--y", "fps", "--series", "seed", "--where", "seed=99*", "-o", "p.svg"];
+    let o = raypipe(d, &args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(std::fs::read_to_string(d.join("p.svg")).unwrap().contains("seed = 995"));
 }
