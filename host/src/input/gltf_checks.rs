@@ -20,6 +20,19 @@ use gltf::{Accessor, Document};
 
 use crate::input::read_file;
 
+/// A GLB's header, if `bytes` is one: its declared length must cover at least the
+/// 12-byte header itself (the `gltf` crate subtracts the header's size from it
+/// unchecked: an overflow panic where overflow checks are on; found by the `gltf` fuzz
+/// target).
+pub fn check_glb_header(bytes: &[u8]) -> Result<(), String> {
+    let Some(length) = bytes.strip_prefix(b"glTF").and_then(|rest| rest.get(4..8)) else { return Ok(()) };
+    let length = u32::from_le_bytes([length[0], length[1], length[2], length[3]]);
+    if length < 12 {
+        return Err(format!("its GLB header declares {length} bytes, fewer than the header's own 12"));
+    }
+    Ok(())
+}
+
 /// The buffers of `doc`, read from `blob` (a `.glb`'s BIN chunk), `data:` URIs or files
 /// in `base`; `name` is the file named in errors.
 pub fn read_buffers(
@@ -230,6 +243,17 @@ mod tests {
     }
 
     const U16_INDICES: &str = r#""componentType":5123,"count":3,"type":"SCALAR""#;
+
+    #[test]
+    fn a_glb_header_shorter_than_itself_is_malformed() {
+        // "glTF", version 2, length 0: the gltf crate computes 0 − 12.
+        let mut glb = b"glTF".to_vec();
+        glb.extend_from_slice(&2u32.to_le_bytes());
+        glb.extend_from_slice(&0u32.to_le_bytes());
+        glb.extend_from_slice(b"\0\0\0\0JSON{}");
+        let e = load_gltf_bytes("t.glb", &glb, &std::env::temp_dir()).err().unwrap().to_string();
+        assert!(e.contains("declares 0 bytes, fewer than the header's own 12"), "{e}");
+    }
 
     #[test]
     fn a_good_triangle_loads() {

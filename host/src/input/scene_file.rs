@@ -126,7 +126,19 @@ pub type MeshLoader<'a> = &'a dyn Fn(&Path) -> Result<Option<(Mesh, Vec<String>)
 pub fn load_scene_file(path: &Path, load_mesh: MeshLoader<'_>) -> Result<(Mesh, Vec<String>, CameraSpec)> {
     let name = path.display().to_string();
     let text = crate::input::read_file::read_text(path, crate::input::read_file::TEXT_LIMIT)?;
-    let file: SceneFile = toml::from_str(&text)
+    let dir = path.parent().unwrap_or(Path::new("."));
+    parse_scene_file(&name, &text, dir, load_mesh)
+}
+
+/// Parses the text of the scene file `name`, whose meshes are named relative to `dir`.
+pub fn parse_scene_file(
+    name: &str,
+    text: &str,
+    dir: &Path,
+    load_mesh: MeshLoader<'_>,
+) -> Result<(Mesh, Vec<String>, CameraSpec)> {
+    let name = name.to_string();
+    let file: SceneFile = toml::from_str(text)
         .map_err(|e| anyhow!("{name}: {}", e.to_string().split_whitespace().collect::<Vec<_>>().join(" ")))?;
     if file.mesh.is_empty() {
         bail!("{name}: the scene file lists no [[mesh]]");
@@ -134,7 +146,6 @@ pub fn load_scene_file(path: &Path, load_mesh: MeshLoader<'_>) -> Result<(Mesh, 
     if file.mesh.len() > MAX_MESHES {
         bail!("{name}: {} meshes is more than {MAX_MESHES}", file.mesh.len());
     }
-    let dir = path.parent().unwrap_or(Path::new("."));
     let mut warnings = Vec::new();
     // Each file is read once, however often it is listed, and every copy is counted
     // against the scene's limit before any is made (a small scene file can name a big
