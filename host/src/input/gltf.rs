@@ -28,6 +28,7 @@ pub fn load_gltf_file(path: &Path) -> Result<(Mesh, LoadNotes, CameraSpec)> {
 pub fn load_gltf_bytes(name: &str, bytes: &[u8], base: &Path) -> Result<(Mesh, LoadNotes, CameraSpec)> {
     let malformed = |e: String| anyhow!("{name}: malformed glTF: {e}");
     gltf_checks::check_glb_header(bytes).map_err(malformed)?;
+    gltf_checks::check_position_accessors(bytes).map_err(malformed)?;
     let gltf::Gltf { document: doc, blob } = gltf::Gltf::from_slice(bytes).map_err(|e| malformed(e.to_string()))?;
     let buffers = gltf_checks::read_buffers(&doc, base, blob, name)?;
     let scene = doc

@@ -33,6 +33,32 @@ pub fn check_glb_header(bytes: &[u8]) -> Result<(), String> {
     Ok(())
 }
 
+/// Every primitive's POSITION accessor exists. The `gltf` crate's validation indexes the
+/// accessors by it unchecked (a panic on a file that names a missing one; found by the
+/// `gltf` fuzz target), so the JSON is read without validation and checked first.
+pub fn check_position_accessors(bytes: &[u8]) -> Result<(), String> {
+    use gltf::json::validation::Checked;
+    let json = if bytes.starts_with(b"glTF") {
+        gltf::Glb::from_slice(bytes).map_err(|e| e.to_string())?.json.into_owned()
+    } else {
+        bytes.to_vec()
+    };
+    let root: gltf::json::Root = gltf::json::deserialize::from_slice(&json).map_err(|e| e.to_string())?;
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            let Some(a) = prim.attributes.get(&Checked::Valid(gltf::json::mesh::Semantic::Positions)) else { continue };
+            if a.value() >= root.accessors.len() {
+                return Err(format!(
+                    "mesh {m} primitive {p}: POSITION names accessor {}, of {} accessors",
+                    a.value(),
+                    root.accessors.len()
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// The buffers of `doc`, read from `blob` (a `.glb`'s BIN chunk), `data:` URIs or files
 /// in `base`; `name` is the file named in errors.
 pub fn read_buffers(
@@ -253,6 +279,13 @@ mod tests {
         glb.extend_from_slice(b"\0\0\0\0JSON{}");
         let e = load_gltf_bytes("t.glb", &glb, &std::env::temp_dir()).err().unwrap().to_string();
         assert!(e.contains("declares 0 bytes, fewer than the header's own 12"), "{e}");
+    }
+
+    #[test]
+    fn a_missing_position_accessor_is_malformed() {
+        let text = doc(U16_INDICES, r#"[{"mesh":0}]"#, "[0]").replace(r#""POSITION":0"#, r#""POSITION":7"#);
+        let e = load(&text).unwrap_err();
+        assert!(e.contains("POSITION names accessor 7, of 2 accessors"), "{e}");
     }
 
     #[test]
