@@ -37,7 +37,7 @@ pub fn load(dir: &Path, spec: &str) -> Result<TextureImage, String> {
 }
 
 /// Decodes a PNG or JPEG (`kind`: an extension or MIME type), refusing a size beyond
-/// [`MAX_SIDE`] from the header, before the texels are allocated.
+/// `MAX_SIDE` (16384) from the header, before the texels are allocated.
 pub fn decode(bytes: &[u8], kind: &str) -> Result<TextureImage, String> {
     match kind {
         "png" | "image/png" => decode_png(bytes),
