@@ -15,17 +15,28 @@ thread_local! {
 }
 
 /// An open batch; dropping it without [`Batch::commit`] discards its outputs.
-pub struct Batch(());
+pub struct Batch {
+    /// False for a batch opened inside another: the outer one names or discards all.
+    outermost: bool,
+}
 
 impl Batch {
-    /// Opens a batch on this thread (batches do not nest: a second one joins the first).
+    /// Opens a batch on this thread (one opened inside another joins it).
     pub fn begin() -> Batch {
-        OPEN.with(|o| o.borrow_mut().get_or_insert_with(Vec::new).clear());
-        Batch(())
+        OPEN.with(|o| {
+            let mut open = o.borrow_mut();
+            let outermost = open.is_none();
+            open.get_or_insert_with(Vec::new);
+            Batch { outermost }
+        })
     }
 
-    /// Gives every output its name.
-    pub fn commit(self) -> Result<()> {
+    /// Gives every output its name (an inner batch leaves that to the outer one).
+    pub fn commit(mut self) -> Result<()> {
+        if !self.outermost {
+            return Ok(());
+        }
+        self.outermost = false;
         let pending = OPEN.with(|o| o.borrow_mut().take()).unwrap_or_default();
         pending.into_iter().try_for_each(Pending::rename)
     }
@@ -34,7 +45,9 @@ impl Batch {
 impl Drop for Batch {
     fn drop(&mut self) {
         // Dropping the pending files deletes their temporaries.
-        OPEN.with(|o| o.borrow_mut().take());
+        if self.outermost {
+            OPEN.with(|o| o.borrow_mut().take());
+        }
     }
 }
 

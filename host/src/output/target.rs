@@ -8,8 +8,8 @@
 //! system that honours `fsync`).
 //!
 //! Temporary files are named `.NAME.raypipe-PID-XXXXXX` beside their target `NAME`, so a
-//! killed run's leftovers are found next to what they were for; the next write of `NAME`
-//! removes those whose process is gone.
+//! killed run's leftovers are found next to what they were for; the next run that writes
+//! into the folder removes those whose process is gone.
 
 use std::fs::File;
 use std::io::Write;
@@ -126,10 +126,9 @@ impl Pending {
             }
             Target::Replace(to) => {
                 let dir = dir_of(&to);
-                let stem = temp_stem(&to);
-                remove_stale(dir, &stem);
+                remove_stale(dir);
                 let tmp = tempfile::Builder::new()
-                    .prefix(&format!("{stem}{}-", std::process::id()))
+                    .prefix(&format!("{}{}-", temp_stem(&to), std::process::id()))
                     .rand_bytes(6)
                     .tempfile_in(dir)
                     .map_err(|e| anyhow!("{name}: cannot create a file in {}: {e}", dir.display()))?;
@@ -192,13 +191,23 @@ fn temp_stem(to: &Path) -> String {
     format!(".{file}.raypipe-")
 }
 
-/// Removes `dir`'s temporaries of `stem` whose writing process no longer runs (a run
-/// killed before its rename). Best effort: whatever cannot be read or removed stays.
-fn remove_stale(dir: &Path, stem: &str) {
+/// Removes `dir`'s temporaries whose writing process no longer runs (a run killed
+/// before its rename), once per folder and process: a sweep writing a million reports
+/// into one folder reads it once, not a million times. Best effort: whatever cannot be
+/// read or removed stays.
+fn remove_stale(dir: &Path) {
+    static SCANNED: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+    let Ok(mut scanned) = SCANNED.lock() else { return };
+    if scanned.iter().any(|d| d == dir) {
+        return;
+    }
+    scanned.push(dir.to_path_buf());
+    drop(scanned);
     let Ok(entries) = std::fs::read_dir(dir) else { return };
     for e in entries.flatten() {
         let file = e.file_name();
-        let Some(rest) = file.to_str().and_then(|f| f.strip_prefix(stem)) else { continue };
+        let Some(name) = file.to_str().filter(|f| f.starts_with('.')) else { continue };
+        let Some((_, rest)) = name.rsplit_once(".raypipe-") else { continue };
         let Some(pid) = rest.split('-').next().and_then(|p| p.parse::<u32>().ok()) else { continue };
         if !process_alive(pid) {
             let _ = std::fs::remove_file(e.path());
