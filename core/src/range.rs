@@ -42,6 +42,9 @@ pub const MIN_COMPONENT_RATIO: f32 = 1.0 / 1_099_511_627_776.0;
 /// Without `f64-fallback`: how far from the origin the scene may lie, in scene extents
 /// (its bounds' largest coordinate magnitude over its extent).
 pub const EMBEDDED_ORIGIN_EXTENTS: f32 = 4096.0;
+/// Whether this build has the `f64-fallback` feature (and so no
+/// [`EMBEDDED_ORIGIN_EXTENTS`] limit).
+pub const F64_FALLBACK: bool = cfg!(feature = "f64-fallback");
 
 /// Why a scene or ray lies outside the guaranteed range.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -95,7 +98,7 @@ pub fn check_bounds(lo: Vec3, hi: Vec3) -> Result<(), OutOfRange> {
         return Err(OutOfRange::SceneScale);
     }
     let far = lo.abs().max(hi.abs()).max_element();
-    if cfg!(not(feature = "f64-fallback")) && far > EMBEDDED_ORIGIN_EXTENTS * e {
+    if !F64_FALLBACK && far > EMBEDDED_ORIGIN_EXTENTS * e {
         return Err(OutOfRange::FarFromOrigin);
     }
     Ok(())
