@@ -7,9 +7,9 @@
 //! so once a command says it wrote a file, the file survives a power loss (on a file
 //! system that honours `fsync`).
 //!
-//! Temporary files are named `.NAME.raypipe-PID-XXXXXX` beside their target `NAME`, so a
-//! killed run's leftovers are found next to what they were for; the next run that writes
-//! into the folder removes those whose process is gone.
+//! Temporary files are named `.NAME.raypipe-PID@HOST-XXXXXX` beside their target `NAME`,
+//! so a killed run's leftovers are found next to what they were for; the next run on the
+//! same machine that writes into the folder removes those whose process is gone.
 
 use std::fs::File;
 use std::io::Write;
@@ -128,7 +128,7 @@ impl Pending {
                 let dir = dir_of(&to);
                 remove_stale(dir);
                 let tmp = tempfile::Builder::new()
-                    .prefix(&format!("{}{}-", temp_stem(&to), std::process::id()))
+                    .prefix(&format!("{}{}@{}-", temp_stem(&to), std::process::id(), host()))
                     .rand_bytes(6)
                     .tempfile_in(dir)
                     .map_err(|e| anyhow!("{name}: cannot create a file in {}: {e}", dir.display()))?;
@@ -208,11 +208,29 @@ fn remove_stale(dir: &Path) {
         let file = e.file_name();
         let Some(name) = file.to_str().filter(|f| f.starts_with('.')) else { continue };
         let Some((_, rest)) = name.rsplit_once(".raypipe-") else { continue };
-        let Some(pid) = rest.split('-').next().and_then(|p| p.parse::<u32>().ok()) else { continue };
-        if !process_alive(pid) {
+        // PID@HOST-XXXXXX: only this machine's processes can be asked whether they run
+        // (a folder on a cluster's shared file system holds other machines' too).
+        let Some((owner, _)) = rest.rsplit_once('-') else { continue };
+        let Some((pid, at)) = owner.split_once('@') else { continue };
+        let Ok(pid) = pid.parse::<u32>() else { continue };
+        if at == host() && !process_alive(pid) {
             let _ = std::fs::remove_file(e.path());
         }
     }
+}
+
+/// This machine's name, as temporary files carry it (`-` and `/` would confuse the
+/// name's parts; they become `_`).
+fn host() -> String {
+    let mut buf = [0u8; 256];
+    #[cfg(unix)]
+    // SAFETY: gethostname writes at most `buf.len()` bytes into `buf`.
+    let ok = unsafe { libc::gethostname(buf.as_mut_ptr().cast(), buf.len()) } == 0;
+    #[cfg(not(unix))]
+    let ok = false;
+    let len = buf.iter().position(|&b| b == 0).unwrap_or(buf.len());
+    let name = if ok { String::from_utf8_lossy(&buf[..len]).into_owned() } else { "localhost".into() };
+    name.replace(['-', '/', '@'], "_")
 }
 
 #[cfg(unix)]

@@ -92,14 +92,20 @@ fn a_failed_second_output_leaves_no_first() {
 #[test]
 fn a_killed_runs_temporaries_are_cleared_by_the_next_write() {
     let dir = tempfile::tempdir().unwrap();
-    // A leftover of a process that no longer runs (pid beyond pid_max), and one of this
-    // live process, which must stay.
-    write(dir.path(), ".rays.npy.raypipe-4194305-abcdef", "partial");
-    let live = format!(".rays.npy.raypipe-{}-abcdef", std::process::id());
+    // A leftover of a process of this machine that no longer runs (pid beyond
+    // pid_max), one of this live process and one of another machine (a shared file
+    // system): only the first goes.
+    let host = std::fs::read_to_string("/proc/sys/kernel/hostname").unwrap().trim().replace(['-', '/', '@'], "_");
+    write(dir.path(), &format!(".rays.npy.raypipe-4194305@{host}-abcdef"), "partial");
+    let live = format!(".rays.npy.raypipe-{}@{host}-abcdef", std::process::id());
     write(dir.path(), &live, "partial");
+    let remote = ".rays.npy.raypipe-4194305@elsewhere-abcdef".to_string();
+    write(dir.path(), &remote, "partial");
     let o = raypipe(dir.path(), &["rays", "--size", "4x4", "-o", "rays.npy"]);
     assert!(o.status.success(), "{}", stderr(&o));
-    assert_eq!(only_files(dir.path()), [live, "rays.npy".to_string()]);
+    let mut want = vec![live, remote, "rays.npy".to_string()];
+    want.sort();
+    assert_eq!(only_files(dir.path()), want);
 }
 
 #[test]
