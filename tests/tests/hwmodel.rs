@@ -91,12 +91,7 @@ fn config() -> impl Strategy<Value = HwConfig> {
 /// Makes each cache no slower than what is behind it, as `validate` demands: the L1s
 /// no slower than the L2, and every cache no slower than the memory's fastest answer.
 fn ordered_hierarchy(c: &mut HwConfig) {
-    let d = &c.memory.dram;
-    let fastest = match c.memory.model {
-        MemoryModel::Perfect => u32::MAX,
-        MemoryModel::Fixed => c.memory.latency + 1,
-        MemoryModel::Dram => (d.controller_latency as f64 + d.t_cl as f64 * c.clock_mhz / d.clock_mhz) as u32,
-    };
+    let fastest = c.memory_fastest_answer().map_or(u32::MAX, |f| f as u32);
     for cache in [&mut c.cache.nodes, &mut c.cache.triangles, &mut c.cache.lists, &mut c.cache.shading] {
         cache.hit_latency = cache.hit_latency.min(fastest);
     }

@@ -115,15 +115,7 @@ impl HwConfig {
     /// transfer cycle; DRAM: the controller and the CAS latency, in chip cycles), is no
     /// cache anyone would build, and would make a miss cheaper than a hit.
     fn validate_hierarchy(&self) -> Result<(), String> {
-        let m = &self.memory;
-        let memory = match m.model {
-            MemoryModel::Perfect => None,
-            MemoryModel::Fixed => Some(m.latency as f64 + 1.0),
-            MemoryModel::Dram => {
-                let d = &m.dram;
-                Some(d.controller_latency as f64 + d.t_cl as f64 * self.clock_mhz / d.clock_mhz)
-            }
-        };
+        let memory = self.memory_fastest_answer();
         let l2 = &self.cache.l2;
         for (name, c) in self.caches().into_iter().filter(|(_, c)| c.size_bytes > 0) {
             let h = c.hit_latency as f64;
@@ -142,6 +134,22 @@ impl HwConfig {
             }
         }
         Ok(())
+    }
+}
+
+impl HwConfig {
+    /// The memory's fastest answer in chip cycles (fixed: its latency and one transfer
+    /// cycle; DRAM: the controller and CL), or `None` for perfect memory.
+    pub fn memory_fastest_answer(&self) -> Option<f64> {
+        let m = &self.memory;
+        match m.model {
+            MemoryModel::Perfect => None,
+            MemoryModel::Fixed => Some(m.latency as f64 + 1.0),
+            MemoryModel::Dram => {
+                let d = &m.dram;
+                Some(d.controller_latency as f64 + d.t_cl as f64 * self.clock_mhz / d.clock_mhz)
+            }
+        }
     }
 }
 
