@@ -142,3 +142,34 @@ fn area_light_samples_are_never_blocked_by_the_emitter_itself() {
     }
     assert!(near > 2.0 * far && far > 0.0, "near {near}, far {far}");
 }
+
+/// A ray that leaves the scene sees the sky, in every algorithm, whether or not its eye
+/// ray crossed the scene's box: the corners of a small object's frame show the sky's
+/// radiance along their own directions.
+#[test]
+fn every_algorithm_sees_the_sky_outside_the_scene_box() {
+    use raypipe_core::camera::{Camera, EyeRays};
+    use raypipe_core::image::LightRecord;
+    let sky =
+        LightRecord { position: [0.9, 0.6, 0.3], kind: LightRecord::ENVIRONMENT, color: [0.2, 0.4, 0.8], triangle: 0 };
+    let opts = BuildOptions { lights: vec![sky], ..Default::default() };
+    let scene = scene::load(Some(&root().join("fixtures/tetra.obj")), &opts).unwrap();
+    let view = scene.view().unwrap();
+    let cam = CameraRecord { width: 32, height: 24, ..*view.camera().unwrap() };
+    let eye = EyeRays::new(&Camera::from(&cam)).unwrap();
+    let (lo, hi) = view.test_bounds();
+    let outside: Vec<(u32, u32)> = (0..24)
+        .flat_map(|y| (0..32).map(move |x| (x, y)))
+        .filter(|&(x, y)| eye.sample_ray_in_scene(x, y, 0, lo, hi).is_none())
+        .collect();
+    assert!(outside.len() > 100, "the frame must show much beyond the scene's box");
+    for algo in [Algorithm::Cast, Algorithm::Shadow, Algorithm::Whitted, Algorithm::Path] {
+        let frame = render(&view, &cam, &RenderOptions { algo, samples: 1, ..Default::default() }).unwrap();
+        for &(x, y) in &outside {
+            let want = sky.sky(eye.ray(x, y).dir).to_array();
+            let got = frame.radiance[(y * 32 + x) as usize];
+            // Within rounding: the sky looks up a renormalized direction.
+            assert!(got.iter().zip(want).all(|(g, w)| (g - w).abs() < 1e-6), "{algo:?} ({x}, {y}): {got:?} {want:?}");
+        }
+    }
+}

@@ -13,7 +13,7 @@ use raypipe::render::tracer::trace;
 use raypipe::render::{render, Algorithm, RenderOptions};
 use raypipe::scene::{self, Accel, BuildOptions};
 use raypipe_core::camera::{Camera, EyeRays};
-use raypipe_core::image::CameraRecord;
+use raypipe_core::image::{CameraRecord, LightRecord};
 use raypipe_core::pixel_filter::Filter;
 use raypipe_core::{NoProbe, RayCounters, SceneView, Vec3, Watertight};
 use raypipe_hw::stream::counters::PassKind;
@@ -98,6 +98,9 @@ fn small_camera(view: &SceneView<'_>, w: u32, h: u32) -> CameraRecord {
 #[test]
 fn the_image_is_the_hosts_for_every_architecture_oracle_and_algorithm() {
     let glossy = root().join("fixtures/glossy.obj");
+    let tetra = root().join("fixtures/tetra.obj");
+    let sky =
+        LightRecord { position: [0.9, 0.6, 0.3], kind: LightRecord::ENVIRONMENT, color: [0.2, 0.4, 0.8], triangle: 0 };
     for (input, algo, samples, filter) in [
         (None, Algorithm::Cast, 1, Filter::Box),
         (None, Algorithm::Cast, 4, Filter::Gaussian),
@@ -107,9 +110,14 @@ fn the_image_is_the_hosts_for_every_architecture_oracle_and_algorithm() {
         // Blinn–Phong highlights and glossy bounces.
         (Some(&glossy), Algorithm::Whitted, 1, Filter::Box),
         (Some(&glossy), Algorithm::Path, 2, Filter::Tent),
+        // A small object under a sky: eye rays that miss the scene's box see it too.
+        (Some(&tetra), Algorithm::Cast, 1, Filter::Box),
+        (Some(&tetra), Algorithm::Path, 2, Filter::Box),
     ] {
-        let scene = scene::load(input.map(|p| p.as_path()), &BuildOptions { accel: Accel::Grid, ..Default::default() })
-            .unwrap();
+        let lights = if input == Some(&tetra) { vec![sky] } else { Vec::new() };
+        let scene =
+            scene::load(input.map(|p| p.as_path()), &BuildOptions { accel: Accel::Grid, lights, ..Default::default() })
+                .unwrap();
         let view = scene.view().unwrap();
         let cam = small_camera(&view, 40, 32);
         let opts =

@@ -1,7 +1,7 @@
 //! The shading kernel (Purcell 2002 §3.1.4, the ray caster's shader): interpolated
 //! per-vertex normal, material diffuse colour times vertex colour, Lambert shading from
 //! the point and directional lights plus ambient light (an environment's mean counts
-//! as ambient), plus emission; the background colour on a miss.
+//! as ambient), plus emission; on a miss the sky or the background ([`crate::shade::escaped`]).
 //! Shadows and secondary rays come with the later algorithms.
 
 use glam::Vec3;
@@ -10,6 +10,7 @@ use crate::hit::Hit;
 use crate::image::{LightRecord, SceneView};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
+use crate::shade::escaped::escaped;
 use crate::shade::ray_cone::RayCone;
 use crate::shade::surface::Surface;
 
@@ -22,7 +23,7 @@ pub fn shade<P: MemoryProbe>(
     background: Vec3,
     probe: &mut P,
 ) -> Vec3 {
-    let Some(hit) = hit else { return background };
+    let Some(hit) = hit else { return escaped(scene, ray.dir, background, probe) };
     let surface = Surface::at(scene, ray, &hit, cone, probe);
     let (n, point) = (surface.normal, surface.point);
     let mut light = Vec3::ZERO;

@@ -4,6 +4,7 @@
 
 pub mod blinn_phong;
 pub mod color;
+pub mod escaped;
 pub mod hemisphere;
 pub mod lambert;
 pub mod path;

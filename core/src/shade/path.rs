@@ -30,6 +30,7 @@ use crate::hit::Hit;
 use crate::image::{LightRecord, SceneView};
 use crate::probe::MemoryProbe;
 use crate::shade::blinn_phong::BlinnPhong;
+use crate::shade::escaped::sky_light;
 use crate::shade::hemisphere::cosine_direction;
 use crate::shade::ray_record::{RayKind, RayRecord};
 use crate::shade::rng::uniform;
@@ -44,13 +45,8 @@ pub struct PathOptions {
     /// End paths at random after the first bounce, reweighting the survivors (unbiased,
     /// but a surviving path's weight can grow).
     pub roulette: bool,
-    /// Radiance of rays that hit nothing.
+    /// Radiance of rays that hit nothing when the scene has no sky.
     pub background: Vec3,
-}
-
-/// The scene's sky light, if it has one.
-fn environment<P: MemoryProbe>(scene: &SceneView<'_>, probe: &mut P) -> Option<LightRecord> {
-    (0..scene.shading_light_count()).map(|i| scene.light(i, probe)).find(|l| l.kind == LightRecord::ENVIRONMENT)
 }
 
 /// Shades the end of `rec`: returns the radiance added now (times the record's weight)
@@ -66,7 +62,7 @@ pub fn shade_path<P: MemoryProbe>(
     let Some(hit) = hit else {
         // The sky: seen directly along camera and specular paths; after a diffuse bounce
         // next-event estimation has counted it already.
-        return match environment(scene, probe) {
+        return match sky_light(scene, probe) {
             Some(_) if rec.kind == RayKind::Path => Vec3::ZERO,
             Some(sky) => rec.weight * sky.sky(rec.ray.dir.normalize_or_zero()),
             None => rec.weight * opts.background,

@@ -15,6 +15,7 @@ use glam::Vec3;
 use crate::hit::Hit;
 use crate::image::SceneView;
 use crate::probe::MemoryProbe;
+use crate::shade::escaped::escaped;
 use crate::shade::ray_record::RayRecord;
 use crate::shade::specular::specular_rays;
 use crate::shade::surface::Surface;
@@ -24,7 +25,7 @@ use crate::shade::surface::Surface;
 pub struct WhittedOptions {
     /// Largest number of reflection/refraction bounces.
     pub max_depth: u8,
-    /// Radiance of rays that hit nothing.
+    /// Radiance of rays that hit nothing when the scene has no sky.
     pub background: Vec3,
 }
 
@@ -38,7 +39,7 @@ pub fn shade_whitted<P: MemoryProbe>(
     probe: &mut P,
     emit: &mut impl FnMut(RayRecord),
 ) -> Vec3 {
-    let Some(hit) = hit else { return rec.weight * opts.background };
+    let Some(hit) = hit else { return rec.weight * escaped(scene, rec.ray.dir, opts.background, probe) };
     let s = Surface::at(scene, &rec.ray, &hit, rec.cone, probe);
     let m = s.material;
     let (diffuse, glossy) = s.lobes();

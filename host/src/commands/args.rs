@@ -57,8 +57,9 @@ pub struct StructureArgs {
     #[arg(long, value_name = "DX,DY,DZ[,R,G,B]", value_parser = parse_light, allow_hyphen_values = true)]
     pub sun: Vec<[f32; 6]>,
     /// A sky: constant radiance "r,g,b", or a gradient "r,g,b,R,G,B" from the horizon's
-    /// r,g,b to the zenith's R,G,B (+y up). Path tracing samples it; the other
-    /// algorithms add its mean as ambient light.
+    /// r,g,b to the zenith's R,G,B (+y up). Every ray that leaves the scene sees it, in
+    /// every algorithm; path tracing samples it as a light, the other algorithms add its
+    /// mean as ambient light.
     #[arg(long, value_name = "R,G,B[,R,G,B]", value_parser = parse_sky, allow_hyphen_values = true)]
     pub sky: Option<[f32; 6]>,
     /// Acceleration structure.

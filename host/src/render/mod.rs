@@ -15,8 +15,8 @@ use raypipe_core::camera::{Camera, EyeRays};
 use raypipe_core::image::CameraRecord;
 use raypipe_core::packet::PacketCounters;
 use raypipe_core::shade::color::rgb8;
+use raypipe_core::shade::escaped::escaped;
 use raypipe_core::shade::lambert::shade;
-use raypipe_core::shade::ray_cone::RayCone;
 use raypipe_core::{Intersector, NoProbe, Ray, RayCounters, SceneView};
 
 use crate::render::gbuffer::{gbuffer_hit, rasterize, GBuffer};
@@ -241,12 +241,12 @@ fn render_with<I: Intersector>(
                         }
                     }
                 }
+                let geometry = TileGeometry { x0, y0, width: tw as u32, image_width: w };
                 let radiance = match opts.shader(background) {
-                    None => cast_tile(scene, background, samples, eye.cone(), &primaries),
+                    None => cast_tile(scene, (eye, background), samples, geometry, &primaries),
                     Some(shader) => {
-                        let geometry = TileGeometry { x0, y0, width: tw as u32, image_width: w };
                         let mut counts = StreamCounts::default();
-                        let shading = TileShading { shader: &shader, background, samples, cone: eye.cone() };
+                        let shading = TileShading { shader: &shader, background, samples, eye };
                         let radiance =
                             shade_tile::<I, _>(scene, &shading, geometry, &primaries, &mut NoProbe, &mut counts);
                         totals.secondary = counts.rays.iter().sum();
@@ -274,26 +274,30 @@ fn render_with<I: Intersector>(
 }
 
 /// Ray casting's colours for a tile's eye rays (sample-major): one sample's colour as it
-/// is, several summed exactly ([`RadianceSum`]) with weight `1 / samples` each.
+/// is, several summed exactly ([`RadianceSum`]) with weight `1 / samples` each. An eye
+/// ray that missed the scene's box sees what an escaped ray sees.
 fn cast_tile(
     scene: &SceneView<'_>,
-    background: Vec3,
+    (eye, background): (&EyeRays, Vec3),
     samples: u32,
-    cone: RayCone,
+    tile: TileGeometry,
     primaries: &[(Option<Ray>, Option<raypipe_core::Hit>)],
 ) -> Vec<Vec3> {
-    let color = |(ray, hit): &(Option<Ray>, Option<raypipe_core::Hit>)| match ray {
-        Some(ray) => shade(scene, ray, cone, *hit, background, &mut NoProbe),
-        None => background,
+    let n = primaries.len() / samples.max(1) as usize;
+    let color = |i: usize, (ray, hit): &(Option<Ray>, Option<raypipe_core::Hit>)| match ray {
+        Some(ray) => shade(scene, ray, eye.cone(), *hit, background, &mut NoProbe),
+        None => {
+            let (x, y) = tile.xy(i % n.max(1));
+            escaped(scene, eye.sample_ray(x, y, (i / n.max(1)) as u32).dir, background, &mut NoProbe)
+        }
     };
     if samples <= 1 {
-        return primaries.iter().map(color).collect();
+        return primaries.iter().enumerate().map(|(i, p)| color(i, p)).collect();
     }
-    let n = primaries.len() / samples as usize;
     let mut sum = vec![RadianceSum::default(); n];
     let weight = 1.0 / samples as f32;
     for (i, p) in primaries.iter().enumerate() {
-        sum[i % n].add(color(p) * weight);
+        sum[i % n].add(color(i, p) * weight);
     }
     sum.iter().map(RadianceSum::value).collect()
 }

@@ -8,8 +8,9 @@
 
 use std::collections::VecDeque;
 
+use raypipe_core::camera::EyeRays;
+use raypipe_core::shade::escaped::escaped;
 use raypipe_core::shade::radiance_sum::RadianceSum;
-use raypipe_core::shade::ray_cone::RayCone;
 use raypipe_core::shade::ray_record::{RayKind, RayRecord};
 use raypipe_core::shade::shader::Shader;
 use raypipe_core::traverse::occlusion::occluded;
@@ -58,8 +59,13 @@ pub struct TileGeometry {
 
 impl TileGeometry {
     fn global(&self, local: usize) -> u32 {
-        let (x, y) = (self.x0 + local as u32 % self.width, self.y0 + local as u32 / self.width);
+        let (x, y) = self.xy(local);
         y * self.image_width + x
+    }
+
+    /// Image coordinates of the tile's pixel `local` (row-major in the tile).
+    pub fn xy(&self, local: usize) -> (u32, u32) {
+        (self.x0 + local as u32 % self.width, self.y0 + local as u32 / self.width)
     }
 
     fn local(&self, global: u32) -> usize {
@@ -69,7 +75,8 @@ impl TileGeometry {
 }
 
 /// How a tile is shaded: the ray-emitting shader, the background, eye rays per pixel and
-/// the eye rays' cone (for texture filtering).
+/// the camera's eye rays (their cone filters textures; an eye ray that misses the
+/// scene's box still sees the sky along its direction).
 #[derive(Clone, Copy, Debug)]
 pub struct TileShading<'s> {
     /// The shader.
@@ -78,8 +85,8 @@ pub struct TileShading<'s> {
     pub background: Vec3,
     /// Eye rays per pixel.
     pub samples: u32,
-    /// The eye rays' cone.
-    pub cone: RayCone,
+    /// The camera's eye rays.
+    pub eye: &'s EyeRays,
 }
 
 /// Radiance of a tile's pixels (row-major in the tile) from their eye rays and hits:
@@ -93,16 +100,20 @@ pub fn shade_tile<I: Intersector, P: MemoryProbe>(
     probe: &mut P,
     counts: &mut StreamCounts,
 ) -> Vec<Vec3> {
-    let TileShading { shader, background, samples, cone } = *shading;
+    let TileShading { shader, background, samples, eye } = *shading;
+    let cone = eye.cone();
     let samples = samples.max(1);
     let pixels = primaries.len() / samples as usize;
     let mut radiance = vec![RadianceSum::default(); pixels];
     let mut stream: VecDeque<RayRecord> = VecDeque::new();
-    let miss = background * (1.0 / samples as f32);
+    let share = 1.0 / samples as f32;
     for (i, (ray, hit)) in primaries.iter().enumerate() {
         let (s, p) = ((i / pixels.max(1)) as u32, i % pixels.max(1));
         match ray {
-            None => radiance[p].add(miss),
+            None => {
+                let (x, y) = tile.xy(p);
+                radiance[p].add(escaped(scene, eye.sample_ray(x, y, s).dir, background, probe) * share);
+            }
             Some(ray) => {
                 counts.shades += hit.is_some() as u64;
                 shader.shade_primary(

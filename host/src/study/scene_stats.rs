@@ -294,7 +294,7 @@ fn costs_with<I: Intersector>(
                     Some(shader) => {
                         let geometry = TileGeometry { x0, y0, width: x1 - x0, image_width: eye.width };
                         let mut s = StreamCounts::default();
-                        let shading = TileShading { shader, background, samples, cone: eye.cone() };
+                        let shading = TileShading { shader, background, samples, eye };
                         std::hint::black_box(shade_tile::<I, _>(
                             scene, &shading, geometry, &primaries, &mut probe, &mut s,
                         ));

@@ -37,7 +37,7 @@ pub enum Fragment {
 pub struct StreamMachine<'s, I: Intersector> {
     pub(crate) scene: SceneView<'s>,
     pub(crate) grid: GridView<'s>,
-    eye: EyeRays,
+    pub(crate) eye: EyeRays,
     pub(crate) background: Vec3,
     pub(crate) shader: Option<Shader>,
     pub(crate) cfg: StreamConfig,

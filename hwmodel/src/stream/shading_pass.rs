@@ -6,6 +6,7 @@
 
 use raypipe_core::image::MaterialRecord;
 use raypipe_core::shade::blinn_phong::is_glossy;
+use raypipe_core::shade::escaped::escaped;
 use raypipe_core::shade::lambert::shade;
 use raypipe_core::shade::ray_record::{RayKind, RayRecord};
 use raypipe_core::shade::shader::Shader;
@@ -50,15 +51,24 @@ impl<I: Intersector> StreamMachine<'_, I> {
         // and whether its surface reads a texture (core's test, that of `Surface::at`).
         let material = |hit: Option<raypipe_core::Hit>| hit.map(|h| scene.material_of(h.prim, &mut NoProbe));
         let reads_texture = |m: &MaterialRecord| surface_texture(&scene, m).is_some();
-        let (sums, miss) = (self.sums_radiance(), background * (1.0 / self.samples() as f32));
+        let (sums, share) = (self.sums_radiance(), 1.0 / self.samples() as f32);
+        let eye = self.eye;
         let mut probe = StreamProbe::new(&mut self.cache, false);
         for (i, f) in frags.iter().enumerate() {
             let (rec, hit) = match f {
                 Fragment::Empty => {
-                    // An eye ray that missed the scene box: its share of the background.
-                    if wave == 0 && sums {
-                        if let Some(r) = self.radiance.get_mut(i) {
-                            r.add(miss);
+                    // An eye ray that missed the scene box (wave 0 holds screen `s` of
+                    // sample `s`, pixel `i`): its share of what an escaped ray sees.
+                    if wave == 0 {
+                        let (x, y) = (i as u32 % width, i as u32 / width);
+                        let dir = eye.sample_ray(x, y, screen).dir;
+                        let color = escaped(&scene, dir, background, &mut probe);
+                        if sums {
+                            if let Some(r) = self.radiance.get_mut(i) {
+                                r.add(color * share);
+                            }
+                        } else if let Some(px) = self.framebuffer.get_mut(i) {
+                            *px = color;
                         }
                     }
                     continue;

@@ -4,6 +4,7 @@
 //! cycle once the data has arrived, and only then is the framebuffer written (a posted
 //! write per packet) and the rays the shader emitted released.
 
+use raypipe_core::shade::escaped::escaped;
 use raypipe_core::shade::lambert::shade;
 use raypipe_core::shade::ray_record::{RayKind, RayRecord};
 use raypipe_core::SceneView;
@@ -163,10 +164,13 @@ impl Rgs {
                         None => self.framebuffer[pixel] = color,
                     }
                 }
-                (None, None) => match self.radiance.get_mut(pixel) {
-                    Some(sum) => sum.add(self.background * share),
-                    None => self.framebuffer[pixel] = self.background,
-                },
+                (None, None) => {
+                    let color = escaped(scene, self.eye.sample_ray(x, y, s).dir, self.background, &mut probe);
+                    match self.radiance.get_mut(pixel) {
+                        Some(sum) => sum.add(color * share),
+                        None => self.framebuffer[pixel] = color,
+                    }
+                }
                 (Some(shader), Some(ray)) => {
                     let sum = &mut self.radiance[pixel];
                     shader.shade_primary(
@@ -178,7 +182,10 @@ impl Rgs {
                         &mut |r| emitted.push(r),
                     );
                 }
-                (Some(_), None) => self.radiance[pixel].add(self.background * share),
+                (Some(_), None) => {
+                    let color = escaped(scene, self.eye.sample_ray(x, y, s).dir, self.background, &mut probe);
+                    self.radiance[pixel].add(color * share)
+                }
             }
             if s == 0 {
                 self.hits[pixel] = if packet.lanes & (1 << j) != 0 { packet.hits[j] } else { None };
