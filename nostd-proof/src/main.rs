@@ -179,7 +179,7 @@ mod full {
     #[inline(never)]
     pub fn shaders(view: &SceneView<'_>, ray: Ray, pixel: u32, hit: Option<Hit>) -> (Vec3, u32) {
         let whitted = Shader::Whitted(WhittedOptions { max_depth: 2, background: Vec3::ZERO });
-        let path = Shader::Path(PathOptions { bounces: 2, roulette: true, background: Vec3::ZERO });
+        let path = Shader::Path(PathOptions::new(2, true, Vec3::ZERO));
         let rec = RayRecord::primary(ray, pixel);
         let (mut radiance, mut records) = (Vec3::ZERO, 0u32);
         for shader in [&whitted, &path] {

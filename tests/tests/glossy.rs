@@ -86,7 +86,7 @@ fn furnace(m: MaterialRecord, view_dir: Vec3, k: u32) -> f64 {
     let sky = LightRecord { position: [1.0; 3], kind: LightRecord::ENVIRONMENT, color: [1.0; 3], triangle: 0 };
     let scene = floor(m, sky);
     let view = scene.view().unwrap();
-    let opts = PathOptions { bounces: 1, roulette: false, background: Vec3::ZERO };
+    let opts = PathOptions::new(1, false, Vec3::ZERO);
     let origin = -view_dir.normalize() * 2.0;
     let mut total = 0.0f64;
     for sample in 0..k {

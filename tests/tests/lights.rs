@@ -11,6 +11,8 @@ use raypipe_core::shade::lambert::shade;
 use raypipe_core::shade::path::{shade_path, PathOptions};
 use raypipe_core::shade::ray_cone::RayCone;
 use raypipe_core::shade::ray_record::{RayKind, RayRecord};
+use raypipe_core::traverse::occlusion::occluded;
+use raypipe_core::Watertight;
 use raypipe_core::{Hit, NoProbe, Ray, Vec3};
 
 /// A white floor (triangles 0, 1) under `emitters` (triangle, radiance), lit by nothing
@@ -99,7 +101,7 @@ fn picking_one_emitter_by_power_is_unbiased() {
         &mut Default::default(),
     )
     .unwrap();
-    let opts = PathOptions { bounces: 0, roulette: false, background: Vec3::ZERO };
+    let opts = PathOptions::new(0, false, Vec3::ZERO);
     let n = 200_000u32;
     let mut sum = [0.0f64; 3];
     for s in 0..n {
@@ -115,6 +117,45 @@ fn picking_one_emitter_by_power_is_unbiased() {
     for c in 0..3 {
         let rel = (mean[c] - expected[c]).abs() / expected[c];
         assert!(rel < 0.01, "channel {c}: mean {mean} vs integral {expected} ({rel:.4})");
+    }
+    // With a bounce to follow, the light sample and the bounce that hits an emitter share
+    // the direct light by the power heuristic: together the light sample's estimate alone,
+    // nothing counted twice or lost. Both see the emitters shadow each other, which the
+    // quadrature above ignores.
+    let estimate = |bounces: u8| {
+        let opts = PathOptions::new(bounces, false, Vec3::ZERO);
+        let mut sum = [0.0f64; 3];
+        let mut add = |w: Vec3| {
+            for (s, w) in sum.iter_mut().zip(w.to_array()) {
+                *s += w as f64;
+            }
+        };
+        for s in 0..n {
+            let rec = RayRecord { sample: s, ..RayRecord::primary(ray, 7) };
+            let mut out = Vec::new();
+            shade_path(&view, &rec, Some(hit), &opts, &mut NoProbe, &mut |r| out.push(r));
+            for r in out {
+                if r.kind == RayKind::Shadow {
+                    if !occluded::<Watertight, _>(&view, &r.ray, &mut NoProbe, &mut Default::default()) {
+                        add(r.weight);
+                    }
+                    continue;
+                }
+                let hit = raypipe::render::tracer::trace::<Watertight, _>(
+                    &view,
+                    &r.ray,
+                    &mut NoProbe,
+                    &mut Default::default(),
+                );
+                add(shade_path(&view, &r, hit, &opts, &mut NoProbe, &mut |_| {}));
+            }
+        }
+        Vec3::new(sum[0] as f32, sum[1] as f32, sum[2] as f32) / n as f32
+    };
+    let (light_only, mis) = (estimate(0), estimate(1));
+    for c in 0..3 {
+        let rel = (mis[c] - light_only[c]).abs() / light_only[c];
+        assert!(rel < 0.01, "channel {c}: with MIS {mis} vs light samples alone {light_only} ({rel:.4})");
     }
 }
 

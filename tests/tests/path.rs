@@ -44,7 +44,7 @@ proptest! {
     ) {
         let scene = scene::load(Some(&root().join("fixtures/whitted.obj")), &BuildOptions::default()).unwrap();
         let view = scene.view().unwrap();
-        let opts = PathOptions { bounces: 6, roulette: false, background: Vec3::ZERO };
+        let opts = PathOptions::new(6, false, Vec3::ZERO);
         let ray = Ray::new(Vec3::new(0.4, 1.7, 4.6), Vec3::from(dir));
         let mut stack = vec![RayRecord { sample, ..RayRecord::primary(ray, pixel) }];
         while let Some(rec) = stack.pop() {
@@ -113,7 +113,7 @@ fn area_light_samples_are_never_blocked_by_the_emitter_itself() {
     };
     let scene = scene::build("lit".into(), mesh, Vec::new(), Default::default(), &BuildOptions::default()).unwrap();
     let view = scene.view().unwrap();
-    let opts = PathOptions { bounces: 0, roulette: false, background: Vec3::ZERO };
+    let opts = PathOptions::new(0, false, Vec3::ZERO);
     let mut near = 0.0f32;
     let mut far = 0.0f32;
     for i in 0..64u32 {
@@ -172,4 +172,101 @@ fn every_algorithm_sees_the_sky_outside_the_scene_box() {
             assert!(got.iter().zip(want).all(|(g, w)| (g - w).abs() < 1e-6), "{algo:?} ({x}, {y}): {got:?} {want:?}");
         }
     }
+}
+
+/// A glossy floor under a large emitter, for multiple importance sampling.
+fn glossy_floor_under_a_large_emitter() -> raypipe::scene::Scene {
+    use raypipe::input::mesh::Mesh;
+    use raypipe_core::image::MaterialRecord;
+    let positions = vec![
+        [-2.0, 0.0, -2.0],
+        [2.0, 0.0, -2.0],
+        [2.0, 0.0, 2.0],
+        [-2.0, 0.0, 2.0],
+        [-1.5, 1.0, -1.5],
+        [1.5, 1.0, -1.5],
+        [1.5, 1.0, 1.5],
+        [-1.5, 1.0, 1.5],
+    ];
+    let triangles = vec![[0, 2, 1], [0, 3, 2], [4, 5, 6], [4, 6, 7]];
+    let floor =
+        MaterialRecord { diffuse: [0.1; 3], specular: [0.8; 3], shininess: 200.0, illum: 2, ..MaterialRecord::DEFAULT };
+    let light = MaterialRecord { emission: [2.0; 3], ..MaterialRecord::DEFAULT };
+    let mesh = Mesh {
+        positions,
+        triangles,
+        tri_materials: vec![0, 0, 1, 1],
+        materials: vec![floor, light],
+        material_names: vec!["floor".into(), "light".into()],
+        ..Default::default()
+    };
+    scene::build("mis".into(), mesh, Vec::new(), Default::default(), &BuildOptions::default()).unwrap()
+}
+
+/// Multiple importance sampling: a glossy bounce that reaches an emitter brings the
+/// power heuristic's share of its light (not nothing, as when only next-event estimation
+/// counted emitters), and the next-event sample toward the same point gives up the rest.
+#[test]
+fn a_glossy_bounce_that_finds_an_emitter_brings_its_share_of_the_light() {
+    let scene = glossy_floor_under_a_large_emitter();
+    let view = scene.view().unwrap();
+    let opts = PathOptions::new(1, false, Vec3::ZERO);
+    let (mut found, mut nee_weight, mut nee_full) = (0, 0.0f32, 0.0f32);
+    for i in 0..256u32 {
+        let ray = Ray::new(Vec3::new(0.0, 0.5, 1.5), Vec3::new(0.0, -0.5, -1.0).normalize());
+        let rec = RayRecord { sample: i, ..RayRecord::primary(ray, 3) };
+        let hit = trace::<Watertight, _>(&view, &ray, &mut NoProbe, &mut RayCounters::default());
+        let mut out = Vec::new();
+        shade_path(&view, &rec, hit, &opts, &mut NoProbe, &mut |r| out.push(r));
+        for r in &out {
+            match r.kind {
+                RayKind::Glossy => {
+                    assert!(r.pdf > 0.0 && r.indirect, "a sampled bounce carries its density");
+                    let hit = trace::<Watertight, _>(&view, &r.ray, &mut NoProbe, &mut RayCounters::default());
+                    if hit.is_some_and(|h| h.prim >= 2) {
+                        let now = shade_path(&view, r, hit, &opts, &mut NoProbe, &mut |_| {});
+                        let full = r.weight * 2.0;
+                        assert!(now.x > 0.0 && now.x <= full.x * 1.0001, "{now:?} of {full:?}");
+                        found += 1;
+                    }
+                }
+                RayKind::Shadow => {
+                    nee_weight += r.weight.x;
+                    nee_full = nee_full.max(r.weight.x);
+                }
+                _ => {}
+            }
+        }
+    }
+    assert!(found > 20, "a sharp lobe under a large emitter reaches it often ({found})");
+    assert!(nee_weight > 0.0 && nee_full.is_finite());
+}
+
+/// `--clamp` bounds what indirect light adds, but leaves what the eye sees directly (the
+/// emitter itself) alone, and without it the image is unchanged.
+#[test]
+fn the_clamp_bounds_indirect_light_only() {
+    let scene = glossy_floor_under_a_large_emitter();
+    let view = scene.view().unwrap();
+    let cam = CameraRecord {
+        width: 24,
+        height: 16,
+        eye: [0.0, 0.5, 1.9],
+        look_at: [0.0, 0.6, 0.0],
+        ..*view.camera().unwrap()
+    };
+    let base = RenderOptions { algo: Algorithm::Path, samples: 8, bounces: 2, ..Default::default() };
+    let free = render(&view, &cam, &base).unwrap();
+    let unclamped = render(&view, &cam, &RenderOptions { clamp: Some(1e9), ..base }).unwrap();
+    assert!(free.radiance == unclamped.radiance, "a clamp nothing reaches changes nothing");
+    let tight = render(&view, &cam, &RenderOptions { clamp: Some(0.05), ..base }).unwrap();
+    let lum = |c: &[f32; 3]| c[0] + c[1] + c[2];
+    let (mut lower, mut emitter_kept) = (0, 0);
+    for (a, b) in free.radiance.iter().zip(&tight.radiance) {
+        assert!(lum(b) <= lum(a) * 1.0001 + 1e-6, "clamping never brightens: {a:?} {b:?}");
+        lower += (lum(b) < lum(a) * 0.999) as u32;
+        emitter_kept += (lum(a) >= 6.0 && lum(b) >= 6.0) as u32;
+    }
+    assert!(lower > 10, "a tight clamp darkens the floor's reflections ({lower} pixels)");
+    assert!(emitter_kept > 0, "the emitter seen directly keeps its radiance");
 }

@@ -276,6 +276,16 @@ impl<'a> SceneView<'a> {
         Some(if v < entry.keep { (i, entry.pdf) } else { (entry.alias, entry.alias_pdf) })
     }
 
+    /// The probability that [`SceneView::pick_area_light`] picks area light `k` (one read
+    /// of the alias table), or `None` when the image has no alias table and the pick is
+    /// uniform.
+    #[inline]
+    pub fn area_light_probability<P: MemoryProbe>(&self, k: u32, probe: &mut P) -> Option<f32> {
+        let entry = self.light_alias.get(k as usize)?;
+        probe.read(DataClass::Shading, self.light_alias_addr.wrapping_add(k.wrapping_mul(16)), 16);
+        Some(entry.pdf)
+    }
+
     /// Reads light `index` (a default black ambient light if out of range).
     #[inline]
     pub fn light<P: MemoryProbe>(&self, index: u32, probe: &mut P) -> LightRecord {

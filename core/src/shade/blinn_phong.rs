@@ -70,6 +70,22 @@ impl BlinnPhong {
         self.ks * (self.pi_norm() * crate::math::exp_log::pow(cos_h, self.exponent))
     }
 
+    /// The solid-angle density with which [`BlinnPhong::sample`] picks unit `dir`: the
+    /// half-vector density `(n + 1)/(2π) (N·H)^n` over the reflection's Jacobian
+    /// `4 (V·H)` (zero below the surface).
+    pub fn pdf(&self, normal: Vec3, dir: Vec3, to_eye: Vec3) -> f32 {
+        if normal.dot(dir) <= 0.0 || normal.dot(to_eye) <= 0.0 {
+            return 0.0;
+        }
+        let h = (dir + to_eye).normalize_or_zero();
+        let (cos_h, eye_h) = (normal.dot(h).max(0.0), to_eye.dot(h));
+        if eye_h <= 0.0 {
+            return 0.0;
+        }
+        let n = self.exponent;
+        (n + 1.0) / (2.0 * core::f32::consts::PI) * crate::math::exp_log::pow(cos_h, n) / (4.0 * eye_h)
+    }
+
     /// A bounce direction for light leaving toward unit `to_eye` from a surface with unit
     /// normal `normal`, from two uniform numbers, and its weight `f cos θ / pdf` (times
     /// `Ks`); `None` when the sample falls below the surface (that light is lost: the lobe
@@ -147,6 +163,21 @@ mod tests {
             let uniform_est = (uniform_est / k as f64) as f32;
             let importance = albedo(&l, v, 200_000);
             assert!((uniform_est - importance).abs() < 0.02, "n {n}: {uniform_est} vs {importance}");
+        }
+    }
+
+    /// The density is the one `sample` draws from: the sampled weight equals the
+    /// evaluated BRDF times the cosine over `pdf`.
+    #[test]
+    fn pdf_matches_the_sampled_weight() {
+        for n in [1.0, 10.0, 80.0] {
+            let l = lobe(n);
+            let v = Vec3::new(0.3, -0.2, 0.9).normalize();
+            for i in 0..2000 {
+                let Some((d, w)) = l.sample(Vec3::Z, v, uniform(i, 3, 0, 0), uniform(i, 3, 0, 1)) else { continue };
+                let expected = l.eval_pi(Vec3::Z, d, v).x / core::f32::consts::PI * d.z / l.pdf(Vec3::Z, d, v);
+                assert!((w.x - expected).abs() <= 1e-3 * expected.max(1.0), "n {n}: {} vs {expected}", w.x);
+            }
         }
     }
 

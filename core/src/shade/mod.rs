@@ -7,6 +7,7 @@ pub mod color;
 pub mod escaped;
 pub mod hemisphere;
 pub mod lambert;
+pub mod mis;
 pub mod path;
 pub mod radiance_sum;
 pub mod raster;

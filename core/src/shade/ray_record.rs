@@ -68,12 +68,29 @@ pub struct RayRecord {
     pub sample: u32,
     /// The cone of space the ray stands for, for texture filtering.
     pub cone: RayCone,
+    /// Solid-angle density with which the shader sampled this ray's direction (the
+    /// path tracer's diffuse and glossy bounces, for multiple importance sampling);
+    /// zero for rays that were not sampled (eye, mirror, glass, shadow rays).
+    pub pdf: f32,
+    /// The path has left a diffuse or glossy surface: what it brings is indirect light
+    /// (the path tracer's clamp applies to that only).
+    pub indirect: bool,
 }
 
 impl RayRecord {
     /// A primary ray of weight one, of no cone width (textures at their finest level).
     pub fn primary(ray: Ray, pixel: u32) -> RayRecord {
-        RayRecord { ray, pixel, weight: Vec3::ONE, kind: RayKind::Primary, depth: 0, sample: 0, cone: RayCone::POINT }
+        RayRecord {
+            ray,
+            pixel,
+            weight: Vec3::ONE,
+            kind: RayKind::Primary,
+            depth: 0,
+            sample: 0,
+            cone: RayCone::POINT,
+            pdf: 0.0,
+            indirect: false,
+        }
     }
 
     /// Eye ray `sample` of `samples` through pixel `pixel`, with the eye's `cone`: weight
@@ -82,9 +99,11 @@ impl RayRecord {
         RayRecord { weight: Vec3::splat(1.0 / samples.max(1) as f32), sample, cone, ..RayRecord::primary(ray, pixel) }
     }
 
-    /// A record continuing from `self` (same pixel and sample) with `cone`.
+    /// A record continuing from `self` (same pixel and sample, indirect if `self` is)
+    /// with `cone`, not sampled from a density.
     pub fn child(&self, ray: Ray, weight: Vec3, kind: RayKind, depth: u8, cone: RayCone) -> RayRecord {
-        RayRecord { ray, pixel: self.pixel, weight, kind, depth, sample: self.sample, cone }
+        let indirect = self.indirect;
+        RayRecord { ray, pixel: self.pixel, weight, kind, depth, sample: self.sample, cone, pdf: 0.0, indirect }
     }
 }
 

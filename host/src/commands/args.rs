@@ -13,7 +13,7 @@ use crate::build::grid::{GridResolution, DEFAULT_CELLS_PER_TRIANGLE};
 use crate::build::kdtree::KdParams;
 use crate::build::sah::BvhParams;
 use crate::input::camera_file::CameraSpec;
-use crate::output::tone_map::{Display, ToneMap};
+use crate::output::tone_map::{DisplayChoice, Exposure, ToneMap};
 use crate::render::tracer::IntersectorKind;
 use crate::render::{self, Algorithm, RenderOptions};
 use crate::scene::{Accel, BuildOptions, TriangleLayout};
@@ -62,9 +62,13 @@ pub struct StructureArgs {
     /// mean as ambient light.
     #[arg(long, value_name = "R,G,B[,R,G,B]", value_parser = parse_sky, allow_hyphen_values = true)]
     pub sky: Option<[f32; 6]>,
-    /// Acceleration structure.
-    #[arg(long, value_enum, default_value_t = Accel::Grid)]
-    pub accel: Accel,
+    /// Acceleration structure. Default: bvh4, the fastest on the host; `raypipe stream`
+    /// uses Purcell's grid and `raypipe simulate` its chip preset's structure unless told.
+    #[arg(long, value_enum)]
+    pub accel: Option<Accel>,
+    /// The structure when --accel is not given (set by the command).
+    #[arg(skip = Accel::Bvh4)]
+    pub default_accel: Accel,
     /// Grid cells along the scene's shortest axis (Purcell used 64 for the bunny);
     /// default: derived from the triangle count.
     #[arg(long, value_name = "N", allow_hyphen_values = true)]
@@ -104,13 +108,18 @@ pub struct StructureArgs {
 }
 
 impl StructureArgs {
+    /// The structure to build: the one asked for, else the command's default.
+    pub fn accel(&self) -> Accel {
+        self.accel.unwrap_or(self.default_accel)
+    }
+
     /// The structure flags given a value other than their default (they apply only when
     /// building).
     pub(crate) fn flags_given(&self) -> Vec<&'static str> {
         let (kd, bvh) = (KdParams::default(), BvhParams::default());
         let mut v = Vec::new();
         let checks = [
-            (self.accel != Accel::Grid, "--accel"),
+            (self.accel.is_some(), "--accel"),
             (self.grid_min_dim.is_some(), "--grid-min-dim"),
             (self.grid_density != DEFAULT_CELLS_PER_TRIANGLE, "--grid-density"),
             (self.triangles != TriangleLayout::Indexed, "--triangles"),
@@ -152,7 +161,7 @@ impl StructureArgs {
                 }))
                 .collect(),
             camera: CameraSpec::default(),
-            accel: self.accel,
+            accel: self.accel(),
             grid: match self.grid_min_dim {
                 Some(n) => GridResolution::MinDim(n),
                 None => GridResolution::Auto { cells_per_triangle: self.grid_density },
@@ -335,6 +344,11 @@ pub struct AlgoArgs {
     /// Path tracing: end paths at random after the first bounce (Russian roulette).
     #[arg(long)]
     pub roulette: bool,
+    /// Path tracing: the largest radiance one bounce may add to one sample; brighter
+    /// contributions are scaled down to it, hue kept. Removes fireflies (rare paths that
+    /// find a bright light) at the cost of some energy. Default: no clamp.
+    #[arg(long, value_name = "RADIANCE", allow_hyphen_values = true)]
+    pub clamp: Option<f32>,
 }
 
 impl AlgoArgs {
@@ -356,6 +370,15 @@ impl AlgoArgs {
         opts.samples = samples;
         opts.filter = self.filter;
         opts.roulette = self.roulette;
+        if let Some(c) = self.clamp {
+            if !(c.is_finite() && c > 0.0) {
+                bail!("--clamp {c} must be a positive radiance");
+            }
+            if self.algo != Algorithm::Path {
+                bail!("--clamp applies to path tracing only (--algo path)");
+            }
+        }
+        opts.clamp = self.clamp;
         Ok(())
     }
 }
@@ -363,20 +386,31 @@ impl AlgoArgs {
 /// How a PNG output shows linear radiance.
 #[derive(Args, Debug, Clone, Default)]
 pub struct DisplayArgs {
-    /// PNG: exposure in stops (radiance times 2^EV before tone mapping).
-    #[arg(long, value_name = "EV", default_value_t = 0.0, allow_negative_numbers = true)]
-    pub exposure: f32,
+    /// PNG: exposure in stops (radiance times 2^EV before tone mapping), or "auto": the
+    /// frame's log-average luminance to middle grey, at most 1% of pixels clipping.
+    /// Default: auto for path tracing (its brightness is the emitters'), 0 otherwise.
+    #[arg(long, value_name = "EV|auto", value_parser = parse_exposure, allow_negative_numbers = true)]
+    pub exposure: Option<Exposure>,
     /// PNG: tone-mapping operator.
     #[arg(long, value_enum, default_value_t = ToneMap::Clamp)]
     pub tonemap: ToneMap,
 }
 
+fn parse_exposure(s: &str) -> std::result::Result<Exposure, String> {
+    if s.eq_ignore_ascii_case("auto") {
+        return Ok(Exposure::Auto);
+    }
+    match s.parse::<f32>() {
+        Ok(ev) if ev.is_finite() && ev.abs() <= 64.0 => Ok(Exposure::Stops(ev)),
+        _ => Err(format!("{s} is not \"auto\" or a number of stops between -64 and 64")),
+    }
+}
+
 impl DisplayArgs {
-    /// Checks the values: the display transform.
-    pub fn display(&self) -> Result<Display> {
-        if !self.exposure.is_finite() || self.exposure.abs() > 64.0 {
-            bail!("--exposure {} is not a number of stops between -64 and 64", self.exposure);
-        }
-        Ok(Display { exposure: self.exposure, tone_map: self.tonemap })
+    /// The display transform asked for, `algo` deciding the default exposure.
+    pub fn choice(&self, algo: Algorithm) -> DisplayChoice {
+        let exposure =
+            self.exposure.unwrap_or(if algo == Algorithm::Path { Exposure::Auto } else { Exposure::Stops(0.0) });
+        DisplayChoice { exposure, tone_map: self.tonemap }
     }
 }

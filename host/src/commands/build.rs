@@ -70,11 +70,11 @@ pub(crate) fn cmd_build(a: BuildArgs) -> Result<()> {
     let r = scene.report.as_ref().ok_or_else(|| anyhow!("internal error: no build report"))?;
     println!("scene        {input}");
     println!("triangles    {} ({} degenerate), vertices {}", r.triangles, r.degenerate, r.vertices);
-    match a.structure.accel {
+    match a.structure.accel() {
         Accel::Kd | Accel::Bvh | Accel::Bvh4 | Accel::Bvh8 => {
             println!(
                 "{:<12} {} nodes, depth {}, {} triangle references ({:.2} per triangle)",
-                accel_name(a.structure.accel),
+                accel_name(a.structure.accel()),
                 r.tree_nodes,
                 r.tree_depth,
                 r.references,

@@ -48,7 +48,6 @@ pub struct RenderArgs {
 pub(crate) fn cmd_render(a: RenderArgs) -> Result<()> {
     a.run.check()?;
     check_image_path(&a.output)?;
-    let display = a.display.display()?;
     let loading = Instant::now();
     let scene = load_scene(a.scene.as_deref(), &a.structure, &a.camera)?;
     let load_secs = loading.elapsed().as_secs_f64();
@@ -60,13 +59,14 @@ pub(crate) fn cmd_render(a: RenderArgs) -> Result<()> {
     let mut opts =
         RenderOptions { threads: a.run.threads, intersector: kind, progress: true, packet, ..Default::default() };
     a.algo.apply(&mut opts)?;
+    let display = a.display.choice(opts.algo);
     if let Some(cams) = a.walk.cameras(&cam)? {
         return walkthrough(&a, &scene, &view, &cams, &opts, &display);
     }
     let start = Instant::now();
     let (frame, rays) = render::render_counted(&view, &cam, &opts)?;
     let secs = start.elapsed().as_secs_f64();
-    output::write_frame(&a.output, &frame, &display)?;
+    let auto = output::write_frame(&a.output, &frame, &display)?;
     // Building the structure is part of loading an OBJ; the report says how long it took.
     let build_secs = scene.report.as_ref().map_or(0.0, |r| r.grid_seconds);
     println!(
@@ -80,6 +80,9 @@ pub(crate) fn cmd_render(a: RenderArgs) -> Result<()> {
         a.output.display()
     );
     println!("lights   {}", lights_summary(&scene)?);
+    if let Some(auto) = auto {
+        println!("exposure {}", auto.describe());
+    }
     println!(
         "time     load {:.3} s, build {:.3} s, render {:.3} s",
         (load_secs - build_secs).max(0.0),
@@ -104,19 +107,27 @@ fn walkthrough(
     view: &raypipe_core::SceneView<'_>,
     cams: &[raypipe_core::image::CameraRecord],
     opts: &RenderOptions,
-    display: &crate::output::tone_map::Display,
+    display: &crate::output::tone_map::DisplayChoice,
 ) -> Result<()> {
     println!("walkthrough of {} ({} triangles): {} frames", scene.name, view.triangle_count(), cams.len());
     println!("lights   {}", lights_summary(scene)?);
     println!("frame      seconds   frames/s   Mrays/s  image");
     let mut times = Vec::with_capacity(cams.len());
     let mut all_rays = 0u64;
+    let mut display = *display;
     for (k, cam) in cams.iter().enumerate() {
         let start = Instant::now();
         let (frame, rays) = render::render_counted(view, cam, opts)?;
         let secs = start.elapsed().as_secs_f64().max(1e-9);
         let path = output::frame_path(&a.output, k);
-        output::write_frame(&path, &frame, display)?;
+        if k == 0 {
+            let auto;
+            (display, auto) = display.fixed_by(&frame.radiance);
+            if let Some(auto) = auto.filter(|_| output::ImageFormat::of(&path).ok() == Some(output::ImageFormat::Png)) {
+                println!("exposure {} — every frame", auto.describe());
+            }
+        }
+        output::write_frame(&path, &frame, &display)?;
         println!(
             "{k:>5}  {secs:>10.4}  {:>9.2}  {:>8.2}  {}",
             1.0 / secs,

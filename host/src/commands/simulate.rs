@@ -9,7 +9,7 @@ use crate::hw::frame_setup::FrameSetup;
 use crate::output;
 use crate::render::tracer::IntersectorKind;
 use crate::render::{Algorithm, RenderOptions};
-use crate::scene::Scene;
+use crate::scene::{Accel, Scene};
 use anyhow::{bail, Result};
 use raypipe_hw::Report;
 
@@ -131,7 +131,7 @@ pub(crate) fn parse_roi(s: &str) -> Result<(u64, u64), String> {
 
 pub(crate) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
     check_image_path(&a.output)?;
-    let display = a.display.display()?;
+    let mut display = a.display.choice(a.algo.algo);
     // Every output's directory before anything is written: never one without the other.
     output::check_writable(&a.output)?;
     output::check_writable(&a.report)?;
@@ -149,14 +149,18 @@ pub(crate) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
     let outputs = output::batch::Batch::begin();
     let run = run_simulation(&a, None, true)?;
     let measured: Vec<&FrameRun> = run.frames.iter().filter(|f| !f.warmup).collect();
+    let mut auto = None;
     if walk {
+        if let Some(first) = run.frames.first() {
+            (display, auto) = display.fixed_by(&first.frame.radiance);
+        }
         for (k, f) in run.frames.iter().enumerate() {
             output::write_frame(&output::frame_path(&a.output, k), &f.frame, &display)?;
         }
         let lines: Vec<String> = run.frames.iter().enumerate().map(|(k, f)| frame_line(k, f)).collect();
         output::write_bytes(&a.measure.frames, (lines.join("\n") + "\n").as_bytes())?;
     } else if let Some(last) = run.frames.last() {
-        output::write_frame(&a.output, &last.frame, &display)?;
+        auto = output::write_frame(&a.output, &last.frame, &display)?;
     }
     if a.measure.interval.is_some() {
         let mut text = String::new();
@@ -194,6 +198,9 @@ pub(crate) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
         a.output.display().to_string()
     };
     println!("simulated {} ({}, {} triangles) -> {target}", run.scene, run.structure, run.triangles);
+    if let Some(auto) = auto.filter(|_| output::ImageFormat::of(&a.output).ok() == Some(output::ImageFormat::Png)) {
+        println!("exposure {}", auto.describe());
+    }
     if walk {
         print_walkthrough(&run.frames, a.measure.warmup_frames);
         println!("last frame:");
@@ -282,6 +289,23 @@ fn print_walkthrough(frames: &[FrameRun], warmup: usize) {
     }
 }
 
+/// Where the simulated structure came from, said on the summary line: a preset's
+/// structure must never be a silent default.
+fn structure_origin(a: &SimulateArgs, cfg: &raypipe_hw::HwConfig, scene: &Scene) -> String {
+    let chip = match (&a.preset, &a.config) {
+        (_, Some(file)) => format!("{}", file.display()),
+        (Some(p), None) => format!("preset {p}"),
+        (None, None) => "the default chip".into(),
+    };
+    if scene.report.is_none() {
+        format!("built into the scene image ({chip} names {:?})", cfg.structure)
+    } else if a.structure.accel.is_some() {
+        format!("from --accel ({chip} names {:?})", cfg.structure)
+    } else {
+        format!("the structure of {chip} (--accel to change)")
+    }
+}
+
 /// One simulation's results.
 pub(crate) struct Simulated {
     /// Every frame (one unless a walkthrough or warm-up).
@@ -304,12 +328,12 @@ pub(crate) struct SceneCache {
 }
 
 impl SceneCache {
-    fn get(&self, a: &SimulateArgs) -> Result<Arc<Scene>> {
-        let key = format!("{:?}|{:?}|{:?}", a.scene, a.structure, a.camera);
+    fn get(&self, a: &SimulateArgs, structure: &StructureArgs) -> Result<Arc<Scene>> {
+        let key = format!("{:?}|{:?}|{:?}", a.scene, structure, a.camera);
         if let Some(s) = self.scenes.lock().map_err(|_| anyhow::anyhow!("scene cache poisoned"))?.get(&key) {
             return Ok(s.clone());
         }
-        let scene = Arc::new(load_scene(a.scene.as_deref(), &a.structure, &a.camera)?);
+        let scene = Arc::new(load_scene(a.scene.as_deref(), structure, &a.camera)?);
         warn(&scene);
         let mut map = self.scenes.lock().map_err(|_| anyhow::anyhow!("scene cache poisoned"))?;
         Ok(map.entry(key).or_insert(scene).clone())
@@ -328,10 +352,14 @@ pub(crate) fn run_simulation(a: &SimulateArgs, cache: Option<&SceneCache>, show_
             cfg.datapath.name()
         );
     }
+    // The chip's own structure unless the command line names one.
+    let mut structure = a.structure.clone();
+    structure.default_accel = <Accel as clap::ValueEnum>::from_str(&cfg.structure, true)
+        .map_err(|_| anyhow::anyhow!("the chip's structure {:?} is not one raypipe builds", cfg.structure))?;
     let scene = match cache {
-        Some(c) => c.get(a)?,
+        Some(c) => c.get(a, &structure)?,
         None => {
-            let s = load_scene(a.scene.as_deref(), &a.structure, &a.camera)?;
+            let s = load_scene(a.scene.as_deref(), &structure, &a.camera)?;
             warn(&s);
             Arc::new(s)
         }
@@ -388,7 +416,7 @@ pub(crate) fn run_simulation(a: &SimulateArgs, cache: Option<&SceneCache>, show_
         frames,
         report,
         scene: scene.name.clone(),
-        structure: structure_summary(&view),
+        structure: format!("{}, {}", structure_summary(&view), structure_origin(a, &cfg, &scene)),
         triangles: view.triangle_count(),
         seconds,
     })

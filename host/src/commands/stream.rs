@@ -4,6 +4,7 @@ use crate::hw::frame_setup::FrameSetup;
 use crate::output;
 use crate::render::tracer::IntersectorKind;
 use crate::render::{self, Algorithm, RenderOptions};
+use crate::scene::Accel;
 use anyhow::{anyhow, bail, Result};
 use raypipe_hw::stream::{CostModel, StreamConfig};
 use std::time::Instant;
@@ -84,14 +85,16 @@ pub struct StreamArgs {
 
 pub(crate) fn cmd_stream(a: StreamArgs) -> Result<()> {
     check_image_path(&a.output)?;
-    let display = a.display.display()?;
+    let display = a.display.choice(a.algo.algo);
     output::check_writable(&a.output)?;
     output::check_writable(&a.report)?;
     let (cfg, costs) = machine_of(&a)?;
     let algo = AlgoArgs { samples: Some(a.algo.samples.unwrap_or(1)), ..a.algo.clone() };
     let mut opts = RenderOptions::default();
     algo.apply(&mut opts)?;
-    let scene = load_scene(a.scene.as_deref(), &a.structure, &a.camera)?;
+    // Purcell's machine traverses a uniform grid unless told otherwise.
+    let structure = StructureArgs { default_accel: Accel::Grid, ..a.structure.clone() };
+    let scene = load_scene(a.scene.as_deref(), &structure, &a.camera)?;
     warn(&scene);
     let view = scene.view()?;
     if view.grid().is_none() {
@@ -137,7 +140,7 @@ pub(crate) fn cmd_stream(a: StreamArgs) -> Result<()> {
         None
     };
     let outputs = output::batch::Batch::begin();
-    output::write_frame(&a.output, &frame, &display)?;
+    let auto = output::write_frame(&a.output, &frame, &display)?;
     output::write_bytes(&a.report, report.to_json().as_bytes())?;
     outputs.commit()?;
     println!(
@@ -150,6 +153,9 @@ pub(crate) fn cmd_stream(a: StreamArgs) -> Result<()> {
         format!("{:?}", opts.algo).to_lowercase(),
         architecture_label(&cfg)
     );
+    if let Some(auto) = auto {
+        println!("exposure {}", auto.describe());
+    }
     let label = format!("{} {}", scene.name, cfg.arch);
     print!("{}", crate::hw::stream::table2(&report, &label));
     print!("{}", crate::hw::stream::kernel_table(&report));

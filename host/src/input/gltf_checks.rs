@@ -186,6 +186,10 @@ fn check_kind(a: &Accessor<'_>, what: &str, types: &[DataType], dims: &[Dimensio
 /// The accessor's elements, and any sparse substitution, lie inside their buffer views,
 /// and the views inside their buffers.
 fn check_range(a: &Accessor<'_>, what: &str, buffers: &[gltf::buffer::Data]) -> Result<(), String> {
+    // glTF 2.0 §5.1.1: `count` is at least 1 (the gltf crate computes `count - 1`).
+    if a.count() == 0 {
+        return Err(format!("accessor {} ({what}) has count 0; glTF requires at least 1", a.index()));
+    }
     let elem = a.size() as u64;
     if let Some(view) = a.view() {
         let stride = view.stride().map_or(elem, |s| s as u64);
@@ -302,6 +306,11 @@ mod tests {
         let e = load(&doc(r#""componentType":5123,"count":4000000000,"type":"SCALAR""#, r#"[{"mesh":0}]"#, "[0]"))
             .unwrap_err();
         assert!(e.contains("reaches byte 8000000000 of buffer view 1, which holds 8"), "{e}");
+        // An empty accessor (the gltf crate's reader subtracts one from its count).
+        let text = doc(U16_INDICES, r#"[{"mesh":0}]"#, "[0]")
+            .replace(r#""componentType":5126,"count":3"#, r#""componentType":5126,"count":0"#);
+        let e = load(&text).unwrap_err();
+        assert!(e.contains("accessor 0 (POSITION) has count 0"), "{e}");
         // A view beyond its buffer.
         let text = doc(U16_INDICES, r#"[{"mesh":0}]"#, "[0]")
             .replace(r#""byteOffset":36,"byteLength":8"#, r#""byteOffset":40,"byteLength":8"#);

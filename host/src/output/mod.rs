@@ -72,14 +72,30 @@ impl ImageFormat {
     }
 }
 
-/// Writes a frame atomically in the format its extension names: PNG through `display`,
-/// EXR and PFM as the linear radiance.
+/// Writes a frame atomically in the format its extension names: PNG through `choice`
+/// (returning what automatic exposure chose, if it was asked for), EXR and PFM as the
+/// linear radiance.
 pub fn write_frame(
     path: &Path,
     frame: &crate::render::Frame,
+    choice: &crate::output::tone_map::DisplayChoice,
+) -> Result<Option<crate::output::tone_map::AutoExposure>> {
+    let format = ImageFormat::of(path)?;
+    if format != ImageFormat::Png {
+        write_image(path, format, frame, &Default::default())?;
+        return Ok(None);
+    }
+    let (display, auto) = choice.for_frame(&frame.radiance);
+    write_image(path, format, frame, &display)?;
+    Ok(auto)
+}
+
+fn write_image(
+    path: &Path,
+    format: ImageFormat,
+    frame: &crate::render::Frame,
     display: &crate::output::tone_map::Display,
 ) -> Result<()> {
-    let format = ImageFormat::of(path)?;
     if format != ImageFormat::Png || !display.is_identity() {
         let n = frame.width as usize * frame.height as usize;
         if frame.radiance.len() != n {

@@ -58,6 +58,9 @@ pub struct RenderOptions {
     pub filter: Filter,
     /// Path tracing: Russian roulette after the first bounce.
     pub roulette: bool,
+    /// Path tracing: largest radiance one path vertex may add to one sample (`None`:
+    /// no clamp).
+    pub clamp: Option<f32>,
 }
 
 /// The rendering algorithm (Purcell 2002 Fig. 3).
@@ -83,7 +86,10 @@ impl RenderOptions {
             Algorithm::Shadow => Some(Shader::Whitted(WhittedOptions { max_depth: 0, background })),
             Algorithm::Whitted => Some(Shader::Whitted(WhittedOptions { max_depth: self.max_depth, background })),
             Algorithm::Path => {
-                Some(Shader::Path(PathOptions { bounces: self.bounces, roulette: self.roulette, background }))
+                // A record's weight carries 1/samples: the limit per sample becomes one
+                // per record.
+                let clamp = self.clamp.map_or(f32::INFINITY, |c| c / self.samples.max(1) as f32);
+                Some(Shader::Path(PathOptions { clamp, ..PathOptions::new(self.bounces, self.roulette, background) }))
             }
         }
     }
@@ -107,6 +113,7 @@ impl Default for RenderOptions {
             samples: 1,
             filter: Filter::Box,
             roulette: false,
+            clamp: None,
         }
     }
 }

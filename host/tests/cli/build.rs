@@ -8,13 +8,16 @@ fn build_then_render_the_image_equals_rendering_the_obj() {
     let dir = tempfile::tempdir().unwrap();
     let obj = fixtures().join("cornell_box.obj");
     let obj = obj.to_str().unwrap();
-    let o = raypipe(dir.path(), &["build", obj, "-o", "box.rpsi", "--grid-min-dim", "5"]);
+    let o = raypipe(dir.path(), &["build", obj, "-o", "box.rpsi", "--accel", "grid", "--grid-min-dim", "5"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let out = String::from_utf8_lossy(&o.stdout);
     assert!(out.contains("triangles    32"), "{out}");
     assert!(out.contains("grid         5 x 5 x 5"), "{out}");
     let a = raypipe(dir.path(), &["render", "box.rpsi", "-o", "a.png", "--size", "80x60"]);
-    let b = raypipe(dir.path(), &["render", obj, "-o", "b.png", "--size", "80x60", "--grid-min-dim", "5"]);
+    let b = raypipe(
+        dir.path(),
+        &["render", obj, "-o", "b.png", "--size", "80x60", "--accel", "grid", "--grid-min-dim", "5"],
+    );
     let c = raypipe(dir.path(), &["render", "-o", "c.png", "--size", "80x60"]);
     assert!(a.status.success() && b.status.success() && c.status.success());
     let (pa, pb, pc) =
@@ -32,7 +35,8 @@ fn generated_scenes_build_with_their_views() {
     {
         for view in views {
             let out = format!("{view}.rpsi");
-            let o = raypipe(dir.path(), &["build", "--generate", spec, "--view", view, "-o", &out]);
+            // Purcell's stream machine walks a grid.
+            let o = raypipe(dir.path(), &["build", "--generate", spec, "--view", view, "--accel", "grid", "-o", &out]);
             assert!(o.status.success(), "{spec} {view}: {}", stderr(&o));
             let o = raypipe(dir.path(), &["stream", &out, "--size", "32x32", "--no-charts"]);
             assert!(o.status.success(), "{spec} {view}: {}", stderr(&o));

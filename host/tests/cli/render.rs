@@ -249,7 +249,16 @@ fn hdr_outputs_hold_the_linear_framebuffer() {
         assert_one_line_error(&o, what);
     }
     let o = raypipe(dir.path(), &["render", "-o", "c.png", "--exposure", "inf"]);
-    assert_one_line_error(&o, "--exposure");
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "a usage error: {err}");
+    assert!(err.trim().lines().count() == 1 && err.contains("--exposure"), "{err}");
+    // Path tracing exposes automatically and says so; EXR stays linear and says nothing.
+    let o = raypipe(dir.path(), &["render", "-o", "p.png", "--algo", "path", "--samples", "2", "--size", "16x16"]);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("exposure auto"), "{}", String::from_utf8_lossy(&o.stdout));
+    let o = raypipe(dir.path(), &["render", "-o", "p.exr", "--algo", "path", "--samples", "2", "--size", "16x16"]);
+    assert!(!String::from_utf8_lossy(&o.stdout).contains("exposure"), "{}", String::from_utf8_lossy(&o.stdout));
+    let o = raypipe(dir.path(), &["render", "-o", "c.png", "--clamp", "2"]);
+    assert_one_line_error(&o, "path tracing only");
     let o = raypipe(dir.path(), &["render", "-o", "c.png", "--filter", "lanczos"]);
     assert!(!o.status.success() && stderr(&o).contains("unknown filter"), "{}", stderr(&o));
 }

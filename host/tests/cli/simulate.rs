@@ -57,6 +57,18 @@ fn simulate_presets_configs_and_overrides() {
         assert!(o.status.success(), "{extra:?}: {}", stderr(&o));
         assert_eq!(decode(&dir.path().join("s.png")), decode(&dir.path().join("r.png")), "{extra:?}");
     }
+    // A preset brings its structure and says so; --accel overrides it, and says that.
+    let o = raypipe(dir.path(), &["simulate", tetra, "--preset", "saarcor", "--size", "16x16", "-o", "k.png"]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("(kd ") && out.contains("the structure of preset saarcor"), "{out}");
+    let o = raypipe(dir.path(), &["simulate", tetra, "--preset", "saarcor", "--accel", "grid", "--size", "16x16"]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("(grid ") && out.contains("from --accel (preset saarcor names \"kd\")"), "{out}");
+    // A bare word is a string value.
+    let o = raypipe(dir.path(), &["simulate", tetra, "--set", "memory.model=dram", "--size", "16x16", "-o", "d.png"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = raypipe(dir.path(), &["simulate", tetra, "--set", "structure=octree", "--size", "16x16"]);
+    assert_one_line_error(&o, "structure must be one of");
 }
 
 #[test]

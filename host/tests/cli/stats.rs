@@ -8,7 +8,7 @@ fn stats_and_bench_report_their_figures() {
     let o = raypipe(dir.path(), &["stats", "--size", "64x64"]);
     let out = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "{}", stderr(&o));
-    for key in ["rays that hit", "voxels visited per ray", "triangles tested per ray", "list entries read"] {
+    for key in ["rays that hit", "nodes visited per ray", "triangles tested per ray", "list entries read"] {
         assert!(out.contains(key), "{out}");
     }
     let o = raypipe(dir.path(), &["bench", "--size", "32x32", "--runs", "1"]);

@@ -50,7 +50,13 @@ pub struct HwConfig {
     pub memory: MemoryConfig,
     /// Energy and area figures (docs/hw-model.md, "Energy and area").
     pub energy: energy::EnergyConfig,
+    /// The acceleration structure the chip is built to traverse, used when the command
+    /// line names none: "grid", "kd", "bvh", "bvh4", "bvh8" or "none".
+    pub structure: String,
 }
+
+/// The structures a chip may name.
+pub const STRUCTURES: [&str; 6] = ["grid", "kd", "bvh", "bvh4", "bvh8", "none"];
 
 /// The ray generation & shading unit.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -255,6 +261,8 @@ impl Default for HwConfig {
             cache: CachesConfig::default(),
             memory: MemoryConfig::default(),
             energy: energy::EnergyConfig::default(),
+            // Purcell's uniform grid, the structure the project began with.
+            structure: "grid".into(),
         }
     }
 }
@@ -372,10 +380,13 @@ impl HwConfig {
         };
         let (key, value) = (key.trim(), value.trim());
         let mut doc = toml::Table::try_from(&*self).map_err(|e| one_line(&e.to_string()))?;
+        // A bare word is a string (`memory.model=dram`), as a shell user writes it.
+        let bare = !value.is_empty() && value.chars().all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-');
         let parsed: toml::Value = toml::from_str::<toml::Table>(&format!("v = {value}"))
             .ok()
             .and_then(|mut t| t.remove("v"))
-            .ok_or_else(|| format!("--set {key}: {value:?} is not a number, boolean or quoted string"))?;
+            .or_else(|| bare.then(|| toml::Value::String(value.to_string())))
+            .ok_or_else(|| format!("--set {key}: {value:?} is not a number, boolean, word or quoted string"))?;
         let path: Vec<&str> = key.split('.').collect();
         let no_such = || format!("--set {key}: no such parameter");
         let Some((last, parents)) = path.split_last() else { return Err(no_such()) };
@@ -457,6 +468,9 @@ mod tests {
         c.set("traversal.threads=16").unwrap();
         assert_eq!(c.traversal.threads, 16);
         assert!(c.set("traversal.threads=\"many\"").is_err());
+        assert!(c.set("traversal.threads=many").is_err(), "a word is a string, not a number");
+        c.set("memory.model=dram").unwrap();
+        assert_eq!(c.memory.model, MemoryModel::Dram);
         c.set("fifo.rays=0").unwrap();
         assert!(c.validate().unwrap_err().contains("fifo.rays"));
         let mut c = HwConfig::default();

@@ -15,6 +15,13 @@ impl HwConfig {
         if ![1, 4, 16, 64].contains(&self.packet_size) {
             return Err(format!("packet_size must be 1, 4, 16 or 64 (got {})", self.packet_size));
         }
+        if !super::STRUCTURES.contains(&self.structure.as_str()) {
+            return Err(format!(
+                "structure must be one of {} (got {:?})",
+                super::STRUCTURES.join(", "),
+                self.structure
+            ));
+        }
         self.validate_units()?;
         self.fifo.validate()?;
         for (name, c) in self.caches() {
