@@ -97,12 +97,12 @@ pub(crate) fn cmd_fixed_point(a: FixedPointArgs) -> Result<()> {
                 );
             }
             if !ok {
-                eprintln!(
-                    "warning: {}: coordinates up to {largest:.4} do not fit {} (largest {:.4}): they saturate",
+                crate::output::warnings::warning(&format!(
+                    "{}: coordinates up to {largest:.4} do not fit {} (largest {:.4}): they saturate",
                     scene.name,
                     d.name(),
                     format.max_value()
-                );
+                ));
             }
         }
     }

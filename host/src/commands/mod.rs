@@ -28,9 +28,7 @@ use std::path::Path;
 
 pub(crate) fn warn(scene: &Scene) {
     if let Some(r) = &scene.report {
-        for w in &r.warnings {
-            eprintln!("warning: {w}");
-        }
+        crate::output::warnings::warnings(&scene.name, &r.warnings);
     }
 }
 
@@ -104,7 +102,7 @@ pub(crate) fn camera_for(view: &raypipe_core::SceneView<'_>, args: &CameraArgs) 
 /// Warns about a scene or rays outside raypipe-core's guaranteed range.
 pub(crate) fn warn_range(view: &raypipe_core::SceneView<'_>, rays: &[raypipe_core::Ray], what: &str) {
     for w in crate::input::range_check::warnings(view, rays, what) {
-        eprintln!("warning: {w}");
+        crate::output::warnings::warning(&w);
     }
 }
 
@@ -121,11 +119,11 @@ pub(crate) fn load_scene(path: Option<&Path>, structure: &StructureArgs, camera:
         return Ok(scene);
     }
     for flag in structure.flags_given() {
-        eprintln!(
-            "warning: {}: {flag} applies when building from an OBJ; the image keeps its {}",
+        crate::output::warnings::warning(&format!(
+            "{}: {flag} applies when building from an OBJ; the image keeps its {}",
             scene.name,
             structure_summary(&scene.view()?)
-        );
+        ));
     }
     if opts.lights.is_empty() {
         // An image whose point light raypipe placed for the image's own camera, rendered

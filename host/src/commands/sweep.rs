@@ -138,7 +138,12 @@ pub(crate) fn cmd_sweep(a: SweepArgs) -> Result<()> {
     bar.finish_and_clear();
     let mut failed = 0;
     for r in new_rows.iter().filter(|r| r.error.is_some()) {
-        eprintln!("warning: sweep point {} ({}): {}", r.index, r.point, r.error.as_deref().unwrap_or(""));
+        crate::output::warnings::warning(&format!(
+            "sweep point {} ({}): {}",
+            r.index,
+            r.point,
+            r.error.as_deref().unwrap_or("")
+        ));
         failed += 1;
     }
     let rows = journal.finish(&a.output, new_rows)?;
@@ -171,7 +176,11 @@ fn merge(m: SweepMergeArgs) -> Result<()> {
     let rows = sweep_table::normalize(rows);
     for w in rows.windows(2) {
         if w[0].index + 1 != w[1].index {
-            eprintln!("warning: sweep merge: points {} to {} are missing", w[0].index + 1, w[1].index - 1);
+            crate::output::warnings::warning(&format!(
+                "sweep merge: points {} to {} are missing",
+                w[0].index + 1,
+                w[1].index - 1
+            ));
         }
     }
     sweep_table::write(&m.output, &rows)?;

@@ -146,18 +146,18 @@ pub(crate) fn cmd_trace(a: TraceArgs) -> Result<()> {
     warn_range(&view, &valid, &format!("rays of {name}"));
     let n_invalid = invalid.iter().filter(|b| **b).count();
     if n_invalid > 0 {
-        eprintln!(
-            "warning: {name}: {n_invalid} rows are not rays (NaN or infinite values, a zero direction, an empty or negative interval): returned as misses"
-        );
+        crate::output::warnings::warning(&format!(
+            "{name}: {n_invalid} rows are not rays (NaN or infinite values, a zero direction, an empty or negative interval): returned as misses"
+        ));
     }
     if a.packet != PacketSize::Single {
         let share = incoherent_share(&rays, a.packet.lanes());
         if share > 0.25 {
-            eprintln!(
-                "warning: {name}: {:.0}% of the packets of {} consecutive rays hold rays more than 60° from their mean direction: packets of incoherent rays split at once and trace slower than single rays (--packet 1)",
+            crate::output::warnings::warning(&format!(
+                "{name}: {:.0}% of the packets of {} consecutive rays hold rays more than 60° from their mean direction: packets of incoherent rays split at once and trace slower than single rays (--packet 1)",
                 100.0 * share,
                 a.packet.lanes()
-            );
+            ));
         }
     }
     let kind = IntersectorKind::resolve(a.run.intersector, &view);

@@ -262,3 +262,30 @@ fn hdr_outputs_hold_the_linear_framebuffer() {
     let o = raypipe(dir.path(), &["render", "-o", "c.png", "--filter", "lanczos"]);
     assert!(!o.status.success() && stderr(&o).contains("unknown filter"), "{}", stderr(&o));
 }
+
+/// A scene with many warnings prints one line by default, every one with --verbose and
+/// none with --quiet; the image is the same.
+#[test]
+fn long_warning_lists_fold_unless_verbose() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mut mtl = String::new();
+    let mut obj = String::from("mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\n");
+    for i in 0..5 {
+        mtl += &format!("newmtl m{i}\nKd 0.5 0.5 0.5\nmap_Kd missing{i}.png\n");
+        obj += &format!("usemtl m{i}\nf 1 2 3\n");
+    }
+    write(d, "m.mtl", &mtl);
+    write(d, "s.obj", &obj);
+    let count = |args: &[&str]| {
+        let mut all = vec!["render", "s.obj", "--size", "8x8", "-o", "x.png"];
+        all.extend_from_slice(args);
+        let o = raypipe(d, &all);
+        assert!(o.status.success(), "{}", stderr(&o));
+        stderr(&o).lines().filter(|l| l.starts_with("warning:")).count()
+    };
+    assert_eq!(count(&[]), 1, "folded");
+    assert!(count(&["--verbose"]) >= 5);
+    assert_eq!(count(&["--quiet"]), 0);
+    assert_eq!(count(&["-q"]), 0);
+}
