@@ -473,6 +473,12 @@ fn model_images_equal_the_host_for_every_algorithm() {
                 );
                 let r = sim.report();
                 assert_eq!(r.conservation.rays_issued, r.conservation.rays_retired);
+                // Ray steps: each packet step counts its active rays.
+                assert!(r.ray_steps >= r.traversal_steps && r.ray_steps <= r.traversal_steps * cfg.packet_size as u64);
+                if cfg.packet_size == 1 {
+                    assert_eq!(r.ray_steps, r.traversal_steps);
+                    assert_eq!(r.traversal_simd_efficiency, 1.0);
+                }
                 assert_eq!(r.conservation.bytes_requested, r.conservation.bytes_delivered);
                 let secondary: u64 = r.rays_by_kind.iter().filter(|(k, _)| *k != "primary").map(|(_, n)| n).sum();
                 // A sky casts no shadow ray outside the path tracer.

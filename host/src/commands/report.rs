@@ -5,7 +5,7 @@ use std::path::Path;
 use anyhow::{anyhow, Result};
 use serde_json::Value;
 
-use crate::study::report_diff::{diff, is_headline, show, Change};
+use crate::study::report_diff::{diff, is_headline, show, Change, HEADLINE};
 
 use clap::Args;
 use clap::Subcommand;
@@ -91,7 +91,9 @@ fn cmd_diff(a: ReportDiffArgs) -> Result<()> {
         d.changes.len(),
         d.changes.len() + d.unchanged
     );
-    let (head, rest): (Vec<&Change>, Vec<&Change>) = d.changes.iter().partition(|c| is_headline(&c.path));
+    let (mut head, rest): (Vec<&Change>, Vec<&Change>) = d.changes.iter().partition(|c| is_headline(&c.path));
+    // The headline in its fixed order, not by effect.
+    head.sort_by_key(|c| HEADLINE.iter().position(|h| *h == c.path));
     let limit = a.top.unwrap_or(usize::MAX);
     for (title, list) in [("headline", head), ("every other number", rest)] {
         if list.is_empty() {

@@ -28,8 +28,13 @@ pub fn summary(report: &Report) -> String {
         report.rays_per_second / 1e6
     ));
     line(format!(
-        "work           {} traversal steps, {} ray-triangle tests",
-        report.traversal_steps, report.triangle_tests
+        "work           {} packet steps = {} ray steps ({:.2} per ray, SIMD {:.0}%), {} ray-triangle tests ({:.2} per ray)",
+        report.traversal_steps,
+        report.ray_steps,
+        report.steps_per_ray,
+        100.0 * report.traversal_simd_efficiency,
+        report.triangle_tests,
+        report.tests_per_ray
     ));
     let kinds: Vec<String> =
         report.rays_by_kind.iter().filter(|(_, &n)| n > 0).map(|(k, n)| format!("{k} {n}")).collect();

@@ -52,14 +52,17 @@ impl Change {
         }
     }
 
-    /// How large the change is: |ln ratio| (sign changes and appearances rank first).
+    /// How large the change is: the symmetric relative change `|b − a| / (|a| + |b|)`
+    /// (0 to 1) times the number's order of magnitude `ln(1 + max(|a|, |b|))`, so that a
+    /// small counter going 4 → 0 (1 × 1.6) ranks below a frame's cycles doubling
+    /// (⅓ × 14 at a million cycles), and a counter appearing at 10⁶ ranks first.
     pub fn effect(&self) -> f64 {
-        let r = self.ratio();
-        if r.is_finite() && r > 0.0 {
-            r.ln().abs()
-        } else {
-            f64::INFINITY
+        let (a, b) = (self.a.abs(), self.b.abs());
+        if a + b == 0.0 {
+            return 0.0;
         }
+        let relative = if self.a * self.b < 0.0 { 1.0 } else { (self.b - self.a).abs() / (a + b) };
+        relative * (1.0 + a.max(b)).ln()
     }
 }
 
@@ -83,15 +86,27 @@ fn record(path: &str) -> String {
     path.splitn(3, '.').take(2).collect::<Vec<_>>().join(".")
 }
 
-/// The headline numbers: the report's top-level figures and its memory and energy
-/// totals (shown before the rest).
+/// The headline: figures that compare across chips of any packet size, frame size or
+/// clock, in this order (packet-step counts are not among them: a 64-ray packet step
+/// and a single ray's step are not the same work).
+pub const HEADLINE: [&str; 12] = [
+    "frames_per_second",
+    "cycles",
+    "rays_per_second",
+    "steps_per_ray",
+    "tests_per_ray",
+    "traversal_simd_efficiency",
+    "memory.bytes_per_ray",
+    "memory.utilization",
+    "memory.traffic_over_compulsory",
+    "energy.joules_per_ray",
+    "energy.watts",
+    "energy.area_mm2",
+];
+
+/// Whether `path` is a headline figure.
 pub fn is_headline(path: &str) -> bool {
-    !path.contains('.')
-        || matches!(
-            path,
-            "memory.total_bytes" | "memory.bytes_per_ray" | "memory.utilization" | "memory.traffic_over_compulsory"
-        )
-        || path.starts_with("energy.") && path.matches('.').count() == 1
+    HEADLINE.contains(&path)
 }
 
 fn text(v: &Value) -> String {
@@ -152,5 +167,25 @@ pub fn show(v: f64) -> String {
     } else {
         let digits = (3 - v.abs().log10().floor() as i32).clamp(0, 9) as usize;
         format!("{v:.digits$}")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn small_counters_vanishing_rank_below_large_figures_changing() {
+        let c = |a: f64, b: f64| Change { path: String::new(), a, b };
+        assert!(c(1e6, 2e6).effect() > c(4.0, 0.0).effect());
+        assert!(c(0.0, 1e6).effect() > c(1e6, 2e6).effect());
+        assert_eq!(c(3.0, 3.0).effect(), 0.0);
+        assert_eq!(c(0.0, 0.0).effect(), 0.0);
+    }
+
+    #[test]
+    fn the_headline_holds_per_ray_figures_not_packet_steps() {
+        assert!(is_headline("steps_per_ray") && is_headline("traversal_simd_efficiency"));
+        assert!(!is_headline("traversal_steps") && !is_headline("triangle_tests"));
     }
 }

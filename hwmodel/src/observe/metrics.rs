@@ -24,7 +24,10 @@ pub fn metrics(r: &Report) -> Vec<(String, f64)> {
         ("rays".into(), r.rays as f64),
         ("mrays_per_s".into(), r.rays_per_second / 1e6),
         ("traversal_steps".into(), r.traversal_steps as f64),
+        ("ray_steps".into(), r.ray_steps as f64),
+        ("steps_per_ray".into(), r.steps_per_ray),
         ("triangle_tests".into(), r.triangle_tests as f64),
+        ("tests_per_ray".into(), r.tests_per_ray),
         ("memory_utilization".into(), r.memory.utilization),
         ("bytes_per_ray".into(), r.memory.bytes_per_ray),
     ];

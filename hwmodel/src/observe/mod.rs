@@ -7,4 +7,5 @@ pub mod metrics;
 pub mod report;
 pub mod stall;
 pub mod unit_stats;
+pub mod verdict;
 pub mod waves;

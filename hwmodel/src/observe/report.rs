@@ -204,10 +204,20 @@ pub struct Report {
     pub rays_by_kind: BTreeMap<String, u64>,
     /// Most shadow and secondary ray records waiting in the shading unit at once.
     pub ray_stream_peak: usize,
-    /// Traversal steps issued (packet steps).
+    /// Traversal steps issued (packet steps: a 64-ray packet's step counts once, so
+    /// chips of different packet sizes compare on `ray_steps`, not on this).
     pub traversal_steps: u64,
+    /// Ray steps: the rays that took part in each traversal step, summed (a packet step
+    /// of 40 active rays counts 40).
+    pub ray_steps: u64,
+    /// Ray steps per traced ray.
+    pub steps_per_ray: f64,
     /// Ray–triangle tests run.
     pub triangle_tests: u64,
+    /// Ray–triangle tests per traced ray.
+    pub tests_per_ray: f64,
+    /// Active lanes over lane slots of the traversal units' issues (1 for single rays).
+    pub traversal_simd_efficiency: f64,
     /// What produced the report (set by the command line).
     pub run: RunIdentity,
     /// The one-line verdict: what bounds the frame.
@@ -306,10 +316,13 @@ impl Report {
         let units = unit_reports(&s);
         let traversal_steps =
             s.units.iter().filter(|(n, _)| n.starts_with("traversal")).map(|(_, u)| u.issues).sum::<u64>();
+        let ray_steps = units.iter().filter(|u| u.name.starts_with("traversal")).map(|u| u.active_lanes).sum::<u64>();
+        let lane_slots = traversal_steps.saturating_mul(s.cfg.packet_size as u64);
+        let traversal_simd_efficiency = if lane_slots == 0 { 1.0 } else { ray_steps as f64 / lane_slots as f64 };
         let fifos = fifo_reports(&s);
         let caches = cache_reports(&s);
         let memory = memory_report(&s, rays);
-        let bottleneck = verdict(&units, memory.utilization);
+        let bottleneck = crate::observe::verdict::verdict(&units, memory.utilization);
         Report {
             schema: SCHEMA,
             config: s.cfg.clone(),
@@ -324,7 +337,11 @@ impl Report {
             run: RunIdentity::default(),
             bottleneck,
             traversal_steps,
+            ray_steps,
+            steps_per_ray: ray_steps as f64 / rays.max(1) as f64,
             triangle_tests: s.tests,
+            tests_per_ray: s.tests as f64 / rays.max(1) as f64,
+            traversal_simd_efficiency,
             units,
             fifos,
             caches,
@@ -342,76 +359,6 @@ impl Report {
     /// The report as pretty-printed JSON.
     pub fn to_json(&self) -> String {
         serde_json::to_string_pretty(self).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
-    }
-}
-
-/// The one-line verdict: the memory when it is busy most of the time, else the unit kind
-/// that works most, else what the traversal units wait for most.
-fn verdict(units: &[UnitReport], utilization: f64) -> String {
-    let kind = |prefix: &str| -> Option<(f64, f64, String, f64)> {
-        let us: Vec<&UnitReport> = units.iter().filter(|u| u.name.starts_with(prefix)).collect();
-        if us.is_empty() {
-            return None;
-        }
-        let ticked: f64 = us.iter().map(|u| (u.busy_cycles + u.stall_cycles + u.idle_cycles) as f64).sum();
-        let busy: f64 = us.iter().map(|u| u.busy_cycles as f64).sum::<f64>() / ticked.max(1.0);
-        let mut reasons: BTreeMap<String, u64> = BTreeMap::new();
-        for u in &us {
-            for (k, v) in &u.stall_reasons {
-                *reasons.entry(k.clone()).or_default() += v;
-            }
-        }
-        let (top, n) = reasons.into_iter().max_by_key(|(_, v)| *v).unwrap_or_default();
-        let mem: f64 = us
-            .iter()
-            .flat_map(|u| u.stall_reasons.iter())
-            .filter(|(k, _)| Stall::ALL.iter().any(|s| s.is_memory() && s.name() == k.as_str()))
-            .map(|(_, v)| *v as f64)
-            .sum::<f64>()
-            / ticked.max(1.0);
-        Some((busy, mem, top, n as f64 / ticked.max(1.0)))
-    };
-    let trav = kind("traversal");
-    let isect = kind("intersection");
-    let shade = kind("rgs.shade");
-    let wait = |k: &Option<(f64, f64, String, f64)>, what: &str| {
-        k.as_ref().map_or(String::new(), |(_, mem, top, share)| {
-            format!("; {what} wait on memory {:.0}% of their cycles (most: {top} {:.0}%)", 100.0 * mem, 100.0 * share)
-        })
-    };
-    if utilization >= 0.8 {
-        return format!(
-            "memory-bound: memory {:.0}% busy{}{}",
-            100.0 * utilization,
-            wait(&trav, "traversal units"),
-            wait(&isect, "intersection units")
-        );
-    }
-    let mut best = ("traversal", trav.as_ref().map_or(0.0, |k| k.0));
-    for (name, k) in [("intersection", &isect), ("shading", &shade)] {
-        let b = k.as_ref().map_or(0.0, |k| k.0);
-        if b > best.1 {
-            best = (name, b);
-        }
-    }
-    if best.1 >= 0.6 {
-        return format!("{}-bound: its datapath busy {:.0}% of cycles", best.0, 100.0 * best.1);
-    }
-    match &trav {
-        Some((busy, mem, top, share)) if *mem >= 0.3 => format!(
-            "latency-bound: memory {:.0}% busy, traversal units wait on memory {:.0}% of their cycles (most: {top} {:.0}%), busy {:.0}%",
-            100.0 * utilization,
-            100.0 * mem,
-            100.0 * share,
-            100.0 * busy
-        ),
-        Some((busy, _, top, share)) => format!(
-            "no dominant bound: traversal busy {:.0}%, most stalls {top} {:.0}%; memory {:.0}% busy",
-            100.0 * busy,
-            100.0 * share,
-            100.0 * utilization
-        ),
-        None => "no traversal units".to_string(),
     }
 }
 

@@ -66,6 +66,18 @@ impl Stall {
         }
     }
 
+    /// The kind of wait, for sentences that must add up: memory (data not yet there),
+    /// back-pressure (no room downstream), pipeline (the unit's own latency and issue
+    /// slots) or starvation (nothing of its own to work on).
+    pub const fn group(self) -> &'static str {
+        match self {
+            Stall::NodeData | Stall::TriangleData | Stall::ShadingData | Stall::Mshr | Stall::MemoryQueue => "memory",
+            Stall::OutputFull => "a full output FIFO",
+            Stall::StepLatency | Stall::PipelineLatency | Stall::IssueSlot | Stall::CachePort => "their pipeline",
+            Stall::AtIntersection => "the intersection unit",
+        }
+    }
+
     /// True for the reasons that wait on memory.
     pub const fn is_memory(self) -> bool {
         matches!(self, Stall::NodeData | Stall::TriangleData | Stall::ShadingData | Stall::Mshr | Stall::MemoryQueue)
