@@ -95,8 +95,10 @@ pub(crate) fn cmd_sweep(a: SweepArgs) -> Result<()> {
     let (jsonl, _) = sweep_table::outputs(&a.output);
     output::check_writable(&jsonl)?;
     if let Some(dir) = &a.reports {
+        // Made as `mkdir -p` would, so a fresh sweep needs no preparation.
         if !dir.is_dir() {
-            bail!("--reports {}: no such directory", dir.display());
+            std::fs::create_dir_all(dir)
+                .map_err(|e| anyhow::anyhow!("--reports {}: cannot create: {e}", dir.display()))?;
         }
     }
     // Resume: rows already written for this run's points are kept, not run again; rows

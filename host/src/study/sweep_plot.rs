@@ -3,6 +3,7 @@
 //! over two parameters) and stacked bars (the metrics under one prefix — stall reasons,
 //! bytes per ray by class — against one parameter).
 
+use crate::output::warnings::warning;
 use anyhow::{anyhow, bail, Result};
 use plotters::prelude::*;
 
@@ -105,6 +106,14 @@ pub fn draw(plot: &Plot, rows: &[Row], title: &str) -> Result<String> {
     Ok(svg)
 }
 
+/// The top of a y axis holding data up to `top` with room above it for a legend of
+/// `entries` lines in the upper right corner, so the legend never covers a point.
+fn above_legend(top: f64, entries: usize) -> f64 {
+    // About 20 px per entry and 24 px of frame, in a plot area of about 480 px.
+    let share = ((entries as f64 * 20.0 + 24.0) / 480.0).min(0.6);
+    top / (1.0 - share)
+}
+
 fn metric_of(r: &Row, name: &str) -> Result<f64, String> {
     number(r, name).ok_or_else(|| format!("point {} has no number {name:?}", r.index))
 }
@@ -130,6 +139,7 @@ fn line(svg: &mut String, rows: &[&Row], x: &str, y: &str, series: Option<&str>,
         groups.iter().enumerate().map(|(i, g)| (g.as_str(), i)).collect();
     let x_of: std::collections::HashMap<&str, usize> = xs.iter().enumerate().map(|(i, v)| (v.as_str(), i)).collect();
     let mut points: Vec<Vec<(f64, f64)>> = vec![Vec::new(); groups.len()];
+    let mut missing = Vec::new();
     for r in rows {
         let g = match series {
             Some(s) => match label(r, s).and_then(|l| group_of.get(l.as_str()).copied()) {
@@ -140,10 +150,22 @@ fn line(svg: &mut String, rows: &[&Row], x: &str, y: &str, series: Option<&str>,
         };
         let xv = label(r, x).unwrap_or_default();
         let px = if numeric { xv.parse::<f64>()? } else { x_of.get(xv.as_str()).copied().unwrap_or(0) as f64 };
-        let v = metric_of(r, y)?;
-        if v.is_finite() {
-            points[g].push((px, v));
+        // A point without the metric (a hit rate of a cache it does not have) is left
+        // out, and said so below.
+        match number(r, y) {
+            Some(v) if v.is_finite() => points[g].push((px, v)),
+            _ => missing.push(r.index),
         }
+    }
+    if !missing.is_empty() {
+        let which: Vec<String> = missing.iter().take(5).map(|i| i.to_string()).collect();
+        warning(&format!(
+            "plot: {} point{} without a value of {y:?} left out (point {}{})",
+            missing.len(),
+            if missing.len() == 1 { "" } else { "s" },
+            which.join(", "),
+            if missing.len() > 5 { ", …" } else { "" }
+        ));
     }
     let mut lines: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
     for (g, mut pts) in groups.iter().zip(points) {
@@ -164,7 +186,13 @@ fn line(svg: &mut String, rows: &[&Row], x: &str, y: &str, series: Option<&str>,
     if x0 == x1 {
         (x0, x1) = (x0 - 1.0, x1 + 1.0);
     }
-    let y1 = if y1 > 0.0 { y1 * 1.1 } else { 1.0 };
+    let y1 = above_legend(if y1 > 0.0 { y1 * 1.05 } else { 1.0 }, lines.len());
+    if log_x && !(numeric && x0 > 0.0) {
+        warning(&format!(
+            "plot: --log-x needs positive numbers on x; {x:?} has {}: drawn on a linear axis",
+            if numeric { "zero or negative values" } else { "names" }
+        ));
+    }
     let root = SVGBackend::with_string(svg, SIZE).into_drawing_area();
     root.fill(&WHITE)?;
     let mut builder = ChartBuilder::on(&root);
@@ -319,7 +347,7 @@ fn stacked(svg: &mut String, rows: &[&Row], x: &str, prefix: &str, title: &str) 
         }
     }
     let top = bars.iter().map(|b| b.iter().sum::<f64>()).fold(0.0f64, f64::max);
-    let top = if top > 0.0 { top * 1.1 } else { 1.0 };
+    let top = above_legend(if top > 0.0 { top * 1.05 } else { 1.0 }, parts.len());
     let root = SVGBackend::with_string(svg, SIZE).into_drawing_area();
     root.fill(&WHITE)?;
     let mut chart = ChartBuilder::on(&root)

@@ -251,3 +251,35 @@ fn a_plot_of_more_series_than_a_chart_can_show_is_refused() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(std::fs::read_to_string(d.join("p.svg")).unwrap().contains("seed = 995"));
 }
+
+/// A point without the plotted metric (no node cache, no node hit rate) is left out
+/// with a word, as is a log axis over zero; `--reports` makes its folder.
+#[test]
+fn plots_leave_out_points_without_the_metric_and_say_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let tetra = fixtures().join("tetra.obj");
+    write(
+        d,
+        "cache.toml",
+        &format!(
+            "[fixed]\nscene = {:?}\nsize = \"16x16\"\naccel = \"bvh4\"\n[grid]\n\"cache.nodes.size_bytes\" = [0, 4096, 8192]\n",
+            tetra.display().to_string()
+        ),
+    );
+    let o = raypipe(d, &["sweep", "cache.toml", "-o", "c", "--reports", "new/reports"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(std::fs::read_dir(d.join("new/reports")).unwrap().count(), 3, "one report per point");
+    let o = raypipe(
+        d,
+        &["plot", "c.jsonl", "--x", "cache.nodes.size_bytes", "--y", "hit_rate.nodes", "--log-x", "-o", "p.svg"],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(err.contains("1 point without a value of \"hit_rate.nodes\" left out"), "{err}");
+    assert!(!err.contains("--log-x"), "the points left have positive x: {err}");
+    assert!(d.join("p.svg").exists());
+    let o = raypipe(d, &["plot", "c.jsonl", "--x", "cache.nodes.size_bytes", "--y", "fps", "--log-x", "-o", "q.svg"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--log-x needs positive numbers"), "{}", stderr(&o));
+}
