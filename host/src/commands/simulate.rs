@@ -113,6 +113,10 @@ pub struct MeasureArgs {
     /// shading) and memory transactions.
     #[arg(long, value_name = "FILE.json")]
     pub trace: Option<PathBuf>,
+    /// Only what overlaps cycles A..B in the trace (a whole frame's trace of a large chip
+    /// is more than a viewer opens).
+    #[arg(long, value_name = "A..B", value_parser = parse_roi, requires = "trace")]
+    pub trace_window: Option<(u64, u64)>,
     /// Per-pixel cost heatmaps of the (last) frame: PREFIX-cycles.png (cycles its packets
     /// were in flight), PREFIX-steps.png (ray–node tests), PREFIX-tests.png (ray–triangle
     /// tests), PREFIX-bytes.png (scene bytes read for it).
@@ -385,6 +389,7 @@ pub(crate) fn run_simulation(a: &SimulateArgs, cache: Option<&SceneCache>, show_
             units: a.measure.vcd_units.clone(),
         }),
         trace: a.measure.trace.clone(),
+        trace_window: a.measure.trace_window,
     };
     if measure.warmup_frames >= views.len() {
         bail!("--warmup-frames {}: the walkthrough has only {} frames", measure.warmup_frames, views.len());

@@ -53,6 +53,8 @@ pub struct Measure {
     pub vcd: Option<VcdSpec>,
     /// A Chrome trace-event file of packet lifetimes and memory transactions.
     pub trace: Option<std::path::PathBuf>,
+    /// Only cycles A..B in the trace.
+    pub trace_window: Option<(u64, u64)>,
 }
 
 /// Waveforms to write: the VCD file, its window of cycles (of the whole run) and the
@@ -158,12 +160,19 @@ impl Run<'_, '_> {
             if let Some((a, b)) = window.filter(|(a, b)| a >= b) {
                 bail!("--vcd-window {a}..{b}: the window is empty");
             }
-            let comment = format!("raypipe simulate: 1 time unit = 1 clock cycle at {} MHz", cfg.clock_mhz);
-            let (file, sink) = crate::output::waveform::create(path, comment)?;
+            let comment = format!(
+                "raypipe simulate: time in ps; clock {} MHz, one cycle every {:.3} ps, cycle n at n x the period",
+                cfg.clock_mhz,
+                1e6 / cfg.clock_mhz
+            );
+            let (file, sink) = crate::output::waveform::create(path, comment, cfg.clock_mhz)?;
             let waves = Waves::new(Box::new(sink), &sim.signals(), units, window.unwrap_or((0, u64::MAX)))
                 .map_err(|e| anyhow!(e))?;
             sim.set_waves(waves);
             vcd_file = Some(file);
+        }
+        if let Some((a, b)) = measure.trace_window.filter(|(a, b)| a >= b) {
+            bail!("--trace-window {a}..{b}: the window is empty");
         }
         if measure.trace.is_some() {
             sim.enable_trace();
@@ -234,11 +243,39 @@ impl Run<'_, '_> {
             let path = measure.vcd.as_ref().map(|v| v.path.display().to_string()).unwrap_or_default();
             waves.finish(sim.now()).map_err(|e| anyhow!("{path}: {e}"))?;
             file.commit()?;
+            if let Some(spec) = &measure.vcd {
+                write_gtkwave_files(&spec.path, &spec.units, &sim.signals())?;
+            }
         }
         if let (Some(path), Some(log)) = (&measure.trace, sim.take_trace()) {
-            let doc = crate::output::trace_events::to_json(&log, cfg.clock_mhz);
+            let doc = crate::output::trace_events::to_json(&log, cfg.clock_mhz, measure.trace_window);
             crate::output::write_bytes(path, doc.to_string().as_bytes())?;
         }
         Ok(out)
     }
+}
+
+/// The GTKWave save file (`RUN.gtkw`) and activity filter (`RUN.activity.txt`) beside the
+/// VCD `RUN.vcd`, listing the signals `units` kept (as the waveform sampler does).
+fn write_gtkwave_files(
+    vcd: &std::path::Path,
+    units: &[String],
+    all: &[raypipe_hw::observe::waves::Signal],
+) -> Result<()> {
+    use crate::output::waveform;
+    // A VCD sent to a device or a pipe has no folder of its own to keep files beside.
+    if std::fs::metadata(vcd).is_ok_and(|m| !m.is_file()) {
+        return Ok(());
+    }
+    let kept: Vec<_> = all
+        .iter()
+        .filter(|s| units.is_empty() || units.iter().any(|p| s.name.starts_with(p.as_str())))
+        .cloned()
+        .collect();
+    let dir = vcd.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
+    let dir = dir.canonicalize().map_err(|e| anyhow!("{}: {e}", dir.display()))?;
+    let name = vcd.file_name().map(std::path::PathBuf::from).unwrap_or_else(|| "run.vcd".into());
+    let (save, filter) = (dir.join(name.with_extension("gtkw")), dir.join(name.with_extension("activity.txt")));
+    crate::output::write_bytes(&filter, waveform::activity_filter().as_bytes())?;
+    crate::output::write_bytes(&save, waveform::gtkw(&dir.join(&name), &filter, &kept).as_bytes())
 }

@@ -1,17 +1,33 @@
 //! A run's trace in the Chrome trace-event format (JSON), which Perfetto and
 //! chrome://tracing open: each packet is an async slice from its issue to the end of its
 //! shading, with nested slices for its time in traversal, at the intersection unit and
-//! in shading; each memory request is a complete slice on its port's track, from the
-//! request to its data. One microsecond on the timeline is one clock cycle.
+//! in shading; each memory request is a complete slice from the request to its data, on
+//! one of its port's tracks — as many tracks as the port ever had requests outstanding
+//! at once, so that slices never overlap on a track (Perfetto's importer requires
+//! complete slices on a track to nest). One microsecond on the timeline is one clock
+//! cycle; a window keeps the packets and requests that overlap it.
 
 use std::collections::BTreeMap;
 
 use raypipe_hw::observe::waves::{TraceEvent, TraceLog};
 use serde_json::{json, Value};
 
-/// The trace as a trace-event JSON document.
-pub fn to_json(log: &TraceLog, clock_mhz: f64) -> Value {
+/// One memory request, before it is given a track.
+struct Request<'a> {
+    port: &'a str,
+    issued: u64,
+    ready: u64,
+    name: String,
+    bytes: u32,
+    frame: u32,
+}
+
+/// The trace as a trace-event JSON document, of the cycles in `window` (all if `None`).
+pub fn to_json(log: &TraceLog, clock_mhz: f64, window: Option<(u64, u64)>) -> Value {
+    let (from, to) = window.unwrap_or((0, u64::MAX));
+    let overlaps = |a: u64, b: u64| a < to && b.max(a + 1) > from;
     let mut events: Vec<Value> = Vec::new();
+    let mut requests: Vec<Request> = Vec::new();
     // Packets, numbered per frame: their events in order.
     // (frame, packet) → (cycle, FIFO or "shaded", entered).
     type Steps<'a> = Vec<(u64, &'a str, bool)>;
@@ -25,23 +41,48 @@ pub fn to_json(log: &TraceLog, clock_mhz: f64) -> Value {
             TraceEvent::Shaded { cycle, packet } => {
                 packets.entry((frame, *packet)).or_default().push((*cycle, "shaded", true));
             }
-            TraceEvent::Memory { port, issued, ready, class, bytes, write } => {
-                let n = tracks.len();
-                let tid = *tracks.entry(port.clone()).or_insert(n + 1);
-                events.push(json!({
-                    "name": if *write { format!("{class} write") } else { (*class).to_string() },
-                    "cat": "memory", "ph": "X", "pid": 2, "tid": tid,
-                    "ts": issued, "dur": ready.saturating_sub(*issued).max(1),
-                    "args": { "bytes": bytes, "frame": frame },
-                }));
+            TraceEvent::Memory { port, issued, ready, class, bytes, write } if overlaps(*issued, *ready) => {
+                requests.push(Request {
+                    port,
+                    issued: *issued,
+                    ready: (*ready).max(issued + 1),
+                    name: if *write { format!("{class} write") } else { (*class).to_string() },
+                    bytes: *bytes,
+                    frame,
+                });
             }
+            TraceEvent::Memory { .. } => {}
         }
+    }
+    // Each port's requests in issue order, each on the first of its tracks free by then.
+    requests.sort_by(|a, b| (a.port, a.issued, a.ready).cmp(&(b.port, b.issued, b.ready)));
+    let mut lanes: BTreeMap<&str, Vec<u64>> = BTreeMap::new();
+    for r in &requests {
+        let ends = lanes.entry(r.port).or_default();
+        let lane = match ends.iter().position(|&end| end <= r.issued) {
+            Some(k) => k,
+            None => {
+                ends.push(0);
+                ends.len() - 1
+            }
+        };
+        ends[lane] = r.ready;
+        let n = tracks.len();
+        let tid = *tracks.entry(format!("{} #{lane}", r.port)).or_insert(n + 1);
+        events.push(json!({
+            "name": r.name, "cat": "memory", "ph": "X", "pid": 2, "tid": tid,
+            "ts": r.issued, "dur": r.ready - r.issued,
+            "args": { "bytes": r.bytes, "frame": r.frame },
+        }));
     }
     for ((frame, packet), evs) in &packets {
         let id = format!("{frame}.{packet}");
         let slice = |name: &str, ph: &str, ts: u64| json!({ "name": name, "cat": "packet", "ph": ph, "id": id, "pid": 1, "tid": 1, "ts": ts });
         let first = evs.first().map_or(0, |e| e.0);
         let last = evs.last().map_or(first, |e| e.0);
+        if !overlaps(first, last) {
+            continue;
+        }
         events.push(slice(&format!("packet {packet} (frame {frame})"), "b", first));
         // Nested phases: traversal from leaving the ray FIFO to entering the hit FIFO,
         // within it each visit to the intersection unit (leaving a leaf FIFO to entering

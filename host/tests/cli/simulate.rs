@@ -199,8 +199,22 @@ fn waveforms_and_traces_observe_without_changing_the_run() {
     let plain = std::fs::read_to_string(d.join("plain.json")).unwrap();
     assert_eq!(plain, std::fs::read_to_string(d.join("watched.json")).unwrap(), "tracing changed the report");
     let report: serde_json::Value = serde_json::from_str(&plain).unwrap();
-    // The VCD parses; each FIFO's occupancy averaged over time is the report's mean.
+    // The VCD parses, in picoseconds at the clock's period; each FIFO's occupancy
+    // averaged over time is the report's mean.
+    let text = std::fs::read_to_string(d.join("w.vcd")).unwrap();
+    assert!(text.contains("$timescale 1 ps $end"), "true time: {}", &text[..300.min(text.len())]);
+    let period = (1e6 / report["config"]["clock_mhz"].as_f64().unwrap()).round() as u64;
     let (signals, end) = read_vcd(&d.join("w.vcd"));
+    assert_eq!(end % period, 0, "every change on a clock edge ({period} ps)");
+    let cycles = |t: u64| t / period;
+    let signals: Vec<Wave> =
+        signals.into_iter().map(|(n, c)| (n, c.into_iter().map(|(t, v)| (cycles(t), v)).collect())).collect();
+    let end = cycles(end);
+    // GTKWave's save file groups the signals and decodes the activities.
+    let save = std::fs::read_to_string(d.join("w.gtkw")).unwrap();
+    assert!(save.contains("[dumpfile]") && save.contains("-traversal0") && save.contains("activity.txt"), "{save}");
+    let filter = std::fs::read_to_string(d.join("w.activity.txt")).unwrap();
+    assert!(filter.contains("0 idle") && filter.contains("1 busy") && filter.contains("node_data"), "{filter}");
     let fifos = report["fifos"].as_array().unwrap();
     assert_eq!(signals.iter().filter(|(n, _)| n.ends_with(".occupancy")).count(), fifos.len());
     for f in fifos {
@@ -244,13 +258,35 @@ fn waveforms_and_traces_observe_without_changing_the_run() {
         memory,
         report["memory"]["requests"].as_u64().unwrap() + report["memory"]["l2"]["hits"].as_u64().unwrap()
     );
+    // No two memory slices overlap on a track (Perfetto's importer requires it).
+    let mut tracks: std::collections::BTreeMap<u64, Vec<(u64, u64)>> = Default::default();
+    for e in events.iter().filter(|e| e["cat"] == "memory") {
+        let (ts, dur) = (e["ts"].as_u64().unwrap(), e["dur"].as_u64().unwrap());
+        tracks.entry(e["tid"].as_u64().unwrap()).or_default().push((ts, ts + dur));
+    }
+    assert!(tracks.len() > 1, "outstanding requests spread over tracks");
+    for (tid, mut slices) in tracks {
+        slices.sort();
+        assert!(slices.windows(2).all(|w| w[0].1 <= w[1].0), "track {tid} overlaps");
+    }
+    // A trace window keeps only what overlaps it.
+    let o = raypipe(d, &[&base[..], &["--trace", "tw.json", "--trace-window", "100..300"]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let tw: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(d.join("tw.json")).unwrap()).unwrap();
+    let tw = tw["traceEvents"].as_array().unwrap();
+    assert!(tw.len() < events.len());
+    for e in tw.iter().filter(|e| e["cat"] == "memory") {
+        let (ts, dur) = (e["ts"].as_u64().unwrap(), e["dur"].as_u64().unwrap());
+        assert!(ts < 300 && ts + dur > 100, "{e}");
+    }
     // A window and a unit filter narrow the VCD; an empty filter is an error.
     let o =
         raypipe(d, &[&base[..], &["--vcd", "n.vcd", "--vcd-window", "100..200", "--vcd-units", "traversal1"]].concat());
     assert!(o.status.success(), "{}", stderr(&o));
     let (narrow, end) = read_vcd(&d.join("n.vcd"));
     assert!(narrow.iter().all(|(n, _)| n.starts_with("raypipe.traversal1.")) && !narrow.is_empty());
-    assert!(narrow.iter().all(|(_, c)| c.iter().all(|(t, _)| (100..200).contains(t))) && end <= 200);
+    let window = 100 * period..200 * period;
+    assert!(narrow.iter().all(|(_, c)| c.iter().all(|(t, _)| window.contains(t))) && end <= 200 * period);
     assert_one_line_error(
         &raypipe(d, &[&base[..], &["--vcd", "z.vcd", "--vcd-units", "nothing"]].concat()),
         "no signal",
