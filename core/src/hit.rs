@@ -15,7 +15,7 @@ pub struct Hit {
 }
 
 impl Hit {
-    /// `docs/design.md`, "one hit, whatever the path": the closest hit is the one with the smallest
+    /// [design.md](https://github.com/raypipe/raypipe/blob/main/docs/design.md), "one hit, whatever the path": the closest hit is the one with the smallest
     /// `(t, prim)`, compared lexicographically. Returns true if `self` beats `other`.
     #[inline]
     pub fn is_closer_than(&self, other: &Hit) -> bool {

@@ -5,7 +5,7 @@
 //! ([`SceneView::parse`]), validated once; after that no kernel can index out of bounds
 //! or panic.
 //!
-//! The kernels are steps over plain data (`docs/design.md`, contract 3), grouped by
+//! The kernels are steps over plain data ([design.md](https://github.com/raypipe/raypipe/blob/main/docs/design.md), contract 3), grouped by
 //! Purcell's pipeline stages (generate → traverse → intersect → shade):
 //!
 //! * [`camera`]: pinhole eye rays and Purcell's scene-bounding-box test (generate);
@@ -22,6 +22,11 @@
 //! * at the root, the scene image ([`image`]) and the plain records: [`ray`], [`hit`],
 //!   [`probe`] (the one access path of scene reads) and [`counters`], [`range`] (the
 //!   scenes and rays for which every path gives the same hit).
+//!
+//! A board needs more than this crate: start-up code, a memory map, a linker script and
+//! the right release profile. The [`guide`] takes you from nothing to a running
+//! Cortex-M4F or RV32 firmware, and lists each feature's flash cost, each kernel's stack
+//! and the trees' depth limits.
 //!
 //! ## Firmware in five steps
 //!
@@ -84,6 +89,7 @@ pub mod camera;
 pub mod counters;
 #[forbid(unsafe_code)]
 pub mod fixed_ray;
+pub mod guide;
 #[forbid(unsafe_code)]
 pub mod hit;
 #[forbid(unsafe_code)]

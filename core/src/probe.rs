@@ -1,6 +1,6 @@
 //! The one access path through which kernels read the scene image.
 //!
-//! `docs/design.md`: "every scene read is visible". Each accessor of [`crate::SceneView`] that a
+//! [design.md](https://github.com/raypipe/raypipe/blob/main/docs/design.md): "every scene read is visible". Each accessor of [`crate::SceneView`] that a
 //! kernel uses reports the byte address, byte count and data class of the read to a
 //! [`MemoryProbe`]. The host passes [`NoProbe`], which compiles to nothing; the hardware
 //! model passes a probe that feeds its caches and memory channel.

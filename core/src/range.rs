@@ -1,5 +1,5 @@
 //! The guaranteed range: the scenes and rays for which "one hit whatever the path"
-//! (`docs/design.md`) holds — every structure, packet size and driver returns the brute-force
+//! ([design.md](https://github.com/raypipe/raypipe/blob/main/docs/design.md)) holds — every structure, packet size and driver returns the brute-force
 //! hit bit for bit, with the watertight test. Outside it the kernels stay bounded and
 //! panic-free, but hits may differ between paths (far origins, where
 //! the rounding of the ray itself outgrows the structures' margins; tiny direction

@@ -1,7 +1,8 @@
 /* A C program using raypipe-core through its C API, as C firmware would: load a scene
  * image into an aligned buffer, parse it once, trace the eye rays of a 32 x 32 view one
  * by one and as packets, check every hit against brute force and the any-hit query,
- * shade, and check that corrupted images and null arguments are refused.
+ * read each hit's geometric normal, material and object, shade, and check that
+ * corrupted images and null arguments are refused with a status that names the cause.
  *
  *   cc -O2 -I core/capi/include core/capi/examples/trace.c \
  *      core/capi/target/release/libraypipe_capi.a -o trace && ./trace fixtures/tetra-bvh4.rpsi
@@ -28,7 +29,10 @@ int main(int argc, char **argv) {
 
     RpScene scene;
     int code = rp_scene_parse(image, (size_t)len, &scene);
-    if (code != RP_OK) { fprintf(stderr, "%s: rejected with code %d\n", path, code); return 3; }
+    if (code != RP_OK) { fprintf(stderr, "%s: %s\n", path, rp_status_string(code)); return 3; }
+    uint32_t cam_w, cam_h;
+    if (rp_camera_size(&scene, &cam_w, &cam_h) != RP_OK || cam_w == 0 || cam_h == 0) { fprintf(stderr, "no camera size\n"); return 4; }
+    if (rp_version() != 0x000100 || strcmp(rp_version_string(), "0.1.0") != 0) { fprintf(stderr, "version %s\n", rp_version_string()); return 4; }
 
     enum { W = 32, H = 32 };
     RpRay rays[W * H];
@@ -43,8 +47,14 @@ int main(int argc, char **argv) {
             bool b = rp_trace_brute_force(&scene, r, &reference);
             if (a != b || (a && !same(&hit, &reference))) { fprintf(stderr, "pixel %u,%u: walk and brute force differ\n", x, y); return 5; }
             if (rp_occluded(&scene, r) != a) { fprintf(stderr, "pixel %u,%u: any-hit differs\n", x, y); return 5; }
-            float bg[3] = {0.1f, 0.2f, 0.3f}, rgb[3];
-            if (rp_shade(&scene, r, a ? &hit : NULL, &bg, &rgb) != RP_OK || !(rgb[0] >= 0.0f)) { fprintf(stderr, "shade failed\n"); return 6; }
+            RpRgb bg = {0.1f, 0.2f, 0.3f}, rgb;
+            if (rp_shade(&scene, r, a ? &hit : NULL, bg, &rgb) != RP_OK || !(rgb.r >= 0.0f)) { fprintf(stderr, "shade failed\n"); return 6; }
+            if (a) {
+                /* The geometric normal faces the eye or away, never along the ray's side. */
+                float along = hit.ng[0] * r->dir[0] + hit.ng[1] * r->dir[1] + hit.ng[2] * r->dir[2];
+                float len2 = hit.ng[0] * hit.ng[0] + hit.ng[1] * hit.ng[1] + hit.ng[2] * hit.ng[2];
+                if (!(len2 > 0.0f) || along == 0.0f || hit.material == RP_NO_MATERIAL) { fprintf(stderr, "pixel %u,%u: hit without normal or material\n", x, y); return 6; }
+            }
             if (a) hits[y * W + x] = hit;
             hit_count += a;
         }
@@ -65,13 +75,15 @@ int main(int argc, char **argv) {
     /* Refusals: a flipped byte is a checksum error, null arguments are argument errors. */
     image[len / 2] ^= 0x40;
     RpScene bad;
-    if (rp_scene_parse(image, (size_t)len, &bad) != RP_ERR_CHECKSUM) { fprintf(stderr, "corruption accepted\n"); return 9; }
+    code = rp_scene_parse(image, (size_t)len, &bad);
+    if (code != RP_ERR_CHECKSUM || strstr(rp_status_string(code), "checksum") == NULL) { fprintf(stderr, "corruption accepted\n"); return 9; }
+    if (strcmp(rp_status_string(12345), "unknown status code") != 0) { fprintf(stderr, "unknown code named\n"); return 9; }
     image[len / 2] ^= 0x40;
     if (rp_scene_parse(NULL, 0, &bad) != RP_ERR_ARGUMENT || rp_trace(NULL, &rays[0], &hits[0])) { fprintf(stderr, "null accepted\n"); return 9; }
     if (rp_scene_parse(image + 1, (size_t)len - 1, &bad) == RP_OK) { fprintf(stderr, "misaligned accepted\n"); return 9; }
 
-    printf("%s: %u triangles, %d of %d rays hit; walk, brute force, any-hit, packets agree: ok\n",
-           path, rp_triangle_count(&scene), hit_count, W * H);
+    printf("%s: %u triangles, %d of %d rays hit; walk, brute force, any-hit, packets agree (raypipe %s): ok\n",
+           path, rp_triangle_count(&scene), hit_count, W * H, rp_version_string());
     free(image);
     return 0;
 }

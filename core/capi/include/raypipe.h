@@ -16,6 +16,11 @@
 #define RP_SCENE_WORDS 80
 
 /**
+ * `RpHit::material` of an image without materials.
+ */
+#define RP_NO_MATERIAL UINT32_MAX
+
+/**
  * Success.
  */
 #define RP_OK 0
@@ -91,7 +96,8 @@ typedef struct RpRay {
 
 /**
  * A hit: distance along the ray, barycentric coordinates of the second and third
- * vertex, and the triangle (its index in the image).
+ * vertex, the triangle (its index in the image), its geometric normal, its material
+ * and the object it came from (as Embree's `RTCHit` has `Ng`, `primID`, `geomID`).
  */
 typedef struct RpHit {
   /**
@@ -110,11 +116,61 @@ typedef struct RpHit {
    * Triangle index.
    */
   uint32_t prim;
+  /**
+   * Geometric normal, not normalized: `(b − a) × (c − a)` of the triangle's vertices
+   * `a b c` (its length is twice the triangle's area; it faces the side the winding
+   * is counter-clockwise from).
+   */
+  float ng[3];
+  /**
+   * Material number (an index into the image's materials; `RP_NO_MATERIAL` when the
+   * image has none).
+   */
+  uint32_t material;
+  /**
+   * The object the triangle came from (an OBJ `o`/`g`, a glTF node; 0 when the image
+   * does not record objects).
+   */
+  uint32_t object;
 } RpHit;
+
+/**
+ * A linear RGB colour.
+ */
+typedef struct RpRgb {
+  /**
+   * Red.
+   */
+  float r;
+  /**
+   * Green.
+   */
+  float g;
+  /**
+   * Blue.
+   */
+  float b;
+} RpRgb;
 
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
+
+/**
+ * The library's version, `major << 16 | minor << 8 | patch` (0.1.0 is 0x000100).
+ */
+uint32_t rp_version(void);
+
+/**
+ * The library's version as text ("0.1.0"), a static NUL-terminated string.
+ */
+const char *rp_version_string(void);
+
+/**
+ * What a status code means, as a static NUL-terminated English sentence (for logs);
+ * an unknown code gets "unknown status code".
+ */
+const char *rp_status_string(int32_t code);
 
 /**
  * Validates the scene image of `len` bytes at `bytes` (16-byte aligned, in place) and
@@ -133,6 +189,16 @@ int32_t rp_scene_parse(const uint8_t *bytes, uintptr_t len, struct RpScene *out)
  * `scene` is null or filled by `rp_scene_parse`, its image still in place.
  */
 uint32_t rp_triangle_count(const struct RpScene *scene);
+
+/**
+ * The size the image's camera was built for (`raypipe build --size`), written to
+ * `*width` and `*height`. Returns `RP_OK`, `RP_ERR_NO_CAMERA` or `RP_ERR_ARGUMENT`.
+ *
+ * # Safety
+ * `scene` is null or filled by `rp_scene_parse`; `width` and `height` are null or
+ * writable.
+ */
+int32_t rp_camera_size(const struct RpScene *scene, uint32_t *width, uint32_t *height);
 
 /**
  * The eye ray through pixel `(x, y)` of a `width × height` image seen by the scene's
@@ -190,19 +256,19 @@ uint64_t rp_trace_packet(const struct RpScene *scene,
                          struct RpHit *hits);
 
 /**
- * Lambert shading of a ray's hit (`hit` null: the background) in linear RGB, written
- * to `rgb[0..3]`. Textures are read at their finest mipmap level (the ray carries no
- * cone).
+ * Lambert shading of a ray's hit (`hit` null: what a ray that escapes sees — the
+ * image's sky, else `background`) in linear RGB, written to `*out`. Textures are read
+ * at their finest mipmap level (the ray carries no cone).
  *
  * # Safety
  * `scene` is null or filled by `rp_scene_parse`; `ray` is null or readable; `hit` is
- * null or readable; `background` points to 3 readable floats; `rgb` to 3 writable.
+ * null or readable; `out` is null or writable.
  */
 int32_t rp_shade(const struct RpScene *scene,
                  const struct RpRay *ray,
                  const struct RpHit *hit,
-                 const float (*background)[3],
-                 float (*rgb)[3]);
+                 struct RpRgb background,
+                 struct RpRgb *out);
 
 #ifdef __cplusplus
 }  // extern "C"

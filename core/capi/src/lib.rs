@@ -53,7 +53,8 @@ pub struct RpRay {
 }
 
 /// A hit: distance along the ray, barycentric coordinates of the second and third
-/// vertex, and the triangle (its index in the image).
+/// vertex, the triangle (its index in the image), its geometric normal, its material
+/// and the object it came from (as Embree's `RTCHit` has `Ng`, `primID`, `geomID`).
 #[repr(C)]
 #[derive(Clone, Copy, Default)]
 pub struct RpHit {
@@ -65,7 +66,32 @@ pub struct RpHit {
     pub v: f32,
     /// Triangle index.
     pub prim: u32,
+    /// Geometric normal, not normalized: `(b − a) × (c − a)` of the triangle's vertices
+    /// `a b c` (its length is twice the triangle's area; it faces the side the winding
+    /// is counter-clockwise from).
+    pub ng: [f32; 3],
+    /// Material number (an index into the image's materials; `RP_NO_MATERIAL` when the
+    /// image has none).
+    pub material: u32,
+    /// The object the triangle came from (an OBJ `o`/`g`, a glTF node; 0 when the image
+    /// does not record objects).
+    pub object: u32,
 }
+
+/// A linear RGB colour.
+#[repr(C)]
+#[derive(Clone, Copy, Default)]
+pub struct RpRgb {
+    /// Red.
+    pub r: f32,
+    /// Green.
+    pub g: f32,
+    /// Blue.
+    pub b: f32,
+}
+
+/// `RpHit::material` of an image without materials.
+pub const RP_NO_MATERIAL: u32 = u32::MAX;
 
 /// Success.
 pub const RP_OK: i32 = 0;
@@ -88,8 +114,53 @@ fn ray_of(r: &RpRay) -> Ray {
     Ray { origin: Vec3::from(r.origin), dir: Vec3::from(r.dir), t_min: r.t_min, t_max: r.t_max }
 }
 
-fn hit_of(h: &Hit) -> RpHit {
-    RpHit { t: h.t, u: h.u, v: h.v, prim: h.prim }
+fn hit_of(view: &SceneView<'_>, h: &Hit) -> RpHit {
+    let [a, b, c] = view.triangle(h.prim, &mut NoProbe);
+    RpHit {
+        t: h.t,
+        u: h.u,
+        v: h.v,
+        prim: h.prim,
+        ng: (b - a).cross(c - a).to_array(),
+        material: view.material_id(h.prim, &mut NoProbe).unwrap_or(RP_NO_MATERIAL),
+        object: view.object_of(h.prim),
+    }
+}
+
+/// The library's version, `major << 16 | minor << 8 | patch` (0.1.0 is 0x000100).
+#[no_mangle]
+pub extern "C" fn rp_version() -> u32 {
+    let part = |s: &str| s.parse::<u32>().unwrap_or(0) & 0xff;
+    let (major, minor, patch) = (
+        part(env!("CARGO_PKG_VERSION_MAJOR")),
+        part(env!("CARGO_PKG_VERSION_MINOR")),
+        part(env!("CARGO_PKG_VERSION_PATCH")),
+    );
+    major << 16 | minor << 8 | patch
+}
+
+/// The library's version as text ("0.1.0"), a static NUL-terminated string.
+#[no_mangle]
+pub extern "C" fn rp_version_string() -> *const core::ffi::c_char {
+    concat!(env!("CARGO_PKG_VERSION"), "\0").as_ptr().cast()
+}
+
+/// What a status code means, as a static NUL-terminated English sentence (for logs);
+/// an unknown code gets "unknown status code".
+#[no_mangle]
+pub extern "C" fn rp_status_string(code: i32) -> *const core::ffi::c_char {
+    let text: &'static str = match code {
+        RP_OK => "ok\0",
+        RP_ERR_ARGUMENT => "a null pointer or an impossible count or pixel was passed\0",
+        RP_ERR_TRUNCATED => "the image is shorter than its header says\0",
+        RP_ERR_MISALIGNED => "the image does not start on a 16-byte boundary\0",
+        RP_ERR_NOT_AN_IMAGE => "not a raypipe scene image, or a version this library does not read\0",
+        RP_ERR_CHECKSUM => "the image's checksum does not match: it is corrupted\0",
+        RP_ERR_INVALID => "a section, record, index or structure of the image is invalid\0",
+        RP_ERR_NO_CAMERA => "the image has no camera, or its camera is unusable\0",
+        _ => "unknown status code\0",
+    };
+    text.as_ptr().cast()
 }
 
 fn code_of(e: &SceneError) -> i32 {
@@ -148,6 +219,24 @@ pub unsafe extern "C" fn rp_triangle_count(scene: *const RpScene) -> u32 {
     unsafe { view(scene) }.map_or(0, |v| v.triangle_count())
 }
 
+/// The size the image's camera was built for (`raypipe build --size`), written to
+/// `*width` and `*height`. Returns `RP_OK`, `RP_ERR_NO_CAMERA` or `RP_ERR_ARGUMENT`.
+///
+/// # Safety
+/// `scene` is null or filled by `rp_scene_parse`; `width` and `height` are null or
+/// writable.
+#[no_mangle]
+pub unsafe extern "C" fn rp_camera_size(scene: *const RpScene, width: *mut u32, height: *mut u32) -> i32 {
+    // SAFETY: the caller's contract.
+    let (Some(v), Some(w), Some(h)) = (unsafe { view(scene) }, unsafe { width.as_mut() }, unsafe { height.as_mut() })
+    else {
+        return RP_ERR_ARGUMENT;
+    };
+    let Some(cam) = v.camera() else { return RP_ERR_NO_CAMERA };
+    (*w, *h) = (cam.width, cam.height);
+    RP_OK
+}
+
 /// The eye ray through pixel `(x, y)` of a `width × height` image seen by the scene's
 /// camera. Returns `RP_OK`, `RP_ERR_NO_CAMERA` or `RP_ERR_ARGUMENT` (null pointers,
 /// pixel outside the image).
@@ -194,7 +283,7 @@ pub unsafe extern "C" fn rp_trace(scene: *const RpScene, ray: *const RpRay, hit:
     };
     match trace_walk::<Watertight, _>(v, &ray_of(r), &mut NoProbe) {
         Some(h) => {
-            *out = hit_of(&h);
+            *out = hit_of(v, &h);
             true
         }
         None => false,
@@ -214,7 +303,7 @@ pub unsafe extern "C" fn rp_trace_brute_force(scene: *const RpScene, ray: *const
     };
     match trace_brute_force::<Watertight, _>(v, &ray_of(r), &mut NoProbe, &mut RayCounters::default()) {
         Some(h) => {
-            *out = hit_of(&h);
+            *out = hit_of(v, &h);
             true
         }
         None => false,
@@ -262,7 +351,7 @@ pub unsafe extern "C" fn rp_trace_packet(
         trace_packet_steps::<Watertight, _, 16>(v, &lanes, (1u64 << rays.len()) - 1, &mut found, &mut NoProbe);
         for (i, (slot, h)) in hits.iter_mut().zip(found).enumerate() {
             if let Some(h) = h {
-                *slot = hit_of(&h);
+                *slot = hit_of(v, &h);
                 mask |= 1 << (16 * chunk + i);
             }
         }
@@ -270,24 +359,23 @@ pub unsafe extern "C" fn rp_trace_packet(
     mask
 }
 
-/// Lambert shading of a ray's hit (`hit` null: the background) in linear RGB, written
-/// to `rgb[0..3]`. Textures are read at their finest mipmap level (the ray carries no
-/// cone).
+/// Lambert shading of a ray's hit (`hit` null: what a ray that escapes sees — the
+/// image's sky, else `background`) in linear RGB, written to `*out`. Textures are read
+/// at their finest mipmap level (the ray carries no cone).
 ///
 /// # Safety
 /// `scene` is null or filled by `rp_scene_parse`; `ray` is null or readable; `hit` is
-/// null or readable; `background` points to 3 readable floats; `rgb` to 3 writable.
+/// null or readable; `out` is null or writable.
 #[no_mangle]
 pub unsafe extern "C" fn rp_shade(
     scene: *const RpScene,
     ray: *const RpRay,
     hit: *const RpHit,
-    background: *const [f32; 3],
-    rgb: *mut [f32; 3],
+    background: RpRgb,
+    out: *mut RpRgb,
 ) -> i32 {
     // SAFETY: the caller's contract.
-    let (Some(v), Some(r), Some(bg), Some(out)) =
-        (unsafe { view(scene) }, unsafe { ray.as_ref() }, unsafe { background.as_ref() }, unsafe { rgb.as_mut() })
+    let (Some(v), Some(r), Some(out)) = (unsafe { view(scene) }, unsafe { ray.as_ref() }, unsafe { out.as_mut() })
     else {
         return RP_ERR_ARGUMENT;
     };
@@ -295,7 +383,9 @@ pub unsafe extern "C" fn rp_shade(
     let h = unsafe { hit.as_ref() }.map(|h| Hit { t: h.t, u: h.u, v: h.v, prim: h.prim });
     // A hit on a triangle the image does not have is no hit.
     let h = h.filter(|h| h.prim < v.triangle_count());
-    *out = shade(v, &ray_of(r), RayCone::POINT, h, Vec3::from(*bg), &mut NoProbe).to_array();
+    let bg = Vec3::new(background.r, background.g, background.b);
+    let [r, g, b] = shade(v, &ray_of(r), RayCone::POINT, h, bg, &mut NoProbe).to_array();
+    *out = RpRgb { r, g, b };
     RP_OK
 }
 

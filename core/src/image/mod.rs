@@ -1,6 +1,6 @@
 //! The scene image: a versioned, little-endian binary format read in place.
 //!
-//! The byte-level format is documented for RTL engineers in `docs/scene-format.md`.
+//! The byte-level format is documented for RTL engineers in [scene-format.md](https://github.com/raypipe/raypipe/blob/main/docs/scene-format.md).
 //! Layout: a 64-byte [`Header`], a table of 16-byte [`SectionEntry`] records, then the
 //! sections, each starting on a 64-byte boundary. Every record is `#[repr(C)]` with its
 //! size and alignment asserted at compile time.

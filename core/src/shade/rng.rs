@@ -1,6 +1,6 @@
 //! Counter-based random numbers: a number is a hash of where it is used — pixel, sample,
 //! bounce and dimension — not the next state of a generator, so an image comes out the
-//! same whatever order, thread or hardware unit traces its rays (`docs/design.md`,
+//! same whatever order, thread or hardware unit traces its rays ([design.md](https://github.com/raypipe/raypipe/blob/main/docs/design.md),
 //! "determinism"). The mixer is the lowbias32 integer hash (C. Wellons, "Prospecting for
 //! hash functions", 2018), applied over the four counters.
 

@@ -1,5 +1,5 @@
 //! One ray's walk through whichever structure the scene image holds, one step at a time:
-//! the interface a hardware traversal unit drives (`docs/design.md`, "kernels are steps over
+//! the interface a hardware traversal unit drives ([design.md](https://github.com/raypipe/raypipe/blob/main/docs/design.md), "kernels are steps over
 //! plain data"). Each [`Walk::step`] reads one node or voxel and reports an event; at a
 //! [`Leaf`] the intersection side reads the leaf's triangle ids with [`Leaf::entry`],
 //! tests them into [`Walk::best_mut`], and calls [`Walk::finish_leaf`]. The walks are the

@@ -4,7 +4,7 @@
 //! time. Signals sit in scopes named after the units (`raypipe.fifos.rays0.occupancy`,
 //! `raypipe.traversal0.threads.fetching`). Beside the VCD go a GTKWave save file
 //! (signals grouped by unit, activities decoded) and the translate filter file of the
-//! activity code ([`ACTIVITY_FILTER`]).
+//! activity code ([`activity_filter`]).
 
 use std::io::{BufWriter, Write};
 use std::path::Path;

@@ -17,7 +17,7 @@ pub(in crate::image) type Children = heapless::Vec<u32, 8>;
 /// the list entries its leaves hold; summed over every visit of the walk they may not
 /// exceed `list_entries`.
 ///
-/// That bounds the work of any ray on an accepted tree (docs/scene-format.md, "Work
+/// That bounds the work of any ray on an accepted tree ([scene-format.md](https://github.com/raypipe/raypipe/blob/main/docs/scene-format.md), "Work
 /// bounds"): the walk visits each node at most once per path from the root, the paths
 /// are exactly the visits counted here (at most `n`), so a ray takes at most `n` node
 /// steps and tests at most `list_entries` list entries.
