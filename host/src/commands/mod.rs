@@ -96,6 +96,15 @@ pub(crate) fn camera_for(view: &raypipe_core::SceneView<'_>, args: &CameraArgs) 
     let (w, h) = (eye.width.saturating_sub(1), eye.height.saturating_sub(1));
     let rays = [(0, 0), (w, 0), (0, h), (w, h), (w / 2, h / 2)].map(|(x, y)| eye.ray(x, y));
     warn_range(view, &rays, "camera rays (corners and centre)");
+    if args.eye.is_some() && args.look_at.is_none() && args.camera.is_none() {
+        let [x, y, z] = cam.look_at;
+        crate::output::warnings::hint(&format!(
+            "--eye without --look-at looks at the scene camera's point ({x:.3}, {y:.3}, {z:.3})"
+        ));
+    }
+    if let Some(h) = crate::render::view_check::hint(view, &cam) {
+        crate::output::warnings::hint(&h);
+    }
     Ok(cam)
 }
 

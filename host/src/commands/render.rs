@@ -80,6 +80,13 @@ pub(crate) fn cmd_render(a: RenderArgs) -> Result<()> {
         a.output.display()
     );
     println!("lights   {}", lights_summary(&scene)?);
+    if opts.algo != crate::render::Algorithm::Path && view.area_light_count() > 0 {
+        println!(
+            "note     {} lights the scene with the point light standing in for its emitters; --algo path \
+             lights it with the emitters themselves, so the brightness differs",
+            format!("{:?}", opts.algo).to_lowercase()
+        );
+    }
     if let Some(auto) = auto {
         println!("exposure {}", auto.describe());
     }

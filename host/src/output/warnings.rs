@@ -43,6 +43,14 @@ pub fn warning(message: &str) {
     }
 }
 
+/// A hint: advice about what the user asked for, not a problem with the input (none
+/// with `--quiet`).
+pub fn hint(message: &str) {
+    if verbosity() != Verbosity::Quiet {
+        eprintln!("hint: {message}");
+    }
+}
+
 /// The lines a list of warnings about `source` prints at verbosity `v`.
 pub fn lines(source: &str, list: &[String], v: Verbosity) -> Vec<String> {
     match v {

@@ -7,6 +7,7 @@ pub mod gbuffer;
 pub mod packets;
 pub mod shading;
 pub mod tracer;
+pub mod view_check;
 
 use anyhow::{anyhow, Result};
 use glam::Vec3;

@@ -289,3 +289,37 @@ fn long_warning_lists_fold_unless_verbose() {
     assert_eq!(count(&["--quiet"]), 0);
     assert_eq!(count(&["-q"]), 0);
 }
+
+/// A first view that misses the scene says so: a wall seen from outside, a surface right
+/// in front of the eye, a view of nothing; a good view says nothing.
+#[test]
+fn views_that_miss_the_scene_get_a_hint() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // A 10 × 10 wall at z = 0 with a box behind it.
+    let mut obj = String::from("v -5 -5 0\nv 5 -5 0\nv 5 5 0\nv -5 5 0\nf 1 2 3\nf 1 3 4\n");
+    for (x, y, z) in
+        [(-1, -1, -4), (1, -1, -4), (1, 1, -4), (-1, 1, -4), (-1, -1, -6), (1, -1, -6), (1, 1, -6), (-1, 1, -6)]
+    {
+        obj += &format!("v {x} {y} {z}\n");
+    }
+    obj += "f 5 6 7\nf 5 7 8\nf 9 10 11\nf 9 11 12\nf 5 6 10\nf 5 10 9\n";
+    write(d, "wall.obj", &obj);
+    let hint = |args: &[&str]| {
+        let mut all = vec!["render", "wall.obj", "--size", "16x16", "-o", "x.png"];
+        all.extend_from_slice(args);
+        let o = raypipe(d, &all);
+        assert!(o.status.success(), "{}", stderr(&o));
+        stderr(&o).lines().filter(|l| l.starts_with("hint:")).map(String::from).collect::<Vec<_>>()
+    };
+    let outside = hint(&["--eye", "0,0,12", "--look-at", "0,0,0"]);
+    assert!(outside.iter().any(|h| h.contains("mostly one surface")), "{outside:?}");
+    let pressed = hint(&["--eye", "0,0,0.4", "--look-at", "0,0,-5", "--fov", "60"]);
+    assert!(pressed.iter().any(|h| h.contains("blocks the view")), "{pressed:?}");
+    let away = hint(&["--eye", "0,0,12", "--look-at", "0,0,30"]);
+    assert!(away.iter().any(|h| h.contains("sees almost nothing")), "{away:?}");
+    let eye_only = hint(&["--eye", "0,0,12"]);
+    assert!(eye_only.iter().any(|h| h.contains("--eye without --look-at")), "{eye_only:?}");
+    let good = hint(&["--eye", "8,3,-12", "--look-at", "0,0,-3"]);
+    assert!(good.iter().all(|h| !h.contains("surface") && !h.contains("nothing")), "{good:?}");
+}
