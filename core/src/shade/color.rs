@@ -28,6 +28,13 @@ pub fn srgb8_to_linear(c: u8) -> f32 {
     f32::from_bits(DECODE[c as usize])
 }
 
+/// Rec. 709 luminance of a linear RGB colour (the power measure of the image's alias
+/// table, up to the constant π of a Lambertian emitter; what exposure is set by).
+#[inline]
+pub fn luminance(c: glam::Vec3) -> f32 {
+    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

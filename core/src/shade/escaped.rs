@@ -5,6 +5,7 @@
 
 use glam::Vec3;
 
+use crate::camera::EyeRays;
 use crate::image::{LightRecord, SceneView};
 use crate::probe::MemoryProbe;
 
@@ -21,4 +22,17 @@ pub fn escaped<P: MemoryProbe>(scene: &SceneView<'_>, dir: Vec3, background: Vec
         Some(sky) => sky.sky(dir.normalize_or_zero()),
         None => background,
     }
+}
+
+/// What eye ray `s` of pixel `(x, y)` sees when it misses the scene's box: drivers do not
+/// trace it, but it sees the sky along its own direction.
+#[inline]
+pub fn eye_escaped<P: MemoryProbe>(
+    scene: &SceneView<'_>,
+    eye: &EyeRays,
+    (x, y, s): (u32, u32, u32),
+    background: Vec3,
+    probe: &mut P,
+) -> Vec3 {
+    escaped(scene, eye.sample_ray(x, y, s).dir, background, probe)
 }

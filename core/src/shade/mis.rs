@@ -10,6 +10,7 @@ use glam::Vec3;
 
 use crate::image::SceneView;
 use crate::probe::MemoryProbe;
+use crate::shade::color::luminance;
 
 /// The power heuristic's weight of a strategy of density `a` against one of density
 /// `b` (zero when `a` is zero; one when only `a` could have produced the sample).
@@ -41,13 +42,6 @@ pub fn light_density(pick: f32, d2: f32, cos_light: f32, area: f32) -> f32 {
 #[inline]
 pub fn area_of(e: Vec3) -> f32 {
     0.5 * e.length()
-}
-
-/// Rec. 709 luminance of a linear RGB colour (the power measure of the image's alias
-/// table, up to the constant π of a Lambertian emitter).
-#[inline]
-pub fn luminance(c: Vec3) -> f32 {
-    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
 }
 
 /// The probability that next-event estimation picks the emitting triangle `prim` of

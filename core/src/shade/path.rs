@@ -116,17 +116,16 @@ pub fn shade_path<P: MemoryProbe>(
     let depth = rec.depth as u32;
     let u = |dim: u32| uniform(rec.pixel, rec.sample, depth, dim);
     let to_eye = -rec.ray.dir.normalize_or_zero();
+    // The lobe mixture the bounce draws from: its density weighs both the light sample
+    // and a bounce that hits an emitter (the power heuristic).
+    let lobes = Lobes { diffuse, glossy, glossy_share: glossy_share(diffuse, glossy) };
     if diffuse.max_element() > 0.0 || glossy.is_some() {
         // Without a bounce to follow, the light sample is the only way to an emitter.
-        let lobes_for_mis = (diffuse, glossy, rec.depth < opts.bounces);
-        next_event(scene, rec, &s, lobes_for_mis, clamp, probe, emit);
+        next_event(scene, rec, &s, (&lobes, rec.depth < opts.bounces), clamp, probe, emit);
     }
     if rec.depth >= opts.bounces {
         return now;
     }
-    // The density of the lobe mixture the bounce draws from, for the power heuristic
-    // when it hits an emitter.
-    let lobes = Lobes { diffuse, glossy, glossy_share: glossy_share(diffuse, glossy) };
     let mut bounce = |dir: Vec3, weight: Vec3, kind: RayKind| {
         if weight.max_element() > 0.0 && dir != Vec3::ZERO && weight.is_finite() {
             let child = rec.child(s.ray_along(dir), weight, kind, rec.depth + 1, s.cone);
@@ -181,13 +180,13 @@ fn next_event<P: MemoryProbe>(
     scene: &SceneView<'_>,
     rec: &RayRecord,
     s: &Surface,
-    (diffuse, glossy, bounce_follows): (Vec3, Option<BlinnPhong>, bool),
+    (lobes, bounce_follows): (&Lobes, bool),
     clamp: f32,
     probe: &mut P,
     emit: &mut impl FnMut(RayRecord),
 ) {
     let n = s.normal;
-    let lobes = Lobes { diffuse, glossy, glossy_share: glossy_share(diffuse, glossy) };
+    let (diffuse, glossy) = (lobes.diffuse, lobes.glossy);
     let mut emit = |r: RayRecord| emit(RayRecord { weight: clamped(r.weight, clamp), ..r });
     let depth = rec.depth as u32;
     let u = |dim: u32| uniform(rec.pixel, rec.sample, depth, dim);

@@ -267,11 +267,7 @@ fn write_gtkwave_files(
     if std::fs::metadata(vcd).is_ok_and(|m| !m.is_file()) {
         return Ok(());
     }
-    let kept: Vec<_> = all
-        .iter()
-        .filter(|s| units.is_empty() || units.iter().any(|p| s.name.starts_with(p.as_str())))
-        .cloned()
-        .collect();
+    let kept: Vec<_> = all.iter().filter(|s| raypipe_hw::observe::waves::selected(s, units)).cloned().collect();
     let dir = vcd.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
     let dir = dir.canonicalize().map_err(|e| anyhow!("{}: {e}", dir.display()))?;
     let name = vcd.file_name().map(std::path::PathBuf::from).unwrap_or_else(|| "run.vcd".into());

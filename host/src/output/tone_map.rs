@@ -3,7 +3,7 @@
 //! the linear values.
 
 use glam::Vec3;
-use raypipe_core::shade::color::rgb8;
+use raypipe_core::shade::color::{luminance, rgb8};
 
 /// How highlights are brought into the displayable range.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
@@ -50,7 +50,7 @@ pub struct AutoExposure {
 /// (Reinhard et al. 2002, eq. 1–2), lowered where needed so that no more than
 /// [`CLIP_SHARE`] of the pixels clip. A black frame gets 0 EV.
 pub fn auto_exposure(radiance: &[[f32; 3]]) -> AutoExposure {
-    let luminance = |c: &[f32; 3]| 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
+    let luminance = |c: &[f32; 3]| luminance(Vec3::from(*c));
     let finite: Vec<&[f32; 3]> = radiance.iter().filter(|c| c.iter().all(|v| v.is_finite() && *v >= 0.0)).collect();
     let lit: Vec<f32> = finite.iter().map(|c| luminance(c)).filter(|&l| l > 0.0).collect();
     if lit.is_empty() {
@@ -139,8 +139,7 @@ impl Display {
         rgb8(match self.tone_map {
             ToneMap::Clamp => c,
             ToneMap::Reinhard => {
-                // Rec. 709 luminance.
-                let l = c.dot(Vec3::new(0.2126, 0.7152, 0.0722));
+                let l = luminance(c);
                 if l > 0.0 {
                     c * (1.0 / (1.0 + l))
                 } else {

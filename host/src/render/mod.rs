@@ -16,7 +16,7 @@ use raypipe_core::camera::{Camera, EyeRays};
 use raypipe_core::image::CameraRecord;
 use raypipe_core::packet::PacketCounters;
 use raypipe_core::shade::color::rgb8;
-use raypipe_core::shade::escaped::escaped;
+use raypipe_core::shade::escaped::eye_escaped;
 use raypipe_core::shade::lambert::shade;
 use raypipe_core::{Intersector, NoProbe, Ray, RayCounters, SceneView};
 
@@ -296,7 +296,7 @@ fn cast_tile(
         Some(ray) => shade(scene, ray, eye.cone(), *hit, background, &mut NoProbe),
         None => {
             let (x, y) = tile.xy(i % n.max(1));
-            escaped(scene, eye.sample_ray(x, y, (i / n.max(1)) as u32).dir, background, &mut NoProbe)
+            eye_escaped(scene, eye, (x, y, (i / n.max(1)) as u32), background, &mut NoProbe)
         }
     };
     if samples <= 1 {

@@ -9,7 +9,7 @@
 use std::collections::VecDeque;
 
 use raypipe_core::camera::EyeRays;
-use raypipe_core::shade::escaped::escaped;
+use raypipe_core::shade::escaped::eye_escaped;
 use raypipe_core::shade::radiance_sum::RadianceSum;
 use raypipe_core::shade::ray_record::{RayKind, RayRecord};
 use raypipe_core::shade::shader::Shader;
@@ -112,7 +112,7 @@ pub fn shade_tile<I: Intersector, P: MemoryProbe>(
         match ray {
             None => {
                 let (x, y) = tile.xy(p);
-                radiance[p].add(escaped(scene, eye.sample_ray(x, y, s).dir, background, probe) * share);
+                radiance[p].add(eye_escaped(scene, eye, (x, y, s), background, probe) * share);
             }
             Some(ray) => {
                 counts.shades += hit.is_some() as u64;

@@ -77,9 +77,4 @@ impl Stall {
             Stall::AtIntersection => "the intersection unit",
         }
     }
-
-    /// True for the reasons that wait on memory.
-    pub const fn is_memory(self) -> bool {
-        matches!(self, Stall::NodeData | Stall::TriangleData | Stall::ShadingData | Stall::Mshr | Stall::MemoryQueue)
-    }
 }

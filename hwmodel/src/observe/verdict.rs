@@ -11,8 +11,6 @@ use crate::observe::stall::Stall;
 
 /// The stall cycles of one unit kind, by group.
 struct Waits {
-    /// Cycles the units ticked.
-    cycles: f64,
     /// Busy cycles over those.
     busy: f64,
     /// Group → (its share of the cycles, its largest reason and that reason's share),
@@ -45,7 +43,7 @@ impl Waits {
         let mut groups: Vec<_> =
             groups.into_iter().map(|(g, (n, top, t))| (g, n as f64 / cycles, top, t as f64 / cycles)).collect();
         groups.sort_by(|a, b| b.1.total_cmp(&a.1));
-        Some(Waits { cycles, busy, groups })
+        Some(Waits { busy, groups })
     }
 
     fn share(&self, group: &str) -> f64 {
@@ -95,7 +93,7 @@ pub fn verdict(units: &[UnitReport], utilization: f64) -> String {
         return format!("{}-bound: its datapath busy {:.0}% of cycles", best.0, 100.0 * best.1);
     }
     match &trav {
-        Some(t) if t.share("memory") >= 0.3 && t.cycles > 0.0 => {
+        Some(t) if t.share("memory") >= 0.3 => {
             format!("latency-bound: memory {:.0}% busy; traversal units {}", 100.0 * utilization, t.clause())
         }
         Some(t) => {

@@ -26,6 +26,12 @@ pub trait WaveSink {
     fn finish(&mut self, cycle: u64) -> Result<(), String>;
 }
 
+/// Whether `signal` is one of those `prefixes` select (all when there are none): the
+/// VCD's `--vcd-units`, and the save file that lists the VCD's signals.
+pub fn selected(signal: &Signal, prefixes: &[String]) -> bool {
+    prefixes.is_empty() || prefixes.iter().any(|p| signal.name.starts_with(p.as_str()))
+}
+
 /// A unit's activity as a number: 0 idle, 1 busy, 2 + [`Stall`] index when stalled.
 pub fn activity_code(stats: &UnitStats) -> u64 {
     match stats.last {
@@ -57,9 +63,7 @@ impl Waves {
         prefixes: &[String],
         window: (u64, u64),
     ) -> Result<Waves, String> {
-        let keep: Vec<usize> = (0..all.len())
-            .filter(|&i| prefixes.is_empty() || prefixes.iter().any(|p| all[i].name.starts_with(p.as_str())))
-            .collect();
+        let keep: Vec<usize> = (0..all.len()).filter(|&i| selected(&all[i], prefixes)).collect();
         if keep.is_empty() {
             let some: Vec<&str> = all.iter().take(6).map(|s| s.name.as_str()).collect();
             return Err(format!(

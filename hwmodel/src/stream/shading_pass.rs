@@ -6,7 +6,7 @@
 
 use raypipe_core::image::MaterialRecord;
 use raypipe_core::shade::blinn_phong::is_glossy;
-use raypipe_core::shade::escaped::escaped;
+use raypipe_core::shade::escaped::eye_escaped;
 use raypipe_core::shade::lambert::shade;
 use raypipe_core::shade::ray_record::{RayKind, RayRecord};
 use raypipe_core::shade::shader::Shader;
@@ -61,8 +61,7 @@ impl<I: Intersector> StreamMachine<'_, I> {
                     // sample `s`, pixel `i`): its share of what an escaped ray sees.
                     if wave == 0 {
                         let (x, y) = (i as u32 % width, i as u32 / width);
-                        let dir = eye.sample_ray(x, y, screen).dir;
-                        let color = escaped(&scene, dir, background, &mut probe);
+                        let color = eye_escaped(&scene, &eye, (x, y, screen), background, &mut probe);
                         if sums {
                             if let Some(r) = self.radiance.get_mut(i) {
                                 r.add(color * share);

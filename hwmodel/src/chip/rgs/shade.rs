@@ -4,7 +4,7 @@
 //! cycle once the data has arrived, and only then is the framebuffer written (a posted
 //! write per packet) and the rays the shader emitted released.
 
-use raypipe_core::shade::escaped::escaped;
+use raypipe_core::shade::escaped::eye_escaped;
 use raypipe_core::shade::lambert::shade;
 use raypipe_core::shade::ray_record::{RayKind, RayRecord};
 use raypipe_core::SceneView;
@@ -157,20 +157,6 @@ impl Rgs {
             };
             let share = 1.0 / samples as f32;
             match (&self.shader, ray) {
-                (None, Some(ray)) => {
-                    let color = shade(scene, &ray, self.eye.cone(), packet.hits[j], self.background, &mut probe);
-                    match self.radiance.get_mut(pixel) {
-                        Some(sum) => sum.add(color * share),
-                        None => self.framebuffer[pixel] = color,
-                    }
-                }
-                (None, None) => {
-                    let color = escaped(scene, self.eye.sample_ray(x, y, s).dir, self.background, &mut probe);
-                    match self.radiance.get_mut(pixel) {
-                        Some(sum) => sum.add(color * share),
-                        None => self.framebuffer[pixel] = color,
-                    }
-                }
                 (Some(shader), Some(ray)) => {
                     let sum = &mut self.radiance[pixel];
                     shader.shade_primary(
@@ -182,9 +168,16 @@ impl Rgs {
                         &mut |r| emitted.push(r),
                     );
                 }
-                (Some(_), None) => {
-                    let color = escaped(scene, self.eye.sample_ray(x, y, s).dir, self.background, &mut probe);
-                    self.radiance[pixel].add(color * share)
+                // Ray casting, or an eye ray that missed the scene's box (any shader).
+                (_, ray) => {
+                    let color = match ray {
+                        Some(ray) => shade(scene, &ray, self.eye.cone(), packet.hits[j], self.background, &mut probe),
+                        None => eye_escaped(scene, &self.eye, (x, y, s), self.background, &mut probe),
+                    };
+                    match self.radiance.get_mut(pixel) {
+                        Some(sum) => sum.add(color * share),
+                        None => self.framebuffer[pixel] = color,
+                    }
                 }
             }
             if s == 0 {
