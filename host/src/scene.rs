@@ -285,7 +285,12 @@ pub fn framing_camera(lo: [f32; 3], hi: [f32; 3]) -> CameraRecord {
 /// The mesh's lights: the user's, the input's, or the default; also whether the default
 /// point light was placed for `camera` (then the image says so: another view may place
 /// it again).
-fn choose_lights(name: &str, mesh: &mut Mesh, camera: &CameraRecord, user: &[LightRecord]) -> Result<(String, bool)> {
+pub(crate) fn choose_lights(
+    name: &str,
+    mesh: &mut Mesh,
+    camera: &CameraRecord,
+    user: &[LightRecord],
+) -> Result<(String, bool)> {
     if user.is_empty() && mesh.lights.is_empty() {
         let (lights, note) = crate::build::default_lights::default_lights(mesh, camera);
         let for_camera = lights.iter().any(|l| l.kind == LightRecord::POINT);
@@ -431,31 +436,7 @@ pub fn build(
     }
     writer.camera(&camera);
     let start = Instant::now();
-    match opts.accel {
-        Accel::Grid => {
-            let grid = build_grid(&mesh, opts.grid).map_err(|e| anyhow!("{name}: {e}"))?;
-            report.dims = grid.record.dims;
-            report.cells = grid.cells.len() as u64;
-            report.full_cells = grid.full_cells;
-            report.references = grid.references;
-            report.list_entries = grid.lists.len() as u64;
-            report.structure_bytes = 64 + 4 * (grid.cells.len() + grid.lists.len());
-            writer.grid(&grid);
-        }
-        Accel::Kd => {
-            let kd = build_kdtree(&mesh, &opts.kd);
-            report.tree(kd.nodes.len(), 8, kd.depth, kd.prims.len());
-            writer.kdtree(&kd);
-        }
-        Accel::Bvh => {
-            let bvh = build_bvh(&mesh, &opts.bvh);
-            report.tree(bvh.nodes.len(), 32, bvh.depth, bvh.prims.len());
-            writer.bvh(&bvh);
-        }
-        Accel::Bvh4 => build_wide::<Bvh4Node>(&mesh, opts, &mut report, &mut writer),
-        Accel::Bvh8 => build_wide::<Bvh8Node>(&mesh, opts, &mut report, &mut writer),
-        Accel::None => {}
-    }
+    add_structure(&name, &mesh, opts, &mut report, &mut writer)?;
     report.grid_seconds = start.elapsed().as_secs_f64();
     let image = writer.finish().map_err(|e| anyhow!("{name}: {e}"))?;
     report.image_bytes = image.len();
@@ -474,6 +455,43 @@ pub fn build(
         }
     }
     Ok(scene)
+}
+
+/// Builds the acceleration structure `opts` asks for over `mesh` and adds it to the
+/// image, recording its size in `report`.
+pub fn add_structure(
+    name: &str,
+    mesh: &Mesh,
+    opts: &BuildOptions,
+    report: &mut BuildReport,
+    writer: &mut ImageWriter,
+) -> Result<()> {
+    match opts.accel {
+        Accel::Grid => {
+            let grid = build_grid(mesh, opts.grid).map_err(|e| anyhow!("{name}: {e}"))?;
+            report.dims = grid.record.dims;
+            report.cells = grid.cells.len() as u64;
+            report.full_cells = grid.full_cells;
+            report.references = grid.references;
+            report.list_entries = grid.lists.len() as u64;
+            report.structure_bytes = 64 + 4 * (grid.cells.len() + grid.lists.len());
+            writer.grid(&grid);
+        }
+        Accel::Kd => {
+            let kd = build_kdtree(mesh, &opts.kd);
+            report.tree(kd.nodes.len(), 8, kd.depth, kd.prims.len());
+            writer.kdtree(&kd);
+        }
+        Accel::Bvh => {
+            let bvh = build_bvh(mesh, &opts.bvh);
+            report.tree(bvh.nodes.len(), 32, bvh.depth, bvh.prims.len());
+            writer.bvh(&bvh);
+        }
+        Accel::Bvh4 => build_wide::<Bvh4Node>(mesh, opts, report, writer),
+        Accel::Bvh8 => build_wide::<Bvh8Node>(mesh, opts, report, writer),
+        Accel::None => {}
+    }
+    Ok(())
 }
 
 /// Point lights enclosed by geometry: every one of 14 rays from the light (axes and

@@ -142,6 +142,13 @@ pub enum SceneError {
         /// The texture.
         texture: u32,
     },
+    /// A list that must be strictly increasing (a brick's TRIANGLE_IDS) is not.
+    NotIncreasing {
+        /// Which section.
+        section: SectionKind,
+        /// The first record not above its predecessor.
+        record: u32,
+    },
     /// A section that copies other data (TRI_BLOCKS copies vertices) disagrees with it.
     StaleCopy {
         /// Which section.
@@ -229,6 +236,9 @@ impl fmt::Display for SceneError {
                 section.name()
             ),
             BadGrid => write!(f, "grid dimensions, cell count or cell size are invalid"),
+            NotIncreasing { section, record } => {
+                write!(f, "section {} record {record} is not above the record before it", section.name())
+            }
             UnterminatedList => write!(f, "primitive list section does not end with a null entry"),
             SharedList { cell } => {
                 write!(f, "grid cell {cell} shares a primitive list with another cell (each cell needs its own list)")

@@ -160,11 +160,15 @@ pub enum SectionKind {
     /// The object each triangle came from (an OBJ `o`/`g` name, a glTF node, a scene
     /// file's mesh), u32 each, one per triangle (optional; hit queries report it).
     TriangleObjects = 20,
+    /// A brick's triangles' ids in the whole scene, strictly increasing (one per
+    /// triangle): the hit a brick reports carries the scene-wide id, so bricks order
+    /// equal distances as the flat image does (Wald & Slusallek 2001, §6.3).
+    TriangleIds = 21,
 }
 
 impl SectionKind {
     /// Every kind, in table order.
-    pub const ALL: [SectionKind; 20] = [
+    pub const ALL: [SectionKind; 21] = [
         SectionKind::Positions,
         SectionKind::Triangles,
         SectionKind::Grid,
@@ -185,6 +189,7 @@ impl SectionKind {
         SectionKind::TriBlocks,
         SectionKind::LightAlias,
         SectionKind::TriangleObjects,
+        SectionKind::TriangleIds,
     ];
 
     /// Decodes a section-table kind.
@@ -201,7 +206,8 @@ impl SectionKind {
             | SectionKind::PrimLists
             | SectionKind::TriangleMaterials
             | SectionKind::Texels
-            | SectionKind::TriangleObjects => 4,
+            | SectionKind::TriangleObjects
+            | SectionKind::TriangleIds => 4,
             SectionKind::Textures => 32,
             SectionKind::ShadingVertices | SectionKind::Lights | SectionKind::BvhNodes => 32,
             SectionKind::KdNodes => 8,
@@ -236,6 +242,7 @@ impl SectionKind {
             SectionKind::TriBlocks => "TRI_BLOCKS",
             SectionKind::LightAlias => "LIGHT_ALIAS",
             SectionKind::TriangleObjects => "TRIANGLE_OBJECTS",
+            SectionKind::TriangleIds => "TRIANGLE_IDS",
         }
     }
 }

@@ -5,6 +5,7 @@
 //! sections, each starting on a 64-byte boundary. Every record is `#[repr(C)]` with its
 //! size and alignment asserted at compile time.
 
+pub mod bricked;
 mod crc32;
 mod embed;
 mod error;

@@ -38,6 +38,7 @@ pub struct SceneView<'a> {
     tri_materials: &'a [u32],
     materials: &'a [MaterialRecord],
     tri_objects: &'a [u32],
+    tri_ids: &'a [u32],
     textures: &'a [TextureRecord],
     texels: &'a [u32],
     lights: &'a [LightRecord],
@@ -148,6 +149,7 @@ impl<'a> SceneView<'a> {
             tri_blocks,
             tri_materials: shading.tri_materials,
             tri_objects: shading.tri_objects,
+            tri_ids: shading.tri_ids,
             materials: shading.materials,
             textures: shading.textures,
             texels: shading.texels,
@@ -412,6 +414,21 @@ impl<'a> SceneView<'a> {
     /// The object triangle `prim` came from (0 without TRIANGLE_OBJECTS).
     pub fn object_of(&self, prim: u32) -> u32 {
         self.tri_objects.get(prim as usize).copied().unwrap_or(0)
+    }
+
+    /// The scene-wide id of triangle `prim`: its TRIANGLE_IDS entry in a brick of a
+    /// bricked scene, `prim` itself in a flat image.
+    #[inline]
+    pub fn scene_triangle_id(&self, prim: u32) -> u32 {
+        if self.tri_ids.is_empty() {
+            return prim;
+        }
+        self.tri_ids.get(prim as usize).copied().unwrap_or(prim)
+    }
+
+    /// True if this image is a brick of a bricked scene (it carries TRIANGLE_IDS).
+    pub fn is_brick(&self) -> bool {
+        !self.tri_ids.is_empty()
     }
 
     /// The number of objects: one more than the largest object id (1 without

@@ -10,5 +10,6 @@ pub mod grid;
 pub mod kdtree;
 pub mod occlusion;
 pub mod tree_step;
+pub mod two_level;
 pub mod walk;
 pub mod wide_bvh;

@@ -23,7 +23,7 @@ pub struct BuiltBvh {
 
 /// Margin that node boxes are grown by: relative to the scene's size and magnitude.
 pub fn box_margin(mesh: &Mesh) -> f64 {
-    let (lo, hi) = mesh.bounds();
+    let (lo, hi) = mesh.margin_reference();
     let (lo, hi) = (DVec3::from(lo.map(f64::from)), DVec3::from(hi.map(f64::from)));
     1e-5 * (hi - lo).max_element() + 8.0 * f64::from(f32::EPSILON) * lo.abs().max(hi.abs()).max_element()
 }

@@ -126,13 +126,18 @@ pub fn choose_dims(gmin: DVec3, gmax: DVec3, triangles: usize, res: GridResoluti
 /// Builds the grid over `mesh`.
 pub fn build_grid(mesh: &Mesh, res: GridResolution) -> Result<BuiltGrid> {
     let (lo, hi) = mesh.bounds();
+    // A brick's grid keeps the whole scene's margin besides its own.
+    let extra =
+        mesh.margin_bounds.map_or(0.0, |(a, b)| 1e-5 * (0..3).map(|k| f64::from(b[k] - a[k])).fold(0.0, f64::max));
+    let grow = |p: [f32; 3], s: f64| p.map(|c| (f64::from(c) + s * extra) as f32);
+    let (lo, hi) = if extra > 0.0 { (grow(lo, -1.0).map(next_down), grow(hi, 1.0).map(next_up)) } else { (lo, hi) };
     let (gmin, gmax) = grid_bounds(lo, hi);
     let dims = choose_dims(gmin, gmax, mesh.triangles.len(), res)?;
     let cell_size_f32: [f32; 3] = std::array::from_fn(|a| ((gmax[a] - gmin[a]) / dims[a] as f64) as f32);
     // The builder uses exactly the f32 cell geometry the traversal kernel uses.
     let cs = DVec3::from(cell_size_f32.map(f64::from));
     let mag = gmin.abs().max(gmax.abs()).max_element();
-    let margin = CELL_MARGIN * cs.min_element() + 4.0 * mag * f64::from(f32::EPSILON);
+    let margin = CELL_MARGIN * cs.min_element() + 4.0 * mag * f64::from(f32::EPSILON) + extra;
     let half = cs * 0.5 + DVec3::splat(margin);
     let d = [dims[0] as i64, dims[1] as i64, dims[2] as i64];
     let cell_count = (dims[0] as u64 * dims[1] as u64 * dims[2] as u64) as usize;

@@ -41,12 +41,37 @@ fn stored(mesh: &Mesh, t: [u32; 3]) -> [u32; 3] {
     }
 }
 
+/// The header's scene bounds: the vertices' box, grown for a brick by the whole
+/// scene's margin (the kd-tree's root box is the header's box, and must stay as
+/// conservative as the flat image's).
+fn header_bounds(mesh: &Mesh) -> ([f32; 3], [f32; 3]) {
+    let (lo, hi) = mesh.bounds();
+    if mesh.margin_bounds.is_none() || mesh.positions.is_empty() {
+        return (lo, hi);
+    }
+    let m = crate::build::bvh::box_margin(mesh);
+    (lo.map(|c| ((f64::from(c) - m) as f32).next_down()), hi.map(|c| ((f64::from(c) + m) as f32).next_up()))
+}
+
 impl ImageWriter {
+    /// The header's scene bounds (for an image with no vertices, whose own are empty:
+    /// a bricked scene's globals image carries the scene's).
+    pub fn set_bounds(&mut self, lo: [f32; 3], hi: [f32; 3]) -> &mut Self {
+        self.bounds = (lo, hi);
+        self
+    }
+
+    /// Adds the scene-wide id of each triangle (a brick's TRIANGLE_IDS).
+    pub fn triangle_ids(&mut self, ids: &[u32]) -> &mut Self {
+        self.add(SectionKind::TriangleIds, ids);
+        self
+    }
+
     /// Starts an image for `mesh`: geometry and shading sections.
     pub fn new(mesh: &Mesh) -> ImageWriter {
         let mut w = ImageWriter {
             accel: AccelKind::None as u32,
-            bounds: mesh.bounds(),
+            bounds: header_bounds(mesh),
             counts: (mesh.triangles.len() as u32, mesh.positions.len() as u32),
             sections: Vec::new(),
             flags: 0,

@@ -1,5 +1,6 @@
 //! Compiling a mesh into a scene image: the acceleration structure builders, mipmaps, default lights and the image writer.
 
+pub mod bricks;
 pub mod bvh;
 pub mod default_lights;
 pub mod grid;

@@ -414,3 +414,26 @@ impl DisplayArgs {
         DisplayChoice { exposure, tone_map: self.tonemap }
     }
 }
+
+/// A byte count with an optional binary unit: `300M`, `4G`, `512K`, `65536` (bytes).
+pub(crate) fn parse_byte_size(s: &str) -> Result<u64, String> {
+    let t = s.trim();
+    let (digits, unit) = match t.find(|c: char| !c.is_ascii_digit() && c != '.') {
+        Some(i) => t.split_at(i),
+        None => (t, ""),
+    };
+    let scale: u64 = match unit.to_ascii_uppercase().trim_end_matches("IB").trim_end_matches('B') {
+        "" => 1,
+        "K" => 1 << 10,
+        "M" => 1 << 20,
+        "G" => 1 << 30,
+        "T" => 1 << 40,
+        _ => return Err(format!("'{s}': unknown unit (use K, M, G or T)")),
+    };
+    let v: f64 = digits.parse().map_err(|_| format!("'{s}' is not a size such as 512M or 4G"))?;
+    let bytes = v * scale as f64;
+    if !(1.0..=1e18).contains(&bytes) {
+        return Err(format!("'{s}' is not a size between 1 byte and an exabyte"));
+    }
+    Ok(bytes as u64)
+}

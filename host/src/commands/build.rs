@@ -34,9 +34,29 @@ pub struct BuildArgs {
     pub structure: StructureArgs,
     #[command(flatten)]
     pub camera: CameraArgs,
+    #[command(flatten)]
+    pub bricks: BrickArgs,
+}
+
+/// How `build --bricks` stores a scene larger than memory.
+#[derive(Args, Debug)]
+pub struct BrickArgs {
+    /// Write a bricked scene (.rpsb): self-contained bricks, each with its own structure
+    /// (--accel), compressed, under a top-level BVH; rendered with a brick cache.
+    #[arg(long)]
+    pub bricks: bool,
+    /// Target size of one brick's scene image before compression (e.g. 256K).
+    #[arg(long, value_name = "SIZE", default_value = "256K", value_parser = super::args::parse_byte_size, requires = "bricks")]
+    pub brick_size: u64,
+    /// How bricks are stored.
+    #[arg(long, value_name = "CODEC", default_value = "lz4", value_parser = crate::input::bricked::codec::parse_codec, requires = "bricks")]
+    pub codec: raypipe_core::image::bricked::Codec,
 }
 
 pub(crate) fn cmd_build(a: BuildArgs) -> Result<()> {
+    if a.bricks.bricks {
+        return cmd_build_bricked(a);
+    }
     let start = Instant::now();
     let (input, scene) = match (&a.generate, &a.scene) {
         (Some(spec), _) => {
@@ -112,5 +132,61 @@ pub(crate) fn cmd_build(a: BuildArgs) -> Result<()> {
         r.image_bytes as f64 / r.triangles.max(1) as f64
     );
     println!("total        {elapsed:.3} s -> {}", a.output.display());
+    Ok(())
+}
+
+/// `raypipe build --bricks`.
+fn cmd_build_bricked(a: BuildArgs) -> Result<()> {
+    let start = Instant::now();
+    let (name, mesh, warnings, camera) = match (&a.generate, &a.scene) {
+        (Some(spec), _) => {
+            let g = crate::input::generate::generate(spec, a.view.as_deref())?;
+            (format!("generated {}", g.name), g.mesh, Vec::new(), g.camera)
+        }
+        (None, Some(path)) => {
+            let scene::Source::Mesh { name, mesh, warnings, camera } = scene::load_source(Some(path))? else {
+                bail!("{}: is already a scene image; build takes an OBJ file", path.display());
+            };
+            (name, mesh, warnings, camera)
+        }
+        (None, None) => bail!("build: name an OBJ file or --generate a scene"),
+    };
+    let bopts =
+        crate::build::bricks::BrickOptions { brick_bytes: a.bricks.brick_size, codec: a.bricks.codec, progress: true };
+    let camera = camera.merged(a.camera.spec()?);
+    let r =
+        crate::build::bricks::build_bricked(&name, mesh, warnings, camera, &a.structure.options(), &bopts, &a.output)?;
+    crate::output::warnings::warnings(&name, &r.warnings);
+    let per_tri = |b: u64| b as f64 / r.triangles.max(1) as f64;
+    println!("scene        {name}");
+    println!(
+        "triangles    {}, vertices {} in {} bricks ({})",
+        r.triangles,
+        r.vertices,
+        r.bricks,
+        accel_name(a.structure.accel())
+    );
+    println!(
+        "bricks       {} decompressed ({:.1} bytes/triangle), largest {}",
+        fmt_bytes(r.image_bytes as usize),
+        per_tri(r.image_bytes),
+        fmt_bytes(r.largest_brick as usize)
+    );
+    println!(
+        "stored       {} with {} ({:.2}:1, {:.1} bytes/triangle)",
+        fmt_bytes(r.stored_bytes as usize),
+        a.bricks.codec.name(),
+        r.image_bytes as f64 / r.stored_bytes.max(1) as f64,
+        per_tri(r.stored_bytes)
+    );
+    let [p, b, w] = r.seconds;
+    println!("phases       partition {p:.3} s, bricks {b:.3} s, write {w:.3} s");
+    println!("lights       {}", r.lights);
+    println!(
+        "total        {:.3} s -> {} ({})",
+        start.elapsed().as_secs_f64(),
+        a.output.display(),
+        fmt_bytes(r.file_bytes as usize)
+    );
     Ok(())
 }

@@ -30,6 +30,11 @@ pub struct Mesh {
     /// Object id per triangle (same length as `triangles`: OBJ `o`/`g` names in order,
     /// glTF nodes with a mesh, a scene file's meshes), or empty (one object).
     pub objects: Vec<u32>,
+    /// The bounds the builders size their boxes' margins from, when not the mesh's own:
+    /// a brick of a bricked scene takes the whole scene's, so that its structure stays
+    /// conservative for every ray the whole scene's range admits (rays from far
+    /// outside a small brick round as they would in the flat image).
+    pub margin_bounds: Option<([f32; 3], [f32; 3])>,
 }
 
 impl Mesh {
@@ -89,6 +94,12 @@ impl Mesh {
     pub fn degenerate_warning(&self, name: &str) -> Option<String> {
         let n = self.degenerate_count();
         (n > 0).then(|| format!("{name}: {n} degenerate (zero-area) triangles kept; they can never be hit"))
+    }
+
+    /// The bounds the builders' margins are relative to: [`Mesh::margin_bounds`], or the
+    /// mesh's own.
+    pub fn margin_reference(&self) -> ([f32; 3], [f32; 3]) {
+        self.margin_bounds.unwrap_or_else(|| self.bounds())
     }
 
     /// The box around all vertices.

@@ -1,5 +1,6 @@
 //! Reading scenes and rays: OBJ/MTL, PLY, glTF, scene files, textures, cameras, camera paths, ray batches, generated scenes.
 
+pub mod bricked;
 pub mod camera_file;
 pub mod camera_path;
 pub mod default_scene;

@@ -22,6 +22,11 @@ impl AlignedBytes {
         AlignedBytes { lines, len: bytes.len() }
     }
 
+    /// `len` zero bytes, aligned.
+    pub fn zeroed(len: usize) -> AlignedBytes {
+        AlignedBytes { lines: vec![Line([0; 64]); len.div_ceil(64)], len }
+    }
+
     /// Reads the first `len` bytes of `f` (a whole file, opened by the caller) into an
     /// aligned buffer.
     pub fn read_file(mut f: std::fs::File, len: u64) -> std::io::Result<AlignedBytes> {

@@ -1,5 +1,5 @@
 //! The optional shading sections — SHADING_VERTICES, MATERIALS, TRIANGLE_MATERIALS,
-//! TRIANGLE_OBJECTS, TEXTURES and TEXELS — absent, or matching the geometry: one record
+//! TRIANGLE_OBJECTS, TRIANGLE_IDS, TEXTURES and TEXELS — absent, or matching the geometry: one record
 //! per vertex or triangle, material and texture indices in range, texture chains inside
 //! TEXELS.
 
@@ -16,6 +16,7 @@ pub(in crate::image) struct Shading<'a> {
     pub materials: &'a [MaterialRecord],
     pub tri_materials: &'a [u32],
     pub tri_objects: &'a [u32],
+    pub tri_ids: &'a [u32],
     pub textures: &'a [TextureRecord],
     pub texels: &'a [u32],
 }
@@ -40,6 +41,13 @@ pub(in crate::image) fn shading<'a>(s: &Sections<'a>, nv: u32, nt: u32) -> Resul
     indices_below(K::TriangleMaterials, tri_materials.iter().copied(), nm, false)?;
     let tri_objects: &[u32] = s.slice(K::TriangleObjects)?;
     one_each(K::TriangleObjects, tri_objects.len(), nt)?;
+    let tri_ids: &[u32] = s.slice(K::TriangleIds)?;
+    one_each(K::TriangleIds, tri_ids.len(), nt)?;
+    // Strictly increasing, so that a brick orders equal distances by local index exactly
+    // as the flat image orders them by scene-wide index.
+    if let Some(i) = tri_ids.windows(2).position(|w| w[1] <= w[0]) {
+        return Err(SceneError::NotIncreasing { section: K::TriangleIds, record: i as u32 + 1 });
+    }
     let textures: &[TextureRecord] = s.slice(K::Textures)?;
     let texels: &[u32] = s.slice(K::Texels)?;
     for (i, t) in textures.iter().enumerate() {
@@ -50,5 +58,5 @@ pub(in crate::image) fn shading<'a>(s: &Sections<'a>, nv: u32, nt: u32) -> Resul
         }
     }
     indices_below(K::Materials, materials.iter().map(|m| m.texture), textures.len() as u32, true)?;
-    Ok(Shading { vertices, materials, tri_materials, tri_objects, textures, texels })
+    Ok(Shading { vertices, materials, tri_materials, tri_objects, tri_ids, textures, texels })
 }
