@@ -1,0 +1,137 @@
+//! "One hit whatever the path" across bricks: for random triangle soups cut into bricks
+//! of random sizes, with every structure inside the bricks, the two-level walk returns
+//! the flat image's hit bit for bit — closest and any hit — whichever bricks are
+//! resident when the ray starts (rays park on missing bricks and resume where they
+//! stopped).
+
+use proptest::prelude::*;
+use raypipe::build::bricks::{build_bricked, BrickOptions};
+use raypipe::input::bricked::{BrickedScene, ResidentBrick};
+use raypipe::input::mesh::Mesh;
+use raypipe::render::tracer::trace;
+use raypipe::scene::{Accel, BuildOptions};
+use raypipe_core::image::bricked::Codec;
+use raypipe_core::traverse::occlusion::occluded;
+use raypipe_core::traverse::two_level::{run_two_level, TopWalk, TwoLevelOutcome};
+use raypipe_core::{Hit, NoProbe, Ray, RayCounters, SceneView, Vec3, Watertight};
+use raypipe_tests::build_soup;
+
+fn coord() -> impl Strategy<Value = f32> {
+    prop_oneof![3 => (-8i32..=8).prop_map(|i| i as f32 * 0.5), 1 => -4.0f32..4.0]
+}
+
+fn point() -> impl Strategy<Value = [f32; 3]> {
+    [coord(), coord(), coord()]
+}
+
+fn soup() -> impl Strategy<Value = (Vec<[f32; 3]>, Vec<[u32; 3]>)> {
+    (prop::collection::vec(point(), 3..40), prop::collection::vec(any::<[prop::sample::Index; 3]>(), 1..60)).prop_map(
+        |(positions, picks)| {
+            let n = positions.len();
+            let triangles = picks.iter().map(|t| t.map(|i| i.index(n) as u32)).collect();
+            (positions, triangles)
+        },
+    )
+}
+
+fn rays() -> impl Strategy<Value = Vec<([f32; 3], [f32; 3], bool)>> {
+    let far = || [-60.0f32..60.0, -60.0f32..60.0, -60.0f32..60.0];
+    prop::collection::vec((far(), [-1.0f32..1.0, -1.0f32..1.0, -1.0f32..1.0], any::<bool>()), 40)
+}
+
+/// A bricked scene of the soup, and every brick loaded.
+fn bricked(
+    positions: &[[f32; 3]],
+    triangles: &[[u32; 3]],
+    accel: Accel,
+    brick_bytes: u64,
+    codec: Codec,
+) -> (tempfile::TempDir, BrickedScene) {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = dir.path().join("soup.rpsb");
+    let mesh = Mesh { positions: positions.to_vec(), triangles: triangles.to_vec(), ..Default::default() };
+    let opts = BuildOptions { accel, ..Default::default() };
+    let bopts = BrickOptions { brick_bytes, codec, progress: false };
+    build_bricked("soup", mesh, Vec::new(), Default::default(), &opts, &bopts, &out).expect("soup bricks");
+    let scene = BrickedScene::open(&out).expect("valid bricked scene");
+    (dir, scene)
+}
+
+/// Traces `ray` through the bricked scene with only the bricks of `resident` (a bit
+/// per brick) in memory at first; a ray that reaches a missing brick is parked, the
+/// brick is "loaded", and the ray resumes. Returns the hit and how often it parked.
+fn two_level(
+    scene: &BrickedScene,
+    bricks: &[ResidentBrick],
+    ray: &Ray,
+    any_hit: bool,
+    resident: u64,
+) -> (Option<Hit>, u32) {
+    let index = scene.view();
+    let mut loaded = resident;
+    let mut walk = TopWalk::start(ray, any_hit);
+    let mut parks = 0;
+    loop {
+        let mut have = |b: u32| -> Option<SceneView<'_>> {
+            (loaded & (1u64 << (b % 64)) != 0).then(|| *bricks[b as usize].view())
+        };
+        match run_two_level::<Watertight, _>(&mut walk, index, ray, &mut have, &mut NoProbe) {
+            TwoLevelOutcome::Done(h) => return (h.map(|h| h.hit), parks),
+            TwoLevelOutcome::Missing(b) => {
+                // The parked walk is plain data: a copy resumes as well as the original.
+                walk = walk.clone();
+                parks += 1;
+                loaded |= 1u64 << (b % 64);
+                if parks > 10_000 {
+                    panic!("runaway");
+                }
+            }
+        }
+    }
+}
+
+fn same(a: Option<Hit>, b: Option<Hit>) -> bool {
+    match (a, b) {
+        (None, None) => true,
+        (Some(a), Some(b)) => a.bits_eq(&b),
+        _ => false,
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
+
+    #[test]
+    fn bricks_return_the_flat_images_hit(
+        (positions, triangles) in soup(),
+        accel in prop::sample::select(vec![Accel::Grid, Accel::Kd, Accel::Bvh, Accel::Bvh4, Accel::Bvh8, Accel::None]),
+        brick_bytes in 40u64..600,
+        codec in prop::sample::select(vec![Codec::Lz4, Codec::Zstd, Codec::None]),
+        resident in any::<u64>(),
+        rays in rays(),
+    ) {
+        let flat = build_soup(positions.clone(), triangles.clone(), accel, 1);
+        let fview = flat.view().expect("valid flat image");
+        let (_dir, scene) = bricked(&positions, &triangles, accel, brick_bytes, codec);
+        let bricks: Vec<ResidentBrick> =
+            (0..scene.view().brick_count()).map(|b| scene.load(b).expect("brick loads").0).collect();
+        prop_assert_eq!(scene.view().header().triangle_count, triangles.len() as u64);
+        for (o, d, bounded) in &rays {
+            let mut ray = Ray::new(Vec3::from(*o), Vec3::from(*d));
+            if *bounded {
+                ray.t_min = 0.5;
+                ray.t_max = 30.0;
+            }
+            let want = trace::<Watertight, _>(&fview, &ray, &mut NoProbe, &mut RayCounters::default());
+            let (got, _) = two_level(&scene, &bricks, &ray, false, resident);
+            prop_assert!(same(want, got), "{accel:?}: flat {want:?} != bricked {got:?} for {ray:?}");
+            // With nothing resident, a ray that hits must have waited for a brick.
+            let (cold, parks) = two_level(&scene, &bricks, &ray, false, 0);
+            prop_assert!(same(want, cold));
+            prop_assert!(cold.is_none() || parks > 0);
+            let blocked = occluded::<Watertight, _>(&fview, &ray, &mut NoProbe, &mut RayCounters::default());
+            let (any, _) = two_level(&scene, &bricks, &ray, true, resident);
+            prop_assert_eq!(blocked, any.is_some(), "{:?}: any-hit for {:?}", accel, ray);
+        }
+    }
+}
