@@ -135,3 +135,65 @@ proptest! {
         }
     }
 }
+
+/// The frames of a scene, flat and bricked, for every cache size, thread count and
+/// packet size: the same pixels, bit for bit (radiance included).
+fn frames_agree(
+    name: &str,
+    mesh: Mesh,
+    camera: raypipe::input::camera_file::CameraSpec,
+    accel: Accel,
+    brick_bytes: u64,
+) {
+    use raypipe::render::bricked::brick_cache::with_cache;
+    use raypipe::render::bricked::frame::render_bricked;
+    use raypipe::render::packets::PacketSize;
+    use raypipe::render::{render, Algorithm, RenderOptions};
+
+    let opts = BuildOptions { accel, ..Default::default() };
+    let flat = raypipe::scene::build(name.into(), mesh.clone(), Vec::new(), camera, &opts).expect("flat builds");
+    let fview = flat.view().unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("scene.rpsb");
+    let bopts = BrickOptions { brick_bytes, codec: Codec::Lz4, progress: false };
+    build_bricked(name, mesh, Vec::new(), camera, &opts, &bopts, &out).expect("bricks build");
+    let scene = BrickedScene::open(&out).unwrap();
+    assert!(scene.view().brick_count() >= 4, "{name}: {} bricks", scene.view().brick_count());
+    let mut cam = *fview.camera().unwrap();
+    assert_eq!(&cam, scene.view().globals().camera().unwrap());
+    (cam.width, cam.height) = (48, 40);
+    let largest = scene.view().header().max_brick_size;
+    let all: u64 = scene.view().bricks().iter().map(|b| b.image_size).sum();
+    for algo in [Algorithm::Cast, Algorithm::Whitted] {
+        for (samples, packet, threads) in [(1, PacketSize::Single, 1), (2, PacketSize::P16, 2), (1, PacketSize::P64, 3)]
+        {
+            let o = RenderOptions { algo, samples, packet, threads: Some(threads), ..Default::default() };
+            let want = render(&fview, &cam, &o).unwrap();
+            for (cache, loaders) in [(largest, 1), (largest * 3, 2), (all, 3)] {
+                let (got, stats) = with_cache(&scene, cache, loaders, |c| render_bricked(&scene, c, &cam, &o)).unwrap();
+                assert_eq!(got.pixels, want.pixels, "{name} {algo:?} {packet:?} cache {cache}");
+                let bits =
+                    |f: &raypipe::render::Frame| f.radiance.iter().flatten().map(|c| c.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&got), bits(&want), "{name} {algo:?} {packet:?} cache {cache}: radiance");
+                assert!(stats.trace.brick_visits > 0);
+            }
+        }
+    }
+}
+
+#[test]
+fn bricked_frames_equal_flat_frames_for_the_cornell_box() {
+    let raypipe::scene::Source::Mesh { mesh, camera, .. } = raypipe::scene::load_source(None).unwrap() else {
+        panic!("the default scene is a mesh")
+    };
+    // Tiny bricks, so that the box's few triangles still make several.
+    frames_agree("cornell", mesh, camera, Accel::Bvh4, 300);
+}
+
+#[test]
+fn bricked_frames_equal_flat_frames_for_a_building() {
+    for accel in [Accel::Grid, Accel::Kd, Accel::Bvh] {
+        let g = raypipe::input::generate::generate("building:floors=1,rooms=3,seed=4", Some("inside")).unwrap();
+        frames_agree("building", g.mesh, g.camera, accel, 24 << 10);
+    }
+}

@@ -46,6 +46,7 @@ fn checker_floor() -> Scene {
         }],
         textures: vec![TextureImage { width: SIDE, height: SIDE, rgba, wrap: TextureRecord::REPEAT }],
         objects: Vec::new(),
+        margin_bounds: None,
     };
     scene::build("checker".into(), mesh, Vec::new(), Default::default(), &BuildOptions::default()).unwrap()
 }

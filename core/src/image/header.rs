@@ -164,11 +164,14 @@ pub enum SectionKind {
     /// triangle): the hit a brick reports carries the scene-wide id, so bricks order
     /// equal distances as the flat image does (Wald & Slusallek 2001, §6.3).
     TriangleIds = 21,
+    /// A brick's whole scene's bounds (one record: min, max): shading offsets new rays
+    /// in proportion to the scene's extent, which a brick must not change.
+    SceneBounds = 22,
 }
 
 impl SectionKind {
     /// Every kind, in table order.
-    pub const ALL: [SectionKind; 21] = [
+    pub const ALL: [SectionKind; 22] = [
         SectionKind::Positions,
         SectionKind::Triangles,
         SectionKind::Grid,
@@ -190,6 +193,7 @@ impl SectionKind {
         SectionKind::LightAlias,
         SectionKind::TriangleObjects,
         SectionKind::TriangleIds,
+        SectionKind::SceneBounds,
     ];
 
     /// Decodes a section-table kind.
@@ -216,6 +220,7 @@ impl SectionKind {
             SectionKind::WaldTriangles => 48,
             SectionKind::TriBlocks => 144,
             SectionKind::LightAlias => 16,
+            SectionKind::SceneBounds => 24,
         }
     }
 
@@ -243,6 +248,7 @@ impl SectionKind {
             SectionKind::LightAlias => "LIGHT_ALIAS",
             SectionKind::TriangleObjects => "TRIANGLE_OBJECTS",
             SectionKind::TriangleIds => "TRIANGLE_IDS",
+            SectionKind::SceneBounds => "SCENE_BOUNDS",
         }
     }
 }

@@ -39,6 +39,7 @@ pub struct SceneView<'a> {
     materials: &'a [MaterialRecord],
     tri_objects: &'a [u32],
     tri_ids: &'a [u32],
+    scene_bounds: Option<(Vec3, Vec3)>,
     textures: &'a [TextureRecord],
     texels: &'a [u32],
     lights: &'a [LightRecord],
@@ -150,6 +151,7 @@ impl<'a> SceneView<'a> {
             tri_materials: shading.tri_materials,
             tri_objects: shading.tri_objects,
             tri_ids: shading.tri_ids,
+            scene_bounds: validate::geometry::scene_bounds(s)?,
             materials: shading.materials,
             textures: shading.textures,
             texels: shading.texels,
@@ -225,6 +227,13 @@ impl<'a> SceneView<'a> {
     /// Scene bounds from the header.
     pub fn bounds(&self) -> (Vec3, Vec3) {
         (Vec3::from(self.header.bounds_min), Vec3::from(self.header.bounds_max))
+    }
+
+    /// The bounds of the whole scene: a brick's SCENE_BOUNDS, else [`SceneView::bounds`].
+    /// Shading offsets new rays off a surface in proportion to this extent, so a brick
+    /// shades exactly as the flat image does.
+    pub fn scene_bounds(&self) -> (Vec3, Vec3) {
+        self.scene_bounds.unwrap_or_else(|| self.bounds())
     }
 
     /// The scene bounds grown by the builders' margin: the box for Purcell's early

@@ -77,7 +77,7 @@ impl Surface {
         if !entering {
             n = -n;
         }
-        let (lo, hi) = scene.bounds();
+        let (lo, hi) = scene.scene_bounds();
         let scene_extent = (hi - lo).max_element();
         let cone = cone.at_hit(hit.t, ray.dir);
         Surface { point: ray.at(hit.t), normal: n, entering, geometric, material, tint, scene_extent, cone }

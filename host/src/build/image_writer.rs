@@ -61,6 +61,12 @@ impl ImageWriter {
         self
     }
 
+    /// Adds the whole scene's bounds (a brick's SCENE_BOUNDS).
+    pub fn scene_bounds(&mut self, lo: [f32; 3], hi: [f32; 3]) -> &mut Self {
+        self.add(SectionKind::SceneBounds, &[[lo, hi]]);
+        self
+    }
+
     /// Adds the scene-wide id of each triangle (a brick's TRIANGLE_IDS).
     pub fn triangle_ids(&mut self, ids: &[u32]) -> &mut Self {
         self.add(SectionKind::TriangleIds, ids);

@@ -437,3 +437,15 @@ pub(crate) fn parse_byte_size(s: &str) -> Result<u64, String> {
     }
     Ok(bytes as u64)
 }
+
+/// How a bricked scene's bricks are cached while rendering.
+#[derive(Args, Debug, Clone, Copy)]
+pub struct CacheArgs {
+    /// Bytes of decompressed bricks kept in memory (least recently used go first), e.g.
+    /// 512M or 4G; at least the largest brick. Bricked scenes only.
+    #[arg(long, value_name = "SIZE", default_value = "1G", value_parser = parse_byte_size)]
+    pub cache: u64,
+    /// Threads reading and decompressing bricks. Bricked scenes only.
+    #[arg(long, value_name = "N", default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub loaders: u32,
+}

@@ -13,6 +13,7 @@ pub mod info;
 pub mod plot;
 pub mod rays;
 pub mod render;
+pub mod render_bricked;
 pub mod report;
 pub mod simulate;
 pub mod stats;
@@ -77,7 +78,7 @@ pub(crate) fn fmt_bytes(b: usize) -> String {
 }
 
 /// The camera `args` make of the image's own (or the framing camera), unchecked.
-fn camera_of(view: &raypipe_core::SceneView<'_>, args: &CameraArgs) -> Result<CameraRecord> {
+pub(crate) fn camera_of(view: &raypipe_core::SceneView<'_>, args: &CameraArgs) -> Result<CameraRecord> {
     let base = match view.camera() {
         Some(c) => *c,
         None => {

@@ -43,11 +43,16 @@ pub struct RenderArgs {
     pub run: RunArgs,
     #[command(flatten)]
     pub walk: WalkArgs,
+    #[command(flatten)]
+    pub cache: super::args::CacheArgs,
 }
 
 pub(crate) fn cmd_render(a: RenderArgs) -> Result<()> {
     a.run.check()?;
     check_image_path(&a.output)?;
+    if let Some(path) = a.scene.as_deref().filter(|p| crate::input::bricked::is_bricked(p)) {
+        return super::render_bricked::cmd_render_bricked(&a, path);
+    }
     let loading = Instant::now();
     let scene = load_scene(a.scene.as_deref(), &a.structure, &a.camera)?;
     let load_secs = loading.elapsed().as_secs_f64();

@@ -3,6 +3,7 @@
 //! identical for any thread count and tile order.
 
 pub mod batch;
+pub mod bricked;
 pub mod gbuffer;
 pub mod packets;
 pub mod shading;

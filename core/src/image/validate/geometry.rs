@@ -52,3 +52,23 @@ pub(in crate::image) fn geometry<'a>(header: &Header, s: &Sections<'a>) -> Resul
     }
     Ok(Geometry { positions, triangles, bounds_min: bmin, bounds_max: bmax })
 }
+
+/// A brick's SCENE_BOUNDS: absent, or one finite, ordered box.
+pub(in crate::image) fn scene_bounds(s: &Sections<'_>) -> Result<Option<(Vec3, Vec3)>, SceneError> {
+    let kind = SectionKind::SceneBounds;
+    let boxes: &[[[f32; 3]; 2]] = s.slice(kind)?;
+    match boxes {
+        [] => Ok(None),
+        [[lo, hi]] => {
+            let (l, h) = (Vec3::from(*lo), Vec3::from(*hi));
+            if !(finite3(*lo) && finite3(*hi)) {
+                return Err(SceneError::NonFinite { section: kind, record: 0 });
+            }
+            if !l.cmple(h).all() {
+                return Err(SceneError::OutOfBounds { section: kind, record: 0 });
+            }
+            Ok(Some((l, h)))
+        }
+        _ => Err(SceneError::CountMismatch { section: kind, expected: 1, found: boxes.len() as u32 }),
+    }
+}

@@ -61,7 +61,7 @@ pub fn build_brick(ctx: &BrickContext, tris: &mut [TriRecord]) -> Result<BuiltBr
     if ctx.build.triangles == TriangleLayout::Wald {
         writer.wald_triangles(&mesh);
     }
-    writer.triangle_ids(&ids);
+    writer.triangle_ids(&ids).scene_bounds(ctx.scene_bounds.0, ctx.scene_bounds.1);
     let mut report = BuildReport::default();
     add_structure("brick", &mesh, &ctx.build, &mut report, &mut writer)?;
     let image = writer.finish()?;
