@@ -151,6 +151,11 @@ impl TopWalk {
         self.best
     }
 
+    /// True for an any-hit walk (a shadow ray's).
+    pub fn is_any_hit(&self) -> bool {
+        self.any_hit
+    }
+
     /// The brick handed out and not yet finished, if any.
     pub fn pending(&self) -> Option<u32> {
         self.pending

@@ -20,6 +20,7 @@ pub mod stats;
 pub mod stream;
 pub mod sweep;
 pub mod trace;
+pub mod trace_bricked;
 
 use crate::scene::{self, Accel, Scene};
 use anyhow::Result;

@@ -56,6 +56,8 @@ pub struct TraceArgs {
     /// Trace consecutive rays in packets of this many (1 = single rays); hits are the same.
     #[arg(long, value_enum, default_value_t = PacketSize::Single)]
     pub packet: PacketSize,
+    #[command(flatten)]
+    pub cache: super::args::CacheArgs,
 }
 
 /// What `raypipe trace` asks of each ray.
@@ -69,7 +71,7 @@ pub enum Query {
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Field {
+pub(crate) enum Field {
     T,
     U,
     V,
@@ -100,14 +102,14 @@ impl Field {
     }
 
     /// Bytes of the field in a record.
-    fn size(self) -> usize {
+    pub(crate) fn size(self) -> usize {
         match self {
             Field::GeometricNormal | Field::ShadingNormal => 12,
             _ => 4,
         }
     }
 
-    fn descr(self) -> (&'static str, &'static str) {
+    pub(crate) fn descr(self) -> (&'static str, &'static str) {
         match self {
             Field::T => ("t", "'<f4'"),
             Field::U => ("u", "'<f4'"),
@@ -136,6 +138,9 @@ pub(crate) fn cmd_trace(a: TraceArgs) -> Result<()> {
             Vec::new()
         }
     };
+    if crate::input::bricked::is_bricked(&a.scene) {
+        return super::trace_bricked::cmd_trace_bricked(&a, &fields);
+    }
     let array = crate::input::npy::read_f32_2d(&a.rays)?;
     let name = a.rays.display();
     let (rays, invalid) = rays_from_array(&array).map_err(|e| anyhow!("{name}: {e}"))?;
@@ -225,39 +230,52 @@ fn closest_records(
     let mut data = vec![0u8; size * hits.len()];
     data.par_chunks_mut(size.max(1)).zip(hits).zip(rays).zip(invalid).for_each(|(((out, h), ray), bad)| {
         let hit = (h.prim >= 0 && !bad).then_some(Hit { t: h.t, u: h.u, v: h.v, prim: h.prim as u32 });
-        let normals = fields.contains(&Field::ShadingNormal) || fields.contains(&Field::GeometricNormal);
-        let surface = match (&hit, normals) {
-            (Some(hit), true) => Some(Surface::at(view, ray, hit, RayCone::POINT, &mut NoProbe)),
-            _ => None,
-        };
-        let mut at = 0;
-        let mut put = |bytes: &[u8]| {
-            out[at..at + bytes.len()].copy_from_slice(bytes);
-            at += bytes.len();
-        };
-        for f in fields {
-            match f {
-                Field::T => put(&hit.map_or(f32::INFINITY, |h| h.t).to_le_bytes()),
-                Field::U => put(&hit.map_or(0.0, |h| h.u).to_le_bytes()),
-                Field::V => put(&hit.map_or(0.0, |h| h.v).to_le_bytes()),
-                Field::Prim => put(&hit.map_or(-1, |h| h.prim as i32).to_le_bytes()),
-                Field::GeometricNormal | Field::ShadingNormal => {
-                    let n = surface.as_ref().map_or(Vec3::ZERO, |s| {
-                        if *f == Field::GeometricNormal {
-                            s.geometric.normalize_or_zero()
-                        } else {
-                            s.normal
-                        }
-                    });
-                    n.to_array().iter().for_each(|c| put(&c.to_le_bytes()));
-                }
-                Field::Object => put(&hit.map_or(-1, |h| view.object_of(h.prim) as i32).to_le_bytes()),
-                Field::Material => {
-                    let id = hit.and_then(|h| view.material_id(h.prim, &mut NoProbe)).map_or(-1, |m| m as i32);
-                    put(&id.to_le_bytes());
-                }
-            }
-        }
+        pack_record(view, ray, hit, hit, fields, out);
     });
     data
+}
+
+/// One closest-hit record's fields into `out`: `hit` as the file reports it (`prim`
+/// scene-wide), `local` the same hit as `view` knows it (a brick's own triangle index).
+pub(crate) fn pack_record(
+    view: &SceneView<'_>,
+    ray: &Ray,
+    hit: Option<Hit>,
+    local: Option<Hit>,
+    fields: &[Field],
+    out: &mut [u8],
+) {
+    let normals = fields.contains(&Field::ShadingNormal) || fields.contains(&Field::GeometricNormal);
+    let surface = match (&local, normals) {
+        (Some(hit), true) => Some(Surface::at(view, ray, hit, RayCone::POINT, &mut NoProbe)),
+        _ => None,
+    };
+    let mut at = 0;
+    let mut put = |bytes: &[u8]| {
+        out[at..at + bytes.len()].copy_from_slice(bytes);
+        at += bytes.len();
+    };
+    for f in fields {
+        match f {
+            Field::T => put(&hit.map_or(f32::INFINITY, |h| h.t).to_le_bytes()),
+            Field::U => put(&hit.map_or(0.0, |h| h.u).to_le_bytes()),
+            Field::V => put(&hit.map_or(0.0, |h| h.v).to_le_bytes()),
+            Field::Prim => put(&hit.map_or(-1, |h| h.prim as i32).to_le_bytes()),
+            Field::GeometricNormal | Field::ShadingNormal => {
+                let n = surface.as_ref().map_or(Vec3::ZERO, |s| {
+                    if *f == Field::GeometricNormal {
+                        s.geometric.normalize_or_zero()
+                    } else {
+                        s.normal
+                    }
+                });
+                n.to_array().iter().for_each(|c| put(&c.to_le_bytes()));
+            }
+            Field::Object => put(&local.map_or(-1, |h| view.object_of(h.prim) as i32).to_le_bytes()),
+            Field::Material => {
+                let id = local.and_then(|h| view.material_id(h.prim, &mut NoProbe)).map_or(-1, |m| m as i32);
+                put(&id.to_le_bytes());
+            }
+        }
+    }
 }

@@ -5,7 +5,8 @@
 //! brick is missing stays parked — its [`TopWalk`] is plain data — until it arrives.
 //! The tracer waits only when every ray it holds is parked.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use anyhow::Result;
@@ -16,6 +17,8 @@ use raypipe_core::traverse::two_level::{BrickHit, TopEvent, TopWalk};
 use raypipe_core::{Hit, Intersector, NoProbe, Ray, RayCounters, SceneView};
 
 use super::brick_cache::BrickCache;
+use crate::input::bricked::ResidentBrick;
+use crate::platform::isa::with_avx2;
 use crate::render::packets::PacketSize;
 use crate::render::tracer::{trace, trace_packet};
 
@@ -125,6 +128,11 @@ impl<'c, 's> BrickTracer<'c, 's> {
         Ok(())
     }
 
+    /// The scene's index.
+    pub fn index(&self) -> &'c BrickedView<'s> {
+        self.index
+    }
+
     /// Steps `walk` until it needs a brick (returned) or ends (`None`).
     fn advance(&mut self, walk: &mut TopWalk) -> Option<u32> {
         loop {
@@ -138,28 +146,116 @@ impl<'c, 's> BrickTracer<'c, 's> {
 
     /// Traces `rays` (closest hit, or any hit for the rays whose `any_hit` is set) to
     /// the end; returns each ray's hit. For an any-hit ray the hit says only "blocked".
+    /// Single rays go depth first, each through every resident brick it reaches at
+    /// once; packets go brick by brick, a group of rays waiting on each.
     pub fn trace_batch<I: Intersector>(&mut self, rays: &[Ray], any_hit: &[bool]) -> Result<Vec<Option<BrickHit>>> {
         let n = rays.len();
         self.stats.rays += n as u64;
         let mut walks: Vec<TopWalk> = rays.iter().zip(any_hit).map(|(r, &a)| TopWalk::start(r, a)).collect();
         let mut out: Vec<Option<BrickHit>> = vec![None; n];
-        let mut work = Vec::new();
-        for (i, walk) in walks.iter_mut().enumerate() {
-            match self.advance(walk) {
-                Some(b) => work.push((b, i)),
-                None => out[i] = walk.best(),
-            }
-        }
-        self.grouped(work, |tracer, view, items, more| {
-            tracer.trace_group::<I>(view, &items, rays, any_hit, &mut walks);
-            for i in items {
-                match tracer.advance(&mut walks[i]) {
-                    Some(b) => more.push((b, i)),
-                    None => out[i] = walks[i].best(),
+        if self.packet != PacketSize::Single {
+            let mut work = Vec::new();
+            for (i, walk) in walks.iter_mut().enumerate() {
+                match self.advance(walk) {
+                    Some(b) => work.push((b, i)),
+                    None => out[i] = walk.best(),
                 }
             }
-        })?;
+            self.grouped(work, |tracer, view, items, more| {
+                tracer.trace_group::<I>(view, &items, rays, any_hit, &mut walks);
+                for i in items {
+                    match tracer.advance(&mut walks[i]) {
+                        Some(b) => more.push((b, i)),
+                        None => out[i] = walks[i].best(),
+                    }
+                }
+            })?;
+            return Ok(out);
+        }
+        let mut pins: HashMap<u32, Arc<ResidentBrick>> = HashMap::new();
+        let mut parked: BTreeMap<u32, Group<usize>> = BTreeMap::new();
+        for i in 0..n {
+            if let Some(b) = self.depth_first::<I>(&mut pins, &mut walks[i], &rays[i], &mut out[i]) {
+                park(&mut parked, b, i);
+            }
+        }
+        let mut seen = self.cache.generation();
+        while !parked.is_empty() {
+            let mut progressed = false;
+            let keys: Vec<u32> = parked.keys().copied().collect();
+            for b in keys {
+                if !pins.contains_key(&b) {
+                    match self.cache.get(b) {
+                        Some(brick) => {
+                            pins.insert(b, brick);
+                        }
+                        None => continue,
+                    }
+                }
+                let Some(g) = parked.remove(&b) else { continue };
+                self.stats.parked_ray_seconds += g.since.elapsed().as_secs_f64() * g.items.len() as f64;
+                progressed = true;
+                for i in g.items {
+                    if let Some(next) = self.depth_first::<I>(&mut pins, &mut walks[i], &rays[i], &mut out[i]) {
+                        park(&mut parked, next, i);
+                    }
+                }
+            }
+            if !progressed {
+                // Let every brick go before waiting: a loader may need the room.
+                pins.clear();
+                self.cache.released();
+                let t = Instant::now();
+                self.cache.wait(&mut seen, Duration::from_millis(20))?;
+                self.stats.idle_seconds += t.elapsed().as_secs_f64();
+            }
+        }
+        pins.clear();
+        self.cache.released();
         Ok(out)
+    }
+
+    /// Runs one ray through every brick it reaches that is resident (pinned in `pins`,
+    /// or taken from the cache and pinned); returns the missing brick it must wait for,
+    /// or `None` once its walk is done (its hit in `out`).
+    fn depth_first<I: Intersector>(
+        &mut self,
+        pins: &mut HashMap<u32, Arc<ResidentBrick>>,
+        walk: &mut TopWalk,
+        ray: &Ray,
+        out: &mut Option<BrickHit>,
+    ) -> Option<u32> {
+        let mut c = RayCounters::default();
+        let parked = loop {
+            let Some(b) = self.advance(walk) else {
+                *out = walk.best();
+                break None;
+            };
+            let brick = match pins.get(&b) {
+                Some(brick) => brick,
+                None => match self.cache.get(b) {
+                    Some(brick) => pins.entry(b).or_insert(brick),
+                    None => break Some(b),
+                },
+            };
+            let view = brick.view();
+            self.stats.brick_visits += 1;
+            let r = walk.brick_ray(ray);
+            if walk.is_any_hit() {
+                let blocked = occluded::<I, _>(view, &r, &mut NoProbe, &mut c);
+                walk.finish_brick(view, blocked.then_some(Hit { t: r.t_max, u: 0.0, v: 0.0, prim: 0 }));
+            } else {
+                // The brick's walk with the CPU's widest instructions, as the flat tracer's.
+                let hit = with_avx2(
+                    #[inline(always)]
+                    || trace::<I, _>(view, &r, &mut NoProbe, &mut c),
+                );
+                walk.finish_brick(view, hit);
+            }
+        };
+        self.stats.steps += c.nodes as u64;
+        self.stats.tests += c.tri_tests as u64;
+        parked
     }
 
     /// Traces the rays `items` through the resident brick `view` and finishes their
@@ -217,4 +313,9 @@ impl<'c, 's> BrickTracer<'c, 's> {
             }
         }
     }
+}
+
+/// Parks ray `i` on brick `b`.
+fn park(parked: &mut BTreeMap<u32, Group<usize>>, b: u32, i: usize) {
+    parked.entry(b).or_insert_with(|| Group { items: Vec::new(), since: Instant::now(), waited: true }).items.push(i);
 }
