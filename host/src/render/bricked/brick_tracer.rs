@@ -184,10 +184,10 @@ impl<'c, 's> BrickTracer<'c, 's> {
             let mut progressed = false;
             let keys: Vec<u32> = parked.keys().copied().collect();
             for b in keys {
-                if !pins.contains_key(&b) {
+                if let std::collections::hash_map::Entry::Vacant(e) = pins.entry(b) {
                     match self.cache.get(b) {
                         Some(brick) => {
-                            pins.insert(b, brick);
+                            e.insert(brick);
                         }
                         None => continue,
                     }
