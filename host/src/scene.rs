@@ -251,6 +251,11 @@ pub fn load_default(opts: &BuildOptions) -> Result<Scene> {
     load(None, opts)
 }
 
+/// The camera of the `.camera` file beside `path`, or none.
+pub fn sidecar_camera_spec(path: &Path) -> Result<CameraSpec> {
+    Ok(sidecar_camera(path).map(|p| CameraSpec::load(&p)).transpose()?.unwrap_or_default())
+}
+
 /// `scene.camera` next to `scene.obj`, if it exists: the scene's default camera.
 fn sidecar_camera(obj: &Path) -> Option<PathBuf> {
     let stem = obj.file_name()?.to_str()?;

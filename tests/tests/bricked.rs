@@ -46,12 +46,16 @@ fn bricked(
     accel: Accel,
     brick_bytes: u64,
     codec: Codec,
+    spill: Option<u64>,
 ) -> (tempfile::TempDir, BrickedScene) {
     let dir = tempfile::tempdir().expect("temp dir");
     let out = dir.path().join("soup.rpsb");
     let mesh = Mesh { positions: positions.to_vec(), triangles: triangles.to_vec(), ..Default::default() };
     let opts = BuildOptions { accel, ..Default::default() };
-    let bopts = BrickOptions { brick_bytes, codec, progress: false };
+    let mut bopts = BrickOptions::new(brick_bytes, codec);
+    // A budget just above the build's working memory (and the mesh's few kilobytes)
+    // leaves room for a few dozen records: the partition then runs on disk.
+    bopts.memory_budget = spill.map(|s| raypipe::build::bricks::working_memory(&bopts) + 4096 + s);
     build_bricked("soup", mesh, Vec::new(), Default::default(), &opts, &bopts, &out).expect("soup bricks");
     let scene = BrickedScene::open(&out).expect("valid bricked scene");
     (dir, scene)
@@ -108,11 +112,12 @@ proptest! {
         brick_bytes in 40u64..600,
         codec in prop::sample::select(vec![Codec::Lz4, Codec::Zstd, Codec::None]),
         resident in any::<u64>(),
+        spill in prop::option::of(0u64..8000),
         rays in rays(),
     ) {
         let flat = build_soup(positions.clone(), triangles.clone(), accel, 1);
         let fview = flat.view().expect("valid flat image");
-        let (_dir, scene) = bricked(&positions, &triangles, accel, brick_bytes, codec);
+        let (_dir, scene) = bricked(&positions, &triangles, accel, brick_bytes, codec, spill);
         let bricks: Vec<ResidentBrick> =
             (0..scene.view().brick_count()).map(|b| scene.load(b).expect("brick loads").0).collect();
         prop_assert_eq!(scene.view().header().triangle_count, triangles.len() as u64);
@@ -155,7 +160,7 @@ fn frames_agree(
     let fview = flat.view().unwrap();
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("scene.rpsb");
-    let bopts = BrickOptions { brick_bytes, codec: Codec::Lz4, progress: false };
+    let bopts = BrickOptions::new(brick_bytes, Codec::Lz4);
     build_bricked(name, mesh, Vec::new(), camera, &opts, &bopts, &out).expect("bricks build");
     let scene = BrickedScene::open(&out).unwrap();
     assert!(scene.view().brick_count() >= 4, "{name}: {} bricks", scene.view().brick_count());
@@ -195,5 +200,75 @@ fn bricked_frames_equal_flat_frames_for_a_building() {
     for accel in [Accel::Grid, Accel::Kd, Accel::Bvh] {
         let g = raypipe::input::generate::generate("building:floors=1,rooms=3,seed=4", Some("inside")).unwrap();
         frames_agree("building", g.mesh, g.camera, accel, 24 << 10);
+    }
+}
+
+/// A PLY file of a generated building, binary or ASCII, with per-vertex normals.
+fn write_ply(path: &std::path::Path, mesh: &Mesh, binary: bool) {
+    use std::io::Write;
+    let mut f = std::io::BufWriter::new(std::fs::File::create(path).unwrap());
+    let format = if binary { "binary_little_endian" } else { "ascii" };
+    write!(
+        f,
+        "ply\nformat {format} 1.0\nelement vertex {}\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\nproperty float nz\nelement face {}\nproperty list uchar int vertex_indices\nend_header\n",
+        mesh.positions.len(),
+        mesh.triangles.len()
+    )
+    .unwrap();
+    for (i, p) in mesh.positions.iter().enumerate() {
+        let n = [0.0f32, (i % 3) as f32 * 0.5, 1.0];
+        if binary {
+            for c in p.iter().chain(&n) {
+                f.write_all(&c.to_le_bytes()).unwrap();
+            }
+        } else {
+            writeln!(f, "{} {} {} {} {} {}", p[0], p[1], p[2], n[0], n[1], n[2]).unwrap();
+        }
+    }
+    for t in &mesh.triangles {
+        if binary {
+            f.write_all(&[3u8]).unwrap();
+            for v in t {
+                f.write_all(&(*v as i32).to_le_bytes()).unwrap();
+            }
+        } else {
+            writeln!(f, "3 {} {} {}", t[0], t[1], t[2]).unwrap();
+        }
+    }
+}
+
+#[test]
+fn a_streamed_ply_bricks_to_the_flat_images_frame() {
+    use raypipe::build::bricks::source::PlySource;
+    use raypipe::input::ply_stream::PlyStream;
+    use raypipe::render::bricked::brick_cache::with_cache;
+    use raypipe::render::bricked::frame::render_bricked;
+    use raypipe::render::{render, Algorithm, RenderOptions};
+
+    let g = raypipe::input::generate::generate("building:floors=1,rooms=2,seed=9", Some("inside")).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    for binary in [true, false] {
+        let ply = dir.path().join(if binary { "b.ply" } else { "a.ply" });
+        write_ply(&ply, &g.mesh, binary);
+        let opts = BuildOptions { accel: Accel::Bvh4, ..Default::default() };
+        let flat = raypipe::scene::load(Some(&ply), &opts).unwrap();
+        let fview = flat.view().unwrap();
+        let out = dir.path().join("b.rpsb");
+        let mut bopts = BrickOptions::new(16 << 10, Codec::Zstd);
+        bopts.memory_budget = Some(raypipe::build::bricks::working_memory(&bopts) + (2 << 20));
+        let mut source = PlySource { ply: PlyStream::open(&ply, u64::MAX).unwrap() };
+        raypipe::build::bricks::build_bricked_from(&mut source, Vec::new(), Default::default(), &opts, &bopts, &out)
+            .unwrap();
+        let scene = BrickedScene::open(&out).unwrap();
+        assert!(scene.view().brick_count() > 4);
+        let mut cam = *fview.camera().unwrap();
+        assert_eq!(&cam, scene.view().globals().camera().unwrap(), "binary {binary}");
+        (cam.width, cam.height) = (64, 48);
+        for algo in [Algorithm::Cast, Algorithm::Whitted] {
+            let o = RenderOptions { algo, ..Default::default() };
+            let want = render(&fview, &cam, &o).unwrap();
+            let (got, _) = with_cache(&scene, 1 << 20, 2, |c| render_bricked(&scene, c, &cam, &o)).unwrap();
+            assert_eq!(got.pixels, want.pixels, "binary {binary} {algo:?}");
+        }
     }
 }

@@ -51,6 +51,13 @@ pub struct BrickArgs {
     /// How bricks are stored.
     #[arg(long, value_name = "CODEC", default_value = "lz4", value_parser = crate::input::bricked::codec::parse_codec, requires = "bricks")]
     pub codec: raypipe_core::image::bricked::Codec,
+    /// Memory the build may use (e.g. 4G): records beyond it are partitioned on disk, in
+    /// spill files beside the output. Default: no limit.
+    #[arg(long, value_name = "SIZE", value_parser = super::args::parse_byte_size, requires = "bricks")]
+    pub memory_budget: Option<u64>,
+    /// Lay N copies of the input side by side along x (Wald's four power plants).
+    #[arg(long, value_name = "N", default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=1024), requires = "bricks")]
+    pub replicate: u32,
 }
 
 pub(crate) fn cmd_build(a: BuildArgs) -> Result<()> {
@@ -137,25 +144,47 @@ pub(crate) fn cmd_build(a: BuildArgs) -> Result<()> {
 
 /// `raypipe build --bricks`.
 fn cmd_build_bricked(a: BuildArgs) -> Result<()> {
+    use crate::build::bricks::source::{MeshSource, PlySource, TriangleSource};
     let start = Instant::now();
-    let (name, mesh, warnings, camera) = match (&a.generate, &a.scene) {
+    let bopts = crate::build::bricks::BrickOptions {
+        brick_bytes: a.bricks.brick_size,
+        codec: a.bricks.codec,
+        progress: true,
+        memory_budget: a.bricks.memory_budget,
+        copies: a.bricks.replicate,
+    };
+    let camera_flags = a.camera.spec()?;
+    let (mut source, warnings, camera): (Box<dyn TriangleSource>, Vec<String>, _) = match (&a.generate, &a.scene) {
         (Some(spec), _) => {
             let g = crate::input::generate::generate(spec, a.view.as_deref())?;
-            (format!("generated {}", g.name), g.mesh, Vec::new(), g.camera)
+            g.mesh.validate(&g.name)?;
+            (Box::new(MeshSource { name: format!("generated {}", g.name), mesh: g.mesh }), Vec::new(), g.camera)
+        }
+        (None, Some(path)) if is_ply(path) => {
+            // A PLY is streamed: only its vertices are held, within the budget.
+            let budget = a.bricks.memory_budget.unwrap_or(u64::MAX);
+            let ply = crate::input::ply_stream::PlyStream::open(path, budget)?;
+            (Box::new(PlySource { ply }), Vec::new(), scene::sidecar_camera_spec(path)?)
         }
         (None, Some(path)) => {
             let scene::Source::Mesh { name, mesh, warnings, camera } = scene::load_source(Some(path))? else {
                 bail!("{}: is already a scene image; build takes an OBJ file", path.display());
             };
-            (name, mesh, warnings, camera)
+            mesh.validate(&name)?;
+            (Box::new(MeshSource { name, mesh }), warnings, camera)
         }
         (None, None) => bail!("build: name an OBJ file or --generate a scene"),
     };
-    let bopts =
-        crate::build::bricks::BrickOptions { brick_bytes: a.bricks.brick_size, codec: a.bricks.codec, progress: true };
-    let camera = camera.merged(a.camera.spec()?);
-    let r =
-        crate::build::bricks::build_bricked(&name, mesh, warnings, camera, &a.structure.options(), &bopts, &a.output)?;
+    let name = source.name().to_string();
+    let camera = camera.merged(camera_flags);
+    let r = crate::build::bricks::build_bricked_from(
+        source.as_mut(),
+        warnings,
+        camera,
+        &a.structure.options(),
+        &bopts,
+        &a.output,
+    )?;
     crate::output::warnings::warnings(&name, &r.warnings);
     let per_tri = |b: u64| b as f64 / r.triangles.max(1) as f64;
     println!("scene        {name}");
@@ -182,6 +211,11 @@ fn cmd_build_bricked(a: BuildArgs) -> Result<()> {
     let [p, b, w] = r.seconds;
     println!("phases       partition {p:.3} s, bricks {b:.3} s, write {w:.3} s");
     println!("lights       {}", r.lights);
+    if let Some(peak) = r.peak_rss {
+        let budget =
+            a.bricks.memory_budget.map_or("no budget".to_string(), |b| format!("budget {}", fmt_bytes(b as usize)));
+        println!("memory       peak resident {} ({budget})", fmt_bytes(peak as usize));
+    }
     println!(
         "total        {:.3} s -> {} ({})",
         start.elapsed().as_secs_f64(),
@@ -189,4 +223,10 @@ fn cmd_build_bricked(a: BuildArgs) -> Result<()> {
         fmt_bytes(r.file_bytes as usize)
     );
     Ok(())
+}
+
+/// True for a `.ply` or `.ply.gz` file.
+fn is_ply(path: &std::path::Path) -> bool {
+    let f = path.file_name().and_then(|f| f.to_str()).unwrap_or("").to_ascii_lowercase();
+    f.ends_with(".ply") || f.ends_with(".ply.gz")
 }

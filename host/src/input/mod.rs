@@ -14,6 +14,7 @@ pub mod obj;
 pub mod obj_indices;
 pub mod panic_guard;
 pub mod ply;
+pub mod ply_stream;
 pub mod polygon;
 pub mod range_check;
 pub mod read_file;

@@ -185,6 +185,19 @@ impl Pending {
     }
 }
 
+/// A scratch folder beside the output `to` (spill files of a long build), named as its
+/// temporary files are, so that a killed run's is removed by the next run writing there;
+/// removed with its contents when dropped.
+pub fn scratch_dir(to: &Path) -> Result<tempfile::TempDir> {
+    let dir = dir_of(to);
+    remove_stale(dir);
+    tempfile::Builder::new()
+        .prefix(&format!("{}{}@{}-", temp_stem(to), std::process::id(), host()))
+        .rand_bytes(6)
+        .tempdir_in(dir)
+        .map_err(|e| anyhow!("{}: cannot create a scratch folder in {}: {e}", to.display(), dir.display()))
+}
+
 /// `.NAME.raypipe-`: the start of every temporary file for `NAME`.
 fn temp_stem(to: &Path) -> String {
     let file = to.file_name().map_or_else(|| "output".into(), |s| s.to_string_lossy().into_owned());
@@ -214,7 +227,11 @@ fn remove_stale(dir: &Path) {
         let Some((pid, at)) = owner.split_once('@') else { continue };
         let Ok(pid) = pid.parse::<u32>() else { continue };
         if at == host() && !process_alive(pid) {
-            let _ = std::fs::remove_file(e.path());
+            if e.file_type().is_ok_and(|t| t.is_dir()) {
+                let _ = std::fs::remove_dir_all(e.path());
+            } else {
+                let _ = std::fs::remove_file(e.path());
+            }
         }
     }
 }

@@ -3,4 +3,5 @@
 pub mod aligned;
 pub mod huge_pages;
 pub mod isa;
+pub mod memory;
 pub mod prefetch;

@@ -54,6 +54,13 @@ impl PayloadWriter {
         PayloadWriter { file, len: 0, bricks: vec![None; bricks] }
     }
 
+    /// Makes room for `n` bricks in all.
+    pub fn grow(&mut self, n: usize) {
+        if self.bricks.len() < n {
+            self.bricks.resize(n, None);
+        }
+    }
+
     /// Stores brick `id`: `stored` are its compressed bytes.
     pub fn add(&mut self, id: usize, stored: &[u8], built: &BuiltBrick) -> Result<()> {
         self.file.write_all(stored).map_err(|e| anyhow!("cannot write a brick to the spill folder: {e}"))?;

@@ -5,22 +5,27 @@
 
 pub mod brick_image;
 pub mod bricked_writer;
+pub mod out_of_core;
 pub mod partition;
+pub mod source;
+pub mod spill;
 pub mod top_tree;
 pub mod tri_record;
 
 use std::path::Path;
-use std::sync::Mutex;
 use std::time::Instant;
 
 use anyhow::{anyhow, bail, Result};
 use rayon::prelude::*;
 use raypipe_core::image::bricked::Codec;
-use raypipe_core::image::{LightRecord, FLAG_DEFAULT_LIGHT, NULL_INDEX};
+use raypipe_core::image::{LightRecord, FLAG_DEFAULT_LIGHT};
 
-use self::brick_image::{build_brick, BrickContext};
+use self::brick_image::{build_brick, BrickContext, BuiltBrick};
 use self::bricked_writer::{IndexParts, PayloadWriter};
-use self::partition::partition;
+use self::out_of_core::partition_file;
+use self::partition::{partition, Part};
+use self::source::{streamed_lights, MeshSource, TriangleSource};
+use self::spill::{SpillFile, SpillWriter};
 use self::tri_record::TriRecord;
 use crate::build::image_writer::ImageWriter;
 use crate::input::bricked::codec::compress;
@@ -38,6 +43,17 @@ pub struct BrickOptions {
     pub codec: Codec,
     /// Show progress bars.
     pub progress: bool,
+    /// Bytes of memory the build may use (`None`: no limit; all records in memory).
+    pub memory_budget: Option<u64>,
+    /// Copies of the input laid side by side (1: the input as it is).
+    pub copies: u32,
+}
+
+impl BrickOptions {
+    /// Bricks of `brick_bytes` stored with `codec`, no budget, one copy, no progress bar.
+    pub fn new(brick_bytes: u64, codec: Codec) -> BrickOptions {
+        BrickOptions { brick_bytes, codec, progress: false, memory_budget: None, copies: 1 }
+    }
 }
 
 /// What a bricked build produced.
@@ -63,6 +79,8 @@ pub struct BrickedReport {
     pub lights: String,
     /// Warnings for the user.
     pub warnings: Vec<String>,
+    /// The process's peak resident memory after the build, if known.
+    pub peak_rss: Option<u64>,
 }
 
 /// Scene-image bytes per triangle a brick of this structure takes, roughly (measured on
@@ -87,7 +105,7 @@ fn bytes_per_triangle(opts: &BuildOptions, shading: bool) -> u64 {
 /// Bricks the mesh `name` into `out`.
 pub fn build_bricked(
     name: &str,
-    mut mesh: Mesh,
+    mesh: Mesh,
     warnings: Vec<String>,
     camera: CameraSpec,
     opts: &BuildOptions,
@@ -95,115 +113,248 @@ pub fn build_bricked(
     out: &Path,
 ) -> Result<BrickedReport> {
     mesh.validate(name)?;
-    let bounds = mesh.bounds();
+    let mut source = MeshSource { name: name.to_string(), mesh };
+    build_bricked_from(&mut source, warnings, camera, opts, bopts, out)
+}
+
+/// Memory a build keeps besides triangle records: the program, buffers, and the bricks
+/// being built at once (each several times its image: records, mesh, structure,
+/// image, compressed copy).
+pub fn working_memory(bopts: &BrickOptions) -> u64 {
+    64 * (1 << 20) + rayon::current_num_threads() as u64 * 8 * bopts.brick_bytes.max(1 << 16)
+}
+
+/// Bricks the triangles of `source` into `out`: streamed to a spill file (and copied
+/// side by side, `--replicate`), lit, partitioned within the memory budget, each part's
+/// bricks built in parallel, and the file laid out.
+pub fn build_bricked_from(
+    source: &mut dyn TriangleSource,
+    warnings: Vec<String>,
+    camera: CameraSpec,
+    opts: &BuildOptions,
+    bopts: &BrickOptions,
+    out: &Path,
+) -> Result<BrickedReport> {
+    let name = source.name().to_string();
+    let budget = bopts.memory_budget.unwrap_or(u64::MAX);
+    let work = working_memory(bopts);
+    if budget < work + source.resident_bytes() {
+        bail!(
+            "{name}: a memory budget of {} MB is too small to build in: it needs {} MB for the input's vertices and {} MB to work",
+            budget / 1_000_000,
+            source.resident_bytes() / 1_000_000,
+            work / 1_000_000
+        );
+    }
+    let scratch = crate::output::target::scratch_dir(out)?;
+    let tables = source.tables();
+    let mut report = BrickedReport { warnings, ..Default::default() };
+
+    let start = Instant::now();
+    let bar = progress::bar(source.triangle_hint() * bopts.copies as u64, "read", bopts.progress);
+    let mut spill = SpillWriter::create(&scratch.path().join("all"), tables.shading)?;
+    let mut bad = None;
+    source.stream(&mut |r| {
+        if bad.is_none() {
+            bad =
+                r.p.iter().flatten().find(|c| !c.is_finite() || c.abs() > crate::input::mesh::MAX_COORDINATE).copied();
+        }
+        bar.inc(1);
+        spill.push(&r)
+    })?;
+    let mut all = spill.finish()?;
+    if let Some(c) = bad {
+        bail!(
+            "{name}: a vertex has the coordinate {c}, NaN, infinite or beyond ±{:e}",
+            crate::input::mesh::MAX_COORDINATE
+        );
+    }
+    if all.count == 0 {
+        bail!("{name}: the mesh has no triangles");
+    }
+    if bopts.copies > 1 {
+        all = replicate(&all, bopts.copies, &bar)?;
+    }
+    crate::input::limits::check_triangles(&name, all.count)?;
+    bar.finish_and_clear();
+    let bounds = all.bounds;
     let camera = camera.merged(opts.camera).apply(&framing_camera(bounds.0, bounds.1));
-    let (lights_note, default_light) = choose_lights(name, &mut mesh, &camera, &opts.lights)?;
-    let mut report = BrickedReport { lights: lights_note, warnings, ..Default::default() };
-    let shading_lights: Vec<LightRecord> =
-        mesh.lights.iter().copied().filter(|l| l.kind != LightRecord::AREA).collect();
-    let areas = mesh.lights.len() - shading_lights.len();
+    let (lights, note, default_light) = match source.mesh().filter(|_| bopts.copies == 1) {
+        // A mesh in memory is lit exactly as a flat build of it is.
+        Some(mesh) => {
+            let (note, default_light) = choose_lights(&name, mesh, &camera, &opts.lights)?;
+            (mesh.lights.clone(), note, default_light)
+        }
+        None => streamed_lights(&opts.lights, bounds, &camera, |ray| first_hit(&all, ray)),
+    };
+    source.release();
+    report.lights = note;
+    let shading_lights: Vec<LightRecord> = lights.iter().copied().filter(|l| l.kind != LightRecord::AREA).collect();
+    let areas = lights.len() - shading_lights.len();
     if areas > 0 {
         report.warnings.push(format!(
             "{name}: {areas} emissive triangles are not area lights in a bricked scene (only path tracing samples them, and it needs the whole scene)"
         ));
     }
     let ctx = BrickContext {
-        materials: std::mem::take(&mut mesh.materials),
-        textures: std::mem::take(&mut mesh.textures),
+        materials: tables.materials,
+        textures: tables.textures,
         lights: shading_lights.clone(),
-        shading: !mesh.shading.is_empty(),
-        has_materials: !mesh.tri_materials.is_empty(),
-        has_objects: mesh.objects.iter().any(|&o| o != 0),
+        shading: tables.shading,
+        has_materials: tables.has_materials,
+        has_objects: tables.has_objects,
         scene_bounds: bounds,
         build: opts.clone(),
     };
-    let mut tris = mesh_records(&mesh);
-    drop(mesh);
     let per_brick = (bopts.brick_bytes / bytes_per_triangle(opts, ctx.shading)).max(1) as usize;
-
-    let start = Instant::now();
-    let part = partition(&mut tris, per_brick, 0);
-    let leaves = part.leaves();
     report.seconds[0] = start.elapsed().as_secs_f64();
 
     let start = Instant::now();
-    let dir = out.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    let payload =
-        tempfile::tempfile_in(dir).map_err(|e| anyhow!("{}: cannot create a spill file: {e}", dir.display()))?;
-    let writer = Mutex::new(PayloadWriter::new(payload, leaves.len()));
-    let boxes = Mutex::new(vec![([0.0f32; 3], [0.0f32; 3]); leaves.len()]);
-    let totals = Mutex::new(BrickedReport::default());
-    let bar = progress::bar(leaves.len() as u64, "bricks", bopts.progress);
-    // Bricks are disjoint ranges of `tris`: each worker sorts and builds its own.
-    let mut slices: Vec<(usize, &mut [TriRecord])> = Vec::with_capacity(leaves.len());
-    let mut rest: &mut [TriRecord] = &mut tris;
-    for (k, r) in leaves.iter().enumerate() {
-        let (head, tail) = rest.split_at_mut(r.len());
-        slices.push((k, head));
-        rest = tail;
-    }
-    slices.into_par_iter().try_for_each(|(k, slice)| -> Result<()> {
-        let built = build_brick(&ctx, slice).map_err(|e| anyhow!("{name}: brick {k}: {e}"))?;
-        let stored = compress(bopts.codec, &built.image)?;
-        lock(&writer)?.add(k, &stored, &built)?;
-        lock(&boxes)?[k] = built.header_bounds;
-        let mut t = lock(&totals)?;
-        t.triangles += built.triangles as u64;
-        t.vertices += built.vertices as u64;
-        t.image_bytes += built.image.len() as u64;
-        t.stored_bytes += stored.len() as u64;
-        t.largest_brick = t.largest_brick.max(built.image.len() as u64);
-        bar.inc(1);
-        Ok(())
-    })?;
+    let payload = tempfile::tempfile_in(scratch.path())
+        .map_err(|e| anyhow!("{}: cannot create a spill file: {e}", scratch.path().display()))?;
+    let mut bricks = BrickSink {
+        ctx: &ctx,
+        codec: bopts.codec,
+        name: &name,
+        writer: PayloadWriter::new(payload, 0),
+        boxes: Vec::new(),
+        totals: BrickedReport::default(),
+    };
+    // A fifth of the rest is left for the allocator's slack and the kernel's buffers.
+    let records_memory = budget.saturating_sub(work) / 5 * 4;
+    let bar = progress::bar(all.count, "bricks", bopts.progress);
+    let part = partition_file(
+        all,
+        per_brick,
+        records_memory,
+        &mut |mut records| bricks.build_part(&mut records, per_brick, &bar),
+        &bar,
+    )?;
     bar.finish_and_clear();
-    drop(tris);
     report.seconds[1] = start.elapsed().as_secs_f64();
 
     let start = Instant::now();
-    let boxes = boxes.into_inner().map_err(|_| anyhow!("internal error: a brick worker panicked"))?;
-    let nodes = top_tree::top_nodes(&part, &boxes);
-    let list: Vec<u32> = (0..leaves.len() as u32).collect();
+    let n = bricks.boxes.len();
+    let nodes = top_tree::top_nodes(&part, &bricks.boxes);
+    let list: Vec<u32> = (0..n as u32).collect();
     let globals = globals_image(&shading_lights, &camera, default_light, bounds)?;
     let parts = IndexParts { codec: bopts.codec, bounds, nodes: &nodes, list: &list, globals: &globals };
-    let bar = progress::bar(leaves.len() as u64, "write", bopts.progress);
-    let writer = writer.into_inner().map_err(|_| anyhow!("internal error: a brick worker panicked"))?;
-    let file_bytes = writer.finish(out, &parts, &bar)?;
+    let bar = progress::bar(n as u64, "write", bopts.progress);
+    let file_bytes = bricks.writer.finish(out, &parts, &bar)?;
     bar.finish_and_clear();
     report.seconds[2] = start.elapsed().as_secs_f64();
-
-    let t = totals.into_inner().map_err(|_| anyhow!("internal error: a brick worker panicked"))?;
+    drop(scratch);
+    let t = bricks.totals;
     Ok(BrickedReport {
         triangles: t.triangles,
-        bricks: leaves.len() as u64,
+        bricks: n as u64,
         vertices: t.vertices,
         image_bytes: t.image_bytes,
         stored_bytes: t.stored_bytes,
         largest_brick: t.largest_brick,
         file_bytes,
+        peak_rss: crate::platform::memory::peak_rss(),
         ..report
     })
 }
 
-fn lock<T>(m: &Mutex<T>) -> Result<std::sync::MutexGuard<'_, T>> {
-    m.lock().map_err(|_| anyhow!("internal error: a brick worker panicked"))
+/// Builds the bricks of the parts that fit in memory, as the partition hands them over.
+struct BrickSink<'a> {
+    ctx: &'a BrickContext,
+    codec: Codec,
+    name: &'a str,
+    writer: PayloadWriter,
+    boxes: Vec<([f32; 3], [f32; 3])>,
+    totals: BrickedReport,
 }
 
-/// The mesh's triangles as records, in face order (id = index).
-fn mesh_records(mesh: &Mesh) -> Vec<TriRecord> {
-    mesh.triangles
-        .iter()
-        .enumerate()
-        .map(|(i, t)| {
-            let mut r = TriRecord::plain(t.map(|v| mesh.positions[v as usize]), i as u32);
-            r.material = mesh.tri_materials.get(i).copied().unwrap_or(NULL_INDEX);
-            r.object = mesh.objects.get(i).copied().unwrap_or(0);
-            if !mesh.shading.is_empty() {
-                r.shading = t.map(|v| mesh.shading[v as usize]);
+impl BrickSink<'_> {
+    /// Partitions `records` in memory and builds their bricks in parallel; the bricks
+    /// take the next ids. Returns the part's tree.
+    fn build_part(
+        &mut self,
+        records: &mut [TriRecord],
+        per_brick: usize,
+        bar: &indicatif::ProgressBar,
+    ) -> Result<Part> {
+        let part = partition(records, per_brick, 0);
+        let leaves = part.leaves();
+        let base = self.boxes.len();
+        let mut slices: Vec<(usize, &mut [TriRecord])> = Vec::with_capacity(leaves.len());
+        let mut rest: &mut [TriRecord] = records;
+        for (k, r) in leaves.iter().enumerate() {
+            let (head, tail) = rest.split_at_mut(r.len());
+            slices.push((base + k, head));
+            rest = tail;
+        }
+        let (ctx, codec, name) = (self.ctx, self.codec, self.name);
+        let built: Vec<Result<(usize, BuiltBrick, Vec<u8>)>> = slices
+            .into_par_iter()
+            .map(|(k, slice)| {
+                let built = build_brick(ctx, slice).map_err(|e| anyhow!("{name}: brick {k}: {e}"))?;
+                let stored = compress(codec, &built.image)?;
+                bar.inc(built.triangles as u64);
+                Ok((k, built, stored))
+            })
+            .collect();
+        self.writer.grow(base + leaves.len());
+        self.boxes.resize(base + leaves.len(), ([0.0; 3], [0.0; 3]));
+        for b in built {
+            let (k, built, stored) = b?;
+            self.writer.add(k, &stored, &built)?;
+            self.boxes[k] = built.header_bounds;
+            let t = &mut self.totals;
+            t.triangles += built.triangles as u64;
+            t.vertices += built.vertices as u64;
+            t.image_bytes += built.image.len() as u64;
+            t.stored_bytes += stored.len() as u64;
+            t.largest_brick = t.largest_brick.max(built.image.len() as u64);
+        }
+        Ok(part)
+    }
+}
+
+/// `copies` copies of `all`'s records side by side along x, each shifted by 1.25 times
+/// the scene's extent; ids continue from copy to copy.
+fn replicate(all: &SpillFile, copies: u32, bar: &indicatif::ProgressBar) -> Result<SpillFile> {
+    let (lo, hi) = all.bounds;
+    let extent = (0..3).map(|a| hi[a] - lo[a]).fold(0.0f32, f32::max);
+    let shift = 1.25 * extent.max(f32::MIN_POSITIVE);
+    let path = all.path.with_extension("copies");
+    let mut w = SpillWriter::create(&path, all.shading)?;
+    for copy in 0..copies as u64 {
+        let dx = shift * copy as f32;
+        let base = copy * all.count;
+        all.for_each(|mut r| {
+            for p in &mut r.p {
+                p[0] += dx;
             }
-            r
-        })
-        .collect()
+            r.id = u32::try_from(base + r.id as u64)
+                .map_err(|_| anyhow!("{copies} copies hold more than 2^32 triangles"))?;
+            bar.inc(1);
+            w.push(&r)
+        })?;
+    }
+    all.remove();
+    w.finish()
+}
+
+/// The nearest triangle along `ray` over every record of `file`: the default light's
+/// rays, brute force as a flat build's before any structure exists.
+fn first_hit(file: &SpillFile, ray: &raypipe_core::Ray) -> Option<f32> {
+    use raypipe_core::{Intersector, Watertight};
+    let prepared = Watertight::prepare(ray);
+    let mut best: Option<f32> = None;
+    let _ = file.for_each(|r| {
+        let v = r.p.map(glam::Vec3::from);
+        if let Some((d, _, _)) = Watertight::intersect(&prepared, &v) {
+            if d > 0.0 && best.is_none_or(|b| d < b) {
+                best = Some(d);
+            }
+        }
+        Ok(())
+    });
+    best
 }
 
 /// The globals image: no triangles; the scene's bounds, camera and shading lights.
