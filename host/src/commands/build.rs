@@ -144,7 +144,7 @@ pub(crate) fn cmd_build(a: BuildArgs) -> Result<()> {
 
 /// `raypipe build --bricks`.
 fn cmd_build_bricked(a: BuildArgs) -> Result<()> {
-    use crate::build::bricks::source::{MeshSource, PlySource, TriangleSource};
+    use crate::build::bricks::source::{MeshSource, PlySource, PowerPlantSource, TriangleSource};
     let start = Instant::now();
     let bopts = crate::build::bricks::BrickOptions {
         brick_bytes: a.bricks.brick_size,
@@ -154,7 +154,15 @@ fn cmd_build_bricked(a: BuildArgs) -> Result<()> {
         copies: a.bricks.replicate,
     };
     let camera_flags = a.camera.spec()?;
+    let streamed = match &a.generate {
+        Some(spec) => crate::input::generate::generate_stream(spec, a.view.as_deref())?,
+        None => None,
+    };
     let (mut source, warnings, camera): (Box<dyn TriangleSource>, Vec<String>, _) = match (&a.generate, &a.scene) {
+        (Some(spec), _) if streamed.is_some() => {
+            let Some((plant, camera)) = streamed else { bail!("internal error: no stream") };
+            (Box::new(PowerPlantSource { name: format!("generated {spec}"), plant }), Vec::new(), camera)
+        }
         (Some(spec), _) => {
             let g = crate::input::generate::generate(spec, a.view.as_deref())?;
             g.mesh.validate(&g.name)?;

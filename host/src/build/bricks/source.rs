@@ -172,3 +172,45 @@ pub fn streamed_lights(
     let point = LightRecord { position: p.to_array(), kind: LightRecord::POINT, color: [0.9; 3], triangle: 0 };
     (vec![point, ambient], format!("point light at ({:.3}, {:.3}, {:.3}), chosen for the camera", p.x, p.y, p.z), true)
 }
+
+/// The generated power plant, streamed.
+pub struct PowerPlantSource {
+    /// Name for messages.
+    pub name: String,
+    /// The generator.
+    pub plant: crate::input::generate::power_plant::PowerPlant,
+}
+
+impl TriangleSource for PowerPlantSource {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn tables(&self) -> SourceTables {
+        SourceTables {
+            materials: crate::input::generate::power_plant::PowerPlant::materials(),
+            textures: Vec::new(),
+            shading: false,
+            has_materials: true,
+            has_objects: false,
+        }
+    }
+
+    fn stream(&mut self, emit: &mut dyn FnMut(TriRecord) -> Result<()>) -> Result<()> {
+        let mut id = 0u32;
+        self.plant.stream(&mut |t, m| {
+            let mut r = TriRecord::plain(t.map(|v| v.to_array()), id);
+            r.material = m;
+            id = id.checked_add(1).ok_or_else(|| anyhow::anyhow!("more than 2^32 triangles"))?;
+            emit(r)
+        })
+    }
+
+    fn resident_bytes(&self) -> u64 {
+        0
+    }
+
+    fn triangle_hint(&self) -> u64 {
+        self.plant.triangles
+    }
+}

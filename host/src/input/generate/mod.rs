@@ -5,6 +5,7 @@
 
 pub mod building;
 pub mod forest;
+pub mod power_plant;
 pub mod shapes;
 
 use anyhow::{bail, Result};
@@ -89,7 +90,22 @@ pub fn generate(spec: &str, view: Option<&str>) -> Result<Generated> {
             limits::check_triangles(&format!("--generate {spec}"), f.triangle_count())?;
             (f.mesh(), f.views())
         }
-        _ => bail!("--generate {spec}: unknown scene '{name}' (building, forest)"),
+        "powerplant" => {
+            let pp = power_plant_params(&mut p)?;
+            p.finish(&["triangles", "seed"])?;
+            limits::check_triangles(&format!("--generate {spec}"), pp.triangles)?;
+            let mut mesh = Mesh { materials: power_plant::PowerPlant::materials(), ..Default::default() };
+            pp.stream(&mut |t, m| {
+                let base = mesh.positions.len() as u32;
+                mesh.positions.extend(t.map(|v| v.to_array()));
+                mesh.triangles.push([base, base + 1, base + 2]);
+                mesh.tri_materials.push(m);
+                Ok(())
+            })?;
+            mesh.material_names = (0..mesh.materials.len()).map(|k| format!("m{k}")).collect();
+            (mesh, power_plant::PowerPlant::views())
+        }
+        _ => bail!("--generate {spec}: unknown scene '{name}' (building, forest, powerplant)"),
     };
     let names: Vec<&str> = views.iter().map(|v| v.0).collect();
     let camera = match view {
@@ -101,6 +117,36 @@ pub fn generate(spec: &str, view: Option<&str>) -> Result<Generated> {
     };
     limits::check_triangles(&format!("--generate {spec}"), mesh.triangles.len() as u64)?;
     Ok(Generated { name: spec.to_string(), mesh, camera })
+}
+
+/// The power plant's parameters from `spec`.
+fn power_plant_params(p: &mut Params<'_>) -> Result<power_plant::PowerPlant> {
+    let pp = power_plant::PowerPlant {
+        triangles: p.get("triangles", 12_500_000, 1_000, u32::MAX - 1)? as u64,
+        seed: p.get("seed", 1, 0, u32::MAX)?,
+    };
+    Ok(pp)
+}
+
+/// A generated scene streamed rather than held: the power plant (`powerplant[:triangles=N,
+/// seed=S]`), for bricked builds of any size. `None` for the other generators.
+pub fn generate_stream(spec: &str, view: Option<&str>) -> Result<Option<(power_plant::PowerPlant, CameraSpec)>> {
+    let (name, params) = spec.split_once(':').unwrap_or((spec, ""));
+    if name != "powerplant" {
+        return Ok(None);
+    }
+    let mut p = Params::parse(spec, params)?;
+    let pp = power_plant_params(&mut p)?;
+    p.finish(&["triangles", "seed"])?;
+    let views = power_plant::PowerPlant::views();
+    let camera = match view {
+        None => views[0].1,
+        Some(v) => match views.iter().find(|(n, _)| *n == v) {
+            Some((_, c)) => *c,
+            None => bail!("--view {v}: powerplant has the views outside, inside"),
+        },
+    };
+    Ok(Some((pp, camera)))
 }
 
 #[cfg(test)]
