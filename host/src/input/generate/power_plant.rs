@@ -89,7 +89,6 @@ impl PowerPlant {
         stairs(&mut count)?;
         let mut rng = Lcg::new(self.seed);
         machinery(&mut rng, &mut count)?;
-        drop(count);
         let mut rng = Lcg::new(self.seed ^ 0x9e37_79b9);
         let mut emitted = n;
         while emitted < self.triangles {
