@@ -3,6 +3,7 @@
 //! and no output file.
 
 mod bad_input;
+mod bricked;
 mod build;
 mod common;
 mod fixed_point;
