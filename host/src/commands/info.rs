@@ -21,9 +21,16 @@ pub struct InfoArgs {
     pub structure: StructureArgs,
     #[command(flatten)]
     pub camera: CameraArgs,
+    /// Bricked scenes: measure each codec on a sample of the bricks (ratio, compression
+    /// and decompression rates).
+    #[arg(long)]
+    pub codecs: bool,
 }
 
 pub(crate) fn cmd_info(a: InfoArgs) -> Result<()> {
+    if let Some(path) = a.scene.as_deref().filter(|p| crate::input::bricked::is_bricked(p)) {
+        return super::info_bricked::cmd_info_bricked(path, a.codecs);
+    }
     let scene = load_scene(a.scene.as_deref(), &a.structure, &a.camera)?;
     warn(&scene);
     let view = scene.view()?;

@@ -10,6 +10,7 @@ pub mod bench;
 pub mod build;
 pub mod fixed_point;
 pub mod info;
+pub mod info_bricked;
 pub mod plot;
 pub mod rays;
 pub mod render;

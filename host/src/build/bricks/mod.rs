@@ -20,7 +20,7 @@ use rayon::prelude::*;
 use raypipe_core::image::bricked::Codec;
 use raypipe_core::image::{LightRecord, FLAG_DEFAULT_LIGHT};
 
-use self::brick_image::{build_brick, BrickContext, BuiltBrick};
+use self::brick_image::{build_brick, BrickContext};
 use self::bricked_writer::{IndexParts, PayloadWriter};
 use self::out_of_core::partition_file;
 use self::partition::{partition, Part};
@@ -291,28 +291,26 @@ impl BrickSink<'_> {
             rest = tail;
         }
         let (ctx, codec, name) = (self.ctx, self.codec, self.name);
-        let built: Vec<Result<(usize, BuiltBrick, Vec<u8>)>> = slices
-            .into_par_iter()
-            .map(|(k, slice)| {
-                let built = build_brick(ctx, slice).map_err(|e| anyhow!("{name}: brick {k}: {e}"))?;
-                let stored = compress(codec, &built.image)?;
-                bar.inc(built.triangles as u64);
-                Ok((k, built, stored))
-            })
-            .collect();
         self.writer.grow(base + leaves.len());
         self.boxes.resize(base + leaves.len(), ([0.0; 3], [0.0; 3]));
-        for b in built {
-            let (k, built, stored) = b?;
-            self.writer.add(k, &stored, &built)?;
-            self.boxes[k] = built.header_bounds;
-            let t = &mut self.totals;
+        // Each brick is stored as soon as it is built and its image let go: the part's
+        // records are the only large thing held.
+        let sink = std::sync::Mutex::new((&mut self.writer, &mut self.boxes, &mut self.totals));
+        slices.into_par_iter().try_for_each(|(k, slice)| -> Result<()> {
+            let built = build_brick(ctx, slice).map_err(|e| anyhow!("{name}: brick {k}: {e}"))?;
+            let stored = compress(codec, &built.image)?;
+            bar.inc(built.triangles as u64);
+            let mut guard = sink.lock().map_err(|_| anyhow!("internal error: a brick worker panicked"))?;
+            let (writer, boxes, t) = &mut *guard;
+            writer.add(k, &stored, &built)?;
+            boxes[k] = built.header_bounds;
             t.triangles += built.triangles as u64;
             t.vertices += built.vertices as u64;
             t.image_bytes += built.image.len() as u64;
             t.stored_bytes += stored.len() as u64;
             t.largest_brick = t.largest_brick.max(built.image.len() as u64);
-        }
+            Ok(())
+        })?;
         Ok(part)
     }
 }

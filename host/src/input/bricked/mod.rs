@@ -58,6 +58,11 @@ impl ResidentBrick {
         &self.view
     }
 
+    /// Its scene image's bytes.
+    pub fn image(&self) -> &[u8] {
+        &self.image
+    }
+
     /// Bytes it occupies.
     pub fn bytes(&self) -> u64 {
         self.image.len() as u64
