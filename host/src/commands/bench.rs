@@ -69,6 +69,8 @@ pub struct BenchArgs {
     /// path rays) per second.
     #[command(flatten)]
     pub algo: AlgoArgs,
+    #[command(flatten)]
+    pub cache: super::args::CacheArgs,
 }
 
 pub(crate) fn cmd_bench(a: BenchArgs) -> Result<()> {
@@ -78,11 +80,21 @@ pub(crate) fn cmd_bench(a: BenchArgs) -> Result<()> {
     if a.runs == 0 {
         bail!("--runs must be at least 1");
     }
+    let (bricked, flat): (Vec<&PathBuf>, Vec<&PathBuf>) =
+        a.scenes.iter().partition(|p| crate::input::bricked::is_bricked(p));
+    for path in &bricked {
+        super::bricked_study::bench(path, a.size, &a.packet, a.runs, a.threads, &a.cache)?;
+    }
+    // Bricked scenes alone: the built-in default is measured only when asked for
+    // alongside flat scenes.
+    if !bricked.is_empty() && flat.is_empty() {
+        return Ok(());
+    }
     let mut targets: Vec<Option<PathBuf>> = Vec::new();
     if !a.no_default {
         targets.push(None);
     }
-    targets.extend(a.scenes.iter().cloned().map(Some));
+    targets.extend(flat.into_iter().cloned().map(Some));
     if targets.is_empty() {
         bail!("nothing to measure: --no-default without scenes");
     }

@@ -7,6 +7,7 @@
 
 pub mod args;
 pub mod bench;
+pub mod bricked_study;
 pub mod build;
 pub mod fixed_point;
 pub mod info;

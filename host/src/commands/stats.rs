@@ -42,10 +42,15 @@ pub struct StatsArgs {
     /// PREFIX-tests.png (triangle tests), PREFIX-bytes.png (scene bytes read).
     #[arg(long, value_name = "PREFIX")]
     pub cost_image: Option<PathBuf>,
+    #[command(flatten)]
+    pub cache: super::args::CacheArgs,
 }
 
 pub(crate) fn cmd_stats(a: StatsArgs) -> Result<()> {
     a.run.check()?;
+    if let Some(path) = a.scene.as_deref().filter(|p| crate::input::bricked::is_bricked(p)) {
+        return super::bricked_study::stats(path, &a.camera, &a.run, &a.cache, a.packet);
+    }
     let scene = load_scene(a.scene.as_deref(), &a.structure, &a.camera)?;
     warn(&scene);
     let view = scene.view()?;

@@ -46,6 +46,25 @@ fn bricked_renders_and_traces_equal_the_flat_images() {
 }
 
 #[test]
+fn stats_bench_and_info_read_bricked_scenes() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    scenes(d);
+    let o = raypipe(d, &["stats", "b.rpsb", "--size", "64x48", "--cache", "300K"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("top-level nodes") && out.contains("bricks") && out.contains("hit rate"), "{out}");
+    let o = raypipe(d, &["bench", "b.rpsb", "--size", "64x48", "--runs", "2", "--packet", "1,16", "--cache", "8M"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("cold Mrays/s") && out.contains("4x4"), "{out}");
+    let o = raypipe(d, &["info", "b.rpsb", "--codecs"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("top-level BVH") && out.contains("zstd") && out.contains("decompress MB/s"), "{out}");
+}
+
+#[test]
 fn damaged_bricked_files_are_one_line_errors() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
