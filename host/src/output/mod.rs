@@ -8,6 +8,7 @@ pub mod progress;
 pub mod target;
 pub mod tone_map;
 pub mod trace_events;
+pub mod walk_chart;
 pub mod warnings;
 pub mod waveform;
 

@@ -33,6 +33,13 @@ fn bricked_renders_and_traces_equal_the_flat_images() {
         assert!(out.contains("first pixel") && out.contains("hit rate") && out.contains("parked"), "{out}");
         assert_eq!(decode(&d.join("f.png")), decode(&d.join("b.png")), "{algo}");
     }
+    // A walkthrough: each frame, then the frame rate and MB loaded as a chart.
+    let o = raypipe(d, &["render", "b.rpsb", "--orbit", "3", "--size", "48x32", "--cache", "300K", "-o", "w.png"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("MB loaded") && out.contains("w-walk.png"), "{out}");
+    assert_eq!(decode(&d.join("w-0002.png")).0, 48);
+    assert!(decode(&d.join("w-walk.png")).0 > 100);
     let o = raypipe(d, &["rays", "flat.rpsi", "--size", "64x48", "-o", "r.npy"]);
     assert!(o.status.success(), "{}", stderr(&o));
     for (query, fields) in [("closest", "t,u,v,prim,ng,ns,material,object"), ("any", "occluded")] {
