@@ -23,7 +23,7 @@ use crate::input::camera_file::CameraSpec;
 use crate::input::default_scene;
 use crate::input::mesh::Mesh;
 use crate::input::obj;
-use crate::platform::aligned::AlignedBytes;
+use crate::platform::image_bytes::ImageBytes;
 
 /// Which acceleration structure to build.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
@@ -130,8 +130,8 @@ impl BuildReport {
 pub struct Scene {
     /// What the user called it.
     pub name: String,
-    /// The image bytes, 64-byte aligned.
-    pub image: AlignedBytes,
+    /// The image bytes, 64-byte aligned: built in memory, or a file mapped in place.
+    pub image: ImageBytes,
     /// Present when the image was built in this run.
     pub report: Option<BuildReport>,
 }
@@ -216,7 +216,10 @@ pub fn load_source(path: Option<&Path>) -> Result<Source> {
         if len > crate::input::read_file::DATA_LIMIT {
             bail!("{name}: {len} bytes is more than any scene image holds");
         }
-        let image = AlignedBytes::read_file(file, len).map_err(|e| anyhow!("{name}: cannot read: {e}"))?;
+        if len < 64 {
+            bail!("{name}: truncated: {len} bytes, a scene image has at least 64");
+        }
+        let image = ImageBytes::map(&file, len).map_err(|e| anyhow!("{name}: cannot map: {e}"))?;
         SceneView::parse(&image).map_err(|e| anyhow!("{name}: {e}"))?;
         return Ok(Source::Image(Scene { name, image, report: None }));
     }
@@ -385,7 +388,7 @@ fn replace_shading_lights(scene: &Scene, user: &[LightRecord], flags: u32) -> Re
         flags,
     )
     .map_err(|e| anyhow!("{}: {e}", scene.name))?;
-    let out = Scene { name: scene.name.clone(), image, report: scene.report.clone() };
+    let out = Scene { name: scene.name.clone(), image: image.into(), report: scene.report.clone() };
     out.view().map_err(|e| anyhow!("internal error: relit an invalid image: {e}"))?;
     Ok(out)
 }
@@ -445,7 +448,7 @@ pub fn build(
     report.grid_seconds = start.elapsed().as_secs_f64();
     let image = writer.finish().map_err(|e| anyhow!("{name}: {e}"))?;
     report.image_bytes = image.len();
-    let mut scene = Scene { name, image, report: Some(report) };
+    let mut scene = Scene { name, image: image.into(), report: Some(report) };
     let view = match scene.view() {
         Ok(v) => v,
         Err(e) => bail!("internal error: built an invalid image: {e}"),

@@ -58,7 +58,7 @@ pub fn put_u32(bytes: &mut [u8], at: usize, v: u32) {
 
 /// The built-in Cornell box's image with structure `accel`.
 pub fn cornell_with(accel: Accel) -> AlignedBytes {
-    scene::load_default(&BuildOptions { accel, ..Default::default() }).unwrap().image
+    AlignedBytes::from_slice(&scene::load_default(&BuildOptions { accel, ..Default::default() }).unwrap().image)
 }
 
 /// `base` edited by `edit`, resealed, and the error `parse` must give it.

@@ -10,7 +10,7 @@ use raypipe_core::{NoProbe, Ray, RayCounters, SceneError, SceneView, Vec3, Water
 use raypipe_tests::{build_soup_layout, cornell_with, corrupt_image, put_u32, reseal, section_entry};
 
 fn cornell() -> AlignedBytes {
-    scene::load_default(&BuildOptions::default()).unwrap().image
+    scene::load_default(&BuildOptions::default()).unwrap().image.into()
 }
 
 /// Applies `edit`, reseals the checksum, and returns the parse error.
@@ -173,6 +173,7 @@ fn soup_image(accel: Accel, layout: TriangleLayout) -> AlignedBytes {
         layout,
     )
     .image
+    .into()
 }
 
 proptest! {

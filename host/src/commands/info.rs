@@ -28,16 +28,21 @@ pub struct InfoArgs {
 }
 
 pub(crate) fn cmd_info(a: InfoArgs) -> Result<()> {
+    let opened = std::time::Instant::now();
     if let Some(path) = a.scene.as_deref().filter(|p| crate::input::bricked::is_bricked(p)) {
         return super::info_bricked::cmd_info_bricked(path, a.codecs);
     }
     let scene = load_scene(a.scene.as_deref(), &a.structure, &a.camera)?;
     warn(&scene);
     let view = scene.view()?;
+    let open_secs = opened.elapsed().as_secs_f64();
     let (lo, hi) = view.bounds();
     let size = hi - lo;
     println!("scene       {}", scene.name);
     println!("image       {} bytes, format version {}", view.bytes().len(), raypipe_core::image::FORMAT_VERSION);
+    if scene.report.is_none() {
+        println!("open        {open_secs:.4} s (mapped and validated in place)");
+    }
     println!(
         "bounds      ({}, {}, {}) .. ({}, {}, {}), size {} x {} x {}",
         lo.x, lo.y, lo.z, hi.x, hi.y, hi.z, size.x, size.y, size.z

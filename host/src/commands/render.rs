@@ -69,7 +69,7 @@ pub(crate) fn cmd_render(a: RenderArgs) -> Result<()> {
         return walkthrough(&a, &scene, &view, &cams, &opts, &display);
     }
     let start = Instant::now();
-    let (frame, rays) = render::render_counted(&view, &cam, &opts)?;
+    let (frame, rays, first_tile) = render::render_timed(&view, &cam, &opts)?;
     let secs = start.elapsed().as_secs_f64();
     let auto = output::write_frame(&a.output, &frame, &display)?;
     // Building the structure is part of loading an OBJ; the report says how long it took.
@@ -96,10 +96,11 @@ pub(crate) fn cmd_render(a: RenderArgs) -> Result<()> {
         println!("exposure {}", auto.describe());
     }
     println!(
-        "time     load {:.3} s, build {:.3} s, render {:.3} s",
+        "time     load {:.3} s, build {:.3} s, render {:.3} s; first pixel after {:.3} s (open, validate, first tile)",
         (load_secs - build_secs).max(0.0),
         build_secs,
-        secs
+        secs,
+        load_secs + first_tile
     );
     println!(
         "rays     {} traced ({} eye, {} secondary): {:.2} Mrays/s",

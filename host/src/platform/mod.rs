@@ -2,6 +2,7 @@
 
 pub mod aligned;
 pub mod huge_pages;
+pub mod image_bytes;
 pub mod isa;
 pub mod memory;
 pub mod prefetch;

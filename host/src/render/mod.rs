@@ -201,8 +201,21 @@ pub fn render_counted(
     camera: &CameraRecord,
     opts: &RenderOptions,
 ) -> Result<(Frame, RayTotals)> {
+    render_timed(scene, camera, opts).map(|(f, r, _)| (f, r))
+}
+
+/// [`render_counted`], and the seconds from its start until the first tile was done (the
+/// first pixels a viewer could show).
+pub fn render_timed(
+    scene: &SceneView<'_>,
+    camera: &CameraRecord,
+    opts: &RenderOptions,
+) -> Result<(Frame, RayTotals, f64)> {
     let eye = eye_rays(camera, "camera")?.with_sampler(opts.sampler());
-    with_intersector!(opts.intersector, I => render_with::<I>(scene, &eye, Vec3::from(camera.background), opts))
+    let first = std::sync::OnceLock::new();
+    let start = std::time::Instant::now();
+    let (frame, rays) = with_intersector!(opts.intersector, I => render_with::<I>(scene, &eye, Vec3::from(camera.background), opts, (start, &first)))?;
+    Ok((frame, rays, first.get().copied().unwrap_or(0.0)))
 }
 
 fn render_with<I: Intersector>(
@@ -210,6 +223,7 @@ fn render_with<I: Intersector>(
     eye: &EyeRays,
     background: Vec3,
     opts: &RenderOptions,
+    (start, first): (std::time::Instant, &std::sync::OnceLock<f64>),
 ) -> Result<(Frame, RayTotals)> {
     let (w, h) = (eye.width, eye.height);
     let (lo, hi) = scene.test_bounds();
@@ -263,6 +277,7 @@ fn render_with<I: Intersector>(
                     }
                 };
                 bar.inc(1);
+                first.get_or_init(|| start.elapsed().as_secs_f64());
                 (radiance, totals)
             })
             .collect()
