@@ -24,7 +24,7 @@ use self::brick_image::{build_brick, BrickContext};
 use self::bricked_writer::{IndexParts, PayloadWriter};
 use self::out_of_core::partition_file;
 use self::partition::{partition, Part};
-use self::source::{streamed_lights, MeshSource, TriangleSource};
+use self::source::{streamed_lights, MeshSource, SourceTables, TriangleSource};
 use self::spill::{SpillFile, SpillWriter};
 use self::tri_record::TriRecord;
 use crate::build::image_writer::ImageWriter;
@@ -151,54 +151,11 @@ pub fn build_bricked_from(
     let mut report = BrickedReport { warnings, ..Default::default() };
 
     let start = Instant::now();
-    let bar = progress::bar(source.triangle_hint() * bopts.copies as u64, "read", bopts.progress);
-    let mut spill = SpillWriter::create(&scratch.path().join("all"), tables.shading)?;
-    let mut bad = None;
-    source.stream(&mut |r| {
-        if bad.is_none() {
-            bad =
-                r.p.iter().flatten().find(|c| !c.is_finite() || c.abs() > crate::input::mesh::MAX_COORDINATE).copied();
-        }
-        bar.inc(1);
-        spill.push(&r)
-    })?;
-    let mut all = spill.finish()?;
-    if let Some(c) = bad {
-        bail!(
-            "{name}: a vertex has the coordinate {c}, NaN, infinite or beyond ±{:e}",
-            crate::input::mesh::MAX_COORDINATE
-        );
-    }
-    if all.count == 0 {
-        bail!("{name}: the mesh has no triangles");
-    }
-    if bopts.copies > 1 {
-        all = replicate(&all, bopts.copies, &bar)?;
-    }
-    // Scene-wide ids are 32-bit; each brick is a flat image within the usual limits.
-    if all.count >= u32::MAX as u64 {
-        bail!("{name}: {} triangles is more than a bricked scene's 32-bit triangle ids hold", all.count);
-    }
-    bar.finish_and_clear();
+    let all = spill_source(source, &tables, bopts, scratch.path())?;
     let bounds = all.bounds;
     let camera = camera.merged(opts.camera).apply(&framing_camera(bounds.0, bounds.1));
-    let (lights, note, default_light) = match source.mesh().filter(|_| bopts.copies == 1) {
-        // A mesh in memory is lit exactly as a flat build of it is.
-        Some(mesh) => {
-            let (note, default_light) = choose_lights(&name, mesh, &camera, &opts.lights)?;
-            (mesh.lights.clone(), note, default_light)
-        }
-        None => streamed_lights(&opts.lights, bounds, &camera, |ray| first_hit(&all, ray)),
-    };
+    let (shading_lights, default_light) = scene_lights(source, &all, &camera, opts, bopts, &mut report)?;
     source.release();
-    report.lights = note;
-    let shading_lights: Vec<LightRecord> = lights.iter().copied().filter(|l| l.kind != LightRecord::AREA).collect();
-    let areas = lights.len() - shading_lights.len();
-    if areas > 0 {
-        report.warnings.push(format!(
-            "{name}: {areas} emissive triangles are not area lights in a bricked scene (only path tracing samples them, and it needs the whole scene)"
-        ));
-    }
     let ctx = BrickContext {
         materials: tables.materials,
         textures: tables.textures,
@@ -259,6 +216,78 @@ pub fn build_bricked_from(
         peak_rss: crate::platform::memory::peak_rss(),
         ..report
     })
+}
+
+/// The scene's lights as a flat build would choose them (a mesh in memory exactly so;
+/// a streamed source by the same rule over the spill file), less its area lights, which
+/// bricks do not carry (a warning says so); and whether the point light is the default
+/// one placed for the camera.
+fn scene_lights(
+    source: &mut dyn TriangleSource,
+    all: &SpillFile,
+    camera: &raypipe_core::image::CameraRecord,
+    opts: &BuildOptions,
+    bopts: &BrickOptions,
+    report: &mut BrickedReport,
+) -> Result<(Vec<LightRecord>, bool)> {
+    let name = source.name().to_string();
+    let (lights, note, default_light) = match source.mesh().filter(|_| bopts.copies == 1) {
+        Some(mesh) => {
+            let (note, default_light) = choose_lights(&name, mesh, camera, &opts.lights)?;
+            (mesh.lights.clone(), note, default_light)
+        }
+        None => streamed_lights(&opts.lights, all.bounds, camera, |ray| first_hit(all, ray)),
+    };
+    report.lights = note;
+    let shading: Vec<LightRecord> = lights.iter().copied().filter(|l| l.kind != LightRecord::AREA).collect();
+    let areas = lights.len() - shading.len();
+    if areas > 0 {
+        report.warnings.push(format!(
+            "{name}: {areas} emissive triangles are not area lights in a bricked scene (only path tracing samples them, and it needs the whole scene)"
+        ));
+    }
+    Ok((shading, default_light))
+}
+
+/// Streams `source` into a spill file in `scratch` (copied side by side when asked),
+/// checking every coordinate and the count.
+fn spill_source(
+    source: &mut dyn TriangleSource,
+    tables: &SourceTables,
+    bopts: &BrickOptions,
+    scratch: &Path,
+) -> Result<SpillFile> {
+    let name = source.name().to_string();
+    let bar = progress::bar(source.triangle_hint() * bopts.copies as u64, "read", bopts.progress);
+    let mut spill = SpillWriter::create(&scratch.join("all"), tables.shading)?;
+    let mut bad = None;
+    source.stream(&mut |r| {
+        if bad.is_none() {
+            let limit = crate::input::mesh::MAX_COORDINATE;
+            bad = r.p.iter().flatten().find(|c| !c.is_finite() || c.abs() > limit).copied();
+        }
+        bar.inc(1);
+        spill.push(&r)
+    })?;
+    let mut all = spill.finish()?;
+    if let Some(c) = bad {
+        bail!(
+            "{name}: a vertex has the coordinate {c}, NaN, infinite or beyond ±{:e}",
+            crate::input::mesh::MAX_COORDINATE
+        );
+    }
+    if all.count == 0 {
+        bail!("{name}: the mesh has no triangles");
+    }
+    if bopts.copies > 1 {
+        all = replicate(&all, bopts.copies, &bar)?;
+    }
+    // Scene-wide ids are 32-bit; each brick is a flat image within the usual limits.
+    if all.count >= u32::MAX as u64 {
+        bail!("{name}: {} triangles is more than a bricked scene's 32-bit triangle ids hold", all.count);
+    }
+    bar.finish_and_clear();
+    Ok(all)
 }
 
 /// Builds the bricks of the parts that fit in memory, as the partition hands them over.

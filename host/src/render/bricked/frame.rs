@@ -145,6 +145,15 @@ struct Primary {
     ray: Option<Ray>,
 }
 
+/// What a worker's tiles share while they are shaded: the globals image, the camera's
+/// eye rays and the background.
+#[derive(Clone, Copy)]
+struct ShadeContext<'a> {
+    globals: &'a SceneView<'a>,
+    eye: &'a EyeRays,
+    background: Vec3,
+}
+
 fn render_chunk<I: Intersector>(
     tracer: &mut BrickTracer<'_, '_>,
     globals: &SceneView<'_>,
@@ -153,8 +162,6 @@ fn render_chunk<I: Intersector>(
     shader: Option<&Shader>,
     tiles: &[(u32, u32, u32, u32)],
 ) -> Result<(TileColors, RayTotals)> {
-    let (lo, hi) = globals.test_bounds();
-    let samples = eye.samples();
     let tiles_x = eye.width.div_ceil(crate::render::TILE);
     let mut chunk = Chunk {
         tiles: tiles.to_vec(),
@@ -168,22 +175,7 @@ fn render_chunk<I: Intersector>(
             .map(|(k, &(x0, y0, ..))| ((y0 / crate::render::TILE) * tiles_x + x0 / crate::render::TILE, k))
             .collect(),
     };
-    let mut primaries = Vec::new();
-    for (k, &(x0, y0, x1, y1)) in tiles.iter().enumerate() {
-        for s in 0..samples {
-            for y in y0..y1 {
-                for x in x0..x1 {
-                    let local = ((y - y0) * (x1 - x0) + (x - x0)) as usize;
-                    primaries.push(Primary {
-                        tile: k,
-                        local,
-                        sample: s,
-                        ray: eye.sample_ray_in_scene(x, y, s, lo, hi),
-                    });
-                }
-            }
-        }
-    }
+    let primaries = primaries(eye, globals.test_bounds(), tiles);
     let traced: Vec<usize> = (0..primaries.len()).filter(|&i| primaries[i].ray.is_some()).collect();
     let rays: Vec<Ray> = traced.iter().filter_map(|&i| primaries[i].ray).collect();
     let mut totals = RayTotals { primary: rays.len() as u64, secondary: 0 };
@@ -192,35 +184,11 @@ fn render_chunk<I: Intersector>(
     for (&i, h) in traced.iter().zip(found) {
         hits[i] = h;
     }
-    let xy = |p: &Primary| {
-        let (x0, y0, x1, _) = tiles[p.tile];
-        (x0 + p.local as u32 % (x1 - x0), y0 + p.local as u32 / (x1 - x0))
-    };
-    let share = 1.0 / samples as f32;
-    let cone = eye.cone();
+    let scene = ShadeContext { globals, eye, background };
     match shader {
         None => {
-            // Ray casting: one colour per eye ray, then summed per pixel as `cast_tile` does.
-            let mut colors = vec![Vec3::ZERO; primaries.len()];
-            let mut work = Vec::new();
-            for (i, p) in primaries.iter().enumerate() {
-                match (p.ray, hits[i]) {
-                    (None, _) => {
-                        let (x, y) = xy(p);
-                        colors[i] = eye_escaped(globals, eye, (x, y, p.sample), background, &mut NoProbe);
-                    }
-                    (Some(ray), None) => colors[i] = shade(globals, &ray, cone, None, background, &mut NoProbe),
-                    (Some(_), Some(h)) => work.push((h.brick, i)),
-                }
-            }
-            tracer.grouped(work, |_, view, items, _| {
-                for i in items {
-                    if let (Some(ray), Some(h)) = (primaries[i].ray, hits[i]) {
-                        colors[i] = shade(view, &ray, cone, Some(h.local_hit()), background, &mut NoProbe);
-                    }
-                }
-            })?;
-            if samples <= 1 {
+            let colors = cast(tracer, scene, &primaries, &hits, tiles)?;
+            if eye.samples() <= 1 {
                 // One sample is its colour as it is (a sum of one would round it).
                 let mut out: Vec<Vec<Vec3>> = chunk.radiance.iter().map(|t| vec![Vec3::ZERO; t.len()]).collect();
                 for (p, c) in primaries.iter().zip(colors) {
@@ -228,47 +196,112 @@ fn render_chunk<I: Intersector>(
                 }
                 return Ok(((chunk.tiles, out), totals));
             }
+            let share = 1.0 / eye.samples() as f32;
             for (p, c) in primaries.iter().zip(colors) {
                 chunk.radiance[p.tile][p.local].add(c * share);
             }
         }
         Some(shader) => {
-            let mut records = Vec::new();
-            let mut work = Vec::new();
-            for (i, p) in primaries.iter().enumerate() {
-                let (x, y) = xy(p);
-                match p.ray {
-                    None => chunk.radiance[p.tile][p.local]
-                        .add(eye_escaped(globals, eye, (x, y, p.sample), background, &mut NoProbe) * share),
-                    Some(ray) => {
-                        let rec = RayRecord::eye_sample(ray, y * eye.width + x, p.sample, samples, cone);
-                        match hits[i] {
-                            None => shader.shade_primary(
-                                globals,
-                                rec,
-                                None,
-                                &mut chunk.radiance[p.tile][p.local],
-                                &mut NoProbe,
-                                &mut |r| records.push(r),
-                            ),
-                            Some(h) => work.push((h.brick, (i, rec))),
-                        }
-                    }
-                }
-            }
-            tracer.grouped(work, |_, view, items, _| {
-                for (i, rec) in items {
-                    let (p, h) = (&primaries[i], hits[i].map(|h| h.local_hit()));
-                    shader.shade_primary(view, rec, h, &mut chunk.radiance[p.tile][p.local], &mut NoProbe, &mut |r| {
-                        records.push(r)
-                    });
-                }
-            })?;
+            let records = shade_primaries(tracer, scene, shader, &primaries, &hits, &mut chunk)?;
             totals.secondary = secondary_waves::<I>(tracer, globals, shader, &mut chunk, eye.width, records)?;
         }
     }
     let colors = chunk.radiance.iter().map(|t| t.iter().map(RadianceSum::value).collect()).collect();
     Ok(((chunk.tiles, colors), totals))
+}
+
+/// Every eye ray of the tiles, tile by tile, sample-major within a tile, rays that miss
+/// the scene's box `(lo, hi)` as `None` (Purcell's test).
+fn primaries(eye: &EyeRays, (lo, hi): (Vec3, Vec3), tiles: &[(u32, u32, u32, u32)]) -> Vec<Primary> {
+    let mut out = Vec::new();
+    for (k, &(x0, y0, x1, y1)) in tiles.iter().enumerate() {
+        for s in 0..eye.samples() {
+            for y in y0..y1 {
+                for x in x0..x1 {
+                    let local = ((y - y0) * (x1 - x0) + (x - x0)) as usize;
+                    out.push(Primary { tile: k, local, sample: s, ray: eye.sample_ray_in_scene(x, y, s, lo, hi) });
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The image position of a primary ray's pixel.
+fn pixel_of(p: &Primary, tiles: &[(u32, u32, u32, u32)]) -> (u32, u32) {
+    let (x0, y0, x1, _) = tiles[p.tile];
+    (x0 + p.local as u32 % (x1 - x0), y0 + p.local as u32 / (x1 - x0))
+}
+
+/// Ray casting: each eye ray's colour, hits shaded from their bricks, brick by brick.
+fn cast(
+    tracer: &mut BrickTracer<'_, '_>,
+    scene: ShadeContext<'_>,
+    primaries: &[Primary],
+    hits: &[Option<BrickHit>],
+    tiles: &[(u32, u32, u32, u32)],
+) -> Result<Vec<Vec3>> {
+    let ShadeContext { globals, eye, background } = scene;
+    let cone = eye.cone();
+    let mut colors = vec![Vec3::ZERO; primaries.len()];
+    let mut work = Vec::new();
+    for (i, p) in primaries.iter().enumerate() {
+        match (p.ray, hits[i]) {
+            (None, _) => {
+                let (x, y) = pixel_of(p, tiles);
+                colors[i] = eye_escaped(globals, eye, (x, y, p.sample), background, &mut NoProbe);
+            }
+            (Some(ray), None) => colors[i] = shade(globals, &ray, cone, None, background, &mut NoProbe),
+            (Some(_), Some(h)) => work.push((h.brick, i)),
+        }
+    }
+    tracer.grouped(work, |_, view, items, _| {
+        for i in items {
+            if let (Some(ray), Some(h)) = (primaries[i].ray, hits[i]) {
+                colors[i] = shade(view, &ray, cone, Some(h.local_hit()), background, &mut NoProbe);
+            }
+        }
+    })?;
+    Ok(colors)
+}
+
+/// The ray-emitting shader on the eye rays' hits (brick by brick) and misses; returns the
+/// records they emitted.
+fn shade_primaries(
+    tracer: &mut BrickTracer<'_, '_>,
+    scene: ShadeContext<'_>,
+    shader: &Shader,
+    primaries: &[Primary],
+    hits: &[Option<BrickHit>],
+    chunk: &mut Chunk,
+) -> Result<Vec<RayRecord>> {
+    let ShadeContext { globals, eye, background } = scene;
+    let (samples, cone) = (eye.samples(), eye.cone());
+    let share = 1.0 / samples as f32;
+    let mut records = Vec::new();
+    let mut work = Vec::new();
+    for (i, p) in primaries.iter().enumerate() {
+        let (x, y) = pixel_of(p, &chunk.tiles);
+        let sum = &mut chunk.radiance[p.tile][p.local];
+        match p.ray {
+            None => sum.add(eye_escaped(globals, eye, (x, y, p.sample), background, &mut NoProbe) * share),
+            Some(ray) => {
+                let rec = RayRecord::eye_sample(ray, y * eye.width + x, p.sample, samples, cone);
+                match hits[i] {
+                    None => shader.shade_primary(globals, rec, None, sum, &mut NoProbe, &mut |r| records.push(r)),
+                    Some(h) => work.push((h.brick, (i, rec))),
+                }
+            }
+        }
+    }
+    tracer.grouped(work, |_, view, items, _| {
+        for (i, rec) in items {
+            let (p, h) = (&primaries[i], hits[i].map(|h| h.local_hit()));
+            let sum = &mut chunk.radiance[p.tile][p.local];
+            shader.shade_primary(view, rec, h, sum, &mut NoProbe, &mut |r| records.push(r));
+        }
+    })?;
+    Ok(records)
 }
 
 /// Traces the shaders' records wave by wave until none is left, shading each wave's
