@@ -45,7 +45,8 @@ pub(in crate::image) fn shading<'a>(s: &Sections<'a>, nv: u32, nt: u32) -> Resul
     one_each(K::TriangleIds, tri_ids.len(), nt)?;
     // Strictly increasing, so that a brick orders equal distances by local index exactly
     // as the flat image orders them by scene-wide index.
-    if let Some(i) = tri_ids.windows(2).position(|w| w[1] <= w[0]) {
+    // Pairs by zip, not `windows`: no index to check, so no panic path in the parse.
+    if let Some(i) = tri_ids.iter().zip(tri_ids.iter().skip(1)).position(|(a, b)| b <= a) {
         return Err(SceneError::NotIncreasing { section: K::TriangleIds, record: i as u32 + 1 });
     }
     let textures: &[TextureRecord] = s.slice(K::Textures)?;
