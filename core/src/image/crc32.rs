@@ -144,6 +144,18 @@ pub fn crc32(bytes: &[u8]) -> u32 {
     c.finish()
 }
 
+/// The CRC-32 of `bytes` with the four bytes at `at` taken as zero: how an image checks
+/// itself with its checksum stored inside it (a scene image's header, a bricked scene's
+/// index). Slices past the end count as empty (callers check the length first).
+pub fn crc32_with_hole(bytes: &[u8], at: usize) -> u32 {
+    let (head, rest) = bytes.split_at_checked(at).unwrap_or((bytes, &[]));
+    let mut crc = Crc32::default();
+    crc.update(head);
+    crc.update(&[0; 4]);
+    crc.update(rest.get(4..).unwrap_or(&[]));
+    crc.finish()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

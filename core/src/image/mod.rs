@@ -18,7 +18,7 @@ mod structure_views;
 mod validate;
 mod view;
 
-pub use crc32::{crc32, Crc32};
+pub use crc32::{crc32, crc32_with_hole, Crc32};
 pub use embed::Aligned64;
 pub use error::SceneError;
 pub use header::{

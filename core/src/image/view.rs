@@ -2,7 +2,7 @@
 
 use glam::Vec3;
 
-use super::crc32::Crc32;
+use super::crc32::crc32_with_hole;
 use super::error::SceneError;
 use super::header::{
     AccelKind, Header, SectionKind, CHECKSUM_OFFSET, FLAG_DEFAULT_LIGHT, FORMAT_VERSION, KNOWN_FLAGS, MAGIC,
@@ -82,11 +82,7 @@ impl<'a> SceneView<'a> {
             return Err(SceneError::Truncated { needed: total.max(64), len: bytes.len() });
         }
         let bytes = &bytes[..total];
-        let mut crc = Crc32::default();
-        crc.update(&bytes[..CHECKSUM_OFFSET]);
-        crc.update(&[0; 4]);
-        crc.update(&bytes[CHECKSUM_OFFSET + 4..]);
-        let computed = crc.finish();
+        let computed = crc32_with_hole(bytes, CHECKSUM_OFFSET);
         if computed != header.checksum {
             return Err(SceneError::ChecksumMismatch { stored: header.checksum, computed });
         }

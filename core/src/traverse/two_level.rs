@@ -146,6 +146,15 @@ impl TopWalk {
         }
     }
 
+    /// The pending brick's any-hit result (`blocked`: something lies in the brick ray's
+    /// interval): ends the walk when blocked. [`TopWalk::best`] then holds a hit at the
+    /// interval's end that says only "blocked".
+    #[inline]
+    pub fn finish_brick_occluded(&mut self, brick: &SceneView<'_>, ray: &Ray, blocked: bool) {
+        let r = self.brick_ray(ray);
+        self.finish_brick(brick, blocked.then_some(Hit { t: r.t_max, u: 0.0, v: 0.0, prim: 0 }));
+    }
+
     /// The best hit so far (the ray's hit once the walk is done).
     pub fn best(&self) -> Option<BrickHit> {
         self.best
@@ -189,14 +198,14 @@ pub fn run_two_level<'s, I: Intersector, P: MemoryProbe>(
             TopEvent::Brick(b) => {
                 let Some(view) = resident(b) else { return TwoLevelOutcome::Missing(b) };
                 let r = walk.brick_ray(ray);
-                let hit = if walk.any_hit {
-                    let mut c = RayCounters::default();
+                if walk.any_hit {
                     // Any hit in range will do; shading needs no hit record of it.
-                    occluded::<I, P>(&view, &r, probe, &mut c).then_some(Hit { t: r.t_max, u: 0.0, v: 0.0, prim: 0 })
+                    let blocked = occluded::<I, P>(&view, &r, probe, &mut RayCounters::default());
+                    walk.finish_brick_occluded(&view, ray, blocked);
                 } else {
-                    trace_walk::<I, P>(&view, &r, probe)
-                };
-                walk.finish_brick(&view, hit);
+                    let hit = trace_walk::<I, P>(&view, &r, probe);
+                    walk.finish_brick(&view, hit);
+                }
             }
             TopEvent::Done => return TwoLevelOutcome::Done(walk.best()),
         }

@@ -4,7 +4,7 @@ use glam::Vec3;
 
 use super::error::BrickedError;
 use super::layout::{BrickRecord, BrickedHeader, Codec, BRICKED_MAGIC, BRICKED_VERSION, INDEX_CHECKSUM_OFFSET};
-use crate::image::crc32::Crc32;
+use crate::image::crc32::crc32_with_hole;
 use crate::image::limits::{IMAGE_ALIGN, MAX_TREE_DEPTH};
 use crate::image::records::BvhNode;
 use crate::image::sections::finite3;
@@ -64,11 +64,7 @@ impl<'a> BrickedView<'a> {
         }
         let index_len = usize::try_from(index_size).map_err(|_| BrickedError::BadLayout)?;
         let index = bytes.get(..index_len).ok_or(BrickedError::Truncated { needed: index_size, len })?;
-        let mut crc = Crc32::default();
-        crc.update(&index[..INDEX_CHECKSUM_OFFSET]);
-        crc.update(&[0; 4]);
-        crc.update(&index[INDEX_CHECKSUM_OFFSET + 4..]);
-        let computed = crc.finish();
+        let computed = crc32_with_hole(index, INDEX_CHECKSUM_OFFSET);
         if computed != header.index_checksum {
             return Err(BrickedError::ChecksumMismatch { stored: header.index_checksum, computed });
         }

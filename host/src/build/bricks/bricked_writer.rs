@@ -11,7 +11,7 @@ use anyhow::{anyhow, bail, Result};
 use raypipe_core::image::bricked::{
     BrickRecord, BrickedHeader, Codec, BRICKED_MAGIC, BRICKED_VERSION, INDEX_CHECKSUM_OFFSET,
 };
-use raypipe_core::image::{crc32, BvhNode};
+use raypipe_core::image::{crc32, crc32_with_hole, BvhNode};
 
 use super::brick_image::BuiltBrick;
 use crate::output::Streamed;
@@ -129,7 +129,7 @@ impl PayloadWriter {
         index.resize(globals_offset as usize, 0);
         index.extend_from_slice(parts.globals);
         index.resize(index_size as usize, 0);
-        header.index_checksum = crc32(&index);
+        header.index_checksum = crc32_with_hole(&index, INDEX_CHECKSUM_OFFSET);
         index[INDEX_CHECKSUM_OFFSET..INDEX_CHECKSUM_OFFSET + 4].copy_from_slice(&header.index_checksum.to_le_bytes());
 
         let mut file = Streamed::create(out)?;

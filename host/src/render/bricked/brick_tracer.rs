@@ -14,7 +14,7 @@ use raypipe_core::image::bricked::BrickedView;
 use raypipe_core::packet::{PacketCounters, RayPacket};
 use raypipe_core::traverse::occlusion::occluded;
 use raypipe_core::traverse::two_level::{BrickHit, TopEvent, TopWalk};
-use raypipe_core::{Hit, Intersector, NoProbe, Ray, RayCounters, SceneView};
+use raypipe_core::{Intersector, NoProbe, Ray, RayCounters, SceneView};
 
 use super::brick_cache::BrickCache;
 use crate::input::bricked::ResidentBrick;
@@ -238,20 +238,8 @@ impl<'c, 's> BrickTracer<'c, 's> {
                     None => break Some(b),
                 },
             };
-            let view = brick.view();
             self.stats.brick_visits += 1;
-            let r = walk.brick_ray(ray);
-            if walk.is_any_hit() {
-                let blocked = occluded::<I, _>(view, &r, &mut NoProbe, &mut c);
-                walk.finish_brick(view, blocked.then_some(Hit { t: r.t_max, u: 0.0, v: 0.0, prim: 0 }));
-            } else {
-                // The brick's walk with the CPU's widest instructions, as the flat tracer's.
-                let hit = with_avx2(
-                    #[inline(always)]
-                    || trace::<I, _>(view, &r, &mut NoProbe, &mut c),
-                );
-                walk.finish_brick(view, hit);
-            }
+            through_brick::<I>(brick.view(), walk, ray, &mut c);
         };
         self.stats.steps += c.nodes as u64;
         self.stats.tests += c.tri_tests as u64;
@@ -272,9 +260,7 @@ impl<'c, 's> BrickTracer<'c, 's> {
         let mut c = RayCounters::default();
         let (shadow, closest): (Vec<usize>, Vec<usize>) = items.iter().partition(|&&i| any_hit[i]);
         for i in shadow {
-            let r = walks[i].brick_ray(&rays[i]);
-            let blocked = occluded::<I, _>(view, &r, &mut NoProbe, &mut c);
-            walks[i].finish_brick(view, blocked.then_some(Hit { t: r.t_max, u: 0.0, v: 0.0, prim: 0 }));
+            through_brick::<I>(view, &mut walks[i], &rays[i], &mut c);
         }
         match self.packet.usable_for(view) {
             PacketSize::P4 => self.packets::<I, 4>(view, &closest, rays, walks),
@@ -282,9 +268,7 @@ impl<'c, 's> BrickTracer<'c, 's> {
             PacketSize::P64 => self.packets::<I, 64>(view, &closest, rays, walks),
             _ => {
                 for &i in &closest {
-                    let r = walks[i].brick_ray(&rays[i]);
-                    let hit = trace::<I, _>(view, &r, &mut NoProbe, &mut c);
-                    walks[i].finish_brick(view, hit);
+                    through_brick::<I>(view, &mut walks[i], &rays[i], &mut c);
                 }
             }
         }
@@ -318,4 +302,22 @@ impl<'c, 's> BrickTracer<'c, 's> {
 /// Parks ray `i` on brick `b`.
 fn park(parked: &mut BTreeMap<u32, Group<usize>>, b: u32, i: usize) {
     parked.entry(b).or_insert_with(|| Group { items: Vec::new(), since: Instant::now(), waited: true }).items.push(i);
+}
+
+/// One ray through the resident brick its walk is waiting on: the brick's any-hit query
+/// or its closest-hit walk (with the CPU's widest instructions, as the flat tracer's),
+/// and the walk told the result.
+#[inline(always)]
+fn through_brick<I: Intersector>(view: &SceneView<'_>, walk: &mut TopWalk, ray: &Ray, c: &mut RayCounters) {
+    let r = walk.brick_ray(ray);
+    if walk.is_any_hit() {
+        let blocked = occluded::<I, _>(view, &r, &mut NoProbe, c);
+        walk.finish_brick_occluded(view, ray, blocked);
+    } else {
+        let hit = with_avx2(
+            #[inline(always)]
+            || trace::<I, _>(view, &r, &mut NoProbe, c),
+        );
+        walk.finish_brick(view, hit);
+    }
 }
