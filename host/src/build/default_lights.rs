@@ -152,15 +152,39 @@ pub fn light_in_view(lo: Vec3, hi: Vec3, camera: &CameraRecord, first_hit: impl 
 /// The nearest triangle along `ray`, by core's watertight test over every triangle (a
 /// handful of rays at build time; no structure exists yet).
 fn first_hit(mesh: &Mesh, ray: &Ray) -> Option<f32> {
-    let prepared = Watertight::prepare(ray);
-    let mut best: Option<f32> = None;
+    let mut nearest = NearestHit::new(ray);
     for t in &mesh.triangles {
-        let [a, b, c] = t.map(|i| Vec3::from(mesh.positions[i as usize]));
-        if let Some((d, _, _)) = Watertight::intersect(&prepared, &[a, b, c]) {
-            if d > 0.0 && best.is_none_or(|b| d < b) {
-                best = Some(d);
+        nearest.test(t.map(|i| Vec3::from(mesh.positions[i as usize])));
+    }
+    nearest.t()
+}
+
+/// The nearest triangle in front of a ray's origin over triangles handed in one by one
+/// (brute force with core's watertight test): the default light's rays, before any
+/// structure exists.
+pub struct NearestHit {
+    prepared: <Watertight as Intersector>::Prepared,
+    best: Option<f32>,
+}
+
+impl NearestHit {
+    /// Nothing hit yet.
+    pub fn new(ray: &Ray) -> NearestHit {
+        NearestHit { prepared: Watertight::prepare(ray), best: None }
+    }
+
+    /// Tests one triangle.
+    #[inline]
+    pub fn test(&mut self, tri: [Vec3; 3]) {
+        if let Some((d, _, _)) = Watertight::intersect(&self.prepared, &tri) {
+            if d > 0.0 && self.best.is_none_or(|b| d < b) {
+                self.best = Some(d);
             }
         }
     }
-    best
+
+    /// The nearest distance found.
+    pub fn t(&self) -> Option<f32> {
+        self.best
+    }
 }

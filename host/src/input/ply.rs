@@ -43,6 +43,17 @@ fn indices(p: &Property) -> Option<Vec<u32>> {
     }
 }
 
+/// A vertex's shading data from its properties (`get` finds the first of some names):
+/// normal, texture coordinates and colour, 8-bit colours (`byte_colour`, the usual)
+/// scaled to [0, 1] and float colours kept; what is missing is 0 (white for colour).
+pub(crate) fn shading_vertex(get: impl Fn(&[&str]) -> Option<f64>, byte_colour: bool) -> ShadingVertex {
+    let n = [get(&["nx"]), get(&["ny"]), get(&["nz"])].map(|c| c.unwrap_or(0.0) as f32);
+    let uv = [get(&["u", "s", "texture_u"]), get(&["v", "t", "texture_v"])].map(|c| c.unwrap_or(0.0) as f32);
+    let c = [get(&["red"]), get(&["green"]), get(&["blue"])];
+    let color = c.map(|c| c.map_or(1.0, |c| if byte_colour { c / 255.0 } else { c }) as f32);
+    ShadingVertex { normal: n, uv, color }
+}
+
 /// Loads a `.ply` or `.ply.gz` file into a [`Mesh`].
 pub fn load_ply_file(path: &Path) -> Result<(Mesh, LoadNotes)> {
     let name = path.display().to_string();
@@ -76,14 +87,8 @@ pub fn parse_ply(name: &str, bytes: &[u8]) -> Result<(Mesh, LoadNotes)> {
         let [Some(x), Some(y), Some(z)] = p else { bail!("{name}: malformed PLY: vertex {i} lacks x, y or z") };
         mesh.positions.push([x as f32, y as f32, z as f32]);
         if normals || uvs || colors {
-            let n = [get(v, &["nx"]), get(v, &["ny"]), get(v, &["nz"])].map(|c| c.unwrap_or(0.0) as f32);
-            let uv =
-                [get(v, &["u", "s", "texture_u"]), get(v, &["v", "t", "texture_v"])].map(|c| c.unwrap_or(0.0) as f32);
-            // 8-bit colours (the usual) are scaled to [0, 1]; float colours are kept.
-            let c = [get(v, &["red"]), get(v, &["green"]), get(v, &["blue"])];
             let byte = matches!(v.get("red"), Some(Property::UChar(_)));
-            let color = c.map(|c| c.map_or(1.0, |c| if byte { c / 255.0 } else { c }) as f32);
-            mesh.shading.push(ShadingVertex { normal: n, uv, color });
+            mesh.shading.push(shading_vertex(|keys| get(v, keys), byte));
         }
     }
     let nv = mesh.positions.len() as u32;

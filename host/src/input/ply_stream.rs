@@ -160,12 +160,7 @@ impl PlyStream {
             };
             self.positions.push([x as f32, y as f32, z as f32]);
             if shaded {
-                let n = [get(&["nx"]), get(&["ny"]), get(&["nz"])].map(|c| c.unwrap_or(0.0) as f32);
-                let uv =
-                    [get(&["u", "s", "texture_u"]), get(&["v", "t", "texture_v"])].map(|c| c.unwrap_or(0.0) as f32);
-                let c = [get(&["red"]), get(&["green"]), get(&["blue"])];
-                let color = c.map(|c| c.map_or(1.0, |c| if byte_colour { c / 255.0 } else { c }) as f32);
-                self.shading.push(ShadingVertex { normal: n, uv, color });
+                self.shading.push(crate::input::ply::shading_vertex(get, byte_colour));
             }
         }
         self.next = vi + 1;

@@ -372,19 +372,12 @@ fn replicate(all: &SpillFile, copies: u32, bar: &indicatif::ProgressBar) -> Resu
 /// The nearest triangle along `ray` over every record of `file`: the default light's
 /// rays, brute force as a flat build's before any structure exists.
 fn first_hit(file: &SpillFile, ray: &raypipe_core::Ray) -> Option<f32> {
-    use raypipe_core::{Intersector, Watertight};
-    let prepared = Watertight::prepare(ray);
-    let mut best: Option<f32> = None;
+    let mut nearest = crate::build::default_lights::NearestHit::new(ray);
     let _ = file.for_each(|r| {
-        let v = r.p.map(glam::Vec3::from);
-        if let Some((d, _, _)) = Watertight::intersect(&prepared, &v) {
-            if d > 0.0 && best.is_none_or(|b| d < b) {
-                best = Some(d);
-            }
-        }
+        nearest.test(r.p.map(glam::Vec3::from));
         Ok(())
     });
-    best
+    nearest.t()
 }
 
 /// The globals image: no triangles; the scene's bounds, camera and shading lights.

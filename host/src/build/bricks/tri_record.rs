@@ -59,18 +59,3 @@ impl TriRecord {
         r
     }
 }
-
-/// Box of a set of records' vertices.
-pub fn bounds_of(tris: &[TriRecord]) -> ([f32; 3], [f32; 3]) {
-    let mut lo = [f32::INFINITY; 3];
-    let mut hi = [f32::NEG_INFINITY; 3];
-    for t in tris {
-        for p in &t.p {
-            for a in 0..3 {
-                lo[a] = lo[a].min(p[a]);
-                hi[a] = hi[a].max(p[a]);
-            }
-        }
-    }
-    (lo, hi)
-}

@@ -184,11 +184,6 @@ impl<'s> BrickCache<'s> {
         self.lock().stats
     }
 
-    /// Bytes of bricks resident now.
-    pub fn resident_bytes(&self) -> u64 {
-        self.lock().bytes
-    }
-
     /// Ends the loaders' loops.
     pub fn stop(&self) {
         self.lock().stop = true;
