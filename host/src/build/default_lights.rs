@@ -14,12 +14,13 @@
 //!   the point light too.
 //! * A dim ambient term.
 
-use glam::{DVec3, Vec3};
+use glam::Vec3;
 use raypipe_core::image::{CameraRecord, LightRecord};
 use raypipe_core::traverse::boxes::clip::clip_ray;
 use raypipe_core::{Intersector, Ray, Watertight};
 
-use crate::build::light_distribution::{area_light_power, luminance};
+use crate::build::emitter_sums::EmitterSums;
+use crate::build::light_distribution::area_light_power;
 use crate::input::mesh::Mesh;
 
 /// Emitted power per unit of scene surface area above which the emitters light the
@@ -28,31 +29,46 @@ pub const STRONG_EMITTERS: f64 = 0.01;
 
 /// The default lights and one line saying what they are.
 pub fn default_lights(mesh: &Mesh, camera: &CameraRecord) -> (Vec<LightRecord>, String) {
+    let (lo, hi) = mesh.bounds();
+    let sums = EmitterSums::of_mesh(mesh);
+    let (mut lights, note) = lights_for(&sums, (lo, hi), camera, |ray| first_hit(mesh, ray));
+    // Area lights last: the shaders of the other algorithms read only the lights before
+    // them.
+    lights.extend(emitters(mesh).1);
+    (lights, note)
+}
+
+/// The default lights other than area lights — a point light (for the camera, or
+/// standing in for strong emitters) and the ambient term — for a scene of `bounds`
+/// whose emitters sum to `sums` and whose nearest hit along a ray `first_hit` gives.
+pub fn lights_for(
+    sums: &EmitterSums,
+    bounds: ([f32; 3], [f32; 3]),
+    camera: &CameraRecord,
+    first_hit: impl Fn(&Ray) -> Option<f32>,
+) -> (Vec<LightRecord>, String) {
+    let (lo, hi) = (Vec3::from(bounds.0), Vec3::from(bounds.1));
     let mut lights = Vec::new();
-    let (power, areas) = emitters(mesh);
-    let surface: f64 = mesh.triangles.iter().map(|&t| triangle_area(mesh, t)).sum();
-    let strong = !areas.is_empty() && power >= STRONG_EMITTERS * surface;
-    let note = if strong {
-        let p = emitters_centre(mesh, &areas);
-        let brightest = areas.iter().map(|l| Vec3::from(l.color)).fold(Vec3::ZERO, Vec3::max);
+    let note = if sums.strong(STRONG_EMITTERS) {
+        let p = sums.centre(lo, hi);
         lights.push(LightRecord {
             position: p.to_array(),
             kind: LightRecord::EMITTERS,
-            color: (brightest / brightest.max_element()).to_array(),
+            color: sums.colour().to_array(),
             triangle: 0,
         });
         format!(
             "{} emissive triangles (power {:.3} per unit of surface, at least {STRONG_EMITTERS}): area lights, and a point light at ({:.3}, {:.3}, {:.3}) standing in for them",
-            areas.len(),
-            power / surface.max(f64::MIN_POSITIVE),
+            sums.count,
+            sums.density(),
             p.x,
             p.y,
             p.z
         )
     } else {
-        let p = light_for_camera(mesh, camera);
+        let p = light_in_view(lo, hi, camera, first_hit);
         lights.push(LightRecord { position: p.to_array(), kind: LightRecord::POINT, color: [0.9; 3], triangle: 0 });
-        if areas.is_empty() {
+        if sums.count == 0 {
             format!("point light at ({:.3}, {:.3}, {:.3}), chosen for the camera", p.x, p.y, p.z)
         } else {
             format!(
@@ -60,15 +76,12 @@ pub fn default_lights(mesh: &Mesh, camera: &CameraRecord) -> (Vec<LightRecord>, 
                 p.x,
                 p.y,
                 p.z,
-                areas.len(),
-                power / surface.max(f64::MIN_POSITIVE)
+                sums.count,
+                sums.density()
             )
         }
     };
     lights.push(LightRecord { position: [0.0; 3], kind: LightRecord::AMBIENT, color: [0.1; 3], triangle: 0 });
-    // Area lights last: the shaders of the other algorithms read only the lights before
-    // them.
-    lights.extend(areas);
     (lights, note)
 }
 
@@ -83,29 +96,6 @@ pub fn emitters(mesh: &Mesh) -> (f64, Vec<LightRecord>) {
     }
     let power = areas.iter().map(|l| area_light_power(mesh, l)).sum();
     (power, areas)
-}
-
-fn triangle_area(mesh: &Mesh, t: [u32; 3]) -> f64 {
-    let [a, b, c] = t.map(|i| Vec3::from(mesh.positions[i as usize]));
-    crate::build::light_distribution::triangle_area(a, b, c)
-}
-
-/// The emitters' power-weighted centre, nudged off them towards the middle of the scene.
-fn emitters_centre(mesh: &Mesh, areas: &[LightRecord]) -> Vec3 {
-    let (lo, hi) = mesh.bounds();
-    let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
-    let centre = (lo + hi) * 0.5;
-    let mut sum = DVec3::ZERO;
-    let mut weight = 0.0;
-    for l in areas {
-        let t = mesh.triangles[l.triangle as usize];
-        let [a, b, c] = t.map(|i| DVec3::from(mesh.positions[i as usize].map(f64::from)));
-        let w = triangle_area(mesh, t) * luminance(l.color).max(1e-12);
-        sum += (a + b + c) / 3.0 * w;
-        weight += w;
-    }
-    let p = (sum / weight.max(f64::MIN_POSITIVE)).as_vec3();
-    p + (centre - p).normalize_or_zero() * (hi - lo).length() * 0.01
 }
 
 /// A point inside the scene's bounds that the eye sees: halfway along the longest free

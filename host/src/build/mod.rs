@@ -3,6 +3,7 @@
 pub mod bricks;
 pub mod bvh;
 pub mod default_lights;
+pub mod emitter_sums;
 pub mod grid;
 pub mod image_writer;
 pub mod kdtree;

@@ -144,7 +144,7 @@ pub(crate) fn cmd_build(a: BuildArgs) -> Result<()> {
 
 /// `raypipe build --bricks`.
 fn cmd_build_bricked(a: BuildArgs) -> Result<()> {
-    use crate::build::bricks::source::{MeshSource, PlySource, PowerPlantSource, TriangleSource};
+    use crate::build::bricks::source::{MeshSource, ObjSource, PlySource, PowerPlantSource, TriangleSource};
     let start = Instant::now();
     let bopts = crate::build::bricks::BrickOptions {
         brick_bytes: a.bricks.brick_size,
@@ -168,11 +168,18 @@ fn cmd_build_bricked(a: BuildArgs) -> Result<()> {
             g.mesh.validate(&g.name)?;
             (Box::new(MeshSource { name: format!("generated {}", g.name), mesh: g.mesh }), Vec::new(), g.camera)
         }
-        (None, Some(path)) if is_ply(path) => {
+        (None, Some(path)) if has_suffix(path, &[".ply", ".ply.gz"]) => {
             // A PLY is streamed: only its vertices are held, within the budget.
             let budget = a.bricks.memory_budget.unwrap_or(u64::MAX);
             let ply = crate::input::ply_stream::PlyStream::open(path, budget)?;
             (Box::new(PlySource { ply }), Vec::new(), scene::sidecar_camera_spec(path)?)
+        }
+        (None, Some(path)) if has_suffix(path, &[".obj", ".obj.gz"]) => {
+            // An OBJ is streamed too: only its vertex tables are held.
+            let budget = a.bricks.memory_budget.unwrap_or(u64::MAX);
+            let obj = crate::input::obj_stream::ObjStream::open(path, budget)?;
+            let warnings = obj.notes.warnings.clone();
+            (Box::new(ObjSource { obj }), warnings, scene::sidecar_camera_spec(path)?)
         }
         (None, Some(path)) => {
             let scene::Source::Mesh { name, mesh, warnings, camera } = scene::load_source(Some(path))? else {
@@ -233,8 +240,8 @@ fn cmd_build_bricked(a: BuildArgs) -> Result<()> {
     Ok(())
 }
 
-/// True for a `.ply` or `.ply.gz` file.
-fn is_ply(path: &std::path::Path) -> bool {
+/// True if the file's name ends with one of `suffixes` (lower case), in any case.
+fn has_suffix(path: &std::path::Path, suffixes: &[&str]) -> bool {
     let f = path.file_name().and_then(|f| f.to_str()).unwrap_or("").to_ascii_lowercase();
-    f.ends_with(".ply") || f.ends_with(".ply.gz")
+    suffixes.iter().any(|s| f.ends_with(s))
 }

@@ -12,6 +12,7 @@ pub mod mesh;
 pub mod npy;
 pub mod obj;
 pub mod obj_indices;
+pub mod obj_stream;
 pub mod panic_guard;
 pub mod ply;
 pub mod ply_stream;

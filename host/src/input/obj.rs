@@ -43,13 +43,27 @@ fn load_obj_unguarded(path: &Path, name: String) -> Result<(Mesh, LoadNotes)> {
     obj_indices::check_face_indices(&name, &text)?;
     let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
     let mut reader = std::io::BufReader::new(text.as_slice());
-    let result = tobj::load_obj_buf(&mut reader, &load_options(), |mtl| {
-        match crate::input::read_file::read_bytes(&dir.join(mtl), crate::input::read_file::TEXT_LIMIT) {
-            Ok(bytes) => load_mtl(&bytes),
-            Err(_) => Err(tobj::LoadError::OpenFileFailed),
-        }
-    });
+    let result = tobj::load_obj_buf(&mut reader, &load_options(), |mtl| read_mtl(&dir, mtl, false));
     convert(&name, Some(path.parent().unwrap_or(Path::new("."))), result)
+}
+
+/// The material library `mtl` named by an OBJ in `dir`; for a compressed OBJ
+/// (`gz_too`) a `.gz` beside it serves when the plain file is missing.
+pub(crate) fn read_mtl(dir: &Path, mtl: &Path, gz_too: bool) -> tobj::MTLLoadResult {
+    let limit = crate::input::read_file::TEXT_LIMIT;
+    let plain = dir.join(mtl);
+    if let Ok(bytes) = crate::input::read_file::read_bytes(&plain, limit) {
+        return load_mtl(&bytes);
+    }
+    let mut gz = plain.into_os_string();
+    gz.push(".gz");
+    if !gz_too || !Path::new(&gz).exists() {
+        return Err(tobj::LoadError::OpenFileFailed);
+    }
+    match crate::input::read_file::read_gzip(Path::new(&gz), limit) {
+        Ok(bytes) => load_mtl(&bytes),
+        Err(_) => Err(tobj::LoadError::ReadError),
+    }
 }
 
 /// Parses an MTL file through tobj, after rejecting what tobj would panic on: a colour
@@ -73,21 +87,7 @@ fn load_obj_gz(path: &Path, name: &str) -> Result<(Mesh, LoadNotes)> {
     obj_indices::check_face_indices(name, &text)?;
     let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
     let mut reader = std::io::BufReader::new(text.as_slice());
-    let result = tobj::load_obj_buf(&mut reader, &load_options(), |mtl| {
-        let plain = dir.join(mtl);
-        let mut gz = plain.clone().into_os_string();
-        gz.push(".gz");
-        if let Ok(bytes) = crate::input::read_file::read_bytes(&plain, crate::input::read_file::TEXT_LIMIT) {
-            load_mtl(&bytes)
-        } else if std::path::Path::new(&gz).exists() {
-            match crate::input::read_file::read_gzip(Path::new(&gz), crate::input::read_file::TEXT_LIMIT) {
-                Ok(bytes) => load_mtl(&bytes),
-                Err(_) => Err(tobj::LoadError::ReadError),
-            }
-        } else {
-            Err(tobj::LoadError::OpenFileFailed)
-        }
-    });
+    let result = tobj::load_obj_buf(&mut reader, &load_options(), |mtl| read_mtl(&dir, mtl, true));
     convert(name, Some(path.parent().unwrap_or(Path::new("."))), result)
 }
 
@@ -193,7 +193,13 @@ fn convert(name: &str, dir: Option<&Path>, result: tobj::LoadResult) -> Result<(
 /// The MTL's materials into `mesh`, with their diffuse textures: one load (and at most
 /// one warning) per texture file, however many materials use it — Sponza's 2 missing
 /// files were 45 warnings — and one warning per feature raypipe does not render.
-fn add_materials(name: &str, dir: Option<&Path>, materials: &[tobj::Material], mesh: &mut Mesh, notes: &mut LoadNotes) {
+pub(crate) fn add_materials(
+    name: &str,
+    dir: Option<&Path>,
+    materials: &[tobj::Material],
+    mesh: &mut Mesh,
+    notes: &mut LoadNotes,
+) {
     // `Ok`: the texture's index; `Err`: the failure's index in `failed`, with the
     // materials that asked for it.
     let mut loaded: std::collections::HashMap<&str, Result<u32, usize>> = std::collections::HashMap::new();
@@ -291,7 +297,7 @@ fn material_record(m: &tobj::Material) -> MaterialRecord {
     r
 }
 
-fn describe(e: &tobj::LoadError) -> String {
+pub(crate) fn describe(e: &tobj::LoadError) -> String {
     use tobj::LoadError::*;
     match e {
         OpenFileFailed => "file cannot be opened".into(),

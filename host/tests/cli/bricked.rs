@@ -166,3 +166,141 @@ fn a_killed_bricked_build_leaves_no_output_and_its_scratch_is_cleared() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert_eq!(only_files(d), vec!["b.rpsb".to_string()]);
 }
+
+/// An OBJ with what a streamed reader must get right: two material libraries' worth of
+/// `usemtl` switches, one emissive; `o` and `g` names (a name coming back continues no
+/// object); quads and a 12-gon; `v//vn`, `v/vt` and `v/vt/vn` corners; negative indices
+/// and a `w`.
+fn write_rich_obj(d: &Path) {
+    use std::fmt::Write;
+    let mut obj = String::from("# test scene\nmtllib rich.mtl\n");
+    let mut v = 0;
+    // A floor of 6×6 quads, two materials in a checker.
+    obj += "o floor\n";
+    for z in 0..7 {
+        for x in 0..7 {
+            writeln!(obj, "v {} 0 {}", x as f32 - 3.0, z as f32 - 3.0).unwrap();
+        }
+    }
+    for z in 0..6 {
+        for x in 0..6 {
+            let i = 1 + z * 7 + x;
+            writeln!(obj, "usemtl {}\nf {} {} {} {}", ["red", "grey"][(x + z) % 2], i, i + 7, i + 8, i + 1).unwrap();
+        }
+    }
+    v += 49;
+    // A 12-gon wall with normals.
+    obj += "g wall\nvn 0 0 1\n";
+    for k in 0..12 {
+        let a = k as f32 / 12.0 * std::f32::consts::TAU;
+        writeln!(obj, "v {} {} -2", 1.5 * a.cos(), 1.5 + 1.5 * a.sin()).unwrap();
+    }
+    obj += "usemtl grey\nf";
+    for k in 0..12 {
+        write!(obj, " {}//1", v + 1 + k).unwrap();
+    }
+    obj += "\n";
+    v += 12;
+    // Boxes: texture coordinates, negative indices, a w, a name that comes back.
+    obj += "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n";
+    for (b, name) in ["box", "crate", "box"].iter().enumerate() {
+        writeln!(obj, "o {name}\nusemtl {}", ["red", "nosuch", "grey"][b]).unwrap();
+        let c = [b as f32 - 1.0, 0.5, 0.5];
+        for k in 0..8 {
+            let s = |bit: usize| if k & bit != 0 { 0.4 } else { -0.4 };
+            writeln!(obj, "v {} {} {} 1", (c[0] + s(1)) * 2.0, (c[1] + s(2)) * 2.0, (c[2] + s(4)) * 2.0).unwrap();
+            let _ = v;
+        }
+        for f in [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]] {
+            obj += "f";
+            for (k, i) in f.iter().enumerate() {
+                write!(obj, " {}/{}", i - 8, k + 1).unwrap();
+            }
+            obj += "\n";
+        }
+        v += 8;
+    }
+    // A lamp above everything.
+    obj += "o lamp\nusemtl light\nv -1 4 -1\nv 1 4 -1\nv 1 4 1\nv -1 4 1\nf -1 -2 -3 -4\n";
+    write(d, "rich.obj", &obj);
+    write(
+        d,
+        "rich.mtl",
+        "newmtl red\nKd 0.8 0.1 0.1\nnewmtl grey\nKd 0.6 0.6 0.6\nKs 0.3 0.3 0.3\nNs 40\nnewmtl light\nKd 0 0 0\nKe 20 20 20\n",
+    );
+}
+
+#[test]
+fn a_streamed_obj_bricks_to_the_flat_images_pixels_and_hits() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_rich_obj(d);
+    let o = raypipe(d, &["build", "rich.obj", "--accel", "kd", "-o", "flat.rpsi"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = raypipe(
+        d,
+        &[
+            "build",
+            "rich.obj",
+            "--accel",
+            "kd",
+            "--bricks",
+            "--brick-size",
+            "2K",
+            "--memory-budget",
+            "80M",
+            "-o",
+            "b.rpsb",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (out, warnings) = (String::from_utf8_lossy(&o.stdout).into_owned(), stderr(&o));
+    let bricks = out.split(" in ").nth(1).and_then(|s| s.split(' ').next()).and_then(|n| n.parse::<u32>().ok());
+    assert!(bricks.is_some_and(|n| n >= 4), "{out}");
+    // The lamp is strong enough to stand in for a point light, in both (the Whitted
+    // frames below show it is the same light).
+    let o = raypipe(d, &["info", "flat.rpsi"]);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("1 emitter stand-in"));
+    assert!(out.lines().any(|l| l.starts_with("lights") && l.contains("standing in")), "{out}");
+    assert!(warnings.contains("2 emissive triangles are not area lights"), "{warnings}");
+    for algo in ["cast", "whitted"] {
+        let o = raypipe(d, &["render", "flat.rpsi", "--algo", algo, "--size", "80x60", "-o", "f.png"]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let o = raypipe(d, &["render", "b.rpsb", "--algo", algo, "--size", "80x60", "--cache", "16K", "-o", "b.png"]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert_eq!(decode(&d.join("f.png")), decode(&d.join("b.png")), "{algo}");
+    }
+    let o = raypipe(d, &["rays", "flat.rpsi", "--size", "64x48", "-o", "r.npy"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for (scene, out) in [("flat.rpsi", "hf.npy"), ("b.rpsb", "hb.npy")] {
+        let fields = "t,u,v,prim,ng,ns,material,object";
+        let o = raypipe(d, &["trace", scene, "--rays", "r.npy", "--hits", out, "--fields", fields]);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let same = std::fs::read(d.join("hf.npy")).unwrap() == std::fs::read(d.join("hb.npy")).unwrap();
+    assert!(same, "streamed OBJ: hits differ from the flat image's");
+    // A budget that cannot hold the vertex tables and the work.
+    let o = raypipe(d, &["build", "rich.obj", "--bricks", "--memory-budget", "2M", "-o", "y.rpsb"]);
+    assert_one_line_error(&o, "too small to build in");
+    // A face naming a vertex that is not there yet: its line.
+    write(d, "bad.obj", "v 0 0 0\nv 1 0 0\nf 1 2 3\nv 0 1 0\n");
+    let o = raypipe(d, &["build", "bad.obj", "--bricks", "-o", "y.rpsb"]);
+    assert_one_line_error(&o, "line 3: the face names vertex 3, but 2 are defined");
+    assert!(!d.join("y.rpsb").exists());
+}
+
+#[test]
+fn a_full_disk_while_building_is_a_one_line_error_and_leaves_nothing() {
+    // A file size limit stands in for a full disk: writes past it fail (EFBIG rather
+    // than ENOSPC, through the same error paths).
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let exe = env!("CARGO_BIN_EXE_raypipe");
+    let cmd = format!(
+        "ulimit -f 256; trap '' XFSZ; exec '{exe}' build --generate building:floors=2,rooms=4 --bricks --brick-size 64K -o b.rpsb"
+    );
+    let o = std::process::Command::new("sh").arg("-c").arg(cmd).current_dir(d).output().unwrap();
+    assert_one_line_error(&o, "cannot write");
+    assert!(stderr(&o).contains("spill"), "{}", stderr(&o));
+    assert!(only_files(d).is_empty(), "{:?}", only_files(d));
+}

@@ -27,6 +27,7 @@ use self::partition::{partition, Part};
 use self::source::{streamed_lights, MeshSource, SourceTables, TriangleSource};
 use self::spill::{SpillFile, SpillWriter};
 use self::tri_record::TriRecord;
+use crate::build::emitter_sums::EmitterSums;
 use crate::build::image_writer::ImageWriter;
 use crate::input::bricked::codec::compress;
 use crate::input::camera_file::CameraSpec;
@@ -154,7 +155,7 @@ pub fn build_bricked_from(
     let all = spill_source(source, &tables, bopts, scratch.path())?;
     let bounds = all.bounds;
     let camera = camera.merged(opts.camera).apply(&framing_camera(bounds.0, bounds.1));
-    let (shading_lights, default_light) = scene_lights(source, &all, &camera, opts, bopts, &mut report)?;
+    let (shading_lights, default_light) = scene_lights(source, &all, &tables, &camera, (opts, bopts), &mut report)?;
     source.release();
     let ctx = BrickContext {
         materials: tables.materials,
@@ -225,22 +226,27 @@ pub fn build_bricked_from(
 fn scene_lights(
     source: &mut dyn TriangleSource,
     all: &SpillFile,
+    tables: &SourceTables,
     camera: &raypipe_core::image::CameraRecord,
-    opts: &BuildOptions,
-    bopts: &BrickOptions,
+    (opts, bopts): (&BuildOptions, &BrickOptions),
     report: &mut BrickedReport,
 ) -> Result<(Vec<LightRecord>, bool)> {
     let name = source.name().to_string();
-    let (lights, note, default_light) = match source.mesh().filter(|_| bopts.copies == 1) {
+    let (lights, note, default_light, areas) = match source.mesh().filter(|_| bopts.copies == 1) {
         Some(mesh) => {
             let (note, default_light) = choose_lights(&name, mesh, camera, &opts.lights)?;
-            (mesh.lights.clone(), note, default_light)
+            let areas = mesh.lights.iter().filter(|l| l.kind == LightRecord::AREA).count() as u64;
+            (mesh.lights.clone(), note, default_light, areas)
         }
-        None => streamed_lights(&opts.lights, all.bounds, camera, |ray| first_hit(all, ray)),
+        None => {
+            let sums = emitter_sums(all, &tables.materials)?;
+            let (lights, note, default_light) =
+                streamed_lights(&opts.lights, all.bounds, camera, &sums, |ray| first_hit(all, ray));
+            (lights, note, default_light, sums.count)
+        }
     };
     report.lights = note;
     let shading: Vec<LightRecord> = lights.iter().copied().filter(|l| l.kind != LightRecord::AREA).collect();
-    let areas = lights.len() - shading.len();
     if areas > 0 {
         report.warnings.push(format!(
             "{name}: {areas} emissive triangles are not area lights in a bricked scene (only path tracing samples them, and it needs the whole scene)"
@@ -367,6 +373,16 @@ fn replicate(all: &SpillFile, copies: u32, bar: &indicatif::ProgressBar) -> Resu
     }
     all.remove();
     w.finish()
+}
+
+/// The emitters' sums over every record of `file`, in id order.
+fn emitter_sums(file: &SpillFile, materials: &[raypipe_core::image::MaterialRecord]) -> Result<EmitterSums> {
+    let mut sums = EmitterSums::default();
+    file.for_each(|r| {
+        sums.add(r.p, materials.get(r.material as usize).map_or([0.0; 3], |m| m.emission));
+        Ok(())
+    })?;
+    Ok(sums)
 }
 
 /// The nearest triangle along `ray` over every record of `file`: the default light's

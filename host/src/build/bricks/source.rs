@@ -5,7 +5,9 @@ use anyhow::Result;
 use raypipe_core::image::{LightRecord, MaterialRecord, NULL_INDEX};
 
 use super::tri_record::TriRecord;
+use crate::build::emitter_sums::EmitterSums;
 use crate::input::mesh::Mesh;
+use crate::input::obj_stream::ObjStream;
 use crate::input::ply_stream::PlyStream;
 use crate::input::texture::TextureImage;
 
@@ -151,13 +153,59 @@ impl TriangleSource for PlySource {
     }
 }
 
-/// The lights of a streamed scene with nothing but its geometry: the user's (with a dim
-/// ambient term), or a point light placed for the camera and the ambient term — what a
-/// flat build gives a scene without emitters.
+/// An OBJ file, its faces streamed.
+pub struct ObjSource {
+    /// The surveyed file.
+    pub obj: ObjStream,
+}
+
+impl TriangleSource for ObjSource {
+    fn name(&self) -> &str {
+        self.obj.name()
+    }
+
+    fn tables(&self) -> SourceTables {
+        SourceTables {
+            materials: self.obj.tables.materials.clone(),
+            textures: self.obj.tables.textures.clone(),
+            shading: self.obj.shading,
+            has_materials: true,
+            has_objects: self.obj.objects,
+        }
+    }
+
+    fn stream(&mut self, emit: &mut dyn FnMut(TriRecord) -> Result<()>) -> Result<()> {
+        let mut id = 0u32;
+        self.obj.faces(&mut |t| {
+            let mut r = TriRecord::plain(t.p, id);
+            (r.material, r.object) = (t.material, t.object);
+            if self.obj.shading {
+                r.shading = t.shading;
+            }
+            id = id.checked_add(1).ok_or_else(|| anyhow::anyhow!("more than 2^32 triangles"))?;
+            emit(r)
+        })
+    }
+
+    fn resident_bytes(&self) -> u64 {
+        self.obj.resident_bytes()
+    }
+
+    fn triangle_hint(&self) -> u64 {
+        self.obj.triangles
+    }
+}
+
+/// The lights of a streamed scene: the user's (with a dim ambient term), or the default
+/// lights a flat build chooses — a point light placed for the camera, or one standing in
+/// for strong emitters (`sums`, over every triangle in id order) — less the area lights,
+/// which bricks do not carry. Also whether the point light is the one placed for the
+/// camera.
 pub fn streamed_lights(
     user: &[LightRecord],
     bounds: ([f32; 3], [f32; 3]),
     camera: &raypipe_core::image::CameraRecord,
+    sums: &EmitterSums,
     first_hit: impl Fn(&raypipe_core::Ray) -> Option<f32>,
 ) -> (Vec<LightRecord>, String, bool) {
     let ambient = LightRecord { position: [0.0; 3], kind: LightRecord::AMBIENT, color: [0.1; 3], triangle: 0 };
@@ -167,10 +215,9 @@ pub fn streamed_lights(
         let n = user.len();
         return (lights, format!("{n} given light{}", if n == 1 { "" } else { "s" }), false);
     }
-    let (lo, hi) = (glam::Vec3::from(bounds.0), glam::Vec3::from(bounds.1));
-    let p = crate::build::default_lights::light_in_view(lo, hi, camera, first_hit);
-    let point = LightRecord { position: p.to_array(), kind: LightRecord::POINT, color: [0.9; 3], triangle: 0 };
-    (vec![point, ambient], format!("point light at ({:.3}, {:.3}, {:.3}), chosen for the camera", p.x, p.y, p.z), true)
+    let (lights, note) = crate::build::default_lights::lights_for(sums, bounds, camera, first_hit);
+    let for_camera = lights.iter().any(|l| l.kind == LightRecord::POINT);
+    (lights, note, for_camera)
 }
 
 /// The generated power plant, streamed.
