@@ -141,6 +141,41 @@ proptest! {
     }
 }
 
+#[test]
+fn triangles_shared_by_bricks_give_the_flat_images_hit() {
+    // A long floor and long walls under a row of small triangles: the partition's cuts
+    // cross the long ones, which every brick they reach then holds.
+    let mut positions = vec![[-8.0, 0.0, -1.0], [8.0, 0.0, -1.0], [-8.0, 0.0, 1.0], [8.0, 0.0, 1.0]];
+    let mut triangles = vec![[0, 1, 2], [1, 3, 2]];
+    for i in 0..40 {
+        let x = -8.0 + 0.4 * i as f32;
+        let b = positions.len() as u32;
+        positions.extend([[x, 0.1, 0.0], [x + 0.3, 0.1, 0.0], [x, 0.5, 0.2], [x, 0.0, -0.9], [x + 0.2, 2.0, -0.9]]);
+        triangles.extend([[b, b + 1, b + 2], [b + 3, b + 4, 0]]);
+    }
+    for accel in [Accel::Bvh4, Accel::Kd, Accel::Grid] {
+        let flat = build_soup(positions.clone(), triangles.clone(), accel, 1);
+        let fview = flat.view().expect("valid flat image");
+        let (_dir, scene) = bricked(&positions, &triangles, accel, 900, Codec::Lz4, None);
+        let h = scene.view().header();
+        assert_eq!(h.triangle_count, triangles.len() as u64);
+        assert!(h.reference_count > h.triangle_count, "{} references", h.reference_count);
+        let bricks: Vec<ResidentBrick> =
+            (0..scene.view().brick_count()).map(|b| scene.load(b).expect("brick loads").0).collect();
+        for k in 0..400u32 {
+            let f = |s: u32| ((k.wrapping_mul(2654435761).wrapping_add(s * 40503) >> 8) % 1000) as f32 / 1000.0;
+            let o = Vec3::new(-9.0 + 18.0 * f(1), 0.05 + 3.0 * f(2), -3.0 + 6.0 * f(3));
+            let d = Vec3::new(f(4) - 0.5, -0.2 - f(5), f(6) - 0.5);
+            let ray = Ray::new(o, d);
+            let want = trace::<Watertight, _>(&fview, &ray, &mut NoProbe, &mut RayCounters::default());
+            for resident in [0, u64::MAX, 0x5555_5555_5555_5555] {
+                let (got, _) = two_level(&scene, &bricks, &ray, false, resident);
+                assert!(same(want, got), "{accel:?}: flat {want:?} != bricked {got:?}");
+            }
+        }
+    }
+}
+
 /// The frames of a scene, flat and bricked, for every cache size, thread count and
 /// packet size: the same pixels, bit for bit (radiance included).
 fn frames_agree(

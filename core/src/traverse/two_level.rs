@@ -12,8 +12,11 @@
 //! One hit whatever the path: a brick reports its closest hit with its scene-wide id
 //! (TRIANGLE_IDS, strictly increasing, so equal distances are ordered inside a brick as
 //! in the flat image), the walk keeps the smallest `(t, id)` over bricks, and a brick is
-//! skipped only when its box is entered beyond the best hit. Every triangle lies in one
-//! brick, whose box holds it, so the result is the flat image's hit bit for bit.
+//! skipped only when its box is entered beyond the best hit. Every point of every
+//! triangle lies in the top-level box of a brick that holds the triangle (a triangle
+//! reaching across the partition's regions is held by each brick it reaches into, and
+//! gives the same `t` and id in each), so the result is the flat image's hit bit for
+//! bit.
 
 use crate::hit::{keep_closest, Hit};
 use crate::image::bricked::BrickedView;

@@ -204,8 +204,10 @@ fn cmd_build_bricked(a: BuildArgs) -> Result<()> {
     let per_tri = |b: u64| b as f64 / r.triangles.max(1) as f64;
     println!("scene        {name}");
     println!(
-        "triangles    {}, vertices {} in {} bricks ({})",
+        "triangles    {} ({} in bricks, {:.3} per triangle), vertices {} in {} bricks ({})",
         r.triangles,
+        r.references,
+        r.references as f64 / r.triangles.max(1) as f64,
         r.vertices,
         r.bricks,
         accel_name(a.structure.accel())

@@ -29,7 +29,13 @@ pub(crate) fn cmd_info_bricked(path: &Path, codecs: bool) -> Result<()> {
         "bounds      ({}, {}, {}) .. ({}, {}, {})",
         h.bounds_min[0], h.bounds_min[1], h.bounds_min[2], h.bounds_max[0], h.bounds_max[1], h.bounds_max[2]
     );
-    println!("triangles   {} ({} vertices stored in bricks)", h.triangle_count, h.vertex_count);
+    println!(
+        "triangles   {} ({} in bricks, {:.3} per triangle; {} vertices stored in bricks)",
+        h.triangle_count,
+        h.reference_count,
+        h.reference_count as f64 / h.triangle_count.max(1) as f64,
+        h.vertex_count
+    );
     println!(
         "bricks      {}, top-level BVH of {} nodes; images {} ({:.1} bytes/triangle), largest {}",
         bricks.len(),

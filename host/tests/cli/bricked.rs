@@ -255,7 +255,7 @@ fn a_streamed_obj_bricks_to_the_flat_images_pixels_and_hits() {
     );
     assert!(o.status.success(), "{}", stderr(&o));
     let (out, warnings) = (String::from_utf8_lossy(&o.stdout).into_owned(), stderr(&o));
-    let bricks = out.split(" in ").nth(1).and_then(|s| s.split(' ').next()).and_then(|n| n.parse::<u32>().ok());
+    let bricks = out.split(" bricks (").next().and_then(|s| s.rsplit(' ').next()).and_then(|n| n.parse::<u32>().ok());
     assert!(bricks.is_some_and(|n| n >= 4), "{out}");
     // The lamp is strong enough to stand in for a point light, in both (the Whitted
     // frames below show it is the same light).

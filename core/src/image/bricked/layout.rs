@@ -5,7 +5,7 @@ use bytemuck::{Pod, Zeroable};
 /// First eight bytes of a bricked scene file.
 pub const BRICKED_MAGIC: [u8; 8] = *b"RPBRICK\0";
 /// The bricked format version this crate reads.
-pub const BRICKED_VERSION: u32 = 1;
+pub const BRICKED_VERSION: u32 = 2;
 /// Byte offset of [`BrickedHeader::index_checksum`].
 pub const INDEX_CHECKSUM_OFFSET: usize = 100;
 
@@ -61,7 +61,7 @@ pub struct BrickedHeader {
     pub index_size: u64,
     /// Bytes of the whole file.
     pub total_size: u64,
-    /// Triangles of the scene: the bricks' counts summed.
+    /// Triangles of the scene, each counted once (scene-wide ids run below it).
     pub triangle_count: u64,
     /// Vertices the bricks store, summed (a vertex shared by two bricks counts twice).
     pub vertex_count: u64,
@@ -79,8 +79,11 @@ pub struct BrickedHeader {
     pub index_checksum: u32,
     /// The largest brick's image size: the smallest cache that can hold any brick.
     pub max_brick_size: u64,
+    /// The bricks' triangle counts summed: a triangle reaching across a split of the
+    /// partition is held by every brick whose region it reaches into.
+    pub reference_count: u64,
     /// Zero.
-    pub reserved: [u32; 4],
+    pub reserved: [u32; 2],
 }
 const _: () = assert!(core::mem::size_of::<BrickedHeader>() == 128);
 const _: () = assert!(core::mem::offset_of!(BrickedHeader, index_checksum) == INDEX_CHECKSUM_OFFSET);

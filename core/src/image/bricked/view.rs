@@ -51,7 +51,7 @@ impl<'a> BrickedView<'a> {
         if header.version != BRICKED_VERSION {
             return Err(BrickedError::UnsupportedVersion(header.version));
         }
-        if header.flags != 0 || header.reserved != [0; 4] {
+        if header.flags != 0 || header.reserved != [0; 2] {
             return Err(BrickedError::Reserved);
         }
         let codec = Codec::from_u32(header.codec).ok_or(BrickedError::UnknownCodec(header.codec))?;
@@ -137,7 +137,10 @@ impl<'a> BrickedView<'a> {
             triangles += b.triangle_count as u64;
             largest = largest.max(b.image_size);
         }
-        if triangles != header.triangle_count {
+        if triangles != header.reference_count
+            || header.triangle_count == 0
+            || header.triangle_count > header.reference_count
+        {
             return Err(BrickedError::CountMismatch);
         }
         if largest != header.max_brick_size {

@@ -42,6 +42,8 @@ pub struct IndexParts<'a> {
     pub list: &'a [u32],
     /// The globals scene image (camera, lights, no triangles).
     pub globals: &'a [u8],
+    /// The scene's triangles (each counted once, however many bricks share it).
+    pub triangles: u64,
 }
 
 fn align64(x: u64) -> u64 {
@@ -108,7 +110,7 @@ impl PayloadWriter {
             node_count: parts.nodes.len() as u32,
             index_size,
             total_size,
-            triangle_count: bricks.iter().map(|b| b.record.triangle_count as u64).sum(),
+            triangle_count: parts.triangles,
             vertex_count: bricks.iter().map(|b| b.record.vertex_count as u64).sum(),
             globals_offset,
             globals_size: parts.globals.len() as u64,
@@ -117,7 +119,8 @@ impl PayloadWriter {
             codec: parts.codec as u32,
             index_checksum: 0,
             max_brick_size: bricks.iter().map(|b| b.record.image_size).max().unwrap_or(0),
-            reserved: [0; 4],
+            reference_count: bricks.iter().map(|b| b.record.triangle_count as u64).sum(),
+            reserved: [0; 2],
         };
         let mut index = Vec::with_capacity(index_size as usize);
         index.extend_from_slice(bytemuck::bytes_of(&header));

@@ -7,6 +7,7 @@ pub mod brick_image;
 pub mod bricked_writer;
 pub mod out_of_core;
 pub mod partition;
+pub mod region;
 pub mod source;
 pub mod spill;
 pub mod top_tree;
@@ -23,7 +24,8 @@ use raypipe_core::image::{LightRecord, FLAG_DEFAULT_LIGHT};
 use self::brick_image::{build_brick, BrickContext};
 use self::bricked_writer::{IndexParts, PayloadWriter};
 use self::out_of_core::partition_file;
-use self::partition::{partition, Part};
+use self::partition::{partition, LeafPart, Part, MAX_GROWTH};
+use self::region::{clipped_bounds, Region};
 use self::source::{streamed_lights, MeshSource, SourceTables, TriangleSource};
 use self::spill::{SpillFile, SpillWriter};
 use self::tri_record::TriRecord;
@@ -60,8 +62,10 @@ impl BrickOptions {
 /// What a bricked build produced.
 #[derive(Clone, Debug, Default)]
 pub struct BrickedReport {
-    /// Triangles.
+    /// Triangles, each counted once.
     pub triangles: u64,
+    /// Triangles the bricks hold, summed (a triangle shared by bricks counts in each).
+    pub references: u64,
     /// Bricks.
     pub bricks: u64,
     /// Vertices the bricks store (welded per brick).
@@ -184,11 +188,14 @@ pub fn build_bricked_from(
     // A fifth of the rest is left for the allocator's slack and the kernel's buffers.
     let records_memory = budget.saturating_sub(work) / 5 * 4;
     let bar = progress::bar(all.count, "bricks", bopts.progress);
+    let unique = all.count;
+    let root = Region { lo: bounds.0, hi: bounds.1 };
     let part = partition_file(
         all,
+        (root, MAX_GROWTH),
         per_brick,
         records_memory,
-        &mut |mut records| bricks.build_part(&mut records, per_brick, &bar),
+        &mut |records, region, allowance| bricks.build_part(records, (region, allowance), per_brick, &bar),
         &bar,
     )?;
     bar.finish_and_clear();
@@ -199,7 +206,8 @@ pub fn build_bricked_from(
     let nodes = top_tree::top_nodes(&part, &bricks.boxes);
     let list: Vec<u32> = (0..n as u32).collect();
     let globals = globals_image(&shading_lights, &camera, default_light, bounds)?;
-    let parts = IndexParts { codec: bopts.codec, bounds, nodes: &nodes, list: &list, globals: &globals };
+    let parts =
+        IndexParts { codec: bopts.codec, bounds, nodes: &nodes, list: &list, globals: &globals, triangles: unique };
     let bar = progress::bar(n as u64, "write", bopts.progress);
     let file_bytes = bricks.writer.finish(out, &parts, &bar)?;
     bar.finish_and_clear();
@@ -207,7 +215,8 @@ pub fn build_bricked_from(
     drop(scratch);
     let t = bricks.totals;
     Ok(BrickedReport {
-        triangles: t.triangles,
+        triangles: unique,
+        references: t.triangles,
         bricks: n as u64,
         vertices: t.vertices,
         image_bytes: t.image_bytes,
@@ -307,38 +316,40 @@ struct BrickSink<'a> {
 }
 
 impl BrickSink<'_> {
-    /// Partitions `records` in memory and builds their bricks in parallel; the bricks
-    /// take the next ids. Returns the part's tree.
+    /// Partitions `records` of `region` in memory (within the growth `allowance`) and
+    /// builds their bricks in parallel; the bricks take the next ids. Returns the
+    /// part's tree.
     fn build_part(
         &mut self,
-        records: &mut [TriRecord],
+        records: Vec<TriRecord>,
+        (region, allowance): (Region, f64),
         per_brick: usize,
         bar: &indicatif::ProgressBar,
     ) -> Result<Part> {
-        let part = partition(records, per_brick, 0);
-        let leaves = part.leaves();
+        let mut leaves = Vec::new();
+        let part = partition(records, region, per_brick, allowance, &mut leaves);
         let base = self.boxes.len();
-        let mut slices: Vec<(usize, &mut [TriRecord])> = Vec::with_capacity(leaves.len());
-        let mut rest: &mut [TriRecord] = records;
-        for (k, r) in leaves.iter().enumerate() {
-            let (head, tail) = rest.split_at_mut(r.len());
-            slices.push((base + k, head));
-            rest = tail;
-        }
+        let margin =
+            crate::build::bvh::box_margin(&Mesh { margin_bounds: Some(self.ctx.scene_bounds), ..Default::default() });
+        let slices: Vec<(usize, LeafPart)> = leaves.into_iter().enumerate().map(|(k, l)| (base + k, l)).collect();
+        let n = slices.len();
         let (ctx, codec, name) = (self.ctx, self.codec, self.name);
-        self.writer.grow(base + leaves.len());
-        self.boxes.resize(base + leaves.len(), ([0.0; 3], [0.0; 3]));
+        self.writer.grow(base + n);
+        self.boxes.resize(base + n, ([0.0; 3], [0.0; 3]));
         // Each brick is stored as soon as it is built and its image let go: the part's
         // records are the only large thing held.
         let sink = std::sync::Mutex::new((&mut self.writer, &mut self.boxes, &mut self.totals));
-        slices.into_par_iter().try_for_each(|(k, slice)| -> Result<()> {
-            let built = build_brick(ctx, slice).map_err(|e| anyhow!("{name}: brick {k}: {e}"))?;
+        slices.into_par_iter().try_for_each(|(k, mut leaf)| -> Result<()> {
+            // The top level's box: the brick's share of space, not its triangles' reach.
+            let top_box = clipped_bounds(&leaf.region, &leaf.records, margin);
+            let built = build_brick(ctx, &mut leaf.records).map_err(|e| anyhow!("{name}: brick {k}: {e}"))?;
+            drop(leaf);
             let stored = compress(codec, &built.image)?;
             bar.inc(built.triangles as u64);
             let mut guard = sink.lock().map_err(|_| anyhow!("internal error: a brick worker panicked"))?;
             let (writer, boxes, t) = &mut *guard;
             writer.add(k, &stored, &built)?;
-            boxes[k] = built.header_bounds;
+            boxes[k] = top_box;
             t.triangles += built.triangles as u64;
             t.vertices += built.vertices as u64;
             t.image_bytes += built.image.len() as u64;

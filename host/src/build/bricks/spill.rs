@@ -113,12 +113,12 @@ impl SpillFile {
     }
 }
 
-/// Where to split a file's records along `axis`: a plane near their centroids' median,
-/// found with histograms (each a pass over the file), narrowed three times at most.
-/// `None` when the centroids cannot be told apart on this axis.
-pub fn median_plane(file: &SpillFile, axis: usize) -> Result<Option<f64>> {
+/// Where to split a file's records: a plane near the median of their `key`s (which lie
+/// in `range`), found with histograms (each a pass over the file), narrowed three times
+/// at most. `None` when the keys cannot be told apart.
+pub fn median_plane(file: &SpillFile, range: (f64, f64), key: impl Fn(&TriRecord) -> f64) -> Result<Option<f64>> {
     const BINS: usize = 4096;
-    let (mut lo, mut hi) = (file.centroids.0[axis], file.centroids.1[axis]);
+    let (mut lo, mut hi) = range;
     let mut below = 0u64;
     let half = file.count / 2;
     for _ in 0..3 {
@@ -128,7 +128,7 @@ pub fn median_plane(file: &SpillFile, axis: usize) -> Result<Option<f64>> {
         let width = (hi - lo) / BINS as f64;
         let mut bins = vec![0u64; BINS];
         file.for_each(|r| {
-            let c = r.centroid(axis);
+            let c = key(&r);
             if c >= lo && c <= hi {
                 let k = (((c - lo) / width) as usize).min(BINS - 1);
                 bins[k] += 1;

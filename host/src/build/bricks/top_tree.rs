@@ -1,6 +1,6 @@
 //! The top-level BVH of a bricked scene: the partition's tree, one brick per leaf, each
-//! node's box the union of its bricks' boxes (which are their vertices' boxes grown by
-//! the scene's margin), laid out as the binary BVH's 32-byte nodes with children side by
+//! node's box the union of its bricks' boxes (each brick's triangles' boxes clipped to
+//! its region and grown by the scene's margin: [`super::region`]), laid out as the binary BVH's 32-byte nodes with children side by
 //! side after their parent.
 
 use raypipe_core::image::BvhNode;
@@ -25,7 +25,7 @@ fn fill(
     next_leaf: &mut u32,
 ) -> ([f32; 3], [f32; 3]) {
     match part {
-        Part::Leaf(_) => {
+        Part::Leaf => {
             let k = *next_leaf;
             *next_leaf += 1;
             let (lo, hi) = boxes[k as usize];
