@@ -252,7 +252,9 @@ impl ImageWriter {
             });
             offset = (offset + bytes.len() as u64).div_ceil(align) * align;
             if offset > u32::MAX as u64 {
-                bail!("scene image would exceed 4 GiB");
+                bail!(
+                    "the scene image would pass 4 GiB, the most a flat image's 32-bit offsets address; build a bricked scene (--bricks), whose offsets are 64-bit"
+                );
             }
         }
         let total = offset as usize;
