@@ -1,5 +1,5 @@
 //! The partition of a scene larger than memory (Wald & Slusallek 2001 §6.4): a part
-//! that does not fit the memory budget is cut as [`super::partition`] cuts one in
+//! that does not fit the memory budget is cut as [`mod@super::partition`] cuts one in
 //! memory — a plane near the median of its keys, found with a histogram pass, then a
 //! pass writing each record to its side's spill file (to both when it straddles) — and
 //! each side is cut again, until a part fits; that part is read into memory,
