@@ -99,8 +99,10 @@ pub fn main() -> ExitCode {
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            let msg = format!("{e:#}").replace('\n', " ");
-            eprintln!("error: {msg}");
+            if !crate::distributed::is_secondary_rank() {
+                let msg = format!("{e:#}").replace('\n', " ");
+                eprintln!("error: {msg}");
+            }
             ExitCode::FAILURE
         }
     }
@@ -116,6 +118,9 @@ fn usage_error(e: clap::Error) -> ExitCode {
         ErrorKind::DisplayHelp | ErrorKind::DisplayVersion | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
     ) {
         e.exit();
+    }
+    if crate::distributed::is_secondary_rank() {
+        return ExitCode::from(2);
     }
     let text = e.render().to_string();
     let first = text.lines().next().unwrap_or("error: bad command line").trim_end();

@@ -8,6 +8,7 @@
 pub mod build;
 pub mod cli;
 pub mod commands;
+pub mod distributed;
 pub mod hw;
 pub mod input;
 pub mod output;

@@ -45,6 +45,50 @@ pub struct RenderArgs {
     pub walk: WalkArgs,
     #[command(flatten)]
     pub cache: super::args::CacheArgs,
+    #[command(flatten)]
+    pub mpi: MpiArgs,
+}
+
+/// Rendering across MPI ranks.
+#[derive(Args, Debug, Clone)]
+pub struct MpiArgs {
+    /// Render across the ranks of an MPI job (`mpirun -n N raypipe render … --mpi`): rank 0
+    /// hands out tiles and writes the image, the others render. Needs a raypipe built
+    /// with the `mpi` feature.
+    #[arg(long)]
+    pub mpi: bool,
+    /// Side of the tiles the master hands out, in pixels.
+    #[arg(long, value_name = "PIXELS", default_value_t = 32, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    pub mpi_tile: u32,
+    /// Seconds the master waits for a worker's tile before it ends the run.
+    #[arg(long, value_name = "SECONDS", default_value_t = 60.0)]
+    pub mpi_timeout: f64,
+}
+
+/// What a render needs once its inputs are read: the scene, the camera, the options and
+/// how frames are displayed.
+pub(crate) struct Prepared {
+    pub scene: crate::scene::Scene,
+    pub camera: raypipe_core::image::CameraRecord,
+    pub opts: RenderOptions,
+    pub display: crate::output::tone_map::DisplayChoice,
+    pub load_secs: f64,
+}
+
+/// Loads the scene of `a` and settles the camera and the options.
+pub(crate) fn prepare(a: &RenderArgs) -> Result<Prepared> {
+    let loading = Instant::now();
+    let scene = load_scene(a.scene.as_deref(), &a.structure, &a.camera)?;
+    let load_secs = loading.elapsed().as_secs_f64();
+    let view = scene.view()?;
+    let camera = camera_for(&view, &a.camera)?;
+    let kind = IntersectorKind::resolve(a.run.intersector, &view);
+    let packet = a.packet.unwrap_or_else(|| PacketSize::auto_for(&view));
+    let mut opts =
+        RenderOptions { threads: a.run.threads, intersector: kind, progress: true, packet, ..Default::default() };
+    a.algo.apply(&mut opts)?;
+    let display = a.display.choice(opts.algo);
+    Ok(Prepared { scene, camera, opts, display, load_secs })
 }
 
 pub(crate) fn cmd_render(a: RenderArgs) -> Result<()> {
@@ -53,18 +97,12 @@ pub(crate) fn cmd_render(a: RenderArgs) -> Result<()> {
     if let Some(path) = a.scene.as_deref().filter(|p| crate::input::bricked::is_bricked(p)) {
         return super::render_bricked::cmd_render_bricked(&a, path);
     }
-    let loading = Instant::now();
-    let scene = load_scene(a.scene.as_deref(), &a.structure, &a.camera)?;
-    let load_secs = loading.elapsed().as_secs_f64();
+    if a.mpi.mpi {
+        return crate::distributed::cmd_render_mpi(&a);
+    }
+    let Prepared { scene, camera: cam, opts, display, load_secs } = prepare(&a)?;
     warn(&scene);
     let view = scene.view()?;
-    let cam = camera_for(&view, &a.camera)?;
-    let kind = IntersectorKind::resolve(a.run.intersector, &view);
-    let packet = a.packet.unwrap_or_else(|| PacketSize::auto_for(&view));
-    let mut opts =
-        RenderOptions { threads: a.run.threads, intersector: kind, progress: true, packet, ..Default::default() };
-    a.algo.apply(&mut opts)?;
-    let display = a.display.choice(opts.algo);
     if let Some(cams) = a.walk.cameras(&cam)? {
         return walkthrough(&a, &scene, &view, &cams, &opts, &display);
     }

@@ -226,75 +226,104 @@ fn render_with<I: Intersector>(
     (start, first): (std::time::Instant, &std::sync::OnceLock<f64>),
 ) -> Result<(Frame, RayTotals)> {
     let (w, h) = (eye.width, eye.height);
-    let (lo, hi) = scene.test_bounds();
     let tiles = tiles(w, h);
-    let samples = eye.samples();
-    // The shadow caster's visibility pass: a G-buffer per eye ray of the pixels.
-    let gbuffers: Option<Vec<GBuffer>> =
-        (opts.algo == Algorithm::Shadow).then(|| (0..samples).map(|s| rasterize(scene, eye, s)).collect());
+    let frame = FrameJob::new(scene, eye, background, opts);
     let bar = progress::bar(tiles.len() as u64, "render", opts.progress);
     let done: Vec<(Vec<Vec3>, RayTotals)> = in_pool(opts.threads, || {
         tiles
             .par_iter()
-            .map(|&(x0, y0, x1, y1)| {
-                let tw = (x1 - x0) as usize;
-                let n = tw * (y1 - y0) as usize;
-                let (mut counters, mut pc) = (RayCounters::default(), PacketCounters::default());
-                let tile = (x0, y0, x1, y1);
-                let mut totals = RayTotals::default();
-                // Every eye ray of the tile and its hit, sample-major.
-                let mut primaries = vec![(None, None); n * samples as usize];
-                for s in 0..samples {
-                    let at = |x: u32, y: u32| s as usize * n + (y - y0) as usize * tw + (x - x0) as usize;
-                    match &gbuffers {
-                        Some(g) => {
-                            for y in y0..y1 {
-                                for x in x0..x1 {
-                                    primaries[at(x, y)] = gbuffer_hit::<I>(scene, eye, &g[s as usize], x, y);
-                                }
-                            }
-                        }
-                        None => {
-                            let mut put = |x: u32, y: u32, ray: Option<Ray>, hit| {
-                                totals.primary += ray.is_some() as u64;
-                                primaries[at(x, y)] = (ray, hit);
-                            };
-                            let rays = TileRays { eye, bounds: (lo, hi), tile, sample: s };
-                            trace_tile::<I>(scene, rays, opts.packet, &mut counters, &mut pc, &mut put);
-                        }
-                    }
-                }
-                let geometry = TileGeometry { x0, y0, width: tw as u32, image_width: w };
-                let radiance = match opts.shader(background) {
-                    None => cast_tile(scene, (eye, background), samples, geometry, &primaries),
-                    Some(shader) => {
-                        let mut counts = StreamCounts::default();
-                        let shading = TileShading { shader: &shader, background, samples, eye };
-                        let radiance =
-                            shade_tile::<I, _>(scene, &shading, geometry, &primaries, &mut NoProbe, &mut counts);
-                        totals.secondary = counts.rays.iter().sum();
-                        radiance
-                    }
-                };
+            .map(|&tile| {
+                let out = frame.tile::<I>(tile);
                 bar.inc(1);
                 first.get_or_init(|| start.elapsed().as_secs_f64());
-                (radiance, totals)
+                out
             })
             .collect()
     })?;
     bar.finish_and_clear();
     let mut radiance = vec![Vec3::ZERO; (w * h) as usize];
     let mut totals = RayTotals::default();
-    for (&(x0, y0, x1, _), (tile, t)) in tiles.iter().zip(done) {
-        let tw = (x1 - x0) as usize;
-        for (row, chunk) in tile.chunks(tw).enumerate() {
-            let start = (y0 as usize + row) * w as usize + x0 as usize;
-            radiance[start..start + tw].copy_from_slice(chunk);
-        }
+    for (&tile, (colours, t)) in tiles.iter().zip(done) {
+        place_tile(&mut radiance, w, tile, &colours);
         totals.primary += t.primary;
         totals.secondary += t.secondary;
     }
     Ok((Frame::from_radiance(w, h, radiance), totals))
+}
+
+/// Copies a tile's colours (row-major within the tile) into the image's `radiance`.
+pub fn place_tile(radiance: &mut [Vec3], image_width: u32, (x0, y0, x1, _): (u32, u32, u32, u32), colours: &[Vec3]) {
+    let tw = (x1 - x0) as usize;
+    for (row, chunk) in colours.chunks(tw).enumerate() {
+        let start = (y0 as usize + row) * image_width as usize + x0 as usize;
+        radiance[start..start + tw].copy_from_slice(chunk);
+    }
+}
+
+/// One frame's work, split into tiles that can be rendered in any order, on any thread or
+/// process: each tile's colours depend on the tile alone (the shadow caster's G-buffers
+/// are made once, for the whole image, before any tile).
+pub struct FrameJob<'a, 's> {
+    scene: &'a SceneView<'s>,
+    eye: &'a EyeRays,
+    background: Vec3,
+    opts: &'a RenderOptions,
+    gbuffers: Option<Vec<GBuffer>>,
+}
+
+impl<'a, 's> FrameJob<'a, 's> {
+    /// The frame of `scene` seen through `eye`.
+    pub fn new(scene: &'a SceneView<'s>, eye: &'a EyeRays, background: Vec3, opts: &'a RenderOptions) -> Self {
+        // The shadow caster's visibility pass: a G-buffer per eye ray of the pixels.
+        let gbuffers =
+            (opts.algo == Algorithm::Shadow).then(|| (0..eye.samples()).map(|s| rasterize(scene, eye, s)).collect());
+        FrameJob { scene, eye, background, opts, gbuffers }
+    }
+
+    /// The colours of the tile `(x0, y0, x1, y1)`, row-major, and the rays it traced.
+    pub fn tile<I: Intersector>(&self, (x0, y0, x1, y1): (u32, u32, u32, u32)) -> (Vec<Vec3>, RayTotals) {
+        let (scene, eye, opts) = (self.scene, self.eye, self.opts);
+        let samples = eye.samples();
+        let tw = (x1 - x0) as usize;
+        let n = tw * (y1 - y0) as usize;
+        let (mut counters, mut pc) = (RayCounters::default(), PacketCounters::default());
+        let tile = (x0, y0, x1, y1);
+        let mut totals = RayTotals::default();
+        // Every eye ray of the tile and its hit, sample-major.
+        let mut primaries = vec![(None, None); n * samples as usize];
+        for s in 0..samples {
+            let at = |x: u32, y: u32| s as usize * n + (y - y0) as usize * tw + (x - x0) as usize;
+            match &self.gbuffers {
+                Some(g) => {
+                    for y in y0..y1 {
+                        for x in x0..x1 {
+                            primaries[at(x, y)] = gbuffer_hit::<I>(scene, eye, &g[s as usize], x, y);
+                        }
+                    }
+                }
+                None => {
+                    let mut put = |x: u32, y: u32, ray: Option<Ray>, hit| {
+                        totals.primary += ray.is_some() as u64;
+                        primaries[at(x, y)] = (ray, hit);
+                    };
+                    let rays = TileRays { eye, bounds: scene.test_bounds(), tile, sample: s };
+                    trace_tile::<I>(scene, rays, opts.packet, &mut counters, &mut pc, &mut put);
+                }
+            }
+        }
+        let geometry = TileGeometry { x0, y0, width: tw as u32, image_width: eye.width };
+        let radiance = match opts.shader(self.background) {
+            None => cast_tile(scene, (eye, self.background), samples, geometry, &primaries),
+            Some(shader) => {
+                let mut counts = StreamCounts::default();
+                let shading = TileShading { shader: &shader, background: self.background, samples, eye };
+                let radiance = shade_tile::<I, _>(scene, &shading, geometry, &primaries, &mut NoProbe, &mut counts);
+                totals.secondary = counts.rays.iter().sum();
+                radiance
+            }
+        };
+        (radiance, totals)
+    }
 }
 
 /// Ray casting's colours for a tile's eye rays (sample-major): one sample's colour as it

@@ -9,6 +9,8 @@ mod common;
 mod fixed_point;
 mod info;
 mod inputs;
+#[cfg(feature = "mpi")]
+mod mpi;
 mod outputs;
 mod render;
 mod report;

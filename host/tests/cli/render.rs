@@ -323,3 +323,12 @@ fn views_that_miss_the_scene_get_a_hint() {
     let good = hint(&["--eye", "8,3,-12", "--look-at", "0,0,-3"]);
     assert!(good.iter().all(|h| !h.contains("surface") && !h.contains("nothing")), "{good:?}");
 }
+
+#[cfg(not(feature = "mpi"))]
+#[test]
+fn render_mpi_without_the_mpi_feature_is_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = raypipe(dir.path(), &["render", "--mpi", "-o", "x.png"]);
+    assert_one_line_error(&o, "built without MPI");
+    assert!(only_files(dir.path()).is_empty());
+}

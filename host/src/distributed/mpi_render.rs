@@ -1,0 +1,339 @@
+//! `raypipe render --mpi`: one frame (or a walkthrough) rendered across the ranks of an
+//! MPI job. Every rank maps the scene image itself (replicated data, from shared
+//! storage); rank 0 is the master, which hands out tiles from the [`TilePool`] — a few
+//! to each worker at once so that a worker never waits for the network between tiles
+//! (Wald & Slusallek 2001 §6.5) — gathers them into the frame and writes it; the other
+//! ranks render the tiles they are given with all their threads. A tile's colours
+//! depend on the tile alone, so the image is the single-process image, bit for bit.
+
+use std::time::{Duration, Instant};
+
+use anyhow::{anyhow, bail, Result};
+use glam::Vec3;
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
+use rayon::prelude::*;
+use raypipe_core::camera::EyeRays;
+use raypipe_core::image::CameraRecord;
+
+use super::protocol::{
+    decode_assign, decode_tile, encode_tile, Assign, TileHeader, TAG_ASSIGN, TAG_READY, TAG_STOP, TAG_TILE,
+};
+use super::tile_pool::{tile_grid, Handout, Rect, TilePool};
+use crate::commands::render::{prepare, Prepared, RenderArgs};
+use crate::render::{self, FrameJob, RayTotals, RenderOptions};
+
+/// Tiles a worker holds at once: one it renders, two queued behind it, so that the
+/// next is there when one is done.
+pub const IN_FLIGHT: usize = 3;
+
+/// What one worker did in one frame.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct WorkerFrame {
+    /// Tiles rendered.
+    pub tiles: u32,
+    /// Of them, tiles it had rendered in the frame before.
+    pub kept: u32,
+    /// Seconds spent rendering.
+    pub busy: f64,
+}
+
+/// `raypipe render --mpi`.
+pub fn cmd_render_mpi(a: &RenderArgs) -> Result<()> {
+    let universe = mpi::initialize().ok_or_else(|| anyhow!("--mpi: MPI was already initialized"))?;
+    let world = universe.world();
+    let (rank, size) = (world.rank(), world.size());
+    if size < 2 {
+        bail!("--mpi needs a master and at least one worker: run it as `mpirun -n 2 raypipe render … --mpi` or more");
+    }
+    // Every rank loads the scene; a worker that cannot tells the master, which says so
+    // once for the whole job.
+    let prepared = prepare(a).and_then(|p| {
+        let cams = cameras(a, &p)?;
+        Ok((p, cams))
+    });
+    if rank != 0 {
+        let ready = match &prepared {
+            Ok(_) => Vec::new(),
+            Err(e) => e.to_string().into_bytes(),
+        };
+        world.process_at_rank(0).send_with_tag(&ready[..], TAG_READY);
+        if let Ok((p, cams)) = &prepared {
+            worker(&world, p, cams, a.mpi.mpi_tile)?;
+        }
+        return Ok(());
+    }
+    let (p, cams) = match prepared {
+        Ok(x) => x,
+        Err(e) => {
+            stop_all(&world);
+            return Err(e);
+        }
+    };
+    for r in 1..size {
+        let (msg, _) = world.process_at_rank(r).receive_vec_with_tag::<u8>(TAG_READY);
+        if !msg.is_empty() {
+            stop_all(&world);
+            bail!("rank {r}: {}", String::from_utf8_lossy(&msg));
+        }
+    }
+    let result = master(&world, a, &p, &cams);
+    if result.is_err() {
+        // The workers may be blocked in a send; only an abort ends them for sure.
+        if let Err(e) = &result {
+            eprintln!("error: {e}");
+        }
+        world.abort(1);
+    }
+    stop_all(&world);
+    result
+}
+
+/// The frames to render: the walk's cameras, or the one camera.
+fn cameras(a: &RenderArgs, p: &Prepared) -> Result<Vec<CameraRecord>> {
+    Ok(a.walk.cameras(&p.camera)?.unwrap_or_else(|| vec![p.camera]))
+}
+
+fn stop_all(world: &SimpleCommunicator) {
+    for r in 1..world.size() {
+        world.process_at_rank(r).send_with_tag(&[0u8; 0][..], TAG_STOP);
+    }
+}
+
+/// The master: every frame's tiles handed out, gathered and written.
+fn master(world: &SimpleCommunicator, a: &RenderArgs, p: &Prepared, cams: &[CameraRecord]) -> Result<()> {
+    let workers = (world.size() - 1) as usize;
+    let (w, h) = (cams[0].width, cams[0].height);
+    let tiles = tile_grid(w, h, a.mpi.mpi_tile);
+    let mut pool = TilePool::new(tiles.len(), workers);
+    let timeout = Duration::from_secs_f64(a.mpi.mpi_timeout.max(0.001));
+    let walk = cams.len() > 1;
+    println!(
+        "mpi      {} ranks: master and {workers} worker{}, {} tiles of {} px, {IN_FLIGHT} in flight per worker; {}",
+        world.size(),
+        if workers == 1 { "" } else { "s" },
+        tiles.len(),
+        a.mpi.mpi_tile,
+        library()
+    );
+    if walk {
+        println!("frame      seconds   frames/s  kept tiles  mpi share  image");
+    }
+    let mut display = p.display;
+    let mut times = Vec::new();
+    for (k, cam) in cams.iter().enumerate() {
+        let start = Instant::now();
+        let (radiance, rays, per_worker) = gather_frame(world, &mut pool, &tiles, (k as u32, w), timeout)?;
+        let secs = start.elapsed().as_secs_f64().max(1e-9);
+        let frame = render::Frame::from_radiance(cam.width, cam.height, radiance);
+        let path = if walk { crate::output::frame_path(&a.output, k) } else { a.output.clone() };
+        if k == 0 {
+            (display, _) = display.fixed_by(&frame.radiance);
+        }
+        crate::output::write_frame(&path, &frame, &display)?;
+        let busy: f64 = per_worker.iter().map(|s| s.busy).sum();
+        // The share of the workers' frame time not spent rendering: messages, waiting
+        // for the master, and the master's own work.
+        let share = 1.0 - busy / (secs * workers as f64);
+        let kept: u32 = per_worker.iter().map(|s| s.kept).sum();
+        if walk {
+            println!(
+                "{k:>5}  {secs:>10.4}  {:>9.2}  {kept:>10}  {:>8.1}%  {}",
+                1.0 / secs,
+                share * 100.0,
+                path.display()
+            );
+        } else {
+            println!(
+                "rendered {} at {}x{} on {workers} worker{} -> {}",
+                p.scene.name,
+                w,
+                h,
+                if workers == 1 { "" } else { "s" },
+                path.display()
+            );
+            println!(
+                "time     render {secs:.3} s ({:.2} Mrays/s); workers busy {:.1}%, mpi share {:.1}%",
+                rays.total() as f64 / secs / 1e6,
+                busy / (secs * workers as f64) * 100.0,
+                share * 100.0
+            );
+        }
+        for (r, s) in per_worker.iter().enumerate() {
+            if !walk {
+                println!(
+                    "rank {:<3} {} tiles, busy {:.3} s, idle {:.3} s",
+                    r + 1,
+                    s.tiles,
+                    s.busy,
+                    (secs - s.busy).max(0.0)
+                );
+            }
+        }
+        times.push(secs);
+    }
+    if walk {
+        let total: f64 = times.iter().sum();
+        println!(
+            "path     {} frames in {total:.3} s: {:.2} frames/s on average",
+            cams.len(),
+            cams.len() as f64 / total
+        );
+    }
+    Ok(())
+}
+
+/// One frame: tiles handed out `IN_FLIGHT` at a time and gathered into its radiance.
+fn gather_frame(
+    world: &SimpleCommunicator,
+    pool: &mut TilePool,
+    tiles: &[Rect],
+    (frame, width): (u32, u32),
+    timeout: Duration,
+) -> Result<(Vec<Vec3>, RayTotals, Vec<WorkerFrame>)> {
+    let workers = (world.size() - 1) as usize;
+    let height = tiles.iter().map(|t| t.3).max().unwrap_or(0);
+    let mut radiance = vec![Vec3::ZERO; (width * height) as usize];
+    let mut rays = RayTotals::default();
+    let mut stats = vec![WorkerFrame::default(); workers];
+    let mut given: Vec<Vec<(u32, Handout)>> = vec![Vec::new(); workers];
+    pool.start_frame();
+    let send = |w: usize, pool: &mut TilePool, given: &mut Vec<Vec<(u32, Handout)>>| {
+        if let Some((t, how)) = pool.next_for(w) {
+            let msg = Assign { frame, tile: t as u32 };
+            world.process_at_rank(w as i32 + 1).send_with_tag(bytemuck::bytes_of(&msg), TAG_ASSIGN);
+            given[w].push((t as u32, how));
+        }
+    };
+    for _ in 0..IN_FLIGHT {
+        for w in 0..workers {
+            send(w, pool, &mut given);
+        }
+    }
+    let mut received = 0;
+    while received < tiles.len() {
+        let status = wait_for_tile(world, timeout, &given)?;
+        let r = status.source_rank();
+        let (bytes, _) = world.process_at_rank(r).receive_vec_with_tag::<u8>(TAG_TILE);
+        let w = (r - 1) as usize;
+        let tile_of = |bytes: &[u8]| -> Result<Rect> {
+            let t = bytemuck::pod_read_unaligned::<u32>(bytes.get(4..8).ok_or_else(|| anyhow!("short message"))?);
+            tiles.get(t as usize).copied().ok_or_else(|| anyhow!("tile {t} does not exist"))
+        };
+        let rect = tile_of(&bytes).map_err(|e| anyhow!("rank {r} sent a malformed tile: {e}"))?;
+        let pixels = ((rect.2 - rect.0) * (rect.3 - rect.1)) as usize;
+        let (h, colours) = decode_tile(&bytes, pixels).map_err(|e| anyhow!("rank {r}: {e}"))?;
+        if h.frame != frame {
+            bail!("rank {r} sent a tile of frame {}, not {frame}", h.frame);
+        }
+        render::place_tile(&mut radiance, width, rect, &colours);
+        rays.primary += h.primary;
+        rays.secondary += h.secondary;
+        let s = &mut stats[w];
+        s.tiles += 1;
+        s.busy += h.seconds;
+        if let Some(at) = given[w].iter().position(|&(t, _)| t == h.tile) {
+            let (_, how) = given[w].swap_remove(at);
+            s.kept += (how == Handout::Kept) as u32;
+        }
+        received += 1;
+        send(w, pool, &mut given);
+    }
+    Ok((radiance, rays, stats))
+}
+
+/// Waits for the next tile from any worker, at most `timeout`; past it, one line naming
+/// a rank that owes a tile and the tile.
+fn wait_for_tile(
+    world: &SimpleCommunicator,
+    timeout: Duration,
+    given: &[Vec<(u32, Handout)>],
+) -> Result<mpi::point_to_point::Status> {
+    let start = Instant::now();
+    loop {
+        if let Some(status) = world.any_process().immediate_probe_with_tag(TAG_TILE) {
+            return Ok(status);
+        }
+        if start.elapsed() > timeout {
+            let (w, t) = given
+                .iter()
+                .enumerate()
+                .find_map(|(w, g)| g.first().map(|&(t, _)| (w, t)))
+                .ok_or_else(|| anyhow!("no tile arrived in {:.0} s", timeout.as_secs_f64()))?;
+            bail!(
+                "rank {} sent nothing for {:.0} s while rendering tile {t}: it died or hangs",
+                w + 1,
+                timeout.as_secs_f64()
+            );
+        }
+        // A short sleep instead of MPI's busy wait leaves the core to the workers.
+        std::thread::sleep(Duration::from_micros(50));
+    }
+}
+
+/// A worker: tiles rendered as they are assigned, until the master says stop.
+fn worker(world: &SimpleCommunicator, p: &Prepared, cams: &[CameraRecord], tile_size: u32) -> Result<()> {
+    let view = p.scene.view()?;
+    let master = world.process_at_rank(0);
+    let background = |k: usize| Vec3::from(cams[k].background);
+    let mut current: Option<(u32, EyeRays)> = None;
+    loop {
+        let (bytes, status) = master.receive_vec::<u8>();
+        match status.tag() {
+            TAG_STOP => return Ok(()),
+            TAG_ASSIGN => {}
+            other => bail!("rank {}: unexpected message tag {other}", world.rank()),
+        }
+        let job = decode_assign(&bytes)?;
+        let k = job.frame as usize;
+        let cam = cams.get(k).ok_or_else(|| anyhow!("frame {k} does not exist"))?;
+        if current.as_ref().is_none_or(|(f, _)| *f != job.frame) {
+            current = Some((job.frame, render::eye_rays(cam, "camera")?.with_sampler(p.opts.sampler())));
+        }
+        let Some((_, eye)) = &current else { continue };
+        let tiles = tile_grid(cam.width, cam.height, tile_size);
+        let rect = *tiles.get(job.tile as usize).ok_or_else(|| anyhow!("tile {} does not exist", job.tile))?;
+        let start = Instant::now();
+        let (colours, rays) = render_rect(&view, eye, background(k), &p.opts, rect)?;
+        let header = TileHeader {
+            frame: job.frame,
+            tile: job.tile,
+            primary: rays.primary,
+            secondary: rays.secondary,
+            seconds: start.elapsed().as_secs_f64(),
+        };
+        master.send_with_tag(&encode_tile(&header, &colours)[..], TAG_TILE);
+    }
+}
+
+/// The colours of `rect`, rendered as the single-process renderer's tiles, in parallel.
+fn render_rect(
+    view: &raypipe_core::SceneView<'_>,
+    eye: &EyeRays,
+    background: Vec3,
+    opts: &RenderOptions,
+    rect: Rect,
+) -> Result<(Vec<Vec3>, RayTotals)> {
+    let job = FrameJob::new(view, eye, background, opts);
+    let (x0, y0, x1, y1) = rect;
+    let parts: Vec<Rect> =
+        render::tiles(x1 - x0, y1 - y0).into_iter().map(|(a, b, c, d)| (a + x0, b + y0, c + x0, d + y0)).collect();
+    let done: Vec<(Vec<Vec3>, RayTotals)> = render::in_pool(opts.threads, || {
+        parts.par_iter().map(|&t| crate::with_intersector!(opts.intersector, I => job.tile::<I>(t))).collect()
+    })?;
+    let width = x1 - x0;
+    let mut colours = vec![Vec3::ZERO; (width * (y1 - y0)) as usize];
+    let mut rays = RayTotals::default();
+    for (&(a, b, c, d), (part, r)) in parts.iter().zip(done) {
+        render::place_tile(&mut colours, width, (a - x0, b - y0, c - x0, d - y0), &part);
+        rays.primary += r.primary;
+        rays.secondary += r.secondary;
+    }
+    Ok((colours, rays))
+}
+
+/// The MPI library's name and version, for the report.
+fn library() -> String {
+    let v = mpi::environment::library_version().unwrap_or_default();
+    v.lines().next().unwrap_or("MPI").trim().to_string()
+}

@@ -1,0 +1,94 @@
+//! The messages between the master and the workers, as bytes: fixed little-endian
+//! headers (`bytemuck` records) and, for a rendered tile, its colours. Decoding checks
+//! every length, so a malformed message is an error, never a panic.
+
+use anyhow::{bail, Result};
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+
+/// Worker → master, once: loaded and ready (or not: the message says why).
+pub const TAG_READY: i32 = 1;
+/// Master → worker: render this tile of this frame.
+pub const TAG_ASSIGN: i32 = 2;
+/// Worker → master: a rendered tile.
+pub const TAG_TILE: i32 = 3;
+/// Master → worker: no more work; leave.
+pub const TAG_STOP: i32 = 4;
+
+/// A tile to render.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq)]
+pub struct Assign {
+    /// Frame of the walk (0 for a single image).
+    pub frame: u32,
+    /// Tile index in the frame's tile list.
+    pub tile: u32,
+}
+
+/// The header of a rendered tile.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct TileHeader {
+    /// Frame of the walk.
+    pub frame: u32,
+    /// Tile index.
+    pub tile: u32,
+    /// Eye rays traced.
+    pub primary: u64,
+    /// Secondary rays traced.
+    pub secondary: u64,
+    /// Seconds the worker spent rendering it.
+    pub seconds: f64,
+}
+
+const HEADER: usize = std::mem::size_of::<TileHeader>();
+
+/// A rendered tile as bytes: the header, then its colours (three `f32` per pixel).
+pub fn encode_tile(header: &TileHeader, colours: &[Vec3]) -> Vec<u8> {
+    let mut out = Vec::with_capacity(HEADER + colours.len() * 12);
+    out.extend_from_slice(bytemuck::bytes_of(header));
+    for c in colours {
+        for v in c.to_array() {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+    }
+    out
+}
+
+/// A rendered tile from its bytes; `pixels` is how many the tile must have.
+pub fn decode_tile(bytes: &[u8], pixels: usize) -> Result<(TileHeader, Vec<Vec3>)> {
+    if bytes.len() != HEADER + pixels * 12 {
+        bail!("a tile message of {} bytes, not {}", bytes.len(), HEADER + pixels * 12);
+    }
+    let header: TileHeader = bytemuck::pod_read_unaligned(&bytes[..HEADER]);
+    let f = |k: usize| f32::from_le_bytes([bytes[k], bytes[k + 1], bytes[k + 2], bytes[k + 3]]);
+    let colours = (0..pixels).map(|i| HEADER + 12 * i).map(|k| Vec3::new(f(k), f(k + 4), f(k + 8))).collect();
+    Ok((header, colours))
+}
+
+/// An assignment from its bytes.
+pub fn decode_assign(bytes: &[u8]) -> Result<Assign> {
+    if bytes.len() != std::mem::size_of::<Assign>() {
+        bail!("an assignment of {} bytes", bytes.len());
+    }
+    Ok(bytemuck::pod_read_unaligned(bytes))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tiles_round_trip_bit_for_bit_and_bad_lengths_are_errors() {
+        let h = TileHeader { frame: 3, tile: 7, primary: 1024, secondary: 99, seconds: 0.25 };
+        let colours = vec![Vec3::new(0.1, f32::MIN_POSITIVE, -0.0), Vec3::new(1e30, 0.5, 2.0)];
+        let bytes = encode_tile(&h, &colours);
+        let (h2, c2) = decode_tile(&bytes, 2).unwrap();
+        assert_eq!(h2, h);
+        let bits = |v: &[Vec3]| v.iter().flat_map(|c| c.to_array().map(f32::to_bits)).collect::<Vec<_>>();
+        assert_eq!(bits(&c2), bits(&colours));
+        assert!(decode_tile(&bytes, 3).is_err());
+        assert!(decode_tile(&bytes[..10], 0).is_err());
+        assert!(decode_assign(&[0; 7]).is_err());
+    }
+}

@@ -1,0 +1,71 @@
+//! `render --mpi` under a real MPI launcher (built with `--features mpi`; CI installs
+//! OpenMPI): the image equals the single-process image, bit for bit, for ray casting and
+//! path tracing, one worker or two, single frames and walkthroughs; a bad command line is
+//! one message for the whole job.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+use crate::common::*;
+
+fn mpirun(dir: &Path, ranks: u32, args: &[&str]) -> Output {
+    let mut c = Command::new("mpirun");
+    c.args(["-n", &ranks.to_string()]);
+    if ranks > 2 {
+        c.arg("--oversubscribe");
+    }
+    c.arg(env!("CARGO_BIN_EXE_raypipe"))
+        .args(args)
+        .current_dir(dir)
+        // OpenMPI refuses root unless told (CI's containers run as root).
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .output()
+        .expect("mpirun runs (install OpenMPI: openmpi-bin)")
+}
+
+#[test]
+fn mpi_frames_equal_single_process_frames() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    for (algo, samples) in [("cast", "1"), ("whitted", "1"), ("path", "4")] {
+        let common = ["render", "--size", "96x72", "--algo", algo, "--samples", samples];
+        let o = raypipe(d, &[&common[..], &["-o", "one.png"]].concat());
+        assert!(o.status.success(), "{}", stderr(&o));
+        for ranks in [2, 3] {
+            let o = mpirun(d, ranks, &[&common[..], &["-o", "mpi.png", "--mpi", "--mpi-tile", "24"]].concat());
+            assert!(o.status.success(), "{algo} on {ranks} ranks: {}", stderr(&o));
+            let out = String::from_utf8_lossy(&o.stdout);
+            assert!(out.contains("mpi share") && out.contains("rank 1"), "{out}");
+            assert_eq!(decode(&d.join("one.png")), decode(&d.join("mpi.png")), "{algo} on {ranks} ranks");
+        }
+    }
+    // A walkthrough: every frame equal; from the second frame on tiles stay with their
+    // worker.
+    let o = raypipe(d, &["render", "--size", "64x48", "--orbit", "3", "-o", "w.png"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = mpirun(d, 3, &["render", "--size", "64x48", "--orbit", "3", "-o", "m.png", "--mpi", "--mpi-tile", "16"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("kept tiles") && out.contains("frames/s"), "{out}");
+    for k in 0..3 {
+        let name = |s: &str| d.join(format!("{s}-{k:04}.png"));
+        assert_eq!(decode(&name("w")), decode(&name("m")), "frame {k}");
+    }
+}
+
+#[test]
+fn a_bad_mpi_command_line_is_one_message() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    for args in [&["render", "--mpi", "--no-such-flag"][..], &["render", "missing.obj", "--mpi"][..]] {
+        let o = mpirun(d, 3, args);
+        assert!(!o.status.success());
+        let errors = stderr(&o).lines().filter(|l| l.starts_with("error:")).count();
+        assert_eq!(errors, 1, "{args:?}: {}", stderr(&o));
+    }
+    assert!(only_files(d).is_empty());
+    // One rank is no job: a master needs a worker.
+    let o = mpirun(d, 1, &["render", "--mpi", "-o", "x.png"]);
+    assert!(stderr(&o).contains("needs a master and at least one worker"), "{}", stderr(&o));
+}
