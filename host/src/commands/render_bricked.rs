@@ -144,7 +144,8 @@ fn walkthrough(
     let stem = a.output.file_stem().map_or("walk".into(), |s| s.to_string_lossy().into_owned());
     let chart = a.output.with_file_name(format!("{stem}-walk.png"));
     let fps: Vec<(f64, f64)> = rows.iter().map(|&(secs, mb)| (1.0 / secs, mb)).collect();
-    let svg = crate::output::walk_chart::walk_chart(&fps, &format!("{}: frames/s and MB loaded", scene.name))?;
+    let svg =
+        crate::output::walk_chart::walk_chart(&fps, &format!("{}: frames/s and MB loaded", scene.name), "MB loaded")?;
     output::write_bytes(&chart, &crate::output::chart_raster::to_png(&svg)?)?;
     println!("chart    {}", chart.display());
     Ok(())

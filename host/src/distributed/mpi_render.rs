@@ -36,6 +36,8 @@ pub struct WorkerFrame {
     pub kept: u32,
     /// Seconds spent rendering.
     pub busy: f64,
+    /// Bytes sent between it and the master (assignments and tiles).
+    pub bytes: u64,
 }
 
 /// `raypipe render --mpi`.
@@ -117,10 +119,11 @@ fn master(world: &SimpleCommunicator, a: &RenderArgs, p: &Prepared, cams: &[Came
         library()
     );
     if walk {
-        println!("frame      seconds   frames/s  kept tiles  mpi share  image");
+        println!("frame      seconds   frames/s  kept tiles  mpi share    MB sent  image");
     }
     let mut display = p.display;
     let mut times = Vec::new();
+    let mut rows: Vec<(f64, f64)> = Vec::new();
     for (k, cam) in cams.iter().enumerate() {
         let start = Instant::now();
         let (radiance, rays, per_worker) = gather_frame(world, &mut pool, &tiles, (k as u32, w), timeout)?;
@@ -136,9 +139,11 @@ fn master(world: &SimpleCommunicator, a: &RenderArgs, p: &Prepared, cams: &[Came
         // for the master, and the master's own work.
         let share = 1.0 - busy / (secs * workers as f64);
         let kept: u32 = per_worker.iter().map(|s| s.kept).sum();
+        let mb = per_worker.iter().map(|s| s.bytes).sum::<u64>() as f64 / 1e6;
+        rows.push((1.0 / secs, mb));
         if walk {
             println!(
-                "{k:>5}  {secs:>10.4}  {:>9.2}  {kept:>10}  {:>8.1}%  {}",
+                "{k:>5}  {secs:>10.4}  {:>9.2}  {kept:>10}  {:>8.1}%  {mb:>9.3}  {}",
                 1.0 / secs,
                 share * 100.0,
                 path.display()
@@ -162,11 +167,12 @@ fn master(world: &SimpleCommunicator, a: &RenderArgs, p: &Prepared, cams: &[Came
         for (r, s) in per_worker.iter().enumerate() {
             if !walk {
                 println!(
-                    "rank {:<3} {} tiles, busy {:.3} s, idle {:.3} s",
+                    "rank {:<3} {} tiles, busy {:.3} s, idle {:.3} s, {:.3} MB sent",
                     r + 1,
                     s.tiles,
                     s.busy,
-                    (secs - s.busy).max(0.0)
+                    (secs - s.busy).max(0.0),
+                    s.bytes as f64 / 1e6
                 );
             }
         }
@@ -179,6 +185,13 @@ fn master(world: &SimpleCommunicator, a: &RenderArgs, p: &Prepared, cams: &[Came
             cams.len(),
             cams.len() as f64 / total
         );
+        // Wald & Slusallek's Figure 10: frame rate and data moved over the walk.
+        let stem = a.output.file_stem().map_or("walk".into(), |s| s.to_string_lossy().into_owned());
+        let chart = a.output.with_file_name(format!("{stem}-walk.png"));
+        let title = format!("{} on {workers} MPI workers: frames/s and MB sent", p.scene.name);
+        let svg = crate::output::walk_chart::walk_chart(&rows, &title, "MB sent")?;
+        crate::output::write_bytes(&chart, &crate::output::chart_raster::to_png(&svg)?)?;
+        println!("chart    {}", chart.display());
     }
     Ok(())
 }
@@ -198,16 +211,17 @@ fn gather_frame(
     let mut stats = vec![WorkerFrame::default(); workers];
     let mut given: Vec<Vec<(u32, Handout)>> = vec![Vec::new(); workers];
     pool.start_frame();
-    let send = |w: usize, pool: &mut TilePool, given: &mut Vec<Vec<(u32, Handout)>>| {
+    let send = |w: usize, pool: &mut TilePool, given: &mut Vec<Vec<(u32, Handout)>>, stats: &mut [WorkerFrame]| {
         if let Some((t, how)) = pool.next_for(w) {
             let msg = Assign { frame, tile: t as u32 };
             world.process_at_rank(w as i32 + 1).send_with_tag(bytemuck::bytes_of(&msg), TAG_ASSIGN);
             given[w].push((t as u32, how));
+            stats[w].bytes += std::mem::size_of::<Assign>() as u64;
         }
     };
     for _ in 0..IN_FLIGHT {
         for w in 0..workers {
-            send(w, pool, &mut given);
+            send(w, pool, &mut given, &mut stats);
         }
     }
     let mut received = 0;
@@ -232,12 +246,13 @@ fn gather_frame(
         let s = &mut stats[w];
         s.tiles += 1;
         s.busy += h.seconds;
+        s.bytes += bytes.len() as u64;
         if let Some(at) = given[w].iter().position(|&(t, _)| t == h.tile) {
             let (_, how) = given[w].swap_remove(at);
             s.kept += (how == Handout::Kept) as u32;
         }
         received += 1;
-        send(w, pool, &mut given);
+        send(w, pool, &mut given, &mut stats);
     }
     Ok((radiance, rays, stats))
 }

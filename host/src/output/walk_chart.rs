@@ -1,14 +1,15 @@
-//! A walkthrough of a bricked scene as Wald & Slusallek 2001 plot theirs (Figure 10):
-//! frames per second and megabytes of bricks loaded (after decompression), frame by
-//! frame, on two axes. Drawn with plotters as SVG, rendered to PNG with resvg.
+//! A walkthrough as Wald & Slusallek 2001 plot theirs (Figure 10): frames per second
+//! and megabytes of data moved (bricks loaded after decompression, or bytes sent
+//! between MPI ranks), frame by frame, on two axes. Drawn with plotters as SVG, rendered to PNG with resvg.
 
 use anyhow::{anyhow, Result};
 use plotters::prelude::*;
 
 use crate::output::chart_numbers::si;
 
-/// The chart of `frames` — `(frames per second, MB loaded)` per frame — as SVG.
-pub fn walk_chart(frames: &[(f64, f64)], title: &str) -> Result<String> {
+/// The chart of `frames` — `(frames per second, megabytes)` per frame, the megabytes
+/// named by `data` ("MB loaded") — as SVG.
+pub fn walk_chart(frames: &[(f64, f64)], title: &str, data: &str) -> Result<String> {
     let mut svg = String::new();
     let draw = |svg: &mut String| -> std::result::Result<(), Box<dyn std::error::Error>> {
         let root = SVGBackend::with_string(svg, (900, 480)).into_drawing_area();
@@ -25,7 +26,7 @@ pub fn walk_chart(frames: &[(f64, f64)], title: &str) -> Result<String> {
             .build_cartesian_2d(0f64..n, 0f64..fps_top)?
             .set_secondary_coord(0f64..n, 0f64..mb_top);
         chart.configure_mesh().x_desc("frame").y_desc("frames/s").y_label_formatter(&|v| si(*v, 2)).draw()?;
-        chart.configure_secondary_axes().y_desc("MB loaded").label_style(("sans-serif", 14)).draw()?;
+        chart.configure_secondary_axes().y_desc(data).label_style(("sans-serif", 14)).draw()?;
         let blue = RGBColor(0x4e, 0x79, 0xa7);
         let orange = RGBColor(0xf2, 0x8e, 0x2b);
         chart
@@ -40,7 +41,7 @@ pub fn walk_chart(frames: &[(f64, f64)], title: &str) -> Result<String> {
                 frames.iter().enumerate().map(|(k, r)| (k as f64, r.1)),
                 orange.stroke_width(2),
             ))?
-            .label("MB loaded")
+            .label(data)
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], orange.stroke_width(2)));
         chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw()?;
         root.present()?;
