@@ -51,7 +51,17 @@ pub struct SweepArgs {
     /// Run every point again, ignoring rows already in PREFIX.jsonl.
     #[arg(long)]
     pub restart: bool,
+    /// Spread the points over the ranks of an MPI job (`mpirun -n N raypipe sweep SPEC
+    /// --mpi`): rank 0 hands them out and writes the rows, the same rows as one process
+    /// writes. Needs a raypipe built with the `mpi` feature.
+    #[arg(long)]
+    pub mpi: bool,
 }
+
+/// Runs the points of a sweep, handing each finished row to `record` as it finishes;
+/// returns the rows.
+pub(crate) type RunPoints<'a> =
+    dyn FnMut(&Spec, &[&Point], &(dyn Fn(&Row) -> Result<()> + Sync)) -> Result<Vec<Row>> + 'a;
 
 /// `raypipe sweep merge`.
 #[derive(Subcommand, Debug)]
@@ -75,6 +85,15 @@ pub(crate) fn cmd_sweep(a: SweepArgs) -> Result<()> {
     if let Some(SweepCommand::Merge(m)) = a.merge {
         return merge(m);
     }
+    if a.mpi {
+        return crate::distributed::cmd_sweep_mpi(&a);
+    }
+    sweep_with(&a, &mut |spec, todo, record| local_points(&a, spec, todo, record))
+}
+
+/// A sweep: its points checked, the journal opened, the points still to run run by
+/// `run`, and the rows written.
+pub(crate) fn sweep_with(a: &SweepArgs, run: &mut RunPoints<'_>) -> Result<()> {
     let Some(spec_path) = a.spec.as_deref() else { bail!("sweep: a spec file is needed") };
     if a.jobs == Some(0) {
         bail!("--jobs must be at least 1");
@@ -121,22 +140,14 @@ pub(crate) fn cmd_sweep(a: SweepArgs) -> Result<()> {
     // The journal: the rows written so far, one line appended as each point finishes,
     // so a stopped sweep resumes where it was.
     let appender = Mutex::new(journal.start()?);
-    let cache = SceneCache::default();
     let bar = progress::bar(todo.len() as u64, "sweep", true);
-    let jobs = a.jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(jobs).build().map_err(|e| anyhow!("sweep: {e}"))?;
-    let new_rows: Vec<Row> = pool.install(|| {
-        todo.par_iter()
-            .map(|p| -> Result<Row> {
-                let row = run_point(p, &spec.dir, &cache, a.reports.as_deref())?;
-                let mut f = appender.lock().map_err(|_| anyhow!("sweep journal poisoned"))?;
-                f.write_all(format!("{}\n", row.to_line()).as_bytes())
-                    .map_err(|e| anyhow!("{}: {e}", jsonl.display()))?;
-                bar.inc(1);
-                Ok(row)
-            })
-            .collect::<Result<Vec<Row>>>()
-    })?;
+    let record = |row: &Row| -> Result<()> {
+        let mut f = appender.lock().map_err(|_| anyhow!("sweep journal poisoned"))?;
+        f.write_all(format!("{}\n", row.to_line()).as_bytes()).map_err(|e| anyhow!("{}: {e}", jsonl.display()))?;
+        bar.inc(1);
+        Ok(())
+    };
+    let new_rows = run(&spec, &todo, &record)?;
     bar.finish_and_clear();
     let mut failed = 0;
     for r in new_rows.iter().filter(|r| r.error.is_some()) {
@@ -154,9 +165,30 @@ pub(crate) fn cmd_sweep(a: SweepArgs) -> Result<()> {
     Ok(())
 }
 
+/// The points run on this machine's cores, `--jobs` at once.
+fn local_points(
+    a: &SweepArgs,
+    spec: &Spec,
+    todo: &[&Point],
+    record: &(dyn Fn(&Row) -> Result<()> + Sync),
+) -> Result<Vec<Row>> {
+    let cache = SceneCache::default();
+    let jobs = a.jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(jobs).build().map_err(|e| anyhow!("sweep: {e}"))?;
+    pool.install(|| {
+        todo.par_iter()
+            .map(|p| -> Result<Row> {
+                let row = run_point(p, &spec.dir, &cache, a.reports.as_deref())?;
+                record(&row)?;
+                Ok(row)
+            })
+            .collect::<Result<Vec<Row>>>()
+    })
+}
+
 /// Runs one point as `raypipe simulate` would; a point that fails becomes a row with
 /// its error (a deadlocked corner of the space must not stop the others).
-fn run_point(p: &Point, dir: &Path, cache: &SceneCache, reports: Option<&Path>) -> Result<Row> {
+pub(crate) fn run_point(p: &Point, dir: &Path, cache: &SceneCache, reports: Option<&Path>) -> Result<Row> {
     let args = p.simulate_args(dir)?;
     match run_simulation(&args, Some(cache), false) {
         Ok(run) => {

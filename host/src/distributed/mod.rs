@@ -9,6 +9,8 @@ pub mod tile_pool;
 
 #[cfg(feature = "mpi")]
 pub mod mpi_render;
+#[cfg(feature = "mpi")]
+pub mod mpi_sweep;
 
 /// `raypipe render --mpi` in a raypipe built without MPI.
 #[cfg(not(feature = "mpi"))]
@@ -16,8 +18,16 @@ pub fn cmd_render_mpi(_: &crate::commands::render::RenderArgs) -> anyhow::Result
     anyhow::bail!("--mpi: this raypipe was built without MPI; build it with `cargo build --release --features mpi`")
 }
 
+/// `raypipe sweep --mpi` in a raypipe built without MPI.
+#[cfg(not(feature = "mpi"))]
+pub fn cmd_sweep_mpi(_: &crate::commands::sweep::SweepArgs) -> anyhow::Result<()> {
+    anyhow::bail!("--mpi: this raypipe was built without MPI; build it with `cargo build --release --features mpi`")
+}
+
 #[cfg(feature = "mpi")]
 pub use mpi_render::cmd_render_mpi;
+#[cfg(feature = "mpi")]
+pub use mpi_sweep::cmd_sweep_mpi;
 
 /// True in a process that an MPI launcher started as a rank other than 0 (OpenMPI,
 /// MPICH and PMIx name it in the environment): such a rank leaves messages about the

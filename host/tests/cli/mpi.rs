@@ -69,3 +69,33 @@ fn a_bad_mpi_command_line_is_one_message() {
     let o = mpirun(d, 1, &["render", "--mpi", "-o", "x.png"]);
     assert!(stderr(&o).contains("needs a master and at least one worker"), "{}", stderr(&o));
 }
+
+#[test]
+fn mpi_sweeps_write_the_single_process_rows() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let tetra = fixtures().join("tetra.obj");
+    write(
+        d,
+        "spec.toml",
+        &format!(
+            "[fixed]\nscene = {:?}\nsize = \"24x16\"\n[grid]\n\"traversal.units\" = [1, 2]\npacket_size = [4, 16]\n\
+             [[points]]\naccel = \"kd\"\n[[points]]\naccel = \"bvh4\"\n\"memory.model\" = \"dram\"\n",
+            tetra.display().to_string()
+        ),
+    );
+    let o = raypipe(d, &["sweep", "spec.toml", "-o", "one"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for ranks in [2, 3] {
+        let o = mpirun(d, ranks, &["sweep", "spec.toml", "-o", "mpi", "--mpi", "--restart"]);
+        assert!(o.status.success(), "{ranks} ranks: {}", stderr(&o));
+        for ext in ["jsonl", "csv"] {
+            let read = |s: &str| std::fs::read(d.join(format!("{s}.{ext}"))).unwrap();
+            assert!(read("one") == read("mpi"), "{ranks} ranks: {ext} differs");
+        }
+    }
+    // Resumed with nothing left to run: the workers are let go.
+    let o = mpirun(d, 3, &["sweep", "spec.toml", "-o", "mpi", "--mpi"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("0 to run"));
+}
