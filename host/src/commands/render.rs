@@ -57,8 +57,8 @@ pub struct MpiArgs {
     /// with the `mpi` feature.
     #[arg(long)]
     pub mpi: bool,
-    /// Side of the tiles the master hands out, in pixels.
-    #[arg(long, value_name = "PIXELS", default_value_t = 32, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    /// Side of the tiles the master hands out, in pixels (at most 512).
+    #[arg(long, value_name = "PIXELS", default_value_t = 32, value_parser = clap::value_parser!(u32).range(1..=512))]
     pub mpi_tile: u32,
     /// Seconds the master waits for a worker's tile before it ends the run.
     #[arg(long, value_name = "SECONDS", default_value_t = 60.0)]

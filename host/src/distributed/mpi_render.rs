@@ -42,9 +42,16 @@ pub struct WorkerFrame {
 
 /// `raypipe render --mpi`.
 pub fn cmd_render_mpi(a: &RenderArgs) -> Result<()> {
-    let universe = mpi::initialize().ok_or_else(|| anyhow!("--mpi: MPI was already initialized"))?;
+    let mut universe = mpi::initialize().ok_or_else(|| anyhow!("--mpi: MPI was already initialized"))?;
     let world = universe.world();
     let (rank, size) = (world.rank(), world.size());
+    if rank != 0 {
+        // Tiles go back by buffered sends: a worker copies a tile out and renders the
+        // next at once, instead of waiting until the master takes it (large messages
+        // wait for the receiver). At most IN_FLIGHT tiles are owed at any time.
+        let tile = a.mpi.mpi_tile as usize;
+        universe.set_buffer_size((IN_FLIGHT + 1) * (tile * tile * 12 + 1024));
+    }
     if size < 2 {
         bail!("--mpi needs a master and at least one worker: run it as `mpirun -n 2 raypipe render … --mpi` or more");
     }
@@ -292,6 +299,11 @@ fn worker(world: &SimpleCommunicator, p: &Prepared, cams: &[CameraRecord], tile_
     let master = world.process_at_rank(0);
     let background = |k: usize| Vec3::from(cams[k].background);
     let mut current: Option<(u32, EyeRays)> = None;
+    let mut threads = rayon::ThreadPoolBuilder::new();
+    if let Some(n) = p.opts.threads {
+        threads = threads.num_threads(n.max(1));
+    }
+    let pool = threads.build().map_err(|e| anyhow!("cannot start worker threads: {e}"))?;
     loop {
         let (bytes, status) = master.receive_vec::<u8>();
         match status.tag() {
@@ -309,7 +321,7 @@ fn worker(world: &SimpleCommunicator, p: &Prepared, cams: &[CameraRecord], tile_
         let tiles = tile_grid(cam.width, cam.height, tile_size);
         let rect = *tiles.get(job.tile as usize).ok_or_else(|| anyhow!("tile {} does not exist", job.tile))?;
         let start = Instant::now();
-        let (colours, rays) = render_rect(&view, eye, background(k), &p.opts, rect)?;
+        let (colours, rays) = pool.install(|| render_rect(&view, eye, background(k), &p.opts, rect));
         let header = TileHeader {
             frame: job.frame,
             tile: job.tile,
@@ -317,25 +329,25 @@ fn worker(world: &SimpleCommunicator, p: &Prepared, cams: &[CameraRecord], tile_
             secondary: rays.secondary,
             seconds: start.elapsed().as_secs_f64(),
         };
-        master.send_with_tag(&encode_tile(&header, &colours)[..], TAG_TILE);
+        master.buffered_send_with_tag(&encode_tile(&header, &colours)[..], TAG_TILE);
     }
 }
 
-/// The colours of `rect`, rendered as the single-process renderer's tiles, in parallel.
+/// The colours of `rect`, rendered as the single-process renderer's tiles, in parallel
+/// (on the worker's thread pool, made once: a pool per tile cost more than the tile).
 fn render_rect(
     view: &raypipe_core::SceneView<'_>,
     eye: &EyeRays,
     background: Vec3,
     opts: &RenderOptions,
     rect: Rect,
-) -> Result<(Vec<Vec3>, RayTotals)> {
+) -> (Vec<Vec3>, RayTotals) {
     let job = FrameJob::new(view, eye, background, opts);
     let (x0, y0, x1, y1) = rect;
     let parts: Vec<Rect> =
         render::tiles(x1 - x0, y1 - y0).into_iter().map(|(a, b, c, d)| (a + x0, b + y0, c + x0, d + y0)).collect();
-    let done: Vec<(Vec<Vec3>, RayTotals)> = render::in_pool(opts.threads, || {
-        parts.par_iter().map(|&t| crate::with_intersector!(opts.intersector, I => job.tile::<I>(t))).collect()
-    })?;
+    let done: Vec<(Vec<Vec3>, RayTotals)> =
+        parts.par_iter().map(|&t| crate::with_intersector!(opts.intersector, I => job.tile::<I>(t))).collect();
     let width = x1 - x0;
     let mut colours = vec![Vec3::ZERO; (width * (y1 - y0)) as usize];
     let mut rays = RayTotals::default();
@@ -344,7 +356,7 @@ fn render_rect(
         rays.primary += r.primary;
         rays.secondary += r.secondary;
     }
-    Ok((colours, rays))
+    (colours, rays)
 }
 
 /// The MPI library's name and version, for the report.
