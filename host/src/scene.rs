@@ -307,7 +307,7 @@ pub(crate) fn choose_lights(
     }
     if !user.is_empty() {
         check_user_lights(name, user)?;
-        let (_, areas) = crate::build::default_lights::emitters(mesh);
+        let areas = crate::build::default_lights::emitters(mesh);
         mesh.lights = user.to_vec();
         mesh.lights.push(LightRecord { position: [0.0; 3], kind: LightRecord::AMBIENT, color: [0.1; 3], triangle: 0 });
         let n = areas.len();

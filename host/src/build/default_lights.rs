@@ -20,7 +20,6 @@ use raypipe_core::traverse::boxes::clip::clip_ray;
 use raypipe_core::{Intersector, Ray, Watertight};
 
 use crate::build::emitter_sums::EmitterSums;
-use crate::build::light_distribution::area_light_power;
 use crate::input::mesh::Mesh;
 
 /// Emitted power per unit of scene surface area above which the emitters light the
@@ -34,7 +33,7 @@ pub fn default_lights(mesh: &Mesh, camera: &CameraRecord) -> (Vec<LightRecord>, 
     let (mut lights, note) = lights_for(&sums, (lo, hi), camera, |ray| first_hit(mesh, ray));
     // Area lights last: the shaders of the other algorithms read only the lights before
     // them.
-    lights.extend(emitters(mesh).1);
+    lights.extend(emitters(mesh));
     (lights, note)
 }
 
@@ -85,17 +84,23 @@ pub fn lights_for(
     (lights, note)
 }
 
-/// The mesh's emissive triangles as area lights, and their total power.
-pub fn emitters(mesh: &Mesh) -> (f64, Vec<LightRecord>) {
+/// The mesh's emissive triangles as area lights (those [`is_emitter`] admits).
+pub fn emitters(mesh: &Mesh) -> Vec<LightRecord> {
     let mut areas = Vec::new();
     for (i, (t, &m)) in mesh.triangles.iter().zip(&mesh.tri_materials).enumerate() {
         let ke = mesh.materials.get(m as usize).map_or([0.0; 3], |m| m.emission);
-        if Vec3::from(ke).max_element() > 0.0 && !mesh.is_degenerate(*t) {
+        if is_emitter(t.map(|v| mesh.positions[v as usize]), ke) {
             areas.push(LightRecord { position: [0.0; 3], kind: LightRecord::AREA, color: ke, triangle: i as u32 });
         }
     }
-    let power = areas.iter().map(|l| area_light_power(mesh, l)).sum();
-    (power, areas)
+    areas
+}
+
+/// Whether the triangle `p` of emission `ke` is an area light: it emits, and it has an
+/// area (its edges' cross product, in f64, is not zero).
+pub fn is_emitter(p: [[f32; 3]; 3], ke: [f32; 3]) -> bool {
+    let [a, b, c] = p.map(|v| glam::DVec3::from(v.map(f64::from)));
+    Vec3::from(ke).max_element() > 0.0 && (b - a).cross(c - a) != glam::DVec3::ZERO
 }
 
 /// A point inside the scene's bounds that the eye sees: halfway along the longest free

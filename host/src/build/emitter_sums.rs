@@ -40,9 +40,8 @@ impl EmitterSums {
         let [a, b, c] = p.map(Vec3::from);
         let area = triangle_area(a, b, c);
         self.surface += area;
-        let [da, db, dc] = p.map(|v| DVec3::from(v.map(f64::from)));
-        let degenerate = (db - da).cross(dc - da) == DVec3::ZERO;
-        if Vec3::from(ke).max_element() > 0.0 && !degenerate {
+        if crate::build::default_lights::is_emitter(p, ke) {
+            let [da, db, dc] = p.map(|v| DVec3::from(v.map(f64::from)));
             self.count += 1;
             self.power += luminance(ke) * area;
             let w = area * luminance(ke).max(1e-12);

@@ -200,7 +200,7 @@ pub fn parse_scene_file(
             color: [0.1; 3],
             triangle: 0,
         });
-        merged.lights.extend(crate::build::default_lights::emitters(&merged).1);
+        merged.lights.extend(crate::build::default_lights::emitters(&merged));
     }
     let camera = file.camera.map_or_else(CameraSpec::default, |c| CameraSpec {
         eye: c.eye,
