@@ -141,12 +141,9 @@ fn walkthrough(
         cams.len() as f64 / total
     );
     // Wald & Slusallek's Figure 10: frame rate and data loaded over the walk.
-    let stem = a.output.file_stem().map_or("walk".into(), |s| s.to_string_lossy().into_owned());
-    let chart = a.output.with_file_name(format!("{stem}-walk.png"));
     let fps: Vec<(f64, f64)> = rows.iter().map(|&(secs, mb)| (1.0 / secs, mb)).collect();
-    let svg =
-        crate::output::walk_chart::walk_chart(&fps, &format!("{}: frames/s and MB loaded", scene.name), "MB loaded")?;
-    output::write_bytes(&chart, &crate::output::chart_raster::to_png(&svg)?)?;
+    let title = format!("{}: frames/s and MB loaded", scene.name);
+    let chart = crate::output::walk_chart::write_walk_chart(&a.output, &fps, &title, "MB loaded")?;
     println!("chart    {}", chart.display());
     Ok(())
 }

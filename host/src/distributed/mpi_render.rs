@@ -12,16 +12,15 @@ use anyhow::{anyhow, bail, Result};
 use glam::Vec3;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
-use rayon::prelude::*;
 use raypipe_core::camera::EyeRays;
 use raypipe_core::image::CameraRecord;
 
 use super::protocol::{
-    decode_assign, decode_tile, encode_tile, Assign, TileHeader, TAG_ASSIGN, TAG_READY, TAG_STOP, TAG_TILE,
+    decode_assign, decode_tile, encode_tile, tile_header, Assign, TileHeader, TAG_ASSIGN, TAG_READY, TAG_STOP, TAG_TILE,
 };
 use super::tile_pool::{tile_grid, Handout, Rect, TilePool};
 use crate::commands::render::{prepare, Prepared, RenderArgs};
-use crate::render::{self, FrameJob, RayTotals, RenderOptions};
+use crate::render::{self, FrameJob, RayTotals};
 
 /// Tiles a worker holds at once: one it renders, two queued behind it, so that the
 /// next is there when one is done.
@@ -87,11 +86,9 @@ pub fn cmd_render_mpi(a: &RenderArgs) -> Result<()> {
         }
     }
     let result = master(&world, a, &p, &cams);
-    if result.is_err() {
+    if let Err(e) = &result {
         // The workers may be blocked in a send; only an abort ends them for sure.
-        if let Err(e) = &result {
-            eprintln!("error: {e}");
-        }
+        eprintln!("error: {e}");
         world.abort(1);
     }
     stop_all(&world);
@@ -170,9 +167,7 @@ fn master(world: &SimpleCommunicator, a: &RenderArgs, p: &Prepared, cams: &[Came
                 busy / (secs * workers as f64) * 100.0,
                 share * 100.0
             );
-        }
-        for (r, s) in per_worker.iter().enumerate() {
-            if !walk {
+            for (r, s) in per_worker.iter().enumerate() {
                 println!(
                     "rank {:<3} {} tiles, busy {:.3} s, idle {:.3} s, {:.3} MB sent",
                     r + 1,
@@ -192,12 +187,8 @@ fn master(world: &SimpleCommunicator, a: &RenderArgs, p: &Prepared, cams: &[Came
             cams.len(),
             cams.len() as f64 / total
         );
-        // Wald & Slusallek's Figure 10: frame rate and data moved over the walk.
-        let stem = a.output.file_stem().map_or("walk".into(), |s| s.to_string_lossy().into_owned());
-        let chart = a.output.with_file_name(format!("{stem}-walk.png"));
         let title = format!("{} on {workers} MPI workers: frames/s and MB sent", p.scene.name);
-        let svg = crate::output::walk_chart::walk_chart(&rows, &title, "MB sent")?;
-        crate::output::write_bytes(&chart, &crate::output::chart_raster::to_png(&svg)?)?;
+        let chart = crate::output::walk_chart::write_walk_chart(&a.output, &rows, &title, "MB sent")?;
         println!("chart    {}", chart.display());
     }
     Ok(())
@@ -237,19 +228,17 @@ fn gather_frame(
         let r = status.source_rank();
         let (bytes, _) = world.process_at_rank(r).receive_vec_with_tag::<u8>(TAG_TILE);
         let w = (r - 1) as usize;
-        let tile_of = |bytes: &[u8]| -> Result<Rect> {
-            let t = bytemuck::pod_read_unaligned::<u32>(bytes.get(4..8).ok_or_else(|| anyhow!("short message"))?);
-            tiles.get(t as usize).copied().ok_or_else(|| anyhow!("tile {t} does not exist"))
-        };
-        let rect = tile_of(&bytes).map_err(|e| anyhow!("rank {r} sent a malformed tile: {e}"))?;
+        let h = tile_header(&bytes).map_err(|e| anyhow!("rank {r}: {e}"))?;
+        let rect = *tiles
+            .get(h.tile as usize)
+            .ok_or_else(|| anyhow!("rank {r} sent tile {}, which does not exist", h.tile))?;
         let pixels = ((rect.2 - rect.0) * (rect.3 - rect.1)) as usize;
         let (h, colours) = decode_tile(&bytes, pixels).map_err(|e| anyhow!("rank {r}: {e}"))?;
         if h.frame != frame {
             bail!("rank {r} sent a tile of frame {}, not {frame}", h.frame);
         }
         render::place_tile(&mut radiance, width, rect, &colours);
-        rays.primary += h.primary;
-        rays.secondary += h.secondary;
+        rays.add(&RayTotals { primary: h.primary, secondary: h.secondary });
         let s = &mut stats[w];
         s.tiles += 1;
         s.busy += h.seconds;
@@ -297,13 +286,16 @@ fn wait_for_tile(
 fn worker(world: &SimpleCommunicator, p: &Prepared, cams: &[CameraRecord], tile_size: u32) -> Result<()> {
     let view = p.scene.view()?;
     let master = world.process_at_rank(0);
-    let background = |k: usize| Vec3::from(cams[k].background);
-    let mut current: Option<(u32, EyeRays)> = None;
-    let mut threads = rayon::ThreadPoolBuilder::new();
-    if let Some(n) = p.opts.threads {
-        threads = threads.num_threads(n.max(1));
-    }
-    let pool = threads.build().map_err(|e| anyhow!("cannot start worker threads: {e}"))?;
+    // The master's tiles, of the first frame's size, as it cuts them.
+    let tiles = tile_grid(cams[0].width, cams[0].height, tile_size);
+    let eyes = cams
+        .iter()
+        .map(|c| Ok(render::eye_rays(c, "camera")?.with_sampler(p.opts.sampler())))
+        .collect::<Result<Vec<EyeRays>>>()?;
+    // One frame's job at a time (the shadow caster's G-buffers are made once a frame).
+    let mut job: Option<(u32, FrameJob)> = None;
+    // One thread pool for the run: a pool per tile cost more than the tile.
+    let pool = render::thread_pool(p.opts.threads)?;
     loop {
         let (bytes, status) = master.receive_vec::<u8>();
         match status.tag() {
@@ -311,52 +303,25 @@ fn worker(world: &SimpleCommunicator, p: &Prepared, cams: &[CameraRecord], tile_
             TAG_ASSIGN => {}
             other => bail!("rank {}: unexpected message tag {other}", world.rank()),
         }
-        let job = decode_assign(&bytes)?;
-        let k = job.frame as usize;
-        let cam = cams.get(k).ok_or_else(|| anyhow!("frame {k} does not exist"))?;
-        if current.as_ref().is_none_or(|(f, _)| *f != job.frame) {
-            current = Some((job.frame, render::eye_rays(cam, "camera")?.with_sampler(p.opts.sampler())));
+        let a = decode_assign(&bytes)?;
+        let k = a.frame as usize;
+        let (Some(cam), Some(eye)) = (cams.get(k), eyes.get(k)) else { bail!("frame {k} does not exist") };
+        if job.as_ref().is_none_or(|(f, _)| *f != a.frame) {
+            job = Some((a.frame, FrameJob::new(&view, eye, Vec3::from(cam.background), &p.opts)));
         }
-        let Some((_, eye)) = &current else { continue };
-        let tiles = tile_grid(cam.width, cam.height, tile_size);
-        let rect = *tiles.get(job.tile as usize).ok_or_else(|| anyhow!("tile {} does not exist", job.tile))?;
+        let Some((_, frame)) = &job else { continue };
+        let rect = *tiles.get(a.tile as usize).ok_or_else(|| anyhow!("tile {} does not exist", a.tile))?;
         let start = Instant::now();
-        let (colours, rays) = pool.install(|| render_rect(&view, eye, background(k), &p.opts, rect));
+        let (colours, rays) = pool.install(|| frame.rect(rect));
         let header = TileHeader {
-            frame: job.frame,
-            tile: job.tile,
+            frame: a.frame,
+            tile: a.tile,
             primary: rays.primary,
             secondary: rays.secondary,
             seconds: start.elapsed().as_secs_f64(),
         };
         master.buffered_send_with_tag(&encode_tile(&header, &colours)[..], TAG_TILE);
     }
-}
-
-/// The colours of `rect`, rendered as the single-process renderer's tiles, in parallel
-/// (on the worker's thread pool, made once: a pool per tile cost more than the tile).
-fn render_rect(
-    view: &raypipe_core::SceneView<'_>,
-    eye: &EyeRays,
-    background: Vec3,
-    opts: &RenderOptions,
-    rect: Rect,
-) -> (Vec<Vec3>, RayTotals) {
-    let job = FrameJob::new(view, eye, background, opts);
-    let (x0, y0, x1, y1) = rect;
-    let parts: Vec<Rect> =
-        render::tiles(x1 - x0, y1 - y0).into_iter().map(|(a, b, c, d)| (a + x0, b + y0, c + x0, d + y0)).collect();
-    let done: Vec<(Vec<Vec3>, RayTotals)> =
-        parts.par_iter().map(|&t| crate::with_intersector!(opts.intersector, I => job.tile::<I>(t))).collect();
-    let width = x1 - x0;
-    let mut colours = vec![Vec3::ZERO; (width * (y1 - y0)) as usize];
-    let mut rays = RayTotals::default();
-    for (&(a, b, c, d), (part, r)) in parts.iter().zip(done) {
-        render::place_tile(&mut colours, width, (a - x0, b - y0, c - x0, d - y0), &part);
-        rays.primary += r.primary;
-        rays.secondary += r.secondary;
-    }
-    (colours, rays)
 }
 
 /// The MPI library's name and version, for the report.

@@ -55,12 +55,21 @@ pub fn encode_tile(header: &TileHeader, colours: &[Vec3]) -> Vec<u8> {
     out
 }
 
+/// A rendered tile's header, read before its colours (which tile it is says how many
+/// colours must follow).
+pub fn tile_header(bytes: &[u8]) -> Result<TileHeader> {
+    match bytes.get(..HEADER) {
+        Some(h) => Ok(bytemuck::pod_read_unaligned(h)),
+        None => bail!("a tile message of {} bytes, shorter than its header", bytes.len()),
+    }
+}
+
 /// A rendered tile from its bytes; `pixels` is how many the tile must have.
 pub fn decode_tile(bytes: &[u8], pixels: usize) -> Result<(TileHeader, Vec<Vec3>)> {
     if bytes.len() != HEADER + pixels * 12 {
         bail!("a tile message of {} bytes, not {}", bytes.len(), HEADER + pixels * 12);
     }
-    let header: TileHeader = bytemuck::pod_read_unaligned(&bytes[..HEADER]);
+    let header = tile_header(bytes)?;
     let f = |k: usize| f32::from_le_bytes([bytes[k], bytes[k + 1], bytes[k + 2], bytes[k + 3]]);
     let colours = (0..pixels).map(|i| HEADER + 12 * i).map(|k| Vec3::new(f(k), f(k + 4), f(k + 8))).collect();
     Ok((header, colours))

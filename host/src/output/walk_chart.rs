@@ -50,3 +50,18 @@ pub fn walk_chart(frames: &[(f64, f64)], title: &str, data: &str) -> Result<Stri
     draw(&mut svg).map_err(|e| anyhow!("{e}"))?;
     Ok(svg)
 }
+
+/// Writes the chart of `frames` beside the walk's frames: `STEM-walk.png` for the output
+/// `STEM.png`. Returns its path.
+pub fn write_walk_chart(
+    output: &std::path::Path,
+    frames: &[(f64, f64)],
+    title: &str,
+    data: &str,
+) -> Result<std::path::PathBuf> {
+    let stem = output.file_stem().map_or("walk".into(), |s| s.to_string_lossy().into_owned());
+    let chart = output.with_file_name(format!("{stem}-walk.png"));
+    let svg = walk_chart(frames, title, data)?;
+    crate::output::write_bytes(&chart, &crate::output::chart_raster::to_png(&svg)?)?;
+    Ok(chart)
+}

@@ -154,12 +154,16 @@ pub fn eye_rays(camera: &CameraRecord, what: &str) -> Result<EyeRays> {
 
 /// Runs `f` on a pool of `threads` workers (all cores when `None`).
 pub fn in_pool<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Send) -> Result<T> {
+    Ok(thread_pool(threads)?.install(f))
+}
+
+/// A pool of `threads` workers (all cores when `None`).
+pub fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
     let mut b = rayon::ThreadPoolBuilder::new();
     if let Some(n) = threads {
         b = b.num_threads(n.max(1));
     }
-    let pool = b.build().map_err(|e| anyhow!("cannot start worker threads: {e}"))?;
-    Ok(pool.install(f))
+    b.build().map_err(|e| anyhow!("cannot start worker threads: {e}"))
 }
 
 /// The tiles of a `w × h` image as `(x0, y0, x1, y1)`.
@@ -184,6 +188,12 @@ pub struct RayTotals {
 }
 
 impl RayTotals {
+    /// Adds another part's rays.
+    pub fn add(&mut self, o: &RayTotals) {
+        self.primary += o.primary;
+        self.secondary += o.secondary;
+    }
+
     /// Every ray traced.
     pub fn total(&self) -> u64 {
         self.primary + self.secondary
@@ -241,14 +251,25 @@ fn render_with<I: Intersector>(
             .collect()
     })?;
     bar.finish_and_clear();
-    let mut radiance = vec![Vec3::ZERO; (w * h) as usize];
-    let mut totals = RayTotals::default();
-    for (&tile, (colours, t)) in tiles.iter().zip(done) {
-        place_tile(&mut radiance, w, tile, &colours);
-        totals.primary += t.primary;
-        totals.secondary += t.secondary;
-    }
+    let (radiance, totals) = assemble((0, 0, w, h), &tiles, done);
     Ok((Frame::from_radiance(w, h, radiance), totals))
+}
+
+/// The colours of the rectangle `area`, row-major, from its `tiles` and their rendered
+/// colours (`done`, in the same order), and the rays they traced together.
+fn assemble(
+    area: (u32, u32, u32, u32),
+    tiles: &[(u32, u32, u32, u32)],
+    done: Vec<(Vec<Vec3>, RayTotals)>,
+) -> (Vec<Vec3>, RayTotals) {
+    let (x0, y0, x1, y1) = area;
+    let mut radiance = vec![Vec3::ZERO; ((x1 - x0) * (y1 - y0)) as usize];
+    let mut totals = RayTotals::default();
+    for (&(a, b, c, d), (colours, t)) in tiles.iter().zip(done) {
+        place_tile(&mut radiance, x1 - x0, (a - x0, b - y0, c - x0, d - y0), &colours);
+        totals.add(&t);
+    }
+    (radiance, totals)
 }
 
 /// Copies a tile's colours (row-major within the tile) into the image's `radiance`.
@@ -278,6 +299,17 @@ impl<'a, 's> FrameJob<'a, 's> {
         let gbuffers =
             (opts.algo == Algorithm::Shadow).then(|| (0..eye.samples()).map(|s| rasterize(scene, eye, s)).collect());
         FrameJob { scene, eye, background, opts, gbuffers }
+    }
+
+    /// The colours of the rectangle `area`, row-major, rendered as the renderer's own
+    /// tiles in parallel (on the current thread pool), and the rays they traced.
+    pub fn rect(&self, area: (u32, u32, u32, u32)) -> (Vec<Vec3>, RayTotals) {
+        let (x0, y0, x1, y1) = area;
+        let tiles: Vec<(u32, u32, u32, u32)> =
+            tiles(x1 - x0, y1 - y0).into_iter().map(|(a, b, c, d)| (a + x0, b + y0, c + x0, d + y0)).collect();
+        let done =
+            tiles.par_iter().map(|&t| with_intersector!(self.opts.intersector, I => self.tile::<I>(t))).collect();
+        assemble(area, &tiles, done)
     }
 
     /// The colours of the tile `(x0, y0, x1, y1)`, row-major, and the rays it traced.
