@@ -28,6 +28,11 @@ pub fn box_margin(mesh: &Mesh) -> f64 {
     1e-5 * (hi - lo).max_element() + 8.0 * f64::from(f32::EPSILON) * lo.abs().max(hi.abs()).max_element()
 }
 
+/// The box `lo..hi` grown by `margin` on every side and rounded outwards to `f32`.
+pub fn grow_by_margin((lo, hi): ([f32; 3], [f32; 3]), margin: f64) -> ([f32; 3], [f32; 3]) {
+    (lo.map(|c| ((f64::from(c) - margin) as f32).next_down()), hi.map(|c| ((f64::from(c) + margin) as f32).next_up()))
+}
+
 /// Builds the BVH.
 pub fn build_bvh(mesh: &Mesh, params: &BvhParams) -> BuiltBvh {
     let verts: Vec<[DVec3; 3]> =

@@ -49,8 +49,7 @@ fn header_bounds(mesh: &Mesh) -> ([f32; 3], [f32; 3]) {
     if mesh.margin_bounds.is_none() || mesh.positions.is_empty() {
         return (lo, hi);
     }
-    let m = crate::build::bvh::box_margin(mesh);
-    (lo.map(|c| ((f64::from(c) - m) as f32).next_down()), hi.map(|c| ((f64::from(c) + m) as f32).next_up()))
+    crate::build::bvh::grow_by_margin((lo, hi), crate::build::bvh::box_margin(mesh))
 }
 
 impl ImageWriter {

@@ -180,9 +180,8 @@ impl ObjStream {
         let name = &self.name;
         let mut lines = open_lines(&self.path)?;
         let mut tables = VertexTables::with_capacity(self.counts, self.colours);
-        let mut map: HashMap<&str, usize> = HashMap::new();
-        let (mut library, mut offset) = (0usize, 0usize);
-        let mut material: Option<usize> = None;
+        let mut materials = MaterialMap::default();
+        let mut library = 0usize;
         let mut objects = Objects::default();
         let mut corners = Vec::new();
         let mut poly = Vec::new();
@@ -196,7 +195,7 @@ impl ObjStream {
                         continue;
                     }
                     let object = objects.face();
-                    let m = match material {
+                    let m = match materials.current {
                         Some(m) if m < self.tables.materials.len() => m as u32,
                         _ => self
                             .default_material
@@ -220,21 +219,10 @@ impl ObjStream {
                 }
                 Some("o" | "g") => objects.current = group_name(line),
                 Some("mtllib") => {
-                    if let Some(names) = self.libraries.get(library) {
-                        for (i, n) in names.iter().enumerate() {
-                            map.insert(n, offset + i);
-                        }
-                        offset += names.len();
-                    }
+                    materials.library(self.libraries.get(library).into_iter().flatten().map(String::as_str));
                     library += 1;
                 }
-                Some("usemtl") => {
-                    let n = rest_of_line(line);
-                    if n.is_empty() {
-                        bail!("{name}: malformed OBJ: line {number}: usemtl names no material");
-                    }
-                    material = map.get(n).copied();
-                }
+                Some("usemtl") => materials.use_line(name, number, line)?,
                 _ => {}
             }
         }
@@ -250,9 +238,7 @@ fn is_gz(path: &Path) -> bool {
 /// The first pass: table sizes, material libraries, and what the faces use.
 fn survey(name: &str, mut lines: Lines, read_mtl: impl Fn(&Path) -> tobj::MTLLoadResult) -> Result<Survey> {
     let mut s = Survey::default();
-    let mut map: HashMap<String, usize> = HashMap::new();
-    let mut loaded = 0usize;
-    let mut material: Option<usize> = None;
+    let mut materials = MaterialMap::default();
     while let Some((number, line)) = lines.next_line(name)? {
         let mut words = line.split_whitespace();
         match words.next() {
@@ -271,7 +257,7 @@ fn survey(name: &str, mut lines: Lines, read_mtl: impl Fn(&Path) -> tobj::MTLLoa
                 if n >= 3 {
                     s.triangles += n - 2;
                     s.corner_data |= data;
-                    s.needs_default |= material.is_none();
+                    s.needs_default |= materials.current.is_none();
                     s.objects.face();
                 }
             }
@@ -280,27 +266,48 @@ fn survey(name: &str, mut lines: Lines, read_mtl: impl Fn(&Path) -> tobj::MTLLoa
                 let lib = PathBuf::from(rest_of_line(line));
                 let result = read_mtl(&lib);
                 if let Ok((mats, _)) = &result {
-                    for (i, m) in mats.iter().enumerate() {
-                        map.insert(m.name.clone(), loaded + i);
-                    }
-                    loaded += mats.len();
+                    materials.library(mats.iter().map(|m| m.name.as_str()));
                 }
                 s.libraries.push((lib, result));
             }
-            Some("usemtl") => {
-                let n = rest_of_line(line);
-                if n.is_empty() {
-                    bail!("{name}: malformed OBJ: line {number}: usemtl names no material");
-                }
-                material = map.get(n).copied();
-            }
+            Some("usemtl") => materials.use_line(name, number, line)?,
             _ => {}
         }
     }
     // The in-memory reader closes its last object at the end of the file, faces or
     // not, and gives it the default material if it has none.
-    s.needs_default |= material.is_none();
+    s.needs_default |= materials.current.is_none();
     Ok(s)
+}
+
+/// `usemtl` resolved as tobj resolves it: by name, against the material libraries read
+/// so far (a later material of the same name wins); an unknown name leaves no material.
+#[derive(Default)]
+struct MaterialMap {
+    index: HashMap<String, usize>,
+    loaded: usize,
+    /// The material faces read now take.
+    current: Option<usize>,
+}
+
+impl MaterialMap {
+    /// A library's materials, by name, in order.
+    fn library<'a>(&mut self, names: impl Iterator<Item = &'a str>) {
+        for n in names {
+            self.index.insert(n.to_string(), self.loaded);
+            self.loaded += 1;
+        }
+    }
+
+    /// A `usemtl` line (line `number` of the file `name`).
+    fn use_line(&mut self, name: &str, number: u64, line: &str) -> Result<()> {
+        let n = rest_of_line(line);
+        if n.is_empty() {
+            bail!("{name}: malformed OBJ: line {number}: usemtl names no material");
+        }
+        self.current = self.index.get(n).copied();
+        Ok(())
+    }
 }
 
 /// What follows the keyword (tobj: after the first space, trimmed).

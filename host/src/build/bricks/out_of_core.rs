@@ -10,7 +10,7 @@ use std::path::Path;
 
 use anyhow::Result;
 
-use super::partition::Part;
+use super::partition::{accepted_growth, widest, Part};
 use super::region::{Region, Side};
 use super::spill::{median_plane, SpillFile, SpillWriter};
 use super::tri_record::{TriRecord, FULL_BYTES};
@@ -65,8 +65,8 @@ fn spatial(
 ) -> Result<Option<(Half, Half, f64)>> {
     // The axis where the centroids spread most inside the region.
     let (lo, hi) = file.centroids;
-    let spread = |a: usize| hi[a].min(f64::from(region.hi[a])) - lo[a].max(f64::from(region.lo[a]));
-    let axis = (0..3).max_by(|&a, &b| spread(a).total_cmp(&spread(b))).unwrap_or(0);
+    let inside = |a: usize| (lo[a].max(f64::from(region.lo[a])), hi[a].min(f64::from(region.hi[a])));
+    let axis = widest([0, 1, 2].map(|a| inside(a).0), [0, 1, 2].map(|a| inside(a).1));
     let range = (f64::from(region.lo[axis]), f64::from(region.hi[axis]));
     let Some(plane) = median_plane(file, range, |r| region.key(r, axis))? else { return Ok(None) };
     let plane = plane as f32;
@@ -74,13 +74,11 @@ fn spatial(
         return Ok(None);
     }
     let (left, right) = write_sides(file, progress, |r| region.side(r, axis, plane))?;
-    let (n, l, r) = (file.count, left.count, right.count);
-    let growth = (l + r) as f64 / n as f64;
-    if l == 0 || r == 0 || l == n || r == n || growth > allowance {
+    let Some(growth) = accepted_growth(file.count, left.count, right.count, allowance) else {
         left.remove();
         right.remove();
         return Ok(None);
-    }
+    };
     let (lr, rr) = region.halves(axis, plane);
     Ok(Some(((left, lr), (right, rr), growth)))
 }
@@ -89,24 +87,26 @@ fn spatial(
 /// or the file halved when they cannot be told apart); both halves keep the region.
 fn object(file: &SpillFile, region: Region, progress: &indicatif::ProgressBar) -> Result<(Half, Half, f64)> {
     let (lo, hi) = file.centroids;
-    let axis = (0..3).max_by(|&a, &b| (hi[a] - lo[a]).total_cmp(&(hi[b] - lo[b]))).unwrap_or(0);
-    let plane = median_plane(file, (lo[axis], hi[axis]), |r| r.centroid(axis))?;
-    let (mut left, mut right) = (None, None);
-    if let Some(p) = plane {
-        let (l, r) = write_sides(file, progress, |r| if r.centroid(axis) < p { Side::Left } else { Side::Right })?;
-        if l.count > 0 && r.count > 0 {
-            (left, right) = (Some(l), Some(r));
-        } else {
-            l.remove();
-            r.remove();
+    let axis = widest(lo, hi);
+    let at_plane = match median_plane(file, (lo[axis], hi[axis]), |r| r.centroid(axis))? {
+        Some(p) => {
+            let (l, r) = write_sides(file, progress, |r| if r.centroid(axis) < p { Side::Left } else { Side::Right })?;
+            if l.count > 0 && r.count > 0 {
+                Some((l, r))
+            } else {
+                l.remove();
+                r.remove();
+                None
+            }
         }
-    }
-    let (left, right) = match (left, right) {
-        (Some(l), Some(r)) => (l, r),
-        _ => {
-            // The plane left one side empty (centroids rounding onto it): halve the file.
-            let half = file.count / 2;
-            let mut k = 0u64;
+        None => None,
+    };
+    let (left, right) = match at_plane {
+        Some(halves) => halves,
+        None => {
+            // The plane left one side empty (centroids rounding onto it), or there was
+            // none: halve the file.
+            let (half, mut k) = (file.count / 2, 0u64);
             write_sides(file, progress, |_| {
                 k += 1;
                 if k <= half {

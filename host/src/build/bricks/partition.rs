@@ -70,7 +70,19 @@ pub fn widest_axis(tris: &[TriRecord]) -> usize {
             hi[a] = hi[a].max(c);
         }
     }
+    widest(lo, hi)
+}
+
+/// The axis along which the box `lo..hi` is widest (the first of equals).
+pub fn widest(lo: [f64; 3], hi: [f64; 3]) -> usize {
     (0..3).max_by(|&a, &b| (hi[a] - lo[a]).total_cmp(&(hi[b] - lo[b]))).unwrap_or(0)
+}
+
+/// The growth of a spatial cut of `n` references into `left` and `right`, if the cut is
+/// taken: both sides non-empty and smaller than the whole, the growth within `allowance`.
+pub fn accepted_growth(n: u64, left: u64, right: u64, allowance: f64) -> Option<f64> {
+    let growth = (left + right) as f64 / n as f64;
+    (left > 0 && right > 0 && left < n && right < n && growth <= allowance).then_some(growth)
 }
 
 /// Splits `tris` of `region` in two: spatially if that keeps the growth within
@@ -112,10 +124,7 @@ fn spatial_split(tris: &[TriRecord], region: Region, allowance: f64) -> Option<S
             Side::Both => (left, right) = (left + 1, right + 1),
         }
     }
-    let growth = (left + right) as f64 / n as f64;
-    if left == 0 || right == 0 || left == n || right == n || growth > allowance {
-        return None;
-    }
+    let growth = accepted_growth(n as u64, left as u64, right as u64, allowance)?;
     let (mut l, mut r) = (Vec::with_capacity(left), Vec::with_capacity(right));
     for t in tris {
         match region.side(t, axis, plane) {

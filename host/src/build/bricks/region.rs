@@ -94,7 +94,7 @@ impl Region {
                 hi[a] = hi[a].max(k);
             }
         }
-        let axis = (0..3).max_by(|&a, &b| (hi[a] - lo[a]).total_cmp(&(hi[b] - lo[b]))).unwrap_or(0);
+        let axis = super::partition::widest(lo, hi);
         (axis, hi[axis] - lo[axis])
     }
 }
@@ -112,7 +112,7 @@ pub fn clipped_bounds(region: &Region, tris: &[TriRecord], margin: f64) -> ([f32
             hi[k] = hi[k].max(b[k]);
         }
     }
-    (lo.map(|c| ((f64::from(c) - margin) as f32).next_down()), hi.map(|c| ((f64::from(c) + margin) as f32).next_up()))
+    crate::build::bvh::grow_by_margin((lo, hi), margin)
 }
 
 #[cfg(test)]
