@@ -4,6 +4,12 @@
 //! its own threads. The tile pool and the message layout are plain Rust; the transport
 //! is rsmpi, behind the `mpi` cargo feature.
 
+#[cfg(feature = "mpi")]
+pub mod crew;
+#[cfg(feature = "mpi")]
+pub mod launcher_stop;
+#[cfg(feature = "mpi")]
+pub mod patient_receive;
 pub mod protocol;
 pub mod tile_pool;
 

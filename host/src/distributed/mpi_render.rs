@@ -15,8 +15,12 @@ use mpi::traits::*;
 use raypipe_core::camera::EyeRays;
 use raypipe_core::image::CameraRecord;
 
+use super::crew::{self, Crew};
+use super::launcher_stop::{catch_sigterm, stopping};
+use super::patient_receive::{receive_within, try_receive, POLL};
 use super::protocol::{
-    decode_assign, decode_tile, encode_tile, tile_header, Assign, TileHeader, TAG_ASSIGN, TAG_READY, TAG_STOP, TAG_TILE,
+    decode_assign, decode_tile, encode_ready, encode_tile, tile_header, Assign, TileHeader, TAG_ASSIGN, TAG_READY,
+    TAG_STOP, TAG_TILE,
 };
 use super::tile_pool::{tile_grid, Handout, Rect, TilePool};
 use crate::commands::render::{prepare, Prepared, RenderArgs};
@@ -60,14 +64,17 @@ pub fn cmd_render_mpi(a: &RenderArgs) -> Result<()> {
         let cams = cameras(a, &p)?;
         Ok((p, cams))
     });
+    // Every rank outlives the launcher's SIGTERM a little (see `launcher_stop`).
+    catch_sigterm();
     if rank != 0 {
-        let ready = match &prepared {
-            Ok(_) => Vec::new(),
-            Err(e) => e.to_string().into_bytes(),
-        };
-        world.process_at_rank(0).send_with_tag(&ready[..], TAG_READY);
+        let ready = prepared.as_ref().map(|_| crew::here()).map_err(|e| e.to_string());
+        world.process_at_rank(0).send_with_tag(&encode_ready(&ready)[..], TAG_READY);
         if let Ok((p, cams)) = &prepared {
-            worker(&world, p, cams, a.mpi.mpi_tile)?;
+            if let Err(e) = worker(&world, p, cams, a) {
+                // The master may wait on this rank: the job ends here, with one line.
+                eprintln!("error: {e:#}");
+                world.abort(1);
+            }
         }
         return Ok(());
     }
@@ -78,17 +85,14 @@ pub fn cmd_render_mpi(a: &RenderArgs) -> Result<()> {
             return Err(e);
         }
     };
-    for r in 1..size {
-        let (msg, _) = world.process_at_rank(r).receive_vec_with_tag::<u8>(TAG_READY);
-        if !msg.is_empty() {
-            stop_all(&world);
-            bail!("rank {r}: {}", String::from_utf8_lossy(&msg));
-        }
-    }
-    let result = master(&world, a, &p, &cams);
+    let result = Crew::gather(&world, timeout_of(a)).and_then(|crew| master(&world, a, &p, &cams, &crew));
     if let Err(e) = &result {
+        eprintln!("error: {e:#}");
+        if stopping() {
+            // The launcher is ending the job and kills every rank in a moment.
+            std::process::exit(1);
+        }
         // The workers may be blocked in a send; only an abort ends them for sure.
-        eprintln!("error: {e}");
         world.abort(1);
     }
     stop_all(&world);
@@ -100,6 +104,11 @@ fn cameras(a: &RenderArgs, p: &Prepared) -> Result<Vec<CameraRecord>> {
     Ok(a.walk.cameras(&p.camera)?.unwrap_or_else(|| vec![p.camera]))
 }
 
+/// `--mpi-timeout`: how long a rank that owes a message may stay silent.
+fn timeout_of(a: &RenderArgs) -> Duration {
+    Duration::from_secs_f64(a.mpi.mpi_timeout.max(0.001))
+}
+
 fn stop_all(world: &SimpleCommunicator) {
     for r in 1..world.size() {
         world.process_at_rank(r).send_with_tag(&[0u8; 0][..], TAG_STOP);
@@ -107,20 +116,19 @@ fn stop_all(world: &SimpleCommunicator) {
 }
 
 /// The master: every frame's tiles handed out, gathered and written.
-fn master(world: &SimpleCommunicator, a: &RenderArgs, p: &Prepared, cams: &[CameraRecord]) -> Result<()> {
+fn master(world: &SimpleCommunicator, a: &RenderArgs, p: &Prepared, cams: &[CameraRecord], crew: &Crew) -> Result<()> {
     let workers = (world.size() - 1) as usize;
     let (w, h) = (cams[0].width, cams[0].height);
     let tiles = tile_grid(w, h, a.mpi.mpi_tile);
     let mut pool = TilePool::new(tiles.len(), workers);
-    let timeout = Duration::from_secs_f64(a.mpi.mpi_timeout.max(0.001));
+    let timeout = timeout_of(a);
     let walk = cams.len() > 1;
     println!(
-        "mpi      {} ranks: master and {workers} worker{}, {} tiles of {} px, {IN_FLIGHT} in flight per worker; {}",
-        world.size(),
+        "mpi      {}: master and {workers} worker{}, {} tiles of {} px, {IN_FLIGHT} in flight per worker",
+        crew.identity(),
         if workers == 1 { "" } else { "s" },
         tiles.len(),
         a.mpi.mpi_tile,
-        library()
     );
     if walk {
         println!("frame      seconds   frames/s  kept tiles  mpi share    MB sent  image");
@@ -130,7 +138,7 @@ fn master(world: &SimpleCommunicator, a: &RenderArgs, p: &Prepared, cams: &[Came
     let mut rows: Vec<(f64, f64)> = Vec::new();
     for (k, cam) in cams.iter().enumerate() {
         let start = Instant::now();
-        let (radiance, rays, per_worker) = gather_frame(world, &mut pool, &tiles, (k as u32, w), timeout)?;
+        let (radiance, rays, per_worker) = gather_frame(world, crew, &mut pool, &tiles, (k as u32, w), timeout)?;
         let secs = start.elapsed().as_secs_f64().max(1e-9);
         let frame = render::Frame::from_radiance(cam.width, cam.height, radiance);
         let path = if walk { crate::output::frame_path(&a.output, k) } else { a.output.clone() };
@@ -197,6 +205,7 @@ fn master(world: &SimpleCommunicator, a: &RenderArgs, p: &Prepared, cams: &[Came
 /// One frame: tiles handed out `IN_FLIGHT` at a time and gathered into its radiance.
 fn gather_frame(
     world: &SimpleCommunicator,
+    crew: &Crew,
     pool: &mut TilePool,
     tiles: &[Rect],
     (frame, width): (u32, u32),
@@ -222,12 +231,27 @@ fn gather_frame(
             send(w, pool, &mut given, &mut stats);
         }
     }
+    // When each worker was last heard from (or last given work when idle).
+    let mut heard = vec![Instant::now(); workers];
     let mut received = 0;
     while received < tiles.len() {
-        let status = wait_for_tile(world, timeout, &given)?;
+        let received_tile = try_receive(&world.any_process(), Some(TAG_TILE), timeout);
+        if stopping() {
+            bail!("{}", launcher_stopped(crew, &given, tiles));
+        }
+        let received_tile = received_tile.map_err(|e| {
+            let owed = usize::try_from(e.rank - 1).ok().and_then(|w| given.get(w)?.first());
+            let owed = owed.map_or(String::new(), |&(t, _)| format!(" tile {t}:"));
+            anyhow!("rank {} stopped in the middle of sending{owed} it died or hangs", e.rank)
+        });
+        let Some((bytes, status)) = received_tile? else {
+            check_silence(&heard, &given, tiles, timeout)?;
+            std::thread::sleep(POLL);
+            continue;
+        };
         let r = status.source_rank();
-        let (bytes, _) = world.process_at_rank(r).receive_vec_with_tag::<u8>(TAG_TILE);
         let w = (r - 1) as usize;
+        heard[w] = Instant::now();
         let h = tile_header(&bytes).map_err(|e| anyhow!("rank {r}: {e}"))?;
         let rect = *tiles
             .get(h.tile as usize)
@@ -253,37 +277,55 @@ fn gather_frame(
     Ok((radiance, rays, stats))
 }
 
-/// Waits for the next tile from any worker, at most `timeout`; past it, one line naming
-/// a rank that owes a tile and the tile.
-fn wait_for_tile(
-    world: &SimpleCommunicator,
-    timeout: Duration,
-    given: &[Vec<(u32, Handout)>],
-) -> Result<mpi::point_to_point::Status> {
-    let start = Instant::now();
-    loop {
-        if let Some(status) = world.any_process().immediate_probe_with_tag(TAG_TILE) {
-            return Ok(status);
-        }
-        if start.elapsed() > timeout {
-            let (w, t) = given
-                .iter()
-                .enumerate()
-                .find_map(|(w, g)| g.first().map(|&(t, _)| (w, t)))
-                .ok_or_else(|| anyhow!("no tile arrived in {:.0} s", timeout.as_secs_f64()))?;
+/// What the master says when the launcher ends the job: which worker on its host died
+/// holding which tile, or, if none did, what every worker held.
+fn launcher_stopped(crew: &Crew, given: &[Vec<(u32, Handout)>], tiles: &[Rect]) -> String {
+    let tile = |t: u32| {
+        let (x0, y0, x1, y1) = tiles[t as usize];
+        format!("tile {t} (pixels {x0}..{x1} x {y0}..{y1})")
+    };
+    let ended = crew.ended_here();
+    if let Some(&w) = ended.first() {
+        let held = given[w].first().map_or("no tile".to_string(), |&(t, _)| tile(t));
+        let who = &crew.workers[w];
+        return format!(
+            "rank {} (pid {} on {}) died while rendering {held}; mpirun is ending the job",
+            w + 1,
+            who.pid,
+            who.host
+        );
+    }
+    let held: Vec<String> = given
+        .iter()
+        .enumerate()
+        .filter_map(|(w, g)| g.first().map(|&(t, _)| format!("rank {} {}", w + 1, tile(t))))
+        .collect();
+    format!(
+        "mpirun is ending the job (a rank on another host died, or it was interrupted); tiles out: {}",
+        held.join(", ")
+    )
+}
+
+/// An error naming the first worker that owes tiles and has been silent past
+/// `timeout`, and the oldest tile it owes.
+fn check_silence(heard: &[Instant], given: &[Vec<(u32, Handout)>], tiles: &[Rect], timeout: Duration) -> Result<()> {
+    for (w, owed) in given.iter().enumerate() {
+        let Some(&(t, _)) = owed.first() else { continue };
+        if heard[w].elapsed() > timeout {
+            let (x0, y0, x1, y1) = tiles[t as usize];
             bail!(
-                "rank {} sent nothing for {:.0} s while rendering tile {t}: it died or hangs",
+                "rank {} sent nothing for {:.0} s while rendering tile {t} (pixels {x0}..{x1} x {y0}..{y1}): it died or hangs",
                 w + 1,
                 timeout.as_secs_f64()
             );
         }
-        // A short sleep instead of MPI's busy wait leaves the core to the workers.
-        std::thread::sleep(Duration::from_micros(50));
     }
+    Ok(())
 }
 
 /// A worker: tiles rendered as they are assigned, until the master says stop.
-fn worker(world: &SimpleCommunicator, p: &Prepared, cams: &[CameraRecord], tile_size: u32) -> Result<()> {
+fn worker(world: &SimpleCommunicator, p: &Prepared, cams: &[CameraRecord], a: &RenderArgs) -> Result<()> {
+    let (tile_size, timeout) = (a.mpi.mpi_tile, timeout_of(a));
     let view = p.scene.view()?;
     let master = world.process_at_rank(0);
     // The master's tiles, of the first frame's size, as it cuts them.
@@ -297,7 +339,21 @@ fn worker(world: &SimpleCommunicator, p: &Prepared, cams: &[CameraRecord], tile_
     // One thread pool for the run: a pool per tile cost more than the tile.
     let pool = render::thread_pool(p.opts.threads)?;
     loop {
-        let (bytes, status) = master.receive_vec::<u8>();
+        if stopping() {
+            // Alive a moment past the launcher's SIGTERM, so that the master can tell
+            // this rank from the one that died; then gone, quietly.
+            std::thread::sleep(Duration::from_millis(300));
+            std::process::exit(143);
+        }
+        // An idle worker may wait on a live master for as long as the slowest tile
+        // (bounded by the timeout) and the image's writing: it gives up after three.
+        let Some((bytes, status)) = receive_within(&master, None, 3 * timeout)? else {
+            bail!(
+                "rank {}: the master sent nothing for {:.0} s: it died or hangs",
+                world.rank(),
+                3.0 * timeout.as_secs_f64()
+            );
+        };
         match status.tag() {
             TAG_STOP => return Ok(()),
             TAG_ASSIGN => {}
@@ -322,10 +378,4 @@ fn worker(world: &SimpleCommunicator, p: &Prepared, cams: &[CameraRecord], tile_
         };
         master.buffered_send_with_tag(&encode_tile(&header, &colours)[..], TAG_TILE);
     }
-}
-
-/// The MPI library's name and version, for the report.
-fn library() -> String {
-    let v = mpi::environment::library_version().unwrap_or_default();
-    v.lines().next().unwrap_or("MPI").trim().to_string()
 }

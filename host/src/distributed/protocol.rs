@@ -6,7 +6,8 @@ use anyhow::{bail, Result};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
-/// Worker → master, once: loaded and ready (or not: the message says why).
+/// Worker → master, once: loaded and ready, with where it runs (or not: the message
+/// says why).
 pub const TAG_READY: i32 = 1;
 /// Master → worker: render this tile of this frame.
 pub const TAG_ASSIGN: i32 = 2;
@@ -75,6 +76,37 @@ pub fn decode_tile(bytes: &[u8], pixels: usize) -> Result<(TileHeader, Vec<Vec3>
     Ok((header, colours))
 }
 
+/// Where a rank runs: its host and process id.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Whereabouts {
+    /// The host's name, as MPI gives it.
+    pub host: String,
+    /// The process id on that host.
+    pub pid: u32,
+}
+
+/// A ready message: `+host pid` when loaded, `-why` when not.
+pub fn encode_ready(ready: &std::result::Result<Whereabouts, String>) -> Vec<u8> {
+    match ready {
+        Ok(w) => format!("+{} {}", w.host, w.pid).into_bytes(),
+        Err(e) => format!("-{e}").into_bytes(),
+    }
+}
+
+/// A ready message from its bytes: `Ok(Ok(where))` when the rank is ready,
+/// `Ok(Err(why))` when it is not.
+pub fn decode_ready(bytes: &[u8]) -> Result<std::result::Result<Whereabouts, String>> {
+    let text = String::from_utf8_lossy(bytes);
+    if let Some(why) = text.strip_prefix('-') {
+        return Ok(Err(why.to_string()));
+    }
+    let ready = text.strip_prefix('+').and_then(|t| t.rsplit_once(' '));
+    match ready.and_then(|(host, pid)| Some(Whereabouts { host: host.to_string(), pid: pid.parse().ok()? })) {
+        Some(w) => Ok(Ok(w)),
+        None => bail!("a malformed ready message of {} bytes", bytes.len()),
+    }
+}
+
 /// An assignment from its bytes.
 pub fn decode_assign(bytes: &[u8]) -> Result<Assign> {
     if bytes.len() != std::mem::size_of::<Assign>() {
@@ -99,5 +131,14 @@ mod tests {
         assert!(decode_tile(&bytes, 3).is_err());
         assert!(decode_tile(&bytes[..10], 0).is_err());
         assert!(decode_assign(&[0; 7]).is_err());
+    }
+
+    #[test]
+    fn ready_messages_round_trip() {
+        let w = Whereabouts { host: "node 7".into(), pid: 4242 };
+        assert_eq!(decode_ready(&encode_ready(&Ok(w.clone()))).unwrap(), Ok(w));
+        let e = Err("missing.obj: no such file".to_string());
+        assert_eq!(decode_ready(&encode_ready(&e)).unwrap(), e);
+        assert!(decode_ready(b"+host").is_err() && decode_ready(b"").is_err());
     }
 }

@@ -9,6 +9,10 @@ use std::process::{Command, Output};
 use crate::common::*;
 
 fn mpirun(dir: &Path, ranks: u32, args: &[&str]) -> Output {
+    mpirun_command(dir, ranks, args).output().expect("mpirun runs (install OpenMPI: openmpi-bin)")
+}
+
+fn mpirun_command(dir: &Path, ranks: u32, args: &[&str]) -> Command {
     let mut c = Command::new("mpirun");
     // More ranks than cores is fine here: the tests check images, not speed.
     c.args(["-n", &ranks.to_string(), "--oversubscribe"]);
@@ -19,9 +23,49 @@ fn mpirun(dir: &Path, ranks: u32, args: &[&str]) -> Output {
         .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
         .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
         // Containers often forbid the cross-process memory copy OpenMPI tries first.
-        .env("OMPI_MCA_btl_vader_single_copy_mechanism", "none")
-        .output()
-        .expect("mpirun runs (install OpenMPI: openmpi-bin)")
+        .env("OMPI_MCA_btl_vader_single_copy_mechanism", "none");
+    c
+}
+
+/// The pid of rank `rank` among the children of `launcher` (OpenMPI starts the ranks
+/// of its own host as its children, and names the rank in their environment).
+fn rank_pid(launcher: u32, rank: u32) -> Option<u32> {
+    let want = format!("OMPI_COMM_WORLD_RANK={rank}");
+    std::fs::read_dir("/proc").ok()?.flatten().find_map(|e| {
+        let pid: u32 = e.file_name().to_str()?.parse().ok()?;
+        let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+        let ppid: u32 = stat.rsplit_once(')')?.1.split_whitespace().nth(1)?.parse().ok()?;
+        let env = std::fs::read(format!("/proc/{pid}/environ")).ok()?;
+        (ppid == launcher && env.split(|&b| b == 0).any(|v| v == want.as_bytes())).then_some(pid)
+    })
+}
+
+/// A long path-traced render on three ranks whose rank 1 gets `signal` once the
+/// workers are rendering; what the job printed, and how it ended.
+fn render_and_signal(dir: &Path, signal: &str) -> Output {
+    use std::io::BufRead;
+    let args = ["render", "--mpi", "--algo", "path", "--samples", "64", "--size", "256x256", "--mpi-timeout", "2"];
+    let mut child = mpirun_command(dir, 3, &[&args[..], &["-o", "a.png"]].concat())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("mpirun runs (install OpenMPI: openmpi-bin)");
+    // The master's first line comes once every worker has loaded the scene.
+    let mut stdout = std::io::BufReader::new(child.stdout.take().unwrap());
+    let mut first = String::new();
+    stdout.read_line(&mut first).unwrap();
+    assert!(first.starts_with("mpi"), "{first}");
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    let pid = rank_pid(child.id(), 1).expect("rank 1 runs under mpirun");
+    let killed = Command::new("kill").args([signal, &pid.to_string()]).status().unwrap();
+    assert!(killed.success());
+    let mut rest = Vec::new();
+    std::io::Read::read_to_end(&mut stdout, &mut rest).unwrap();
+    let mut o = child.wait_with_output().unwrap();
+    o.stdout = [first.into_bytes(), rest].concat();
+    // A stopped rank is left for the launcher to end; make sure it is gone.
+    let _ = Command::new("kill").args(["-KILL", &pid.to_string()]).stderr(std::process::Stdio::null()).status();
+    o
 }
 
 #[test]
@@ -68,6 +112,20 @@ fn a_bad_mpi_command_line_is_one_message() {
     // One rank is no job: a master needs a worker.
     let o = mpirun(d, 1, &["render", "--mpi", "-o", "x.png"]);
     assert!(stderr(&o).contains("needs a master and at least one worker"), "{}", stderr(&o));
+}
+
+#[test]
+fn a_dead_or_hung_worker_ends_the_job_with_one_line_naming_it_and_its_tile() {
+    for signal in ["-KILL", "-STOP"] {
+        let dir = tempfile::tempdir().unwrap();
+        let o = render_and_signal(dir.path(), signal);
+        assert!(!o.status.success(), "{signal}: {}", stderr(&o));
+        let errors: Vec<String> = stderr(&o).lines().filter(|l| l.starts_with("error:")).map(String::from).collect();
+        assert_eq!(errors.len(), 1, "{signal}: {}", stderr(&o));
+        assert!(errors[0].contains("rank 1") && errors[0].contains("tile"), "{signal}: {}", errors[0]);
+        // No image, not even part of one.
+        assert!(only_files(dir.path()).is_empty(), "{signal}: {:?}", only_files(dir.path()));
+    }
 }
 
 #[test]
