@@ -60,9 +60,24 @@ pub struct MpiArgs {
     /// Side of the tiles the master hands out, in pixels (at most 512).
     #[arg(long, value_name = "PIXELS", default_value_t = 32, value_parser = clap::value_parser!(u32).range(1..=512))]
     pub mpi_tile: u32,
-    /// Seconds the master waits for a worker's tile before it ends the run.
+    /// Seconds a rank that owes a message (a worker its tile, a model server its brick)
+    /// may stay silent before the run ends with an error naming it.
     #[arg(long, value_name = "SECONDS", default_value_t = 60.0)]
     pub mpi_timeout: f64,
+    /// Where a bricked scene's bricks come from: every rank reads the file from shared
+    /// storage (replicated), or rank 0 serves them over MPI to the workers' caches
+    /// (served).
+    #[arg(long, value_enum, value_name = "HOW", default_value = "replicated")]
+    pub mpi_data: MpiData,
+}
+
+/// Where the ranks of a distributed render read the scene.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MpiData {
+    /// Every rank reads the scene from shared storage.
+    Replicated,
+    /// Rank 0 holds a bricked scene and sends bricks on request.
+    Served,
 }
 
 /// What a render needs once its inputs are read: the scene, the camera, the options and
@@ -94,11 +109,11 @@ pub(crate) fn prepare(a: &RenderArgs) -> Result<Prepared> {
 pub(crate) fn cmd_render(a: RenderArgs) -> Result<()> {
     a.run.check()?;
     check_image_path(&a.output)?;
-    if let Some(path) = a.scene.as_deref().filter(|p| crate::input::bricked::is_bricked(p)) {
-        return super::render_bricked::cmd_render_bricked(&a, path);
-    }
     if a.mpi.mpi {
         return crate::distributed::cmd_render_mpi(&a);
+    }
+    if let Some(path) = a.scene.as_deref().filter(|p| crate::input::bricked::is_bricked(p)) {
+        return super::render_bricked::cmd_render_bricked(&a, path);
     }
     let Prepared { scene, camera: cam, opts, display, load_secs } = prepare(&a)?;
     warn(&scene);

@@ -11,30 +11,20 @@ use super::render::RenderArgs;
 use super::{camera_of, fmt_bytes};
 use crate::input::bricked::BrickedScene;
 use crate::output;
+use crate::output::tone_map::DisplayChoice;
 use crate::render::bricked::brick_cache::{with_cache, CacheStats};
 use crate::render::bricked::frame::{check_algorithm, render_bricked, BrickedFrame};
 use crate::render::packets::PacketSize;
 use crate::render::tracer::IntersectorKind;
 use crate::render::{self, RenderOptions};
+use raypipe_core::image::CameraRecord;
 
 /// Renders the bricked scene at `path`.
 pub(crate) fn cmd_render_bricked(a: &RenderArgs, path: &Path) -> Result<()> {
     let open = Instant::now();
     let scene = BrickedScene::open(path)?;
     let index = scene.view();
-    let globals = index.globals();
-    let cam = camera_of(globals, &a.camera)?;
-    render::eye_rays(&cam, "camera")?;
-    // The bricks' structure and triangle layout decide the defaults, as a flat image's do.
-    let (first, _) = scene.load(0)?;
-    let kind = IntersectorKind::resolve(a.run.intersector, first.view());
-    let packet = a.packet.unwrap_or_else(|| PacketSize::auto_for(first.view()));
-    drop(first);
-    let mut opts =
-        RenderOptions { threads: a.run.threads, intersector: kind, progress: true, packet, ..Default::default() };
-    a.algo.apply(&mut opts)?;
-    check_algorithm(&opts)?;
-    let display = a.display.choice(opts.algo);
+    let (cam, opts, display) = bricked_setup(a, &scene)?;
     let opened = open.elapsed().as_secs_f64();
     let cams = a.walk.cameras(&cam)?;
     with_cache(&scene, a.cache.cache, a.cache.loaders as usize, |cache| {
@@ -65,6 +55,26 @@ pub(crate) fn cmd_render_bricked(a: &RenderArgs, path: &Path) -> Result<()> {
         print_counts(&stats, &cache.stats(), secs, a.cache.cache);
         Ok(())
     })
+}
+
+/// The camera, options and display of a render of `scene`: the bricks' structure and
+/// triangle layout decide the defaults, as a flat image's do.
+pub(crate) fn bricked_setup(
+    a: &RenderArgs,
+    scene: &BrickedScene,
+) -> Result<(CameraRecord, RenderOptions, DisplayChoice)> {
+    let cam = camera_of(scene.view().globals(), &a.camera)?;
+    render::eye_rays(&cam, "camera")?;
+    let (first, _) = scene.load(0)?;
+    let kind = IntersectorKind::resolve(a.run.intersector, first.view());
+    let packet = a.packet.unwrap_or_else(|| PacketSize::auto_for(first.view()));
+    drop(first);
+    let mut opts =
+        RenderOptions { threads: a.run.threads, intersector: kind, progress: true, packet, ..Default::default() };
+    a.algo.apply(&mut opts)?;
+    check_algorithm(&opts)?;
+    let display = a.display.choice(opts.algo);
+    Ok((cam, opts, display))
 }
 
 /// The frame's rays, the cache's counts and the tracers' waits.

@@ -2,14 +2,14 @@
 //! identity, and to tell a dead worker from a living one when the launcher ends the
 //! job), gathered from the workers' ready messages.
 
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use anyhow::{bail, Result};
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 
 use super::launcher_stop::has_ended;
-use super::patient_receive::receive_within;
+use super::patient_receive::{try_receive, POLL};
 use super::protocol::{decode_ready, Whereabouts, TAG_READY};
 
 /// The job's ranks.
@@ -27,24 +27,36 @@ pub fn here() -> Whereabouts {
 }
 
 impl Crew {
-    /// Waits for every worker's ready message; the first that says it cannot go on, or
-    /// stays silent past `timeout`, is the error.
-    pub fn gather(world: &SimpleCommunicator, timeout: Duration) -> Result<Crew> {
-        let mut workers = Vec::new();
-        for r in 1..world.size() {
-            match receive_within(&world.process_at_rank(r), Some(TAG_READY), timeout)? {
-                Some((msg, _)) => match decode_ready(&msg) {
-                    Ok(Ok(w)) => workers.push(w),
-                    Ok(Err(why)) => bail!("rank {r}: {why}"),
-                    Err(e) => bail!("rank {r}: {e}"),
-                },
-                None => bail!(
-                    "rank {r} did not load the scene within {:.0} s (--mpi-timeout): it died or hangs",
-                    timeout.as_secs_f64()
-                ),
+    /// Waits for every worker's ready message, calling `serve` between polls (a model
+    /// server answers the bricks workers ask for while they get ready); the first
+    /// worker that says it cannot go on, or stays silent past `timeout`, is the error.
+    pub fn gather(
+        world: &SimpleCommunicator,
+        timeout: Duration,
+        serve: &mut dyn FnMut() -> Result<()>,
+    ) -> Result<Crew> {
+        let start = Instant::now();
+        let mut workers: Vec<Option<Whereabouts>> = vec![None; (world.size() - 1) as usize];
+        while let Some(w) = workers.iter().position(Option::is_none) {
+            let r = w as i32 + 1;
+            let Some((msg, _)) = try_receive(&world.process_at_rank(r), Some(TAG_READY), timeout)? else {
+                if start.elapsed() > timeout {
+                    bail!(
+                        "rank {r} did not load the scene within {:.0} s (--mpi-timeout): it died or hangs",
+                        timeout.as_secs_f64()
+                    );
+                }
+                serve()?;
+                std::thread::sleep(POLL);
+                continue;
+            };
+            match decode_ready(&msg) {
+                Ok(Ok(here)) => workers[w] = Some(here),
+                Ok(Err(why)) => bail!("rank {r}: {why}"),
+                Err(e) => bail!("rank {r}: {e}"),
             }
         }
-        Ok(Crew { master: here(), workers })
+        Ok(Crew { master: here(), workers: workers.into_iter().flatten().collect() })
     }
 
     /// The run's identity: ranks and hosts, and the MPI library.

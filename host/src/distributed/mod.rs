@@ -5,6 +5,8 @@
 //! is rsmpi, behind the `mpi` cargo feature.
 
 #[cfg(feature = "mpi")]
+pub mod brick_service;
+#[cfg(feature = "mpi")]
 pub mod crew;
 #[cfg(feature = "mpi")]
 pub mod launcher_stop;
@@ -14,9 +16,13 @@ pub mod protocol;
 pub mod tile_pool;
 
 #[cfg(feature = "mpi")]
+pub mod mpi_master;
+#[cfg(feature = "mpi")]
 pub mod mpi_render;
 #[cfg(feature = "mpi")]
 pub mod mpi_sweep;
+#[cfg(feature = "mpi")]
+pub mod mpi_worker;
 
 /// `raypipe render --mpi` in a raypipe built without MPI.
 #[cfg(not(feature = "mpi"))]

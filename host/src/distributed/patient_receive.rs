@@ -17,6 +17,16 @@ use super::launcher_stop::stopping;
 /// rendering threads (MPI's own waits spin).
 pub const POLL: Duration = Duration::from_micros(50);
 
+/// The one lock every MPI call of a process is made under, so that a worker's loader
+/// threads and its main thread never call MPI at once (`MPI_THREAD_SERIALIZED`).
+static MPI_LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+/// Runs `f`, which calls MPI, under the process's MPI lock.
+pub fn serialized<T>(f: impl FnOnce() -> T) -> T {
+    let _held = MPI_LOCK.lock().unwrap_or_else(|p| p.into_inner());
+    f()
+}
+
 /// A sender that stopped in the middle of a message.
 #[derive(Debug)]
 pub struct Stalled {
@@ -39,6 +49,14 @@ impl std::error::Error for Stalled {}
 /// `patience` (and before the launcher ends the job), else its sender died or hangs in
 /// the middle of it: an error naming the rank.
 pub fn try_receive<S: Source>(
+    source: &S,
+    tag: Option<Tag>,
+    patience: Duration,
+) -> Result<Option<(Vec<u8>, Status)>, Stalled> {
+    serialized(|| try_receive_now(source, tag, patience))
+}
+
+fn try_receive_now<S: Source>(
     source: &S,
     tag: Option<Tag>,
     patience: Duration,

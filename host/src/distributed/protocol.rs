@@ -40,6 +40,12 @@ pub struct TileHeader {
     pub secondary: u64,
     /// Seconds the worker spent rendering it.
     pub seconds: f64,
+    /// Brick visits its cache served (bricked scenes; 0 otherwise).
+    pub hits: u64,
+    /// Bricks its cache had to load.
+    pub misses: u64,
+    /// Stored bytes of the bricks it loaded (from the file, or the model server).
+    pub loaded: u64,
 }
 
 const HEADER: usize = std::mem::size_of::<TileHeader>();
@@ -121,7 +127,16 @@ mod tests {
 
     #[test]
     fn tiles_round_trip_bit_for_bit_and_bad_lengths_are_errors() {
-        let h = TileHeader { frame: 3, tile: 7, primary: 1024, secondary: 99, seconds: 0.25 };
+        let h = TileHeader {
+            frame: 3,
+            tile: 7,
+            primary: 1024,
+            secondary: 99,
+            seconds: 0.25,
+            hits: 5,
+            misses: 2,
+            loaded: 65536,
+        };
         let colours = vec![Vec3::new(0.1, f32::MIN_POSITIVE, -0.0), Vec3::new(1e30, 0.5, 2.0)];
         let bytes = encode_tile(&h, &colours);
         let (h2, c2) = decode_tile(&bytes, 2).unwrap();

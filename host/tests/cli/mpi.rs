@@ -99,6 +99,49 @@ fn mpi_frames_equal_single_process_frames() {
 }
 
 #[test]
+fn bricked_frames_equal_single_process_frames_replicated_and_served() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let o = raypipe(
+        d,
+        &["build", "--generate", "powerplant:triangles=20000", "--bricks", "--brick-size", "16K", "-o", "p.rpsb"],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    // A cache smaller than the scene: bricks are evicted and fetched again.
+    for algo in ["cast", "whitted"] {
+        let common = ["render", "p.rpsb", "--size", "80x60", "--algo", algo, "--cache", "512K"];
+        let o = raypipe(d, &[&common[..], &["-o", "one.png"]].concat());
+        assert!(o.status.success(), "{}", stderr(&o));
+        for (data, ranks) in [("replicated", 2), ("served", 2), ("served", 3)] {
+            let mpi = ["-o", "mpi.png", "--mpi", "--mpi-tile", "16", "--mpi-data", data];
+            let o = mpirun(d, ranks, &[&common[..], &mpi[..]].concat());
+            assert!(o.status.success(), "{algo}, {data} on {ranks} ranks: {}", stderr(&o));
+            let out = String::from_utf8_lossy(&o.stdout);
+            let how = if data == "served" { "MB served" } else { "MB read" };
+            assert!(out.contains("hit rate") && out.contains(how), "{out}");
+            assert_eq!(decode(&d.join("one.png")), decode(&d.join("mpi.png")), "{algo}, {data} on {ranks} ranks");
+        }
+    }
+    // A served walkthrough: every frame equal, the caches' hit rates per worker.
+    let walk = ["render", "p.rpsb", "--size", "48x32", "--orbit", "3", "--cache", "512K"];
+    let o = raypipe(d, &[&walk[..], &["-o", "w.png"]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = mpirun(d, 3, &[&walk[..], &["-o", "m.png", "--mpi", "--mpi-data", "served"]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("hit rate per worker"));
+    for k in 0..3 {
+        let name = |s: &str| d.join(format!("{s}-{k:04}.png"));
+        assert_eq!(decode(&name("w")), decode(&name("m")), "frame {k}");
+    }
+    // Served data need a bricked scene: one line for the whole job.
+    let o = mpirun(d, 3, &["render", "--mpi", "--mpi-data", "served", "-o", "x.png"]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    let errors: Vec<&str> = err.lines().filter(|l| l.starts_with("error:")).collect();
+    assert!(errors.len() == 1 && errors[0].contains("needs a bricked scene"), "{err}");
+}
+
+#[test]
 fn a_bad_mpi_command_line_is_one_message() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();

@@ -20,15 +20,31 @@ use raypipe_core::SceneView;
 
 use crate::platform::aligned::AlignedBytes;
 
-/// An open bricked scene: the file, and its index mapped and validated.
+/// An open bricked scene: its index validated, and where its bricks' stored bytes come
+/// from.
 pub struct BrickedScene {
-    // Borrows `map`'s pages, which stay where they are until the map is dropped, after
+    // Borrows `index`'s bytes, which stay where they are until they are dropped, after
     // it (fields drop in order).
     view: BrickedView<'static>,
-    _map: Mmap,
-    file: File,
+    index: IndexBytes,
+    stored: Stored,
     /// What the user called it.
     pub name: String,
+}
+
+/// The index's bytes: mapped from the file, or received (from a model server).
+enum IndexBytes {
+    Mapped(Mmap),
+    Owned(AlignedBytes),
+}
+
+/// Reads brick `b`'s `size` stored bytes from wherever they are kept.
+pub type FetchStored = Box<dyn Fn(u32, u64) -> Result<Vec<u8>> + Send + Sync>;
+
+/// Where the bricks' stored bytes come from.
+enum Stored {
+    File(File),
+    Fetched(FetchStored),
 }
 
 /// A brick in memory: its decompressed scene image and the validated view of it.
@@ -42,7 +58,7 @@ pub struct ResidentBrick {
 /// What reading one brick cost.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct LoadCost {
-    /// Bytes read from the file.
+    /// Stored bytes read (from the file, or the model server).
     pub bytes_read: u64,
     /// Bytes decompressed.
     pub bytes_decompressed: u64,
@@ -103,7 +119,47 @@ impl BrickedScene {
         // SAFETY: the view borrows the mapped pages, which stay in place while `map`
         // lives; `map` is stored beside it and dropped after it, and never handed out.
         let view: BrickedView<'static> = unsafe { std::mem::transmute::<BrickedView<'_>, BrickedView<'static>>(view) };
-        Ok(BrickedScene { view, _map: map, file, name })
+        Ok(BrickedScene { view, index: IndexBytes::Mapped(map), stored: Stored::File(file), name })
+    }
+
+    /// A scene whose index came as `index` (of a file `file_len` bytes long) and whose
+    /// bricks' stored bytes `fetch` brings: a model server's scene, seen by a worker.
+    pub fn from_index(name: String, index: &[u8], file_len: u64, fetch: FetchStored) -> Result<BrickedScene> {
+        let bytes = AlignedBytes::from_slice(index);
+        let view = BrickedView::parse(&bytes, file_len).map_err(|e| anyhow!("{name}: {e}"))?;
+        // SAFETY: the view borrows the aligned buffer's heap bytes, which do not move
+        // when `bytes` moves and are never written; they are stored beside the view and
+        // dropped after it.
+        let view: BrickedView<'static> = unsafe { std::mem::transmute::<BrickedView<'_>, BrickedView<'static>>(view) };
+        Ok(BrickedScene { view, index: IndexBytes::Owned(bytes), stored: Stored::Fetched(fetch), name })
+    }
+
+    /// The index's bytes, as a model server sends them.
+    pub fn index_bytes(&self) -> &[u8] {
+        match &self.index {
+            IndexBytes::Mapped(m) => &m[..],
+            IndexBytes::Owned(b) => b,
+        }
+    }
+
+    /// Brick `b`'s stored bytes (compressed, unchecked), as a model server sends them.
+    pub fn read_stored(&self, b: u32) -> Result<Vec<u8>> {
+        let name = &self.name;
+        let rec = *self.view.brick(b).ok_or_else(|| anyhow!("{name}: brick {b} does not exist"))?;
+        match &self.stored {
+            Stored::File(file) => {
+                let mut stored = vec![0u8; rec.stored_size as usize];
+                read_at(file, &mut stored, rec.offset).map_err(|e| anyhow!("{name}: brick {b}: cannot read: {e}"))?;
+                Ok(stored)
+            }
+            Stored::Fetched(fetch) => {
+                let stored = fetch(b, rec.stored_size)?;
+                if stored.len() as u64 != rec.stored_size {
+                    bail!("{name}: brick {b}: {} bytes came, not {}", stored.len(), rec.stored_size);
+                }
+                Ok(stored)
+            }
+        }
     }
 
     /// The validated index.
@@ -116,8 +172,7 @@ impl BrickedScene {
         let name = &self.name;
         let rec = *self.view.brick(b).ok_or_else(|| anyhow!("{name}: brick {b} does not exist"))?;
         let t0 = Instant::now();
-        let mut stored = vec![0u8; rec.stored_size as usize];
-        read_at(&self.file, &mut stored, rec.offset).map_err(|e| anyhow!("{name}: brick {b}: cannot read: {e}"))?;
+        let stored = self.read_stored(b)?;
         let t1 = Instant::now();
         let sum = crc32(&stored);
         let mut image = AlignedBytes::zeroed(rec.image_size as usize);

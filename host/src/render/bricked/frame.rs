@@ -6,8 +6,6 @@
 //! image is bit-identical to the flat scene's, whatever the cache size, threads or the
 //! order bricks arrive in.
 
-use std::collections::HashMap;
-
 use anyhow::{bail, Result};
 use rayon::prelude::*;
 use raypipe_core::camera::EyeRays;
@@ -24,7 +22,7 @@ use super::brick_cache::BrickCache;
 use super::brick_tracer::{BrickTracer, TraceStats};
 use crate::input::bricked::BrickedScene;
 use crate::output::progress;
-use crate::render::{eye_rays, in_pool, tiles, Algorithm, Frame, RayTotals, RenderOptions};
+use crate::render::{eye_rays, in_pool, Algorithm, Frame, RayTotals, RenderOptions};
 use crate::with_intersector;
 
 /// Tiles one worker's tracer holds at once.
@@ -63,9 +61,25 @@ pub fn render_bricked(
     camera: &CameraRecord,
     opts: &RenderOptions,
 ) -> Result<(Frame, BrickedFrame)> {
+    let (w, h) = (camera.width, camera.height);
+    let (radiance, stats) = render_bricked_rect(scene, cache, camera, opts, (0, 0, w, h))?;
+    Ok((Frame::from_radiance(w, h, radiance), stats))
+}
+
+/// The pixels of `rect` (`x0, y0, x1, y1`, row by row) of the frame `camera` sees: each
+/// pixel's colour is the whole frame's, bit for bit, so that ranks of a distributed run
+/// can render the rectangles of one frame.
+pub fn render_bricked_rect(
+    scene: &BrickedScene,
+    cache: &BrickCache<'_>,
+    camera: &CameraRecord,
+    opts: &RenderOptions,
+    rect: (u32, u32, u32, u32),
+) -> Result<(Vec<Vec3>, BrickedFrame)> {
     check_algorithm(opts)?;
     let eye = eye_rays(camera, "camera")?.with_sampler(opts.sampler());
-    with_intersector!(opts.intersector, I => frame_with::<I>(scene, cache, &eye, Vec3::from(camera.background), opts))
+    let background = Vec3::from(camera.background);
+    with_intersector!(opts.intersector, I => frame_with::<I>(scene, cache, &eye, background, opts, rect))
 }
 
 /// A worker's tiles and their pixels' final radiance.
@@ -75,18 +89,28 @@ type TileColors = (Vec<(u32, u32, u32, u32)>, Vec<Vec<Vec3>>);
 struct Chunk {
     tiles: Vec<(u32, u32, u32, u32)>,
     radiance: Vec<Vec<RadianceSum>>,
-    // Image-wide tile number → position in `tiles`.
-    at: HashMap<u32, usize>,
 }
 
 impl Chunk {
     fn slot(&mut self, pixel: u32, width: u32) -> Option<&mut RadianceSum> {
         let (x, y) = (pixel % width, pixel / width);
-        let tiles_x = width.div_ceil(crate::render::TILE);
-        let k = *self.at.get(&((y / crate::render::TILE) * tiles_x + x / crate::render::TILE))?;
+        // A chunk holds a few tiles: a scan finds the pixel's.
+        let k = self.tiles.iter().position(|&(x0, y0, x1, y1)| (x0..x1).contains(&x) && (y0..y1).contains(&y))?;
         let (x0, y0, x1, _) = self.tiles[k];
         self.radiance[k].get_mut(((y - y0) * (x1 - x0) + (x - x0)) as usize)
     }
+}
+
+/// `rect` cut into the renderer's tiles.
+fn tiles_in((x0, y0, x1, y1): (u32, u32, u32, u32)) -> Vec<(u32, u32, u32, u32)> {
+    let t = crate::render::TILE;
+    let mut v = Vec::new();
+    for ty in (y0..y1).step_by(t as usize) {
+        for tx in (x0..x1).step_by(t as usize) {
+            v.push((tx, ty, (tx + t).min(x1), (ty + t).min(y1)));
+        }
+    }
+    v
 }
 
 fn frame_with<I: Intersector>(
@@ -95,11 +119,11 @@ fn frame_with<I: Intersector>(
     eye: &EyeRays,
     background: Vec3,
     opts: &RenderOptions,
-) -> Result<(Frame, BrickedFrame)> {
+    rect: (u32, u32, u32, u32),
+) -> Result<(Vec<Vec3>, BrickedFrame)> {
     let index = scene.view();
     let globals = index.globals();
-    let (w, h) = (eye.width, eye.height);
-    let all = tiles(w, h);
+    let all = tiles_in(rect);
     let chunks: Vec<&[(u32, u32, u32, u32)]> = all.chunks(TILES_PER_WORKER).collect();
     let bar = progress::bar(all.len() as u64, "render", opts.progress);
     let shader = opts.shader(background);
@@ -118,22 +142,20 @@ fn frame_with<I: Intersector>(
             .collect()
     })?;
     bar.finish_and_clear();
-    let mut radiance = vec![Vec3::ZERO; (w * h) as usize];
+    let w = rect.2 - rect.0;
+    let mut radiance = vec![Vec3::ZERO; (w * (rect.3 - rect.1)) as usize];
     let mut stats = BrickedFrame { first_tile_seconds: first.get().copied().unwrap_or(0.0), ..Default::default() };
     for r in done {
         let (chunk, s) = r?;
         stats.rays.primary += s.rays.primary;
         stats.rays.secondary += s.rays.secondary;
         stats.trace.add(&s.trace);
-        for (&(x0, y0, x1, _), tile) in chunk.0.iter().zip(&chunk.1) {
-            let tw = (x1 - x0) as usize;
-            for (row, colors) in tile.chunks(tw).enumerate() {
-                let start = (y0 as usize + row) * w as usize + x0 as usize;
-                radiance[start..start + tw].copy_from_slice(colors);
-            }
+        for (&(x0, y0, x1, y1), tile) in chunk.0.iter().zip(&chunk.1) {
+            let local = (x0 - rect.0, y0 - rect.1, x1 - rect.0, y1 - rect.1);
+            crate::render::place_tile(&mut radiance, w, local, tile);
         }
     }
-    Ok((Frame::from_radiance(w, h, radiance), stats))
+    Ok((radiance, stats))
 }
 
 /// One primary ray: its tile, pixel in the tile, sample and ray (`None`: it missed the
@@ -162,17 +184,11 @@ fn render_chunk<I: Intersector>(
     shader: Option<&Shader>,
     tiles: &[(u32, u32, u32, u32)],
 ) -> Result<(TileColors, RayTotals)> {
-    let tiles_x = eye.width.div_ceil(crate::render::TILE);
     let mut chunk = Chunk {
         tiles: tiles.to_vec(),
         radiance: tiles
             .iter()
             .map(|&(x0, y0, x1, y1)| vec![RadianceSum::default(); ((x1 - x0) * (y1 - y0)) as usize])
-            .collect(),
-        at: tiles
-            .iter()
-            .enumerate()
-            .map(|(k, &(x0, y0, ..))| ((y0 / crate::render::TILE) * tiles_x + x0 / crate::render::TILE, k))
             .collect(),
     };
     let primaries = primaries(eye, globals.test_bounds(), tiles);
