@@ -24,9 +24,10 @@ use crate::input::bricked::BrickedScene;
 use crate::output::tone_map::DisplayChoice;
 use crate::render::{self, RayTotals};
 
-/// Tiles a worker holds at once: one it renders, two queued behind it, so that the
-/// next is there when one is done.
-pub const IN_FLIGHT: usize = 3;
+/// Tiles a worker holds at once: a batch it renders side by side
+/// ([`super::mpi_worker::BATCH`]) and as many queued behind it, so that the next batch
+/// is there when one is done.
+pub const IN_FLIGHT: usize = 2 * super::mpi_worker::BATCH;
 
 /// What the master renders.
 pub struct Job<'s> {

@@ -4,23 +4,26 @@
 //! parked rays of `render::bricked` for a bricked scene — so a tile's colours are the
 //! single-process image's.
 
+use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
 use anyhow::{anyhow, bail, Result};
 use glam::Vec3;
+use mpi::point_to_point::Status;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
+use rayon::prelude::*;
 use raypipe_core::camera::EyeRays;
 use raypipe_core::image::CameraRecord;
 
 use super::launcher_stop::stopping;
-use super::patient_receive::{receive_within, serialized};
-use super::protocol::{decode_assign, encode_tile, TileHeader, TAG_ASSIGN, TAG_STOP, TAG_TILE};
+use super::patient_receive::{receive_within, serialized, try_receive};
+use super::protocol::{decode_assign, encode_tile, Assign, TileHeader, TAG_ASSIGN, TAG_STOP, TAG_TILE};
 use super::tile_pool::{tile_grid, Rect};
 use crate::commands::render::{Prepared, RenderArgs};
 use crate::input::bricked::BrickedScene;
 use crate::render::bricked::brick_cache::BrickCache;
-use crate::render::bricked::frame::render_bricked_rect;
+use crate::render::bricked::frame::{render_bricked_rect, BrickedFrame};
 use crate::render::{self, FrameJob, RayTotals, RenderOptions};
 
 /// A rendered tile and what rendering it did.
@@ -33,20 +36,26 @@ pub struct Rendered {
     pub bricks: (u64, u64, u64),
 }
 
-/// Renders tile `rect` of frame `k`.
-type RenderTile<'r> = dyn FnMut(u32, Rect) -> Result<Rendered> + 'r;
+/// Renders the tiles `rects` of frame `k`, side by side.
+type RenderTiles<'r> = dyn FnMut(u32, &[Rect]) -> Result<Vec<Rendered>> + 'r;
 
-/// The worker's loop: tiles rendered as they are assigned, until the master says stop.
+/// Tiles a worker renders side by side: more tiles than threads keep every thread busy
+/// to the end of a batch (one 32-pixel tile is four of the renderer's tiles).
+pub const BATCH: usize = 2;
+
+/// The worker's loop: the tiles assigned rendered a batch at a time, each sent back as
+/// soon as its batch is done, until the master says stop.
 pub fn worker(
     world: &SimpleCommunicator,
     cams: &[CameraRecord],
     a: &RenderArgs,
-    render: &mut RenderTile,
+    render: &mut RenderTiles,
 ) -> Result<()> {
     let timeout = Duration::from_secs_f64(a.mpi.mpi_timeout.max(0.001));
     let master = world.process_at_rank(0);
     // The master's tiles, of the first frame's size, as it cuts them.
     let tiles = tile_grid(cams[0].width, cams[0].height, a.mpi.mpi_tile);
+    let mut queue: VecDeque<Assign> = VecDeque::new();
     loop {
         if stopping() {
             // Alive a moment past the launcher's SIGTERM, so that the master can tell
@@ -54,39 +63,69 @@ pub fn worker(
             std::thread::sleep(Duration::from_millis(300));
             std::process::exit(143);
         }
-        // An idle worker may wait on a live master for as long as the slowest tile
-        // (bounded by the timeout) and the image's writing: it gives up after three.
-        let Some((bytes, status)) = receive_within(&master, None, 3 * timeout)? else {
-            bail!(
-                "rank {}: the master sent nothing for {:.0} s: it died or hangs",
-                world.rank(),
-                3.0 * timeout.as_secs_f64()
-            );
-        };
-        match status.tag() {
-            TAG_STOP => return Ok(()),
-            TAG_ASSIGN => {}
-            other => bail!("rank {}: unexpected message tag {other}", world.rank()),
+        // Every assignment already here is taken; the worker waits only with none.
+        if queue.is_empty() {
+            // An idle worker may wait on a live master for as long as the slowest
+            // tile (bounded by the timeout) and the image's writing: it gives up after
+            // three.
+            let Some(msg) = receive_within(&master, None, 3 * timeout)? else {
+                bail!(
+                    "rank {}: the master sent nothing for {:.0} s: it died or hangs",
+                    world.rank(),
+                    3.0 * timeout.as_secs_f64()
+                );
+            };
+            if !take(world, msg, &mut queue)? {
+                return Ok(());
+            }
         }
-        let job = decode_assign(&bytes)?;
-        if job.frame as usize >= cams.len() {
-            bail!("frame {} does not exist", job.frame);
+        while let Some(msg) = try_receive(&master, None, timeout)? {
+            if !take(world, msg, &mut queue)? {
+                return Ok(());
+            }
         }
-        let rect = *tiles.get(job.tile as usize).ok_or_else(|| anyhow!("tile {} does not exist", job.tile))?;
+        let frame = queue[0].frame;
+        let mut batch = Vec::with_capacity(BATCH);
+        while batch.len() < BATCH && queue.front().is_some_and(|j| j.frame == frame) {
+            batch.extend(queue.pop_front());
+        }
+        if frame as usize >= cams.len() {
+            bail!("frame {frame} does not exist");
+        }
+        let rects = batch
+            .iter()
+            .map(|j| tiles.get(j.tile as usize).copied().ok_or_else(|| anyhow!("tile {} does not exist", j.tile)))
+            .collect::<Result<Vec<Rect>>>()?;
         let start = Instant::now();
-        let done = render(job.frame, rect)?;
-        let header = TileHeader {
-            frame: job.frame,
-            tile: job.tile,
-            primary: done.rays.primary,
-            secondary: done.rays.secondary,
-            seconds: start.elapsed().as_secs_f64(),
-            hits: done.bricks.0,
-            misses: done.bricks.1,
-            loaded: done.bricks.2,
-        };
-        let msg = encode_tile(&header, &done.colours);
-        serialized(|| master.buffered_send_with_tag(&msg[..], TAG_TILE));
+        let done = render(frame, &rects)?;
+        // The batch's time, shared by its tiles.
+        let seconds = start.elapsed().as_secs_f64() / batch.len() as f64;
+        for (job, tile) in batch.iter().zip(done) {
+            let header = TileHeader {
+                frame,
+                tile: job.tile,
+                primary: tile.rays.primary,
+                secondary: tile.rays.secondary,
+                seconds,
+                hits: tile.bricks.0,
+                misses: tile.bricks.1,
+                loaded: tile.bricks.2,
+            };
+            let msg = encode_tile(&header, &tile.colours);
+            serialized(|| master.buffered_send_with_tag(&msg[..], TAG_TILE));
+        }
+    }
+}
+
+/// Queues an assignment; false for the master's stop.
+fn take(world: &SimpleCommunicator, (bytes, status): (Vec<u8>, Status), queue: &mut VecDeque<Assign>) -> Result<bool> {
+    match status.tag() {
+        TAG_STOP => Ok(false),
+        TAG_ASSIGN => {
+            queue.push_back(decode_assign(&bytes)?);
+            Ok(true)
+        }
+        other => bail!("rank {}: unexpected message tag {other}", world.rank()),
     }
 }
 
@@ -106,14 +145,14 @@ pub(crate) fn flat_worker(
     let mut job: Option<(u32, FrameJob)> = None;
     // One thread pool for the run: a pool per tile cost more than the tile.
     let pool = render::thread_pool(p.opts.threads)?;
-    worker(world, cams, a, &mut |k, rect| {
+    worker(world, cams, a, &mut |k, rects| {
         if job.as_ref().is_none_or(|(f, _)| *f != k) {
             let (cam, eye) = (&cams[k as usize], &eyes[k as usize]);
             job = Some((k, FrameJob::new(&view, eye, Vec3::from(cam.background), &p.opts)));
         }
         let Some((_, frame)) = &job else { bail!("no frame job") };
-        let (colours, rays) = pool.install(|| frame.rect(rect));
-        Ok(Rendered { colours, rays, bricks: (0, 0, 0) })
+        let done = pool.install(|| frame.rects(rects));
+        Ok(done.into_iter().map(|(colours, rays)| Rendered { colours, rays, bricks: (0, 0, 0) }).collect())
     })
 }
 
@@ -129,10 +168,19 @@ pub fn bricked_worker(
 ) -> Result<()> {
     let pool = render::thread_pool(opts.threads)?;
     let opts = RenderOptions { progress: false, ..*opts };
-    worker(world, cams, a, &mut |k, rect| {
+    let cams_ref = cams;
+    worker(world, cams, a, &mut |k, rects| {
         let before = cache.stats();
-        let (colours, frame) = pool.install(|| render_bricked_rect(scene, cache, &cams[k as usize], &opts, rect))?;
+        let cam = &cams_ref[k as usize];
+        let done: Vec<(Vec<Vec3>, BrickedFrame)> = pool.install(|| {
+            rects.par_iter().map(|&rect| render_bricked_rect(scene, cache, cam, &opts, rect)).collect::<Result<_>>()
+        })?;
+        // The cache's counts are the batch's: the first tile carries them.
         let c = cache.stats().since(&before);
-        Ok(Rendered { colours, rays: frame.rays, bricks: (c.hits, c.misses, c.bytes_read) })
+        let mut counts = Some((c.hits, c.misses, c.bytes_read));
+        Ok(done
+            .into_iter()
+            .map(|(colours, f)| Rendered { colours, rays: f.rays, bricks: counts.take().unwrap_or_default() })
+            .collect())
     })
 }

@@ -304,12 +304,27 @@ impl<'a, 's> FrameJob<'a, 's> {
     /// The colours of the rectangle `area`, row-major, rendered as the renderer's own
     /// tiles in parallel (on the current thread pool), and the rays they traced.
     pub fn rect(&self, area: (u32, u32, u32, u32)) -> (Vec<Vec3>, RayTotals) {
-        let (x0, y0, x1, y1) = area;
-        let tiles: Vec<(u32, u32, u32, u32)> =
-            tiles(x1 - x0, y1 - y0).into_iter().map(|(a, b, c, d)| (a + x0, b + y0, c + x0, d + y0)).collect();
-        let done =
-            tiles.par_iter().map(|&t| with_intersector!(self.opts.intersector, I => self.tile::<I>(t))).collect();
-        assemble(area, &tiles, done)
+        self.rects(&[area]).pop().unwrap_or_default()
+    }
+
+    /// The colours and rays of each of `areas`, their tiles all rendered in one parallel
+    /// pass: more tiles than threads keep every thread busy to the end.
+    pub fn rects(&self, areas: &[(u32, u32, u32, u32)]) -> Vec<(Vec<Vec3>, RayTotals)> {
+        let per_area: Vec<Vec<(u32, u32, u32, u32)>> = areas
+            .iter()
+            .map(|&(x0, y0, x1, y1)| {
+                tiles(x1 - x0, y1 - y0).into_iter().map(|(a, b, c, d)| (a + x0, b + y0, c + x0, d + y0)).collect()
+            })
+            .collect();
+        let all: Vec<(u32, u32, u32, u32)> = per_area.iter().flatten().copied().collect();
+        let mut done: Vec<(Vec<Vec3>, RayTotals)> =
+            all.par_iter().map(|&t| with_intersector!(self.opts.intersector, I => self.tile::<I>(t))).collect();
+        let mut out = Vec::with_capacity(areas.len());
+        for (&area, tiles) in areas.iter().zip(&per_area) {
+            let rest = done.split_off(tiles.len());
+            out.push(assemble(area, tiles, std::mem::replace(&mut done, rest)));
+        }
+        out
     }
 
     /// The colours of the tile `(x0, y0, x1, y1)`, row-major, and the rays it traced.

@@ -62,13 +62,13 @@ pub fn render_bricked(
     opts: &RenderOptions,
 ) -> Result<(Frame, BrickedFrame)> {
     let (w, h) = (camera.width, camera.height);
-    let (radiance, stats) = render_bricked_rect(scene, cache, camera, opts, (0, 0, w, h))?;
+    let (radiance, stats) = in_pool(opts.threads, || render_bricked_rect(scene, cache, camera, opts, (0, 0, w, h)))??;
     Ok((Frame::from_radiance(w, h, radiance), stats))
 }
 
 /// The pixels of `rect` (`x0, y0, x1, y1`, row by row) of the frame `camera` sees: each
 /// pixel's colour is the whole frame's, bit for bit, so that ranks of a distributed run
-/// can render the rectangles of one frame.
+/// can render the rectangles of one frame. Runs on the current thread pool.
 pub fn render_bricked_rect(
     scene: &BrickedScene,
     cache: &BrickCache<'_>,
@@ -129,18 +129,16 @@ fn frame_with<I: Intersector>(
     let shader = opts.shader(background);
     let start = std::time::Instant::now();
     let first = std::sync::OnceLock::new();
-    let done: Vec<Result<(TileColors, BrickedFrame)>> = in_pool(opts.threads, || {
-        chunks
-            .par_iter()
-            .map(|tiles| {
-                let mut tracer = BrickTracer::new(cache, index, opts.packet);
-                let r = render_chunk::<I>(&mut tracer, globals, eye, background, shader.as_ref(), tiles);
-                bar.inc(tiles.len() as u64);
-                first.get_or_init(|| start.elapsed().as_secs_f64());
-                r.map(|(chunk, rays)| (chunk, BrickedFrame { rays, trace: tracer.stats, first_tile_seconds: 0.0 }))
-            })
-            .collect()
-    })?;
+    let done: Vec<Result<(TileColors, BrickedFrame)>> = chunks
+        .par_iter()
+        .map(|tiles| {
+            let mut tracer = BrickTracer::new(cache, index, opts.packet);
+            let r = render_chunk::<I>(&mut tracer, globals, eye, background, shader.as_ref(), tiles);
+            bar.inc(tiles.len() as u64);
+            first.get_or_init(|| start.elapsed().as_secs_f64());
+            r.map(|(chunk, rays)| (chunk, BrickedFrame { rays, trace: tracer.stats, first_tile_seconds: 0.0 }))
+        })
+        .collect();
     bar.finish_and_clear();
     let w = rect.2 - rect.0;
     let mut radiance = vec![Vec3::ZERO; (w * (rect.3 - rect.1)) as usize];
