@@ -10,6 +10,7 @@ use crate::commands;
 
 use crate::commands::bench::BenchArgs;
 use crate::commands::build::BuildArgs;
+use crate::commands::cluster::ClusterArgs;
 use crate::commands::fixed_point::FixedPointArgs;
 use crate::commands::info::InfoArgs;
 use crate::commands::plot::PlotArgs;
@@ -70,6 +71,10 @@ pub enum Command {
     /// for a cluster: one row per point (CSV and JSON lines), resumable; `sweep merge`
     /// joins shards.
     Sweep(SweepArgs),
+    /// Predict a cluster from a distributed run's recording (`render --mpi --mpi-record`):
+    /// frames per second, efficiency and network bytes for 1…64 workers of given speed,
+    /// links and latency, with a model server for bricks.
+    Cluster(ClusterArgs),
     /// Plot a sweep's rows as SVG or PNG: a metric against a parameter (one line per value
     /// of --series), a heatmap over two parameters (--value), or stacked bars (--stack).
     Plot(PlotArgs),
@@ -150,6 +155,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Info(a) => commands::info::cmd_info(a),
         Command::Sweep(a) => commands::sweep::cmd_sweep(a),
         Command::Plot(a) => commands::plot::cmd_plot(a),
+        Command::Cluster(a) => commands::cluster::cmd_cluster(a),
         Command::Report(a) => commands::report::cmd_report(a),
     }
 }

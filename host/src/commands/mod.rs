@@ -9,6 +9,7 @@ pub mod args;
 pub mod bench;
 pub mod bricked_study;
 pub mod build;
+pub mod cluster;
 pub mod fixed_point;
 pub mod info;
 pub mod info_bricked;

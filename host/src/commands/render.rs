@@ -69,6 +69,10 @@ pub struct MpiArgs {
     /// (served).
     #[arg(long, value_enum, value_name = "HOW", default_value = "replicated")]
     pub mpi_data: MpiData,
+    /// Write what every tile cost, and the bricks it needed, to this file (JSON lines),
+    /// for `raypipe cluster` to replay on a modelled cluster.
+    #[arg(long, value_name = "FILE")]
+    pub mpi_record: Option<std::path::PathBuf>,
 }
 
 /// Where the ranks of a distributed render read the scene.

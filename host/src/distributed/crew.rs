@@ -59,12 +59,23 @@ impl Crew {
         Ok(Crew { master: here(), workers: workers.into_iter().flatten().collect() })
     }
 
-    /// The run's identity: ranks and hosts, and the MPI library.
-    pub fn identity(&self) -> String {
+    /// The hosts the ranks run on, each once.
+    fn host_names(&self) -> Vec<&str> {
         let mut hosts: Vec<&str> =
             std::iter::once(&self.master).chain(&self.workers).map(|w| w.host.as_str()).collect();
         hosts.sort_unstable();
         hosts.dedup();
+        hosts
+    }
+
+    /// How many hosts the ranks run on.
+    pub fn hosts(&self) -> usize {
+        self.host_names().len()
+    }
+
+    /// The run's identity: ranks and hosts, and the MPI library.
+    pub fn identity(&self) -> String {
+        let hosts = self.host_names();
         let ranks = self.workers.len() + 1;
         format!(
             "{ranks} ranks on {} host{} ({}); {}",

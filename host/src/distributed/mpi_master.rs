@@ -23,6 +23,7 @@ use crate::commands::render::RenderArgs;
 use crate::input::bricked::BrickedScene;
 use crate::output::tone_map::DisplayChoice;
 use crate::render::{self, RayTotals};
+use crate::study::cluster::recording::{Recording, RunRecord, TileRecord};
 
 /// Tiles a worker holds at once: a batch it renders side by side
 /// ([`super::mpi_worker::BATCH`]) and as many queued behind it, so that the next batch
@@ -41,6 +42,19 @@ pub struct Job<'s> {
     pub bricked: bool,
     /// The scene the master serves bricks of, when the data are served.
     pub server: Option<&'s BrickedScene>,
+    /// A bricked scene's bricks: stored and decompressed bytes, for the recording.
+    pub bricks: Vec<(u64, u64)>,
+    /// How long a worker that owes tiles may stay silent (`--mpi-timeout`).
+    pub timeout: Duration,
+}
+
+/// What the run did, tile by tile, for `--mpi-record`.
+#[derive(Default)]
+pub struct RunLog {
+    /// Every tile received.
+    pub tiles: Vec<TileRecord>,
+    /// Seconds the master spent on them (decoding, placing, answering).
+    pub master_seconds: f64,
 }
 
 /// What one worker did in one frame.
@@ -85,7 +99,6 @@ pub fn master(world: &SimpleCommunicator, a: &RenderArgs, job: &Job<'_>, crew: &
     let (w, h) = (cams[0].width, cams[0].height);
     let tiles = tile_grid(w, h, a.mpi.mpi_tile);
     let mut pool = TilePool::new(tiles.len(), workers);
-    let timeout = Duration::from_secs_f64(a.mpi.mpi_timeout.max(0.001));
     let walk = cams.len() > 1;
     println!(
         "mpi      {}: master and {workers} worker{}, {} tiles of {} px, {IN_FLIGHT} in flight per worker",
@@ -99,12 +112,12 @@ pub fn master(world: &SimpleCommunicator, a: &RenderArgs, job: &Job<'_>, crew: &
         println!("frame      seconds   frames/s  kept tiles  mpi share    MB sent{bricks}  image");
     }
     let mut display = job.display;
+    let mut log = RunLog::default();
     let mut times = Vec::new();
     let mut rows: Vec<(f64, f64)> = Vec::new();
     for (k, cam) in cams.iter().enumerate() {
         let start = Instant::now();
-        let (radiance, rays, per_worker) =
-            gather_frame(world, crew, &mut pool, &tiles, (k as u32, w), timeout, job.server)?;
+        let (radiance, rays, per_worker) = gather_frame(world, crew, &mut pool, &tiles, (k as u32, w), job, &mut log)?;
         let secs = start.elapsed().as_secs_f64().max(1e-9);
         let frame = render::Frame::from_radiance(cam.width, cam.height, radiance);
         let path = if walk { crate::output::frame_path(&a.output, k) } else { a.output.clone() };
@@ -177,6 +190,24 @@ pub fn master(world: &SimpleCommunicator, a: &RenderArgs, job: &Job<'_>, crew: &
         let chart = crate::output::walk_chart::write_walk_chart(&a.output, &rows, &title, "MB sent")?;
         println!("chart    {}", chart.display());
     }
+    if let Some(path) = &a.mpi.mpi_record {
+        let run = RunRecord {
+            identity: crew.identity(),
+            workers: workers as u32,
+            host_threads: std::thread::available_parallelism().map_or(1, |n| n.get() as u32),
+            hosts: crew.hosts() as u32,
+            width: w,
+            height: h,
+            tile: a.mpi.mpi_tile,
+            in_flight: IN_FLIGHT as u32,
+            batch: super::mpi_worker::BATCH as u32,
+            frame_seconds: times,
+            master_seconds_per_tile: log.master_seconds / log.tiles.len().max(1) as f64,
+            bricks: job.bricks.clone(),
+        };
+        Recording { run, tiles: log.tiles }.write(path)?;
+        println!("record   {}", path.display());
+    }
     Ok(())
 }
 
@@ -187,9 +218,10 @@ fn gather_frame(
     pool: &mut TilePool,
     tiles: &[Rect],
     (frame, width): (u32, u32),
-    timeout: Duration,
-    server: Option<&BrickedScene>,
+    job: &Job<'_>,
+    log: &mut RunLog,
 ) -> Result<(Vec<Vec3>, RayTotals, Vec<WorkerFrame>)> {
+    let timeout = job.timeout;
     let workers = (world.size() - 1) as usize;
     let height = tiles.iter().map(|t| t.3).max().unwrap_or(0);
     let mut radiance = vec![Vec3::ZERO; (width * height) as usize];
@@ -214,7 +246,7 @@ fn gather_frame(
     let mut heard = vec![Instant::now(); workers];
     let mut received = 0;
     while received < tiles.len() {
-        if let Some(scene) = server {
+        if let Some(scene) = job.server {
             let mut served = vec![0u64; workers];
             serve_waiting(world, scene, &mut served)?;
             for (s, b) in stats.iter_mut().zip(served) {
@@ -235,15 +267,16 @@ fn gather_frame(
             std::thread::sleep(POLL);
             continue;
         };
+        let took = Instant::now();
         let r = status.source_rank();
         let w = (r - 1) as usize;
-        heard[w] = Instant::now();
+        heard[w] = took;
         let h = tile_header(&bytes).map_err(|e| anyhow!("rank {r}: {e}"))?;
         let rect = *tiles
             .get(h.tile as usize)
             .ok_or_else(|| anyhow!("rank {r} sent tile {}, which does not exist", h.tile))?;
         let pixels = ((rect.2 - rect.0) * (rect.3 - rect.1)) as usize;
-        let (h, colours) = decode_tile(&bytes, pixels).map_err(|e| anyhow!("rank {r}: {e}"))?;
+        let (h, colours, touched) = decode_tile(&bytes, pixels).map_err(|e| anyhow!("rank {r}: {e}"))?;
         if h.frame != frame {
             bail!("rank {r} sent a tile of frame {}, not {frame}", h.frame);
         }
@@ -260,6 +293,10 @@ fn gather_frame(
         }
         received += 1;
         send(w, pool, &mut given, &mut stats);
+        log.master_seconds += took.elapsed().as_secs_f64();
+        let (seconds, waited) = (h.seconds, h.waited.min(h.seconds));
+        let bytes = bytes.len() as u64;
+        log.tiles.push(TileRecord { frame, tile: h.tile, rank: r as u32, seconds, waited, bytes, bricks: touched });
     }
     Ok((radiance, rays, stats))
 }

@@ -35,8 +35,7 @@ pub fn cmd_render_mpi(a: &RenderArgs) -> Result<()> {
         // Tiles go back by buffered sends: a worker copies a tile out and renders the
         // next at once, instead of waiting until the master takes it (large messages
         // wait for the receiver). At most IN_FLIGHT tiles are owed at any time.
-        let tile = a.mpi.mpi_tile as usize;
-        universe.set_buffer_size((IN_FLIGHT + 1) * (tile * tile * 12 + 1024));
+        universe.set_buffer_size((IN_FLIGHT + 1) * (tile_budget(a) + MPI_BSEND_OVERHEAD));
     }
     if world.size() < 2 {
         bail!("--mpi needs a master and at least one worker: run it as `mpirun -n 2 raypipe render … --mpi` or more");
@@ -75,6 +74,17 @@ pub fn cmd_render_mpi(a: &RenderArgs) -> Result<()> {
     }
     stop_all(&world);
     result
+}
+
+/// What MPI keeps beside each buffered message (generous: `MPI_BSEND_OVERHEAD` is about
+/// a hundred bytes in OpenMPI and MPICH).
+const MPI_BSEND_OVERHEAD: usize = 1024;
+
+/// Bytes a tile message may take in the buffer of buffered sends: its colours, header
+/// and up to 64 Ki bricks; a larger one goes by a plain send.
+pub fn tile_budget(a: &RenderArgs) -> usize {
+    let tile = a.mpi.mpi_tile as usize;
+    tile * tile * 12 + 1024 + 4 * 65536
 }
 
 /// `--mpi-timeout`.
@@ -116,7 +126,15 @@ fn run_flat(world: &SimpleCommunicator, a: &RenderArgs) -> Result<()> {
     }
     let (p, cams) = prepared.inspect_err(|_| stop_all(world))?;
     let crew = Crew::gather(world, timeout_of(a), &mut || Ok(()))?;
-    let job = Job { name: p.scene.name.clone(), cams, display: p.display, bricked: false, server: None };
+    let job = Job {
+        name: p.scene.name.clone(),
+        cams,
+        display: p.display,
+        bricked: false,
+        server: None,
+        bricks: Vec::new(),
+        timeout: timeout_of(a),
+    };
     master(world, a, &job, &crew)
 }
 
@@ -149,7 +167,10 @@ fn run_bricked(world: &SimpleCommunicator, a: &RenderArgs, path: &Path, served: 
     let crew = Crew::gather(world, timeout, &mut serve)?;
     let (cam, _, display) = bricked_setup(a, &scene)?;
     let cams = a.walk.cameras(&cam)?.unwrap_or_else(|| vec![cam]);
-    let job = Job { name, cams, display, bricked: true, server };
+    let index = scene.view();
+    let bricks =
+        (0..index.brick_count()).filter_map(|b| index.brick(b)).map(|r| (r.stored_size, r.image_size)).collect();
+    let job = Job { name, cams, display, bricked: true, server, bricks, timeout };
     master(world, a, &job, &crew)
 }
 

@@ -34,6 +34,10 @@ pub struct Rendered {
     pub rays: RayTotals,
     /// Brick visits served by the cache, bricks loaded, stored bytes loaded.
     pub bricks: (u64, u64, u64),
+    /// Seconds its tracer waited with every ray parked on a brick.
+    pub waited: f64,
+    /// The bricks its rays needed.
+    pub touched: Vec<u32>,
 }
 
 /// Renders the tiles `rects` of frame `k`, side by side.
@@ -56,6 +60,7 @@ pub fn worker(
     // The master's tiles, of the first frame's size, as it cuts them.
     let tiles = tile_grid(cams[0].width, cams[0].height, a.mpi.mpi_tile);
     let mut queue: VecDeque<Assign> = VecDeque::new();
+    let budget = super::mpi_render::tile_budget(a);
     loop {
         if stopping() {
             // Alive a moment past the launcher's SIGTERM, so that the master can tell
@@ -110,9 +115,17 @@ pub fn worker(
                 hits: tile.bricks.0,
                 misses: tile.bricks.1,
                 loaded: tile.bricks.2,
+                // Tiles of a batch run side by side: a thread's wait costs the worker
+                // its share of the batch, as `seconds` is.
+                waited: tile.waited / batch.len() as f64,
+                touched: 0,
             };
-            let msg = encode_tile(&header, &tile.colours);
-            serialized(|| master.buffered_send_with_tag(&msg[..], TAG_TILE));
+            let msg = encode_tile(&header, &tile.colours, &tile.touched);
+            if msg.len() <= budget {
+                serialized(|| master.buffered_send_with_tag(&msg[..], TAG_TILE));
+            } else {
+                serialized(|| master.send_with_tag(&msg[..], TAG_TILE));
+            }
         }
     }
 }
@@ -152,7 +165,9 @@ pub(crate) fn flat_worker(
         }
         let Some((_, frame)) = &job else { bail!("no frame job") };
         let done = pool.install(|| frame.rects(rects));
-        Ok(done.into_iter().map(|(colours, rays)| Rendered { colours, rays, bricks: (0, 0, 0) }).collect())
+        let rendered =
+            |(colours, rays)| Rendered { colours, rays, bricks: (0, 0, 0), waited: 0.0, touched: Vec::new() };
+        Ok(done.into_iter().map(rendered).collect())
     })
 }
 
@@ -180,7 +195,13 @@ pub fn bricked_worker(
         let mut counts = Some((c.hits, c.misses, c.bytes_read));
         Ok(done
             .into_iter()
-            .map(|(colours, f)| Rendered { colours, rays: f.rays, bricks: counts.take().unwrap_or_default() })
+            .map(|(colours, f)| Rendered {
+                colours,
+                rays: f.rays,
+                bricks: counts.take().unwrap_or_default(),
+                waited: f.trace.idle_seconds,
+                touched: f.touched,
+            })
             .collect())
     })
 }

@@ -46,18 +46,26 @@ pub struct TileHeader {
     pub misses: u64,
     /// Stored bytes of the bricks it loaded (from the file, or the model server).
     pub loaded: u64,
+    /// Of `seconds`, those its tracers waited with every ray parked on a brick.
+    pub waited: f64,
+    /// Bricks its rays needed, listed after the colours.
+    pub touched: u64,
 }
 
 const HEADER: usize = std::mem::size_of::<TileHeader>();
 
-/// A rendered tile as bytes: the header, then its colours (three `f32` per pixel).
-pub fn encode_tile(header: &TileHeader, colours: &[Vec3]) -> Vec<u8> {
-    let mut out = Vec::with_capacity(HEADER + colours.len() * 12);
-    out.extend_from_slice(bytemuck::bytes_of(header));
+/// A rendered tile as bytes: the header, its colours (three `f32` per pixel), then the
+/// bricks it needed (`u32` each; `header.touched` is set to their number).
+pub fn encode_tile(header: &TileHeader, colours: &[Vec3], touched: &[u32]) -> Vec<u8> {
+    let mut out = Vec::with_capacity(HEADER + colours.len() * 12 + touched.len() * 4);
+    out.extend_from_slice(bytemuck::bytes_of(&TileHeader { touched: touched.len() as u64, ..*header }));
     for c in colours {
         for v in c.to_array() {
             out.extend_from_slice(&v.to_le_bytes());
         }
+    }
+    for b in touched {
+        out.extend_from_slice(&b.to_le_bytes());
     }
     out
 }
@@ -71,15 +79,27 @@ pub fn tile_header(bytes: &[u8]) -> Result<TileHeader> {
     }
 }
 
+/// A decoded tile: its header, colours and the bricks it needed.
+pub type Tile = (TileHeader, Vec<Vec3>, Vec<u32>);
+
 /// A rendered tile from its bytes; `pixels` is how many the tile must have.
-pub fn decode_tile(bytes: &[u8], pixels: usize) -> Result<(TileHeader, Vec<Vec3>)> {
-    if bytes.len() != HEADER + pixels * 12 {
-        bail!("a tile message of {} bytes, not {}", bytes.len(), HEADER + pixels * 12);
-    }
+pub fn decode_tile(bytes: &[u8], pixels: usize) -> Result<Tile> {
     let header = tile_header(bytes)?;
-    let f = |k: usize| f32::from_le_bytes([bytes[k], bytes[k + 1], bytes[k + 2], bytes[k + 3]]);
+    let touched = usize::try_from(header.touched).ok().filter(|&t| t <= bytes.len() / 4);
+    let want = touched.map(|t| HEADER + pixels * 12 + t * 4);
+    let (Some(touched), Some(true)) = (touched, want.map(|w| w == bytes.len())) else {
+        bail!(
+            "a tile message of {} bytes, not the {pixels} pixels and {} bricks its header gives",
+            bytes.len(),
+            header.touched
+        );
+    };
+    let word = |k: usize| [bytes[k], bytes[k + 1], bytes[k + 2], bytes[k + 3]];
+    let f = |k: usize| f32::from_le_bytes(word(k));
     let colours = (0..pixels).map(|i| HEADER + 12 * i).map(|k| Vec3::new(f(k), f(k + 4), f(k + 8))).collect();
-    Ok((header, colours))
+    let at = HEADER + pixels * 12;
+    let bricks = (0..touched).map(|i| u32::from_le_bytes(word(at + 4 * i))).collect();
+    Ok((header, colours, bricks))
 }
 
 /// Where a rank runs: its host and process id.
@@ -136,14 +156,18 @@ mod tests {
             hits: 5,
             misses: 2,
             loaded: 65536,
+            waited: 0.125,
+            touched: 0,
         };
         let colours = vec![Vec3::new(0.1, f32::MIN_POSITIVE, -0.0), Vec3::new(1e30, 0.5, 2.0)];
-        let bytes = encode_tile(&h, &colours);
-        let (h2, c2) = decode_tile(&bytes, 2).unwrap();
-        assert_eq!(h2, h);
+        let bytes = encode_tile(&h, &colours, &[4, 9, 77]);
+        let (h2, c2, t2) = decode_tile(&bytes, 2).unwrap();
+        assert_eq!(h2, TileHeader { touched: 3, ..h });
+        assert_eq!(t2, [4, 9, 77]);
         let bits = |v: &[Vec3]| v.iter().flat_map(|c| c.to_array().map(f32::to_bits)).collect::<Vec<_>>();
         assert_eq!(bits(&c2), bits(&colours));
         assert!(decode_tile(&bytes, 3).is_err());
+        assert!(decode_tile(&bytes[..bytes.len() - 4], 2).is_err());
         assert!(decode_tile(&bytes[..10], 0).is_err());
         assert!(decode_assign(&[0; 7]).is_err());
     }

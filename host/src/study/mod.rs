@@ -1,6 +1,7 @@
 //! Measuring scenes and models: statistics, benchmarks, the fixed-point comparison, sweeps, plots, report diffs and cost images.
 
 pub mod bench;
+pub mod cluster;
 pub mod cost_image;
 pub mod fixed_point;
 pub mod report_diff;

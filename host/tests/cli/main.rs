@@ -5,6 +5,7 @@
 mod bad_input;
 mod bricked;
 mod build;
+mod cluster;
 mod common;
 mod fixed_point;
 mod info;

@@ -122,13 +122,19 @@ fn bricked_frames_equal_single_process_frames_replicated_and_served() {
             assert_eq!(decode(&d.join("one.png")), decode(&d.join("mpi.png")), "{algo}, {data} on {ranks} ranks");
         }
     }
-    // A served walkthrough: every frame equal, the caches' hit rates per worker.
+    // A served walkthrough: every frame equal, the caches' hit rates per worker; its
+    // recording replays on the cluster model.
     let walk = ["render", "p.rpsb", "--size", "48x32", "--orbit", "3", "--cache", "512K"];
     let o = raypipe(d, &[&walk[..], &["-o", "w.png"]].concat());
     assert!(o.status.success(), "{}", stderr(&o));
-    let o = mpirun(d, 3, &[&walk[..], &["-o", "m.png", "--mpi", "--mpi-data", "served"]].concat());
+    let mpi = ["-o", "m.png", "--mpi", "--mpi-data", "served", "--mpi-record", "rec.jsonl"];
+    let o = mpirun(d, 3, &[&walk[..], &mpi[..]].concat());
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(String::from_utf8_lossy(&o.stdout).contains("hit rate per worker"));
+    let o = raypipe(d, &["cluster", "rec.jsonl", "--served", "--workers", "1,2,64", "--check", "rec.jsonl"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("3 frames of 48x32") && out.contains("check    2 workers on 1 host"), "{out}");
     for k in 0..3 {
         let name = |s: &str| d.join(format!("{s}-{k:04}.png"));
         assert_eq!(decode(&name("w")), decode(&name("m")), "frame {k}");

@@ -5,7 +5,7 @@
 //! brick is missing stays parked — its [`TopWalk`] is plain data — until it arrives.
 //! The tracer waits only when every ray it holds is parked.
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -68,13 +68,27 @@ pub struct BrickTracer<'c, 's> {
     packet: PacketSize,
     /// What it did so far.
     pub stats: TraceStats,
+    /// The bricks it asked the cache for (a set: sorted, each once).
+    touched: BTreeSet<u32>,
 }
 
 impl<'c, 's> BrickTracer<'c, 's> {
     /// A tracer drawing bricks from `cache` (of the scene `index` describes), tracing
     /// each brick's rays as `packet` says.
     pub fn new(cache: &'c BrickCache<'s>, index: &'c BrickedView<'s>, packet: PacketSize) -> Self {
-        BrickTracer { cache, index, packet, stats: TraceStats::default() }
+        BrickTracer { cache, index, packet, stats: TraceStats::default(), touched: BTreeSet::new() }
+    }
+
+    /// Brick `b` from the cache, pinned, if resident (else queued); noted as touched.
+    fn get(&mut self, b: u32) -> Option<Arc<ResidentBrick>> {
+        self.touched.insert(b);
+        self.cache.get(b)
+    }
+
+    /// The bricks it needed, in order: a distributed run's record of a tile's working
+    /// set, from which a cluster model replays other workers' caches.
+    pub fn touched(&self) -> Vec<u32> {
+        self.touched.iter().copied().collect()
     }
 
     /// Hands each group of `pending` to `visit` once its brick is resident, with the
@@ -95,7 +109,7 @@ impl<'c, 's> BrickTracer<'c, 's> {
             let mut progressed = false;
             let keys: Vec<u32> = pending.keys().copied().collect();
             for b in keys {
-                let Some(brick) = self.cache.get(b) else {
+                let Some(brick) = self.get(b) else {
                     if let Some(g) = pending.get_mut(&b) {
                         g.waited = true;
                     }
@@ -185,7 +199,7 @@ impl<'c, 's> BrickTracer<'c, 's> {
             let keys: Vec<u32> = parked.keys().copied().collect();
             for b in keys {
                 if let std::collections::hash_map::Entry::Vacant(e) = pins.entry(b) {
-                    match self.cache.get(b) {
+                    match self.get(b) {
                         Some(brick) => {
                             e.insert(brick);
                         }
@@ -233,7 +247,7 @@ impl<'c, 's> BrickTracer<'c, 's> {
             };
             let brick = match pins.get(&b) {
                 Some(brick) => brick,
-                None => match self.cache.get(b) {
+                None => match self.get(b) {
                     Some(brick) => pins.entry(b).or_insert(brick),
                     None => break Some(b),
                 },

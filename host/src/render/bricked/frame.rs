@@ -29,7 +29,7 @@ use crate::with_intersector;
 pub const TILES_PER_WORKER: usize = 4;
 
 /// What a bricked frame did.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Debug, Default)]
 pub struct BrickedFrame {
     /// Rays traced.
     pub rays: RayTotals,
@@ -37,6 +37,8 @@ pub struct BrickedFrame {
     pub trace: TraceStats,
     /// Seconds from the frame's start until its first tile was done.
     pub first_tile_seconds: f64,
+    /// The bricks its rays needed, sorted, each once.
+    pub touched: Vec<u32>,
 }
 
 /// Checks that `opts` can render a bricked scene: ray casting and Whitted shade from one
@@ -136,7 +138,8 @@ fn frame_with<I: Intersector>(
             let r = render_chunk::<I>(&mut tracer, globals, eye, background, shader.as_ref(), tiles);
             bar.inc(tiles.len() as u64);
             first.get_or_init(|| start.elapsed().as_secs_f64());
-            r.map(|(chunk, rays)| (chunk, BrickedFrame { rays, trace: tracer.stats, first_tile_seconds: 0.0 }))
+            let touched = tracer.touched();
+            r.map(|(chunk, rays)| (chunk, BrickedFrame { rays, trace: tracer.stats, first_tile_seconds: 0.0, touched }))
         })
         .collect();
     bar.finish_and_clear();
@@ -148,11 +151,14 @@ fn frame_with<I: Intersector>(
         stats.rays.primary += s.rays.primary;
         stats.rays.secondary += s.rays.secondary;
         stats.trace.add(&s.trace);
+        stats.touched.extend(s.touched);
         for (&(x0, y0, x1, y1), tile) in chunk.0.iter().zip(&chunk.1) {
             let local = (x0 - rect.0, y0 - rect.1, x1 - rect.0, y1 - rect.1);
             crate::render::place_tile(&mut radiance, w, local, tile);
         }
     }
+    stats.touched.sort_unstable();
+    stats.touched.dedup();
     Ok((radiance, stats))
 }
 
