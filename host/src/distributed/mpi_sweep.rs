@@ -6,10 +6,13 @@
 //! and writes the tables. The rows are the single-process sweep's, byte for byte: a
 //! point's row depends on the point alone.
 
+use std::time::Duration;
+
 use anyhow::{anyhow, bail, Result};
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 
+use super::patient_receive::{try_receive, POLL};
 use crate::commands::simulate::SceneCache;
 use crate::commands::sweep::{run_point, sweep_with, SweepArgs};
 use crate::study::sweep::{Point, Spec};
@@ -33,14 +36,20 @@ pub fn cmd_sweep_mpi(a: &SweepArgs) -> Result<()> {
     if world.size() < 2 {
         bail!("--mpi needs a master and at least one worker: run it as `mpirun -n 2 raypipe sweep … --mpi` or more");
     }
+    // The master outlives the launcher's SIGTERM a moment, to say what was running.
+    super::launcher_stop::catch_sigterm();
     if world.rank() != 0 {
         return worker(&world, a);
     }
     let mut stopped = vec![false; world.size() as usize];
     let result = sweep_with(a, &mut |_, todo, record| master(&world, todo, record, &mut stopped));
     if let Err(e) = &result {
-        // Workers may be running points: only an abort ends them at once.
         eprintln!("error: {e:#}");
+        if super::launcher_stop::stopping() {
+            // The launcher is ending the job and kills every rank in a moment.
+            std::process::exit(1);
+        }
+        // Workers may be running points: only an abort ends them at once.
         world.abort(1);
     }
     // Workers still waiting (the sweep had nothing left to run) are let go.
@@ -64,9 +73,28 @@ fn master(
 ) -> Result<Vec<Row>> {
     let mut rows = Vec::with_capacity(todo.len());
     let mut next = 0;
+    // The point each rank runs.
+    let mut running: Vec<Option<usize>> = vec![None; world.size() as usize];
     while rows.len() < todo.len() {
-        let (msg, status) = world.any_process().receive_vec::<u8>();
+        let (msg, status) = loop {
+            // A point may run for hours: no timeout, but no blocking receive either (a
+            // sender that dies mid-message would block it for ever).
+            let got = try_receive(&world.any_process(), None, Duration::from_secs(60))?;
+            if super::launcher_stop::stopping() {
+                let held: Vec<String> =
+                    running.iter().enumerate().filter_map(|(r, p)| p.map(|p| format!("rank {r} point {p}"))).collect();
+                bail!(
+                    "mpirun is ending the job (a rank died, or it was interrupted) while running: {}",
+                    held.join(", ")
+                );
+            }
+            match got {
+                Some(m) => break m,
+                None => std::thread::sleep(POLL),
+            }
+        };
         let r = status.source_rank();
+        running[r as usize] = None;
         match status.tag() {
             TAG_WANT => {}
             TAG_ROW => {
@@ -80,6 +108,7 @@ fn master(
         }
         if let Some(p) = todo.get(next) {
             world.process_at_rank(r).send_with_tag(&(p.index as u64).to_le_bytes()[..], TAG_POINT);
+            running[r as usize] = Some(p.index);
             next += 1;
         } else {
             world.process_at_rank(r).send_with_tag(&[0u8; 0][..], TAG_STOP);
