@@ -119,10 +119,17 @@ fn run_flat(world: &SimpleCommunicator, a: &RenderArgs) -> Result<()> {
         Ok((p, cams))
     });
     if world.rank() != 0 {
-        return match report_ready(world, prepared) {
-            Some((p, cams)) => flat_worker(world, a, &p, &cams),
-            None => Ok(()),
+        let (p, cams) = match prepared {
+            Ok(x) => x,
+            Err(e) => {
+                report_ready::<()>(world, Err(e));
+                return Ok(());
+            }
         };
+        // The image is validated before the worker says it is ready: on a large scene
+        // that takes a second, which must not fall into the first frame.
+        let Some(view) = report_ready(world, p.scene.view()) else { return Ok(()) };
+        return flat_worker(world, a, &p, &view, &cams);
     }
     let (p, cams) = prepared.inspect_err(|_| stop_all(world))?;
     let crew = Crew::gather(world, timeout_of(a), &mut || Ok(()))?;

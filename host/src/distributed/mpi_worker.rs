@@ -15,6 +15,7 @@ use mpi::traits::*;
 use rayon::prelude::*;
 use raypipe_core::camera::EyeRays;
 use raypipe_core::image::CameraRecord;
+use raypipe_core::SceneView;
 
 use super::launcher_stop::stopping;
 use super::patient_receive::{receive_within, serialized, try_receive};
@@ -147,9 +148,9 @@ pub(crate) fn flat_worker(
     world: &SimpleCommunicator,
     a: &RenderArgs,
     p: &Prepared,
+    view: &SceneView<'_>,
     cams: &[CameraRecord],
 ) -> Result<()> {
-    let view = p.scene.view()?;
     let eyes = cams
         .iter()
         .map(|c| Ok(render::eye_rays(c, "camera")?.with_sampler(p.opts.sampler())))
@@ -161,7 +162,7 @@ pub(crate) fn flat_worker(
     worker(world, cams, a, &mut |k, rects| {
         if job.as_ref().is_none_or(|(f, _)| *f != k) {
             let (cam, eye) = (&cams[k as usize], &eyes[k as usize]);
-            job = Some((k, FrameJob::new(&view, eye, Vec3::from(cam.background), &p.opts)));
+            job = Some((k, FrameJob::new(view, eye, Vec3::from(cam.background), &p.opts)));
         }
         let Some((_, frame)) = &job else { bail!("no frame job") };
         let done = pool.install(|| frame.rects(rects));
