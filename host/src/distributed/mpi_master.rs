@@ -25,9 +25,10 @@ use crate::output::tone_map::DisplayChoice;
 use crate::render::{self, RayTotals};
 use crate::study::cluster::recording::{Recording, RunRecord, TileRecord};
 
-/// Tiles a worker holds at once, all started on its threads at once: enough that its
-/// threads never run dry while finished tiles travel and new ones come.
-pub const IN_FLIGHT: usize = 4;
+/// Tiles a worker holds at once: a batch it renders side by side
+/// ([`super::mpi_worker::BATCH`]) and as many queued behind it, so that the next batch
+/// is there when one is done.
+pub const IN_FLIGHT: usize = 2 * super::mpi_worker::BATCH;
 
 /// What the master renders.
 pub struct Job<'s> {
@@ -199,6 +200,7 @@ pub fn master(world: &SimpleCommunicator, a: &RenderArgs, job: &Job<'_>, crew: &
             height: h,
             tile: a.mpi.mpi_tile,
             in_flight: IN_FLIGHT as u32,
+            batch: super::mpi_worker::BATCH as u32,
             frame_seconds: times,
             master_seconds_per_tile: log.master_seconds / log.tiles.len().max(1) as f64,
             bricks: job.bricks.clone(),
@@ -262,9 +264,7 @@ fn gather_frame(
         });
         let Some((bytes, status)) = received_tile? else {
             check_silence(&heard, &given, tiles, timeout)?;
-            // Workers hold several tiles, so the master can nap longer than a message
-            // takes; polling faster took the cores it shares with workers.
-            std::thread::sleep(4 * POLL);
+            std::thread::sleep(POLL);
             continue;
         };
         let took = Instant::now();

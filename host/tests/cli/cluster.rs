@@ -3,7 +3,7 @@
 
 use crate::common::*;
 
-const RUN: &str = r#"{"identity":"t","workers":1,"host_threads":2,"hosts":1,"width":32,"height":16,"tile":16,"in_flight":4,"frame_seconds":[0.2],"master_seconds_per_tile":0.0,"bricks":[[1000,4000]]}"#;
+const RUN: &str = r#"{"identity":"t","workers":1,"host_threads":2,"hosts":1,"width":32,"height":16,"tile":16,"in_flight":4,"batch":2,"frame_seconds":[0.2],"master_seconds_per_tile":0.0,"bricks":[[1000,4000]]}"#;
 
 fn tile(t: u32) -> String {
     format!(r#"{{"frame":0,"tile":{t},"rank":1,"seconds":0.1,"waited":0.0,"bytes":3100,"bricks":[0]}}"#)

@@ -371,6 +371,7 @@ mod tests {
             height: 64,
             tile: 16,
             in_flight: 4,
+            batch: 2,
             frame_seconds: vec![1.0; frames as usize],
             master_seconds_per_tile: 0.0,
             bricks: vec![(size, size); 8],

@@ -31,6 +31,8 @@ pub struct RunRecord {
     pub tile: u32,
     /// Tiles a worker held at once.
     pub in_flight: u32,
+    /// Tiles a worker rendered side by side.
+    pub batch: u32,
     /// Each frame's measured seconds, master's clock.
     pub frame_seconds: Vec<f64>,
     /// The master's seconds per tile received (decoding, placing, answering), measured.
@@ -172,7 +174,7 @@ impl Recording {
 mod tests {
     use super::*;
 
-    const RUN: &str = r#"{"identity":"t","workers":1,"host_threads":2,"hosts":1,"width":16,"height":16,"tile":16,"in_flight":4,"frame_seconds":[0.5],"master_seconds_per_tile":0.0,"bricks":[[10,20]]}"#;
+    const RUN: &str = r#"{"identity":"t","workers":1,"host_threads":2,"hosts":1,"width":16,"height":16,"tile":16,"in_flight":4,"batch":2,"frame_seconds":[0.5],"master_seconds_per_tile":0.0,"bricks":[[10,20]]}"#;
 
     #[test]
     fn recordings_round_trip_and_bad_ones_are_one_line_errors() {
