@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 use anyhow::{anyhow, bail, Result};
 use glam::Vec3;
 use mpi::point_to_point::Status;
-use mpi::topology::SimpleCommunicator;
+use mpi::topology::{Process, SimpleCommunicator};
 use mpi::traits::*;
 use rayon::prelude::*;
 use raypipe_core::camera::EyeRays;
@@ -18,7 +18,7 @@ use raypipe_core::image::CameraRecord;
 use raypipe_core::SceneView;
 
 use super::launcher_stop::stopping;
-use super::patient_receive::{receive_within, serialized, try_receive};
+use super::patient_receive::{serialized, try_receive, POLL};
 use super::protocol::{decode_assign, encode_tile, Assign, TileHeader, TAG_ASSIGN, TAG_STOP, TAG_TILE};
 use super::tile_pool::{tile_grid, Rect};
 use crate::commands::render::{Prepared, RenderArgs};
@@ -74,7 +74,10 @@ pub fn worker(
             // An idle worker may wait on a live master for as long as the slowest
             // tile (bounded by the timeout) and the image's writing: it gives up after
             // three.
-            let Some(msg) = receive_within(&master, None, 3 * timeout)? else {
+            let Some(msg) = wait_for_order(&master, timeout, 3 * timeout)? else {
+                if stopping() {
+                    continue;
+                }
                 bail!(
                     "rank {}: the master sent nothing for {:.0} s: it died or hangs",
                     world.rank(),
@@ -85,7 +88,9 @@ pub fn worker(
                 return Ok(());
             }
         }
-        while let Some(msg) = try_receive(&master, None, timeout)? {
+        // Only the master's assignments and stop: replies to the loaders' brick
+        // requests come on tags of their own and are theirs to take.
+        while let Some(msg) = next_order(&master, timeout)? {
             if !take(world, msg, &mut queue)? {
                 return Ok(());
             }
@@ -128,6 +133,30 @@ pub fn worker(
                 serialized(|| master.send_with_tag(&msg[..], TAG_TILE));
             }
         }
+    }
+}
+
+/// The master's next assignment, or its stop, if one has begun to arrive.
+fn next_order(master: &Process<'_>, timeout: Duration) -> Result<Option<(Vec<u8>, Status)>> {
+    for tag in [TAG_ASSIGN, TAG_STOP] {
+        if let Some(m) = try_receive(master, Some(tag), timeout)? {
+            return Ok(Some(m));
+        }
+    }
+    Ok(None)
+}
+
+/// The master's next assignment or stop, waiting at most `within` for it to begin.
+fn wait_for_order(master: &Process<'_>, timeout: Duration, within: Duration) -> Result<Option<(Vec<u8>, Status)>> {
+    let start = Instant::now();
+    loop {
+        if let Some(m) = next_order(master, timeout)? {
+            return Ok(Some(m));
+        }
+        if start.elapsed() > within || stopping() {
+            return Ok(None);
+        }
+        std::thread::sleep(POLL);
     }
 }
 
