@@ -168,10 +168,15 @@ pub fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
 
 /// The tiles of a `w × h` image as `(x0, y0, x1, y1)`.
 pub fn tiles(w: u32, h: u32) -> Vec<(u32, u32, u32, u32)> {
+    tiles_in((0, 0, w, h))
+}
+
+/// The rectangle `(x0, y0, x1, y1)` cut into tiles, row by row.
+pub fn tiles_in((x0, y0, x1, y1): (u32, u32, u32, u32)) -> Vec<(u32, u32, u32, u32)> {
     let mut v = Vec::new();
-    for ty in (0..h).step_by(TILE as usize) {
-        for tx in (0..w).step_by(TILE as usize) {
-            v.push((tx, ty, (tx + TILE).min(w), (ty + TILE).min(h)));
+    for ty in (y0..y1).step_by(TILE as usize) {
+        for tx in (x0..x1).step_by(TILE as usize) {
+            v.push((tx, ty, (tx + TILE).min(x1), (ty + TILE).min(y1)));
         }
     }
     v
@@ -310,12 +315,7 @@ impl<'a, 's> FrameJob<'a, 's> {
     /// The colours and rays of each of `areas`, their tiles all rendered in one parallel
     /// pass: more tiles than threads keep every thread busy to the end.
     pub fn rects(&self, areas: &[(u32, u32, u32, u32)]) -> Vec<(Vec<Vec3>, RayTotals)> {
-        let per_area: Vec<Vec<(u32, u32, u32, u32)>> = areas
-            .iter()
-            .map(|&(x0, y0, x1, y1)| {
-                tiles(x1 - x0, y1 - y0).into_iter().map(|(a, b, c, d)| (a + x0, b + y0, c + x0, d + y0)).collect()
-            })
-            .collect();
+        let per_area: Vec<Vec<(u32, u32, u32, u32)>> = areas.iter().map(|&a| tiles_in(a)).collect();
         let all: Vec<(u32, u32, u32, u32)> = per_area.iter().flatten().copied().collect();
         let mut done: Vec<(Vec<Vec3>, RayTotals)> =
             all.par_iter().map(|&t| with_intersector!(self.opts.intersector, I => self.tile::<I>(t))).collect();

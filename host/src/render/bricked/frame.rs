@@ -22,7 +22,7 @@ use super::brick_cache::BrickCache;
 use super::brick_tracer::{BrickTracer, TraceStats};
 use crate::input::bricked::BrickedScene;
 use crate::output::progress;
-use crate::render::{eye_rays, in_pool, Algorithm, Frame, RayTotals, RenderOptions};
+use crate::render::{eye_rays, in_pool, tiles_in, Algorithm, Frame, RayTotals, RenderOptions};
 use crate::with_intersector;
 
 /// Tiles one worker's tracer holds at once.
@@ -101,18 +101,6 @@ impl Chunk {
         let (x0, y0, x1, _) = self.tiles[k];
         self.radiance[k].get_mut(((y - y0) * (x1 - x0) + (x - x0)) as usize)
     }
-}
-
-/// `rect` cut into the renderer's tiles.
-fn tiles_in((x0, y0, x1, y1): (u32, u32, u32, u32)) -> Vec<(u32, u32, u32, u32)> {
-    let t = crate::render::TILE;
-    let mut v = Vec::new();
-    for ty in (y0..y1).step_by(t as usize) {
-        for tx in (x0..x1).step_by(t as usize) {
-            v.push((tx, ty, (tx + t).min(x1), (ty + t).min(y1)));
-        }
-    }
-    v
 }
 
 fn frame_with<I: Intersector>(
