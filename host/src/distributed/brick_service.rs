@@ -66,9 +66,9 @@ fn fetcher(timeout: Duration) -> FetchStored {
     })
 }
 
-/// The server's side: answers every brick request waiting now; returns the bytes sent
-/// to each worker (index = rank − 1).
-pub fn serve_waiting(world: &SimpleCommunicator, scene: &BrickedScene, sent: &mut [u64]) -> Result<()> {
+/// The server's side: answers every brick request waiting now, adding the bytes sent to
+/// each worker to `sent` (index = rank − 1).
+pub fn serve_waiting(world: &SimpleCommunicator, scene: &BrickedScene, sent: &mut dyn FnMut(usize, u64)) -> Result<()> {
     while let Some((msg, status)) = try_receive(&world.any_process(), Some(TAG_BRICK), Duration::from_secs(5))? {
         let r = status.source_rank();
         let field = |k: usize| msg.get(4 * k..4 * k + 4).map(|b| u32::from_le_bytes(b.try_into().expect("four bytes")));
@@ -77,9 +77,7 @@ pub fn serve_waiting(world: &SimpleCommunicator, scene: &BrickedScene, sent: &mu
         };
         let stored = scene.read_stored(b)?;
         world.process_at_rank(r).send_with_tag(&stored[..], tag as i32);
-        if let Some(s) = sent.get_mut((r - 1) as usize) {
-            *s += stored.len() as u64;
-        }
+        sent((r - 1) as usize, stored.len() as u64);
     }
     Ok(())
 }

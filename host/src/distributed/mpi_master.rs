@@ -247,11 +247,11 @@ fn gather_frame(
     let mut received = 0;
     while received < tiles.len() {
         if let Some(scene) = job.server {
-            let mut served = vec![0u64; workers];
-            serve_waiting(world, scene, &mut served)?;
-            for (s, b) in stats.iter_mut().zip(served) {
-                s.served += b;
-            }
+            serve_waiting(world, scene, &mut |w, bytes| {
+                if let Some(s) = stats.get_mut(w) {
+                    s.served += bytes;
+                }
+            })?;
         }
         let received_tile = try_receive(&world.any_process(), Some(TAG_TILE), timeout);
         if stopping() {
@@ -304,10 +304,7 @@ fn gather_frame(
 /// What the master says when the launcher ends the job: which worker on its host died
 /// holding which tile, or, if none did, what every worker held.
 fn launcher_stopped(crew: &Crew, given: &[Vec<(u32, Handout)>], tiles: &[Rect]) -> String {
-    let tile = |t: u32| {
-        let (x0, y0, x1, y1) = tiles[t as usize];
-        format!("tile {t} (pixels {x0}..{x1} x {y0}..{y1})")
-    };
+    let tile = |t: u32| describe_tile(tiles, t);
     let ended = crew.ended_here();
     if let Some(&w) = ended.first() {
         let held = given[w].first().map_or("no tile".to_string(), |&(t, _)| tile(t));
@@ -330,17 +327,23 @@ fn launcher_stopped(crew: &Crew, given: &[Vec<(u32, Handout)>], tiles: &[Rect]) 
     )
 }
 
+/// A tile as the master's errors name it: its number and pixels.
+fn describe_tile(tiles: &[Rect], t: u32) -> String {
+    let (x0, y0, x1, y1) = tiles[t as usize];
+    format!("tile {t} (pixels {x0}..{x1} x {y0}..{y1})")
+}
+
 /// An error naming the first worker that owes tiles and has been silent past
 /// `timeout`, and the oldest tile it owes.
 fn check_silence(heard: &[Instant], given: &[Vec<(u32, Handout)>], tiles: &[Rect], timeout: Duration) -> Result<()> {
     for (w, owed) in given.iter().enumerate() {
         let Some(&(t, _)) = owed.first() else { continue };
         if heard[w].elapsed() > timeout {
-            let (x0, y0, x1, y1) = tiles[t as usize];
             bail!(
-                "rank {} sent nothing for {:.0} s while rendering tile {t} (pixels {x0}..{x1} x {y0}..{y1}): it died or hangs",
+                "rank {} sent nothing for {:.0} s while rendering {}: it died or hangs",
                 w + 1,
-                timeout.as_secs_f64()
+                timeout.as_secs_f64(),
+                describe_tile(tiles, t)
             );
         }
     }

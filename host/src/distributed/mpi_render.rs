@@ -169,8 +169,7 @@ fn run_bricked(world: &SimpleCommunicator, a: &RenderArgs, path: &Path, served: 
     let server = served.then_some(&scene);
     // While the workers get ready they may already ask for bricks (the first, to
     // choose their defaults).
-    let mut sent = vec![0u64; (world.size() - 1) as usize];
-    let mut serve = || server.map_or(Ok(()), |s| super::brick_service::serve_waiting(world, s, &mut sent));
+    let mut serve = || server.map_or(Ok(()), |s| super::brick_service::serve_waiting(world, s, &mut |_, _| {}));
     let crew = Crew::gather(world, timeout, &mut serve)?;
     let (cam, _, display) = bricked_setup(a, &scene)?;
     let cams = a.walk.cameras(&cam)?.unwrap_or_else(|| vec![cam]);
