@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use anyhow::{bail, Result};
 use clap::Args;
 
-use crate::study::cluster::model::{predict, Cluster, Prediction};
+use crate::study::cluster::model::{frame_rate, predict, Cluster, Prediction};
 use crate::study::cluster::recording::Recording;
 
 /// `raypipe cluster`.
@@ -133,7 +133,7 @@ pub fn cmd_cluster(a: ClusterArgs) -> Result<()> {
         if r.workers == 1 { "" } else { "s" },
         r.identity
     );
-    let measured = r.frame_seconds.len() as f64 / r.frame_seconds.iter().sum::<f64>().max(1e-12);
+    let measured = frame_rate(&r.frame_seconds);
     println!("measured  {measured:.2} frames/s over the run");
     println!(
         "cluster   links {:.0}/{:.0} Mbit/s (worker/server), latency {:.0} us, {} worker{} per host, speed {}, cache {} MiB, bricks {}",
@@ -160,16 +160,15 @@ pub fn cmd_cluster(a: ClusterArgs) -> Result<()> {
         let n = o.workers as usize;
         let c = Cluster { workers_per_host: n.div_ceil(o.hosts.max(1) as usize), ..cluster(n) };
         let p = predict(&rec, &c);
-        let got = o.frame_seconds.len() as f64 / o.frame_seconds.iter().sum::<f64>().max(1e-12);
-        let all = |p: &Prediction| p.frame_seconds.len() as f64 / p.frame_seconds.iter().sum::<f64>().max(1e-12);
+        let got = frame_rate(&o.frame_seconds);
         println!(
             "check    {} worker{} on {} host{}: measured {got:.2} frames/s, predicted {:.2} ({:+.0}%)  [{}]",
             n,
             if n == 1 { "" } else { "s" },
             o.hosts,
             if o.hosts == 1 { "" } else { "s" },
-            all(&p),
-            (all(&p) / got - 1.0) * 100.0,
+            p.fps(),
+            (p.fps() / got - 1.0) * 100.0,
             path.display()
         );
     }

@@ -68,13 +68,23 @@ impl Prediction {
     /// Frames per second over the frames after the first (warm), or the first alone.
     pub fn warm_fps(&self) -> f64 {
         let warm = if self.frame_seconds.len() > 1 { &self.frame_seconds[1..] } else { &self.frame_seconds[..] };
-        warm.len() as f64 / warm.iter().sum::<f64>().max(1e-12)
+        frame_rate(warm)
+    }
+
+    /// Frames per second over every frame.
+    pub fn fps(&self) -> f64 {
+        frame_rate(&self.frame_seconds)
     }
 
     /// The first frame's rate (cold caches).
     pub fn cold_fps(&self) -> f64 {
         1.0 / self.frame_seconds[0].max(1e-12)
     }
+}
+
+/// Frames per second of frames that took `seconds` each.
+pub fn frame_rate(seconds: &[f64]) -> f64 {
+    seconds.len() as f64 / seconds.iter().sum::<f64>().max(1e-12)
 }
 
 /// Seconds, as an orderable event time.
