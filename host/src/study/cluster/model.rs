@@ -175,7 +175,8 @@ impl Lru {
 /// One worker's state.
 struct Worker {
     queue: VecDeque<usize>,
-    busy_until: Option<f64>,
+    // A tile is being rendered (its end is an event in the queue).
+    rendering: bool,
     busy: f64,
     link: Link,
     cache: Lru,
@@ -196,7 +197,7 @@ pub fn predict(rec: &Recording, cluster: &Cluster) -> Prediction {
     let mut workers: Vec<Worker> = (0..n)
         .map(|_| Worker {
             queue: VecDeque::new(),
-            busy_until: None,
+            rendering: false,
             busy: 0.0,
             link: Link::new(cluster.client_bandwidth),
             cache: Lru::default(),
@@ -244,7 +245,7 @@ pub fn predict(rec: &Recording, cluster: &Cluster) -> Prediction {
             match e {
                 Event::Assigned { worker, tile } => {
                     workers[worker].queue.push_back(tile);
-                    if workers[worker].busy_until.is_none() {
+                    if !workers[worker].rendering {
                         if let Some((done, b)) =
                             start_next(&mut workers, worker, t, &tiles, rec, cluster, slowdown, &mut master_link)
                         {
@@ -254,7 +255,7 @@ pub fn predict(rec: &Recording, cluster: &Cluster) -> Prediction {
                     }
                 }
                 Event::Rendered { worker, tile } => {
-                    workers[worker].busy_until = None;
+                    workers[worker].rendering = false;
                     let size = tiles[tile].bytes;
                     let at = send(&mut workers[worker].link, &mut master_link, t, size, cluster.latency);
                     bytes += size;
@@ -360,7 +361,7 @@ fn start_next(
     let share = compute / t.bricks.len().max(1) as f64;
     let done = (now + compute).max(last_ready + share);
     worker.busy += compute;
-    worker.busy_until = Some(done);
+    worker.rendering = true;
     Some(((done, tile), fetched))
 }
 
