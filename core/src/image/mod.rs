@@ -10,6 +10,7 @@ mod crc32;
 mod embed;
 mod error;
 mod header;
+pub mod instanced;
 mod limits;
 mod margin;
 mod records;

@@ -7,6 +7,7 @@
 pub mod bvh;
 pub mod bvh4;
 pub mod grid;
+pub mod instanced;
 pub mod kdtree;
 pub mod lockstep;
 pub mod step;

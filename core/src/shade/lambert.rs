@@ -23,8 +23,21 @@ pub fn shade<P: MemoryProbe>(
     background: Vec3,
     probe: &mut P,
 ) -> Vec3 {
-    let Some(hit) = hit else { return escaped(scene, ray.dir, background, probe) };
-    let surface = Surface::at(scene, ray, &hit, cone, probe);
+    let surface = hit.map(|hit| Surface::at(scene, ray, &hit, cone, probe));
+    shade_surface(scene, ray, surface, background, probe)
+}
+
+/// [`shade`] on a surface read already (an instance's, carried to world space): `lights`
+/// is the image whose lights and sky shade it.
+pub fn shade_surface<P: MemoryProbe>(
+    lights: &SceneView<'_>,
+    ray: &Ray,
+    surface: Option<Surface>,
+    background: Vec3,
+    probe: &mut P,
+) -> Vec3 {
+    let scene = lights;
+    let Some(surface) = surface else { return escaped(scene, ray.dir, background, probe) };
     let (n, point) = (surface.normal, surface.point);
     let mut light = Vec3::ZERO;
     // The lights before the area lights: an image's emitters cost this kernel nothing.

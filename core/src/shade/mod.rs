@@ -6,6 +6,7 @@ pub mod blinn_phong;
 pub mod color;
 pub mod escaped;
 pub mod hemisphere;
+pub mod instance_surface;
 pub mod lambert;
 pub mod mis;
 pub mod path;

@@ -39,8 +39,22 @@ pub fn shade_whitted<P: MemoryProbe>(
     probe: &mut P,
     emit: &mut impl FnMut(RayRecord),
 ) -> Vec3 {
-    let Some(hit) = hit else { return rec.weight * escaped(scene, rec.ray.dir, opts.background, probe) };
-    let s = Surface::at(scene, &rec.ray, &hit, rec.cone, probe);
+    let surface = hit.map(|hit| Surface::at(scene, &rec.ray, &hit, rec.cone, probe));
+    shade_whitted_surface(scene, rec, surface, opts, probe, emit)
+}
+
+/// [`shade_whitted`] on a surface read already (an instance's, carried to world space):
+/// `lights` is the image whose lights and sky shade it.
+pub fn shade_whitted_surface<P: MemoryProbe>(
+    lights: &SceneView<'_>,
+    rec: &RayRecord,
+    surface: Option<Surface>,
+    opts: &WhittedOptions,
+    probe: &mut P,
+    emit: &mut impl FnMut(RayRecord),
+) -> Vec3 {
+    let scene = lights;
+    let Some(s) = surface else { return rec.weight * escaped(scene, rec.ray.dir, opts.background, probe) };
     let m = s.material;
     let (diffuse, glossy) = s.lobes();
     let mut now = Vec3::from(m.emission);

@@ -7,6 +7,7 @@ pub mod brute_force;
 pub mod bvh;
 pub mod dda;
 pub mod grid;
+pub mod instanced;
 pub mod kdtree;
 pub mod occlusion;
 pub mod tree_step;

@@ -1,11 +1,13 @@
 //! Compiling a mesh into a scene image: the acceleration structure builders, mipmaps, default lights and the image writer.
 
+pub mod box_bvh;
 pub mod bricks;
 pub mod bvh;
 pub mod default_lights;
 pub mod emitter_sums;
 pub mod grid;
 pub mod image_writer;
+pub mod instanced;
 pub mod kdtree;
 pub mod light_distribution;
 pub mod mipmap;

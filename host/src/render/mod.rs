@@ -5,6 +5,7 @@
 pub mod batch;
 pub mod bricked;
 pub mod gbuffer;
+pub mod instanced;
 pub mod packets;
 pub mod shading;
 pub mod tracer;

@@ -1,0 +1,271 @@
+//! Building an instanced scene (Wald & Slusallek 2001 §8.3): each shape's mesh is built
+//! once into a bottom-level scene image with the structure the user asked for, placed by
+//! affine instances under a top-level BVH over their world boxes, with the lights and
+//! camera in a globals image ([`raypipe_core::image::instanced`]).
+
+pub mod writer;
+
+use anyhow::{anyhow, bail, Result};
+use glam::{DMat3, DVec3, Vec3};
+use raypipe_core::image::instanced::{mapped_box, InstanceRecord};
+use raypipe_core::image::{LightRecord, MaterialRecord, FLAG_DEFAULT_LIGHT, NULL_INDEX};
+use raypipe_core::math::affine::{self, Affine34};
+use raypipe_core::SceneView;
+
+use crate::build::box_bvh::build_box_bvh;
+use crate::build::image_writer::ImageWriter;
+use crate::input::camera_file::CameraSpec;
+use crate::input::mesh::Mesh;
+use crate::platform::aligned::AlignedBytes;
+use crate::scene::{add_structure, framing_camera, BuildOptions, BuildReport, TriangleLayout};
+
+/// One placed copy of a bottom mesh.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Instance {
+    /// The bottom mesh it draws.
+    pub bottom: u32,
+    /// Object space to world space, row-major 3×4.
+    pub to_world: Affine34,
+    /// A material of [`InstancedScene::materials`] replacing the bottom's own.
+    pub material: Option<u32>,
+}
+
+/// A scene of instanced meshes before it is built.
+#[derive(Clone, Debug, Default)]
+pub struct InstancedScene {
+    /// What the user called it.
+    pub name: String,
+    /// The shapes, each in its own object space with its own materials and textures.
+    pub bottoms: Vec<Mesh>,
+    /// Their names for messages (the files or glTF meshes they came from).
+    pub bottom_names: Vec<String>,
+    /// The placed copies.
+    pub instances: Vec<Instance>,
+    /// Override materials.
+    pub materials: Vec<MaterialRecord>,
+    /// Their names.
+    pub material_names: Vec<String>,
+    /// Lights the input names (none: raypipe's default light for the camera).
+    pub lights: Vec<LightRecord>,
+    /// The input's camera settings.
+    pub camera: CameraSpec,
+    /// Warnings from loading.
+    pub warnings: Vec<String>,
+}
+
+/// A built instanced scene in memory.
+pub struct BuiltInstanced {
+    /// What the user called it.
+    pub name: String,
+    /// The file's bytes.
+    pub bytes: AlignedBytes,
+    /// Warnings and notes from building.
+    pub report: BuildReport,
+}
+
+/// The row-major 3×4 map of a glam affine matrix.
+pub fn affine_of(m: glam::Mat4) -> Affine34 {
+    let r = m.transpose().to_cols_array();
+    [r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8], r[9], r[10], r[11]]
+}
+
+/// The inverse of `m` computed in f64 and rounded to f32, or why there is none: a
+/// non-finite entry, or a linear part too close to singular for the inverse to undo it
+/// in f32 ([`affine::is_inverse_pair`]).
+pub fn inverse(m: &Affine34) -> Result<Affine34, &'static str> {
+    if !affine::is_finite(m) {
+        return Err("the transform has a NaN or infinite entry");
+    }
+    let d = |i: usize| f64::from(m[i]);
+    let lin =
+        DMat3::from_cols(DVec3::new(d(0), d(4), d(8)), DVec3::new(d(1), d(5), d(9)), DVec3::new(d(2), d(6), d(10)));
+    let det = lin.determinant();
+    if det == 0.0 || !det.is_finite() {
+        return Err("the transform is singular (it flattens the mesh)");
+    }
+    let inv = lin.inverse();
+    let t = -(inv * DVec3::new(d(3), d(7), d(11)));
+    let c = |col: usize, row: usize| inv.col(col)[row] as f32;
+    let out = [
+        c(0, 0),
+        c(1, 0),
+        c(2, 0),
+        t.x as f32,
+        c(0, 1),
+        c(1, 1),
+        c(2, 1),
+        t.y as f32,
+        c(0, 2),
+        c(1, 2),
+        c(2, 2),
+        t.z as f32,
+    ];
+    if !affine::is_inverse_pair(m, &out) {
+        return Err("the transform is too close to singular (its inverse does not undo it in f32)");
+    }
+    Ok(out)
+}
+
+/// The world box of an instance: its bottom's box mapped to the world, rounded outward
+/// by a margin relative to its size and magnitude, so that a ray that meets the
+/// geometry in object space enters the box in world space despite rounding.
+pub fn world_box(to_world: &Affine34, bottom: ([f32; 3], [f32; 3])) -> ([f32; 3], [f32; 3]) {
+    let (lo, hi) = mapped_box(to_world, (Vec3::from(bottom.0), Vec3::from(bottom.1)));
+    let margin = 1e-5 * (hi - lo).max_element() + 16.0 * f32::EPSILON * lo.abs().max(hi.abs()).max_element();
+    let lo = (lo - Vec3::splat(margin)).to_array().map(f32::next_down);
+    let hi = (hi + Vec3::splat(margin)).to_array().map(f32::next_up);
+    (lo, hi)
+}
+
+impl InstancedScene {
+    /// Checks what the builder relies on: each bottom a valid mesh, each instance
+    /// naming an existing bottom and material with an invertible finite transform.
+    pub fn check(&self) -> Result<()> {
+        let name = &self.name;
+        if self.instances.is_empty() {
+            bail!("{name}: the scene places no instance");
+        }
+        for (b, mesh) in self.bottoms.iter().enumerate() {
+            let what = self.bottom_names.get(b).map_or_else(|| format!("bottom {b}"), |n| n.clone());
+            mesh.validate(&format!("{name}: {what}"))?;
+        }
+        for (i, inst) in self.instances.iter().enumerate() {
+            let what = format!("{name}: instance {}", i + 1);
+            if inst.bottom as usize >= self.bottoms.len() {
+                bail!("{what}: names a mesh that does not exist");
+            }
+            if inst.material.is_some_and(|m| m as usize >= self.materials.len()) {
+                bail!("{what}: names a material that does not exist");
+            }
+            inverse(&inst.to_world).map_err(|e| anyhow!("{what}: {e}"))?;
+        }
+        Ok(())
+    }
+
+    /// The scene as one mesh: every instance's copy placed in the world (normals by the
+    /// inverse transpose), with its override material.
+    pub fn flatten(&self) -> Mesh {
+        let mut out = Mesh::default();
+        let overrides = out.materials.len() as u32;
+        out.materials.extend_from_slice(&self.materials);
+        out.material_names.extend(self.material_names.iter().cloned());
+        let shading = self.bottoms.iter().any(|m| !m.shading.is_empty());
+        for (k, inst) in self.instances.iter().enumerate() {
+            let Some(mesh) = self.bottoms.get(inst.bottom as usize) else { continue };
+            let base = out.positions.len() as u32;
+            out.positions
+                .extend(mesh.positions.iter().map(|&p| affine::point(&inst.to_world, Vec3::from(p)).to_array()));
+            let to_object = inverse(&inst.to_world).unwrap_or(affine::IDENTITY);
+            if shading {
+                let none = raypipe_core::image::ShadingVertex { normal: [0.0; 3], uv: [0.0; 2], color: [1.0; 3] };
+                out.shading.extend((0..mesh.positions.len()).map(|v| {
+                    let s = mesh.shading.get(v).copied().unwrap_or(none);
+                    let n = affine::normal(&to_object, Vec3::from(s.normal)).normalize_or_zero();
+                    // An override material replaces the vertex tint too.
+                    let color = if inst.material.is_some() { [1.0; 3] } else { s.color };
+                    raypipe_core::image::ShadingVertex { normal: n.to_array(), color, ..s }
+                }));
+            }
+            out.triangles.extend(mesh.triangles.iter().map(|t| t.map(|v| v + base)));
+            out.objects.extend(std::iter::repeat_n(k as u32, mesh.triangles.len()));
+            match inst.material {
+                Some(m) => out.tri_materials.extend(std::iter::repeat_n(overrides + m, mesh.triangles.len())),
+                None => {
+                    let (mbase, tbase) = (out.materials.len() as u32, out.textures.len() as u32);
+                    out.textures.extend(mesh.textures.iter().cloned());
+                    let mut materials = mesh.materials.clone();
+                    if materials.is_empty() {
+                        materials.push(MaterialRecord::DEFAULT);
+                    }
+                    out.materials.extend(materials.iter().map(|r| MaterialRecord {
+                        texture: if r.texture == NULL_INDEX { NULL_INDEX } else { r.texture + tbase },
+                        ..*r
+                    }));
+                    out.material_names.extend((0..materials.len()).map(|i| format!("instance {k} material {i}")));
+                    let n = mesh.triangles.len();
+                    let ids = (0..n).map(|t| mbase + mesh.tri_materials.get(t).copied().unwrap_or(0));
+                    out.tri_materials.extend(ids);
+                }
+            }
+        }
+        out.lights = self.lights.clone();
+        out
+    }
+
+    /// Builds the bottom images (the structure `opts` asks for), the instances, the top
+    /// level and the globals image (lights chosen as the flat scene's would be).
+    pub fn build(&self, opts: &BuildOptions) -> Result<BuiltInstanced> {
+        self.check()?;
+        let name = &self.name;
+        let mut report = BuildReport { warnings: self.warnings.clone(), ..Default::default() };
+        let mut images = Vec::with_capacity(self.bottoms.len());
+        let start = std::time::Instant::now();
+        for (b, mesh) in self.bottoms.iter().enumerate() {
+            let mut mesh = mesh.clone();
+            mesh.lights.clear();
+            let mut writer = ImageWriter::new(&mesh);
+            if opts.triangles == TriangleLayout::Wald {
+                writer.wald_triangles(&mesh);
+            }
+            let what = format!("{name}: {}", self.bottom_names.get(b).map_or("a mesh", |s| s.as_str()));
+            let mut r = BuildReport::default();
+            add_structure(&what, &mesh, opts, &mut r, &mut writer)?;
+            report.tree_nodes += r.tree_nodes;
+            report.structure_bytes += r.structure_bytes;
+            report.triangles += mesh.triangles.len();
+            report.vertices += mesh.positions.len();
+            images.push(writer.finish().map_err(|e| anyhow!("{what}: {e}"))?);
+        }
+        let mut records = Vec::with_capacity(self.instances.len());
+        for inst in &self.instances {
+            let view = SceneView::parse(&images[inst.bottom as usize])
+                .map_err(|e| anyhow!("internal error: built an invalid bottom image: {e}"))?;
+            let h = view.header();
+            let (lo, hi) = world_box(&inst.to_world, (h.bounds_min, h.bounds_max));
+            records.push(InstanceRecord {
+                to_world: inst.to_world,
+                to_object: inverse(&inst.to_world).map_err(|e| anyhow!("{name}: {e}"))?,
+                bottom: inst.bottom,
+                material: inst.material.unwrap_or(NULL_INDEX),
+                bounds_min: lo,
+                bounds_max: hi,
+            });
+        }
+        let boxes: Vec<([f32; 3], [f32; 3])> = records.iter().map(|r| (r.bounds_min, r.bounds_max)).collect();
+        let top = build_box_bvh(&boxes, 1);
+        report.grid_seconds = start.elapsed().as_secs_f64();
+        let bounds = (top.nodes[0].min, top.nodes[0].max);
+        let (globals, note) = self.globals(opts, bounds)?;
+        report.lights = note;
+        let bottoms: Vec<&[u8]> = images.iter().map(|i| &i[..]).collect();
+        let bytes = writer::write_instanced(&bottoms, &records, &top.nodes, &top.list, &globals, bounds)?;
+        report.image_bytes = bytes.len();
+        Ok(BuiltInstanced { name: name.clone(), bytes, report })
+    }
+
+    /// The globals image: the camera, the lights (chosen over the flattened scene, as
+    /// the flat build chooses them; emissive triangles are not area lights here) and the
+    /// override materials.
+    fn globals(&self, opts: &BuildOptions, bounds: ([f32; 3], [f32; 3])) -> Result<(Vec<u8>, String)> {
+        let camera = self.camera.merged(opts.camera).apply(&framing_camera(bounds.0, bounds.1));
+        let mut flat = self.flatten();
+        let (note, default_light) = crate::scene::choose_lights(&self.name, &mut flat, &camera, &opts.lights)?;
+        let lights: Vec<LightRecord> = flat.lights.into_iter().filter(|l| l.kind != LightRecord::AREA).collect();
+        let mesh = Mesh {
+            lights,
+            materials: self.materials.clone(),
+            material_names: self.material_names.clone(),
+            ..Default::default()
+        };
+        let mut w = ImageWriter::new(&mesh);
+        w.set_bounds(bounds.0, bounds.1).camera(&camera);
+        if default_light {
+            w.flags |= FLAG_DEFAULT_LIGHT;
+        }
+        let image = w.finish()?;
+        if let Err(e) = SceneView::parse(&image) {
+            bail!("internal error: built an invalid globals image: {e}");
+        }
+        Ok((image.to_vec(), note))
+    }
+}
