@@ -328,7 +328,7 @@ fn area_note(n: usize) -> String {
 }
 
 /// What the command line's lights must be: a sun has a direction.
-fn check_user_lights(name: &str, user: &[LightRecord]) -> Result<()> {
+pub(crate) fn check_user_lights(name: &str, user: &[LightRecord]) -> Result<()> {
     for l in user {
         if l.kind == LightRecord::DIRECTIONAL && Vec3::from(l.position).length_squared() == 0.0 {
             bail!("{name}: --sun: the direction is zero");

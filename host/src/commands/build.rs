@@ -36,6 +36,12 @@ pub struct BuildArgs {
     pub camera: CameraArgs,
     #[command(flatten)]
     pub bricks: BrickArgs,
+    /// Keep shared geometry shared: write an instanced scene (.rpsx) — each mesh built
+    /// once (--accel) and placed by instances under a top-level BVH. A glTF file's nodes
+    /// that share a mesh become instances; a scene file with [[instance]] entries is
+    /// always built this way.
+    #[arg(long, conflicts_with_all = ["bricks", "generate"])]
+    pub instances: bool,
 }
 
 /// How `build --bricks` stores a scene larger than memory.
@@ -63,6 +69,9 @@ pub struct BrickArgs {
 pub(crate) fn cmd_build(a: BuildArgs) -> Result<()> {
     if a.bricks.bricks {
         return cmd_build_bricked(a);
+    }
+    if a.instances || a.scene.as_deref().is_some_and(crate::input::instanced::is_instanced) {
+        return cmd_build_instanced(a);
     }
     let start = Instant::now();
     let (input, scene) = match (&a.generate, &a.scene) {
@@ -246,4 +255,46 @@ fn cmd_build_bricked(a: BuildArgs) -> Result<()> {
 fn has_suffix(path: &std::path::Path, suffixes: &[&str]) -> bool {
     let f = path.file_name().and_then(|f| f.to_str()).unwrap_or("").to_ascii_lowercase();
     suffixes.iter().any(|s| f.ends_with(s))
+}
+
+/// `raypipe build --instances`, or of a scene file with `[[instance]]` entries.
+fn cmd_build_instanced(a: BuildArgs) -> Result<()> {
+    let start = Instant::now();
+    let path = a.scene.as_deref().ok_or_else(|| anyhow!("build --instances: name a scene file or glTF file"))?;
+    let mut scene = crate::input::instanced::load_instanced_scene(path)?;
+    scene.camera = scene.camera.merged(a.camera.spec()?);
+    let built = scene.build(&a.structure.options())?;
+    for w in &built.report.warnings {
+        eprintln!("warning: {w}");
+    }
+    let view = raypipe_core::image::instanced::InstancedView::parse(&built.bytes)
+        .map_err(|e| anyhow!("internal error: built an invalid instanced scene: {e}"))?;
+    let camera = view.globals().camera().ok_or_else(|| anyhow!("internal error: built scene lacks a camera"))?;
+    render::eye_rays(camera, "camera")?;
+    output::write_bytes(&a.output, &built.bytes)?;
+    let (h, r) = (view.header(), &built.report);
+    println!("scene        {} (instanced)", path.display());
+    println!(
+        "instances    {} of {} meshes: {} triangles drawn, {} stored ({:.1}× shared)",
+        h.instance_count,
+        h.bottom_count,
+        h.triangle_count,
+        h.stored_triangles,
+        h.triangle_count as f64 / h.stored_triangles.max(1) as f64
+    );
+    println!(
+        "{:<12} in each mesh, {} nodes in all; top level {} nodes over the instances",
+        accel_name(a.structure.accel()),
+        r.tree_nodes,
+        h.node_count
+    );
+    println!("lights       {}", r.lights);
+    println!(
+        "image        {} ({}) in {:.3} s (structures {:.3} s)",
+        a.output.display(),
+        fmt_bytes(built.bytes.len()),
+        start.elapsed().as_secs_f64(),
+        r.grid_seconds
+    );
+    Ok(())
 }

@@ -32,6 +32,9 @@ pub(crate) fn cmd_info(a: InfoArgs) -> Result<()> {
     if let Some(path) = a.scene.as_deref().filter(|p| crate::input::bricked::is_bricked(p)) {
         return super::info_bricked::cmd_info_bricked(path, a.codecs);
     }
+    if let Some(path) = a.scene.as_deref().filter(|p| crate::input::instanced::is_instanced(p)) {
+        return super::info_instanced::cmd_info_instanced(path, &a.structure.options());
+    }
     let scene = load_scene(a.scene.as_deref(), &a.structure, &a.camera)?;
     warn(&scene);
     let view = scene.view()?;

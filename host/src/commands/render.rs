@@ -119,6 +119,9 @@ pub(crate) fn cmd_render(a: RenderArgs) -> Result<()> {
     if let Some(path) = a.scene.as_deref().filter(|p| crate::input::bricked::is_bricked(p)) {
         return super::render_bricked::cmd_render_bricked(&a, path);
     }
+    if let Some(path) = a.scene.as_deref().filter(|p| crate::input::instanced::is_instanced(p)) {
+        return super::render_instanced::cmd_render_instanced(&a, path);
+    }
     let Prepared { scene, camera: cam, opts, display, load_secs } = prepare(&a)?;
     warn(&scene);
     let view = scene.view()?;

@@ -10,6 +10,7 @@ use anyhow::{anyhow, Result};
 use glam::{Mat3, Mat4, Vec3};
 use raypipe_core::image::{MaterialRecord, ShadingVertex, NULL_INDEX};
 
+use crate::build::instanced::InstancedScene;
 use crate::input::camera_file::CameraSpec;
 use crate::input::mesh::Mesh;
 use crate::input::obj::LoadNotes;
@@ -24,8 +25,35 @@ pub fn load_gltf_file(path: &Path) -> Result<(Mesh, LoadNotes, CameraSpec)> {
     crate::input::panic_guard::guarded(&name, "glTF", || load_gltf_bytes(&name, &bytes, base))
 }
 
+/// Loads a glTF file as an instanced scene: each mesh that a node places is one bottom
+/// mesh in its own object space, and each node placing it one instance.
+pub fn load_gltf_instanced(path: &Path) -> Result<InstancedScene> {
+    let name = path.display().to_string();
+    let bytes = read_file::read_bytes(path, read_file::DATA_LIMIT)?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    let mut scene = InstancedScene { name: name.clone(), ..Default::default() };
+    let (_, notes, camera) = crate::input::panic_guard::guarded(&name, "glTF", || {
+        load_gltf_document(&name, &bytes, base, Some(&mut scene))
+    })?;
+    scene.warnings = notes.warnings;
+    scene.camera = camera;
+    scene.check()?;
+    Ok(scene)
+}
+
 /// Loads the glTF (or GLB) `bytes` of the file `name`, its other files in `base`.
 pub fn load_gltf_bytes(name: &str, bytes: &[u8], base: &Path) -> Result<(Mesh, LoadNotes, CameraSpec)> {
+    load_gltf_document(name, bytes, base, None)
+}
+
+/// Loads the document: as one mesh, or with `instanced`, as bottoms and instances (the
+/// returned mesh then holds only the materials and textures).
+fn load_gltf_document(
+    name: &str,
+    bytes: &[u8],
+    base: &Path,
+    mut instanced: Option<&mut InstancedScene>,
+) -> Result<(Mesh, LoadNotes, CameraSpec)> {
     let malformed = |e: String| anyhow!("{name}: malformed glTF: {e}");
     gltf_checks::check_glb_header(bytes).map_err(malformed)?;
     gltf_checks::check_position_accessors(bytes).map_err(malformed)?;
@@ -63,6 +91,7 @@ pub fn load_gltf_bytes(name: &str, bytes: &[u8], base: &Path) -> Result<(Mesh, L
     let mut stack: Vec<(gltf::Node, Mat4)> = scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
     let mut skipped_modes = 0usize;
     let mut objects = 0u32;
+    let mut bottom_of: std::collections::HashMap<usize, u32> = Default::default();
     while let Some((node, parent)) = stack.pop() {
         let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
         if let (Some(cam), None) = (node.camera(), camera.eye) {
@@ -72,6 +101,37 @@ pub fn load_gltf_bytes(name: &str, bytes: &[u8], base: &Path) -> Result<(Mesh, L
             // Each node that places a mesh is an object.
             let object = objects;
             objects += 1;
+            if let Some(scene) = instanced.as_deref_mut() {
+                let bottom = match bottom_of.get(&m.index()) {
+                    Some(&b) => b,
+                    None => {
+                        let mut shape = Mesh { materials: mesh.materials.clone(), ..Default::default() };
+                        shape.textures = mesh.textures.clone();
+                        shape.material_names = mesh.material_names.clone();
+                        let placed = Placement {
+                            world: Mat4::IDENTITY,
+                            normal_matrix: Mat3::IDENTITY,
+                            object: 0,
+                            default_material,
+                            mesh_index: m.index(),
+                        };
+                        for prim in m.primitives().filter(|p| p.mode() == gltf::mesh::Mode::Triangles) {
+                            add_primitive(&prim, &buffers, placed, &mut shape).map_err(|e| anyhow!("{name}: {e}"))?;
+                        }
+                        crate::build::instanced::keep_used_textures(&mut shape);
+                        shape.objects.clear();
+                        scene.bottoms.push(shape);
+                        scene.bottom_names.push(format!("mesh {} ({})", m.index(), m.name().unwrap_or("unnamed")));
+                        bottom_of.insert(m.index(), scene.bottoms.len() as u32 - 1);
+                        scene.bottoms.len() as u32 - 1
+                    }
+                };
+                let to_world = crate::build::instanced::affine_of(world);
+                scene.instances.push(crate::build::instanced::Instance { bottom, to_world, material: None });
+                skipped_modes += m.primitives().filter(|p| p.mode() != gltf::mesh::Mode::Triangles).count();
+                stack.extend(node.children().map(|c| (c, world)));
+                continue;
+            }
             let normal_matrix = Mat3::from_mat4(world).inverse().transpose();
             for prim in m.primitives() {
                 if prim.mode() != gltf::mesh::Mode::Triangles {
@@ -86,6 +146,10 @@ pub fn load_gltf_bytes(name: &str, bytes: &[u8], base: &Path) -> Result<(Mesh, L
     }
     if skipped_modes > 0 {
         notes.warnings.push(format!("{name}: {skipped_modes} primitives of points, lines or strips left out"));
+    }
+    if instanced.is_some() {
+        camera.check(name)?;
+        return Ok((mesh, notes, camera));
     }
     mesh.validate(name)?;
     camera.check(name)?;

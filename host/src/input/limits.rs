@@ -28,3 +28,8 @@ pub fn check_vertices(what: &str, vertices: u64) -> Result<()> {
     }
     Ok(())
 }
+
+/// The most triangles an instanced scene may draw (each instance counting its mesh's):
+/// instancing draws far more than a flat scene holds, but every drawn triangle is still
+/// visited once when the default lights are placed.
+pub const MAX_DRAWN_TRIANGLES: u64 = 1 << 32;

@@ -7,6 +7,7 @@ pub mod default_scene;
 pub mod generate;
 pub mod gltf;
 pub mod gltf_checks;
+pub mod instanced;
 pub mod limits;
 pub mod mesh;
 pub mod npy;

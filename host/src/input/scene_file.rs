@@ -22,6 +22,11 @@
 //! shininess = 200
 //! illum = 2
 //!
+//! [[instance]]                # a copy that shares the file's geometry: the scene is
+//! file = "tree.obj"           # built as an instanced scene (one bottom-level image per
+//! translate = [3, 0, 0]       # file, the [[mesh]] entries merged into one more), with
+//! rotate = [0, 45, 0]         # the same keys as [[mesh]]
+//!
 //! [[light]]                   # point (position), sun (direction), sky (horizon, zenith)
 //! kind = "sun"
 //! direction = [0.3, 1, 0.2]
@@ -37,6 +42,7 @@ use glam::{EulerRot, Mat3, Mat4, Quat, Vec3};
 use raypipe_core::image::{LightRecord, MaterialRecord, ShadingVertex, NULL_INDEX};
 use serde::Deserialize;
 
+use crate::build::instanced::{affine_of, Instance, InstancedScene};
 use crate::input::camera_file::CameraSpec;
 use crate::input::mesh::Mesh;
 
@@ -50,6 +56,8 @@ struct SceneFile {
     camera: Option<CameraTable>,
     #[serde(default)]
     mesh: Vec<MeshEntry>,
+    #[serde(default)]
+    instance: Vec<MeshEntry>,
     #[serde(default)]
     materials: BTreeMap<String, MaterialTable>,
     #[serde(default)]
@@ -140,12 +148,34 @@ pub fn parse_scene_file(
     let name = name.to_string();
     let file: SceneFile = toml::from_str(text)
         .map_err(|e| anyhow!("{name}: {}", e.to_string().split_whitespace().collect::<Vec<_>>().join(" ")))?;
-    if file.mesh.is_empty() {
-        bail!("{name}: the scene file lists no [[mesh]]");
+    if file.mesh.is_empty() && file.instance.is_empty() {
+        bail!("{name}: the scene file lists no [[mesh]] or [[instance]]");
     }
-    if file.mesh.len() > MAX_MESHES {
-        bail!("{name}: {} meshes is more than {MAX_MESHES}", file.mesh.len());
+    if !file.instance.is_empty() {
+        // Read as one flat mesh: every copy placed (`load_instanced_scene_file` keeps them
+        // as instances).
+        let inst = instanced_scene(&name, file, dir, load_mesh)?;
+        let mut mesh = inst.flatten();
+        if !inst.lights.is_empty() {
+            mesh.lights.extend(crate::build::default_lights::emitters(&mesh));
+        }
+        mesh.validate(&name)?;
+        return Ok((mesh, inst.warnings, inst.camera));
     }
+    if file.mesh.len() + file.instance.len() > MAX_MESHES {
+        bail!("{name}: {} meshes and instances is more than {MAX_MESHES}", file.mesh.len() + file.instance.len());
+    }
+    merged_meshes(&name, &file, dir, load_mesh)
+}
+
+/// The `[[mesh]]` entries merged into one mesh, with the file's lights and camera.
+fn merged_meshes(
+    name: &str,
+    file: &SceneFile,
+    dir: &Path,
+    load_mesh: MeshLoader<'_>,
+) -> Result<(Mesh, Vec<String>, CameraSpec)> {
+    let name = name.to_string();
     let mut warnings = Vec::new();
     // Each file is read once, however often it is listed, and every copy is counted
     // against the scene's limit before any is made (a small scene file can name a big
@@ -186,33 +216,129 @@ pub fn parse_scene_file(
         };
         append(&mut merged, loaded[&dir.join(&entry.file)].clone(), transform, material);
     }
-    let lights: Vec<LightRecord> = file
-        .light
+    let lights = lights_of(&name, file)?;
+    if !lights.is_empty() {
+        merged.lights = lights;
+        merged.lights.push(ambient());
+        merged.lights.extend(crate::build::default_lights::emitters(&merged));
+    }
+    let camera = camera_of(file);
+    merged.validate(&name)?;
+    camera.check(&name)?;
+    Ok((merged, warnings, camera))
+}
+
+/// The dim ambient term added to a scene file's own lights.
+fn ambient() -> LightRecord {
+    LightRecord { position: [0.0; 3], kind: LightRecord::AMBIENT, color: [0.1; 3], triangle: 0 }
+}
+
+fn lights_of(name: &str, file: &SceneFile) -> Result<Vec<LightRecord>> {
+    file.light
         .iter()
         .enumerate()
         .map(|(i, l)| light_of(l).map_err(|e| anyhow!("{name}: light {}: {e}", i + 1)))
-        .collect::<Result<_>>()?;
-    if !lights.is_empty() {
-        merged.lights = lights;
-        merged.lights.push(LightRecord {
-            position: [0.0; 3],
-            kind: LightRecord::AMBIENT,
-            color: [0.1; 3],
-            triangle: 0,
-        });
-        merged.lights.extend(crate::build::default_lights::emitters(&merged));
-    }
-    let camera = file.camera.map_or_else(CameraSpec::default, |c| CameraSpec {
+        .collect()
+}
+
+fn camera_of(file: &SceneFile) -> CameraSpec {
+    file.camera.as_ref().map_or_else(CameraSpec::default, |c| CameraSpec {
         eye: c.eye,
         look_at: c.look_at,
         up: c.up,
         fov: c.fov,
         size: c.size.map(|[w, h]| (w, h)),
         background: c.background,
-    });
-    merged.validate(&name)?;
-    camera.check(&name)?;
-    Ok((merged, warnings, camera))
+    })
+}
+
+/// True if the scene file at `path` lists an `[[instance]]` (a file that cannot be read
+/// or parsed is not: reading it as a flat scene reports why).
+pub fn has_instances(path: &Path) -> bool {
+    let Ok(text) = crate::input::read_file::read_text(path, crate::input::read_file::TEXT_LIMIT) else { return false };
+    toml::from_str::<SceneFile>(&text).is_ok_and(|f| !f.instance.is_empty())
+}
+
+/// Reads a scene file as an instanced scene: one bottom mesh per file its
+/// `[[instance]]` entries name (each read once), placed by them; the `[[mesh]]`
+/// entries merged into one more bottom placed once as it is.
+pub fn load_instanced_scene_file(path: &Path, load_mesh: MeshLoader<'_>) -> Result<InstancedScene> {
+    let name = path.display().to_string();
+    let text = crate::input::read_file::read_text(path, crate::input::read_file::TEXT_LIMIT)?;
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let file: SceneFile = toml::from_str(&text)
+        .map_err(|e| anyhow!("{name}: {}", e.to_string().split_whitespace().collect::<Vec<_>>().join(" ")))?;
+    if file.instance.is_empty() {
+        bail!("{name}: the scene file lists no [[instance]]");
+    }
+    instanced_scene(&name, file, dir, load_mesh)
+}
+
+fn instanced_scene(name: &str, mut file: SceneFile, dir: &Path, load_mesh: MeshLoader<'_>) -> Result<InstancedScene> {
+    if file.mesh.len() + file.instance.len() > MAX_MESHES {
+        bail!("{name}: {} meshes and instances is more than {MAX_MESHES}", file.mesh.len() + file.instance.len());
+    }
+    let mut scene = InstancedScene { name: name.to_string(), ..Default::default() };
+    let lights = lights_of(name, &file)?;
+    if !lights.is_empty() {
+        scene.lights = lights;
+        scene.lights.push(ambient());
+    }
+    scene.camera = camera_of(&file);
+    scene.camera.check(name)?;
+    let mut bottom_of: std::collections::HashMap<std::path::PathBuf, u32> = Default::default();
+    let mut drawn = 0u64;
+    for (i, entry) in file.instance.iter().enumerate() {
+        let what = format!("{name}: instance {} ({})", i + 1, entry.file);
+        let child = dir.join(&entry.file);
+        if is_scene_file(&child) {
+            bail!("{what}: a scene file cannot include another");
+        }
+        let bottom = match bottom_of.get(&child) {
+            Some(&b) => b,
+            None => {
+                let Some((mesh, w)) = load_mesh(&child)? else {
+                    bail!("{what}: is a scene image; a scene file lists meshes (OBJ, PLY, glTF)");
+                };
+                scene.warnings.extend(w);
+                scene.bottoms.push(mesh);
+                scene.bottom_names.push(entry.file.clone());
+                bottom_of.insert(child.clone(), scene.bottoms.len() as u32 - 1);
+                scene.bottoms.len() as u32 - 1
+            }
+        };
+        drawn += scene.bottoms[bottom as usize].triangles.len() as u64;
+        if drawn > crate::input::limits::MAX_DRAWN_TRIANGLES {
+            bail!(
+                "{what}: brings the scene to {drawn} drawn triangles, more than {}",
+                crate::input::limits::MAX_DRAWN_TRIANGLES
+            );
+        }
+        let transform = transform_of(entry).map_err(|e| anyhow!("{what}: {e}"))?;
+        let material = match &entry.material {
+            Some(m) => {
+                let table =
+                    file.materials.get(m).ok_or_else(|| anyhow!("{what}: material '{m}' is not in [materials]"))?;
+                scene.materials.push(material_of(table));
+                scene.material_names.push(m.clone());
+                Some(scene.materials.len() as u32 - 1)
+            }
+            None => None,
+        };
+        scene.instances.push(Instance { bottom, to_world: affine_of(transform), material });
+    }
+    if !file.mesh.is_empty() {
+        // The [[mesh]] entries, merged as a flat scene file would, are one more bottom.
+        file.light.clear();
+        let (mesh, warnings, _) = merged_meshes(name, &file, dir, load_mesh)?;
+        scene.warnings.extend(warnings);
+        scene.bottoms.push(mesh);
+        scene.bottom_names.push("the [[mesh]] entries".into());
+        let bottom = scene.bottoms.len() as u32 - 1;
+        scene.instances.push(Instance { bottom, to_world: raypipe_core::math::affine::IDENTITY, material: None });
+    }
+    scene.check()?;
+    Ok(scene)
 }
 
 /// The entry's transform: scale, then rotation (x, y, z in degrees), then translation.

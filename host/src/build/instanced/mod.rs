@@ -7,12 +7,16 @@ pub mod writer;
 
 use anyhow::{anyhow, bail, Result};
 use glam::{DMat3, DVec3, Vec3};
-use raypipe_core::image::instanced::{mapped_box, InstanceRecord};
+use raypipe_core::image::instanced::{mapped_box, InstanceRecord, TopLevel, TopParts};
 use raypipe_core::image::{LightRecord, MaterialRecord, FLAG_DEFAULT_LIGHT, NULL_INDEX};
 use raypipe_core::math::affine::{self, Affine34};
+use raypipe_core::traverse::instanced::trace_instanced;
 use raypipe_core::SceneView;
+use raypipe_core::{NoProbe, Watertight};
 
 use crate::build::box_bvh::build_box_bvh;
+use crate::build::default_lights::lights_for;
+use crate::build::emitter_sums::EmitterSums;
 use crate::build::image_writer::ImageWriter;
 use crate::input::camera_file::CameraSpec;
 use crate::input::mesh::Mesh;
@@ -115,6 +119,32 @@ pub fn world_box(to_world: &Affine34, bottom: ([f32; 3], [f32; 3])) -> ([f32; 3]
     let lo = (lo - Vec3::splat(margin)).to_array().map(f32::next_down);
     let hi = (hi + Vec3::splat(margin)).to_array().map(f32::next_up);
     (lo, hi)
+}
+
+/// Drops the textures no material of `mesh`'s triangles uses and renumbers the rest
+/// (a glTF mesh's bottom starts with the whole document's).
+pub fn keep_used_textures(mesh: &mut Mesh) {
+    let mut used = vec![false; mesh.textures.len()];
+    let materials = &mesh.materials;
+    for &m in &mesh.tri_materials {
+        if let Some(t) = materials.get(m as usize).map(|r| r.texture) {
+            if let Some(u) = used.get_mut(t as usize) {
+                *u = true;
+            }
+        }
+    }
+    let mut renumber = vec![NULL_INDEX; used.len()];
+    let mut kept = Vec::new();
+    for (i, t) in std::mem::take(&mut mesh.textures).into_iter().enumerate() {
+        if used[i] {
+            renumber[i] = kept.len() as u32;
+            kept.push(t);
+        }
+    }
+    mesh.textures = kept;
+    for r in &mut mesh.materials {
+        r.texture = renumber.get(r.texture as usize).copied().unwrap_or(NULL_INDEX);
+    }
 }
 
 impl InstancedScene {
@@ -235,7 +265,7 @@ impl InstancedScene {
         let top = build_box_bvh(&boxes, 1);
         report.grid_seconds = start.elapsed().as_secs_f64();
         let bounds = (top.nodes[0].min, top.nodes[0].max);
-        let (globals, note) = self.globals(opts, bounds)?;
+        let (globals, note) = self.globals(opts, &Parts { images: &images, records: &records, top: &top })?;
         report.lights = note;
         let bottoms: Vec<&[u8]> = images.iter().map(|i| &i[..]).collect();
         let bytes = writer::write_instanced(&bottoms, &records, &top.nodes, &top.list, &globals, bounds)?;
@@ -243,14 +273,26 @@ impl InstancedScene {
         Ok(BuiltInstanced { name: name.clone(), bytes, report })
     }
 
-    /// The globals image: the camera, the lights (chosen over the flattened scene, as
-    /// the flat build chooses them; emissive triangles are not area lights here) and the
-    /// override materials.
-    fn globals(&self, opts: &BuildOptions, bounds: ([f32; 3], [f32; 3])) -> Result<(Vec<u8>, String)> {
+    /// The globals image: the camera, the lights and the override materials. Without
+    /// lights of its own the scene gets the flat build's default ones, placed by rays
+    /// through the instances (emissive triangles glow but are not sampled as area
+    /// lights: their ids are shared by every copy).
+    fn globals(&self, opts: &BuildOptions, parts: &Parts<'_>) -> Result<(Vec<u8>, String)> {
+        let bounds = (parts.top.nodes[0].min, parts.top.nodes[0].max);
         let camera = self.camera.merged(opts.camera).apply(&framing_camera(bounds.0, bounds.1));
-        let mut flat = self.flatten();
-        let (note, default_light) = crate::scene::choose_lights(&self.name, &mut flat, &camera, &opts.lights)?;
-        let lights: Vec<LightRecord> = flat.lights.into_iter().filter(|l| l.kind != LightRecord::AREA).collect();
+        let (lights, note, default_light) = if !opts.lights.is_empty() {
+            crate::scene::check_user_lights(&self.name, &opts.lights)?;
+            let mut lights = opts.lights.clone();
+            lights.push(LightRecord { position: [0.0; 3], kind: LightRecord::AMBIENT, color: [0.1; 3], triangle: 0 });
+            (lights, format!("{} given lights", opts.lights.len()), false)
+        } else if !self.lights.is_empty() {
+            (self.lights.clone(), format!("{} lights from the input", self.lights.len()), false)
+        } else {
+            let (lights, note) = self.default_lights(parts, bounds, &camera)?;
+            let for_camera = lights.iter().any(|l| l.kind == LightRecord::POINT);
+            (lights, note, for_camera)
+        };
+        let lights: Vec<LightRecord> = lights.into_iter().filter(|l| l.kind != LightRecord::AREA).collect();
         let mesh = Mesh {
             lights,
             materials: self.materials.clone(),
@@ -268,4 +310,51 @@ impl InstancedScene {
         }
         Ok((image.to_vec(), note))
     }
+
+    /// The flat build's default lights for the placed scene: emitters summed over every
+    /// copy, the light placed by rays through the instances.
+    fn default_lights(
+        &self,
+        parts: &Parts<'_>,
+        bounds: ([f32; 3], [f32; 3]),
+        camera: &raypipe_core::image::CameraRecord,
+    ) -> Result<(Vec<LightRecord>, String)> {
+        let mut sums = EmitterSums::default();
+        for inst in &self.instances {
+            let mesh = &self.bottoms[inst.bottom as usize];
+            for (i, t) in mesh.triangles.iter().enumerate() {
+                let ke = match inst.material {
+                    Some(m) => self.materials[m as usize].emission,
+                    None => {
+                        let m = mesh.tri_materials.get(i).copied().unwrap_or(u32::MAX);
+                        mesh.materials.get(m as usize).map_or([0.0; 3], |m| m.emission)
+                    }
+                };
+                let p = t.map(|v| affine::point(&inst.to_world, Vec3::from(mesh.positions[v as usize])).to_array());
+                sums.add(p, ke);
+            }
+        }
+        let views = parts
+            .images
+            .iter()
+            .map(|i| SceneView::parse(i).map_err(|e| anyhow!("internal error: {e}")))
+            .collect::<Result<Vec<_>>>()?;
+        let top = TopLevel::new(
+            TopParts { instances: parts.records, nodes: &parts.top.nodes, list: &parts.top.list, addrs: [0; 3] },
+            |b| views.get(b as usize).map(|v| v.bounds()),
+            self.materials.len() as u32,
+        )
+        .map_err(|e| anyhow!("internal error: {e}"))?;
+        let first_hit = |ray: &raypipe_core::Ray| {
+            trace_instanced::<Watertight, _>(&top, &views, ray, &mut NoProbe).map(|h| h.hit.t)
+        };
+        Ok(lights_for(&sums, bounds, camera, first_hit))
+    }
+}
+
+/// What the globals image is chosen from: the built bottoms, instances and top level.
+struct Parts<'a> {
+    images: &'a [AlignedBytes],
+    records: &'a [InstanceRecord],
+    top: &'a crate::build::box_bvh::BoxBvh,
 }
