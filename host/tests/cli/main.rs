@@ -10,6 +10,7 @@ mod common;
 mod fixed_point;
 mod info;
 mod inputs;
+mod instanced;
 #[cfg(feature = "mpi")]
 mod mpi;
 mod outputs;
