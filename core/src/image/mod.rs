@@ -31,4 +31,4 @@ pub use records::{
     ShadingVertex, TextureRecord, TriBlock4, TriangleRecord, WaldTriangle, WideNode, NULL_INDEX,
 };
 pub use structure_views::{Bvh4View, Bvh8View, BvhView, GridView, KdTreeView, WideBvhView};
-pub use view::SceneView;
+pub use view::{FrameGeometry, SceneView};

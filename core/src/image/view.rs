@@ -18,6 +18,9 @@ use super::structure_views::{Bvh4View, Bvh8View, BvhView, GridView, KdTreeView};
 use super::validate;
 use crate::probe::{DataClass, MemoryProbe};
 
+mod update;
+pub use update::FrameGeometry;
+
 /// A validated scene image, borrowed in place. Cheap to copy.
 #[derive(Clone, Copy, Debug)]
 pub struct SceneView<'a> {

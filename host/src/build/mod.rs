@@ -4,6 +4,7 @@ pub mod box_bvh;
 pub mod bricks;
 pub mod bvh;
 pub mod default_lights;
+pub mod dynamic;
 pub mod emitter_sums;
 pub mod grid;
 pub mod image_writer;

@@ -17,6 +17,13 @@ use super::tree::{pair, validate_tree, Children};
 pub(in crate::image) fn bvh<'a>(s: &Sections<'a>, nt: u32) -> Result<BvhView<'a>, SceneError> {
     let nodes: &[BvhNode] = s.required(SectionKind::BvhNodes)?;
     let prims = prim_lists(s, nt)?;
+    bvh_tree(nodes, prims)?;
+    Ok(BvhView { nodes, prims, nodes_addr: s.addr(SectionKind::BvhNodes), prims_addr: s.addr(SectionKind::PrimLists) })
+}
+
+/// The shape of a binary BVH whose leaves index `prims` (entries checked by the
+/// caller): finite ordered boxes, children after parents, bounded depth and leaves.
+pub(in crate::image) fn bvh_tree(nodes: &[BvhNode], prims: &[u32]) -> Result<(), SceneError> {
     let np = prims.len() as u64;
     validate_tree(nodes.len(), SectionKind::BvhNodes, MAX_TREE_DEPTH, np, |i| {
         let n = nodes.get(i).ok_or(())?;
@@ -31,6 +38,5 @@ pub(in crate::image) fn bvh<'a>(s: &Sections<'a>, nt: u32) -> Result<BvhView<'a>
         } else {
             Err(())
         }
-    })?;
-    Ok(BvhView { nodes, prims, nodes_addr: s.addr(SectionKind::BvhNodes), prims_addr: s.addr(SectionKind::PrimLists) })
+    })
 }

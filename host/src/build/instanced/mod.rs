@@ -21,7 +21,7 @@ use crate::build::image_writer::ImageWriter;
 use crate::input::camera_file::CameraSpec;
 use crate::input::mesh::Mesh;
 use crate::platform::aligned::AlignedBytes;
-use crate::scene::{add_structure, framing_camera, BuildOptions, BuildReport, TriangleLayout};
+use crate::scene::{add_structure, framing_camera, Accel, BuildOptions, BuildReport, TriangleLayout};
 
 /// One placed copy of a bottom mesh.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -55,6 +55,20 @@ pub struct InstancedScene {
     pub camera: CameraSpec,
     /// Warnings from loading.
     pub warnings: Vec<String>,
+}
+
+/// The built parts of an instanced scene, before they are laid out in one file.
+pub struct BuiltParts {
+    /// Each bottom's scene image.
+    pub images: Vec<AlignedBytes>,
+    /// The instance records.
+    pub records: Vec<InstanceRecord>,
+    /// The top level over them.
+    pub top: crate::build::box_bvh::BoxBvh,
+    /// The globals image.
+    pub globals: Vec<u8>,
+    /// Sizes, lights and warnings.
+    pub report: BuildReport,
 }
 
 /// A built instanced scene in memory.
@@ -225,6 +239,19 @@ impl InstancedScene {
     /// Builds the bottom images (the structure `opts` asks for), the instances, the top
     /// level and the globals image (lights chosen as the flat scene's would be).
     pub fn build(&self, opts: &BuildOptions) -> Result<BuiltInstanced> {
+        let parts = self.build_parts(opts, &|_| opts.accel)?;
+        let BuiltParts { images, records, top, globals, mut report } = parts;
+        let bounds = (top.nodes[0].min, top.nodes[0].max);
+        let bottoms: Vec<&[u8]> = images.iter().map(|i| &i[..]).collect();
+        let bytes = writer::write_instanced(&bottoms, &records, &top.nodes, &top.list, &globals, bounds)?;
+        report.image_bytes = bytes.len();
+        Ok(BuiltInstanced { name: self.name.clone(), bytes, report })
+    }
+
+    /// Builds the parts of the scene: each bottom image with the structure
+    /// `accel_of(bottom)` names, the instance records, the top level and the globals
+    /// image.
+    pub fn build_parts(&self, opts: &BuildOptions, accel_of: &dyn Fn(usize) -> Accel) -> Result<BuiltParts> {
         self.check()?;
         let name = &self.name;
         let mut report = BuildReport { warnings: self.warnings.clone(), ..Default::default() };
@@ -234,12 +261,15 @@ impl InstancedScene {
             let mut mesh = mesh.clone();
             mesh.lights.clear();
             let mut writer = ImageWriter::new(&mesh);
-            if opts.triangles == TriangleLayout::Wald {
+            let accel = accel_of(b);
+            let layout = if accel == opts.accel { opts.triangles } else { TriangleLayout::Indexed };
+            if layout == TriangleLayout::Wald {
                 writer.wald_triangles(&mesh);
             }
             let what = format!("{name}: {}", self.bottom_names.get(b).map_or("a mesh", |s| s.as_str()));
             let mut r = BuildReport::default();
-            add_structure(&what, &mesh, opts, &mut r, &mut writer)?;
+            let own = BuildOptions { accel, triangles: layout, ..opts.clone() };
+            add_structure(&what, &mesh, &own, &mut r, &mut writer)?;
             report.tree_nodes += r.tree_nodes;
             report.structure_bytes += r.structure_bytes;
             report.triangles += mesh.triangles.len();
@@ -264,13 +294,9 @@ impl InstancedScene {
         let boxes: Vec<([f32; 3], [f32; 3])> = records.iter().map(|r| (r.bounds_min, r.bounds_max)).collect();
         let top = build_box_bvh(&boxes, 1);
         report.grid_seconds = start.elapsed().as_secs_f64();
-        let bounds = (top.nodes[0].min, top.nodes[0].max);
         let (globals, note) = self.globals(opts, &Parts { images: &images, records: &records, top: &top })?;
         report.lights = note;
-        let bottoms: Vec<&[u8]> = images.iter().map(|i| &i[..]).collect();
-        let bytes = writer::write_instanced(&bottoms, &records, &top.nodes, &top.list, &globals, bounds)?;
-        report.image_bytes = bytes.len();
-        Ok(BuiltInstanced { name: name.clone(), bytes, report })
+        Ok(BuiltParts { images, records, top, globals, report })
     }
 
     /// The globals image: the camera, the lights and the override materials. Without
