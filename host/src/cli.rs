@@ -8,6 +8,7 @@ use clap::{Parser, Subcommand};
 
 use crate::commands;
 
+use crate::commands::animate::AnimateArgs;
 use crate::commands::bench::BenchArgs;
 use crate::commands::build::BuildArgs;
 use crate::commands::cluster::ClusterArgs;
@@ -46,6 +47,9 @@ pub enum Command {
     Build(BuildArgs),
     /// Render a scene to a PNG (the built-in Cornell box when no scene is given).
     Render(RenderArgs),
+    /// Render an animated BART scene (AFF) frame by frame: per-frame update and render
+    /// times, the frames as PNG (and a video with ffmpeg).
+    Animate(AnimateArgs),
     /// Print Purcell's scene statistics for a view: hits, nodes and triangles per ray.
     Stats(StatsArgs),
     /// Measure build time, image size and primary-ray throughput.
@@ -145,6 +149,7 @@ pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Build(a) => commands::build::cmd_build(a),
         Command::Render(a) => commands::render::cmd_render(a),
+        Command::Animate(a) => commands::animate::cmd_animate(a),
         Command::Stats(a) => commands::stats::cmd_stats(a),
         Command::Bench(a) => commands::bench::cmd_bench(a),
         Command::Trace(a) => commands::trace::cmd_trace(a),

@@ -5,6 +5,7 @@
 // there are TOML tables and placeholders, not rustdoc links or HTML.
 #![allow(rustdoc::broken_intra_doc_links, rustdoc::invalid_html_tags)]
 
+pub mod animate;
 pub mod args;
 pub mod bench;
 pub mod bricked_study;

@@ -1,5 +1,6 @@
 //! Reading scenes and rays: OBJ/MTL, PLY, glTF, scene files, textures, cameras, camera paths, ray batches, generated scenes.
 
+pub mod aff;
 pub mod bricked;
 pub mod camera_file;
 pub mod camera_path;
@@ -18,6 +19,7 @@ pub mod panic_guard;
 pub mod ply;
 pub mod ply_stream;
 pub mod polygon;
+pub mod ppm;
 pub mod range_check;
 pub mod read_file;
 pub mod scene_file;

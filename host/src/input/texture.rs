@@ -42,11 +42,12 @@ pub fn decode(bytes: &[u8], kind: &str) -> Result<TextureImage, String> {
     match kind {
         "png" | "image/png" => decode_png(bytes),
         "jpg" | "jpeg" | "image/jpeg" => decode_jpeg(bytes),
-        _ => Err("unsupported image format (PNG and JPEG are read)".to_string()),
+        "ppm" | "image/x-portable-pixmap" => crate::input::ppm::decode_ppm(bytes),
+        _ => Err("unsupported image format (PNG, JPEG and PPM are read)".to_string()),
     }
 }
 
-fn check_size(width: u32, height: u32) -> Result<(), String> {
+pub(crate) fn check_size(width: u32, height: u32) -> Result<(), String> {
     if width == 0 || height == 0 || width > MAX_SIDE || height > MAX_SIDE {
         return Err(format!("impossible size {width}x{height}"));
     }

@@ -1,5 +1,6 @@
 //! Measuring scenes and models: statistics, benchmarks, the fixed-point comparison, sweeps, plots, report diffs and cost images.
 
+pub mod animation_report;
 pub mod bench;
 pub mod cluster;
 pub mod cost_image;
