@@ -2,6 +2,7 @@
 //! everywhere, and bad input answered with one line on stderr, a non-zero exit, no panic
 //! and no output file.
 
+mod animate;
 mod bad_input;
 mod bricked;
 mod build;

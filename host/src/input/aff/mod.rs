@@ -60,6 +60,13 @@ pub fn load_aff(path: &Path) -> Result<AffScene> {
     assemble(path, parsed)
 }
 
+/// Reads a BART scene whose entry file `path` holds `text` (its includes and textures
+/// are read beside `path`).
+pub fn load_aff_text(path: &Path, text: &str) -> Result<AffScene> {
+    let parsed = parser::parse_text(path, text)?;
+    assemble(path, parsed)
+}
+
 /// The bytes that make two bottoms the same.
 fn identity_of(g: &Gathered) -> Vec<u8> {
     let mut key = Vec::new();

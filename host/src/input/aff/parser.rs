@@ -124,6 +124,16 @@ struct State {
 
 /// Reads the AFF scene whose entry file is `path`.
 pub fn parse(path: &Path) -> Result<Parsed> {
+    parse_entry(path, None)
+}
+
+/// Reads the AFF scene whose entry file `path` holds `text` (read from memory; its
+/// includes and textures are found beside `path`).
+pub fn parse_text(path: &Path, text: &str) -> Result<Parsed> {
+    parse_entry(path, Some(text))
+}
+
+fn parse_entry(path: &Path, text: Option<&str>) -> Result<Parsed> {
     let root_dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
     let mut s = State {
         parsed: Parsed {
@@ -145,7 +155,10 @@ pub fn parse(path: &Path) -> Result<Parsed> {
         root_dir,
         triangles: 0,
     };
-    s.file(path)?;
+    match text {
+        Some(text) => s.text(path, text)?,
+        None => s.file(path)?,
+    }
     if !s.blocks.is_empty() {
         bail!("{}: {} transform block(s) are never closed with '}}'", path.display(), s.blocks.len());
     }
@@ -186,9 +199,15 @@ impl State {
         // BART's files are ASCII with the odd Latin-1 byte in a comment.
         let bytes = crate::input::read_file::read_bytes(path, crate::input::read_file::TEXT_LIMIT)?;
         let text = String::from_utf8_lossy(&bytes);
+        self.text(path, &text)
+    }
+
+    /// Reads the commands of `text`, the file `path`.
+    fn text(&mut self, path: &Path, text: &str) -> Result<()> {
+        let canon = path.canonicalize().unwrap_or_else(|_| path.to_path_buf());
         self.includes.push(canon);
         let depth = self.blocks.len();
-        let mut t = Tokens::new(&path.display().to_string(), &text);
+        let mut t = Tokens::new(&path.display().to_string(), text);
         while let Some(tok) = t.next_token() {
             self.command(tok.text, &mut t, path)?;
         }
