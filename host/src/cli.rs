@@ -14,6 +14,7 @@ use crate::commands::build::BuildArgs;
 use crate::commands::cluster::ClusterArgs;
 use crate::commands::fixed_point::FixedPointArgs;
 use crate::commands::info::InfoArgs;
+use crate::commands::museum_art::MuseumArtArgs;
 use crate::commands::plot::PlotArgs;
 use crate::commands::rays::RaysArgs;
 use crate::commands::render::RenderArgs;
@@ -50,6 +51,9 @@ pub enum Command {
     /// Render an animated BART scene (AFF) frame by frame: per-frame update and render
     /// times, the frames as PNG (and a video with ffmpeg).
     Animate(AnimateArgs),
+    /// Write BART's museum art with 4^LEVEL animated triangles (animartN.aff for the
+    /// museum's larger variants, which the benchmark's files lack).
+    MuseumArt(MuseumArtArgs),
     /// Print Purcell's scene statistics for a view: hits, nodes and triangles per ray.
     Stats(StatsArgs),
     /// Measure build time, image size and primary-ray throughput.
@@ -150,6 +154,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Build(a) => commands::build::cmd_build(a),
         Command::Render(a) => commands::render::cmd_render(a),
         Command::Animate(a) => commands::animate::cmd_animate(a),
+        Command::MuseumArt(a) => commands::museum_art::cmd_museum_art(a),
         Command::Stats(a) => commands::stats::cmd_stats(a),
         Command::Bench(a) => commands::bench::cmd_bench(a),
         Command::Trace(a) => commands::trace::cmd_trace(a),

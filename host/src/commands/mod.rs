@@ -15,6 +15,7 @@ pub mod fixed_point;
 pub mod info;
 pub mod info_bricked;
 pub mod info_instanced;
+pub mod museum_art;
 pub mod plot;
 pub mod rays;
 pub mod render;

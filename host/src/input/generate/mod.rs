@@ -5,6 +5,7 @@
 
 pub mod building;
 pub mod forest;
+pub mod museum_art;
 pub mod power_plant;
 pub mod shapes;
 
