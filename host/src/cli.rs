@@ -10,6 +10,7 @@ use crate::commands;
 
 use crate::commands::animate::AnimateArgs;
 use crate::commands::bench::BenchArgs;
+use crate::commands::bench_updates::BenchUpdatesArgs;
 use crate::commands::build::BuildArgs;
 use crate::commands::cluster::ClusterArgs;
 use crate::commands::fixed_point::FixedPointArgs;
@@ -54,6 +55,9 @@ pub enum Command {
     /// Write BART's museum art with 4^LEVEL animated triangles (animartN.aff for the
     /// museum's larger variants, which the benchmark's files lack).
     MuseumArt(MuseumArtArgs),
+    /// Time refit, linear-BVH and binned-SAH updates of an animation's frames (ms per
+    /// million triangles), and dump its vertex buffers for Embree's harness.
+    BenchUpdates(BenchUpdatesArgs),
     /// Print Purcell's scene statistics for a view: hits, nodes and triangles per ray.
     Stats(StatsArgs),
     /// Measure build time, image size and primary-ray throughput.
@@ -155,6 +159,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Render(a) => commands::render::cmd_render(a),
         Command::Animate(a) => commands::animate::cmd_animate(a),
         Command::MuseumArt(a) => commands::museum_art::cmd_museum_art(a),
+        Command::BenchUpdates(a) => commands::bench_updates::cmd_bench_updates(a),
         Command::Stats(a) => commands::stats::cmd_stats(a),
         Command::Bench(a) => commands::bench::cmd_bench(a),
         Command::Trace(a) => commands::trace::cmd_trace(a),

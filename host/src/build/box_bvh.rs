@@ -1,15 +1,18 @@
 //! A binned-SAH BVH over boxes in `f32` (Wald 2007, "On fast construction of SAH-based
-//! bounding volume hierarchies": centroids binned along the widest axis, the cheapest of
-//! the bins' boundaries taken): the instanced scene's top level, rebuilt every frame of
-//! an animation, and the dynamic bottom levels' fast rebuild. Node boxes are the exact
-//! unions of their boxes (callers pass boxes already rounded outward), so a node holds
-//! its children and a leaf its entries exactly as [`raypipe_core::image::instanced::TopLevel`]
-//! checks.
+//! bounding volume hierarchies": centroids binned along all three axes in one pass, the
+//! cheapest of the bins' boundaries taken): the instanced scene's top level, rebuilt
+//! every frame of an animation, and the dynamic meshes' full rebuild. Primitives are
+//! kept as 32-byte records and partitioned in place, each pass computing the children's
+//! bounds for the next, so a node costs one binning pass and one partition pass. Node
+//! boxes are the exact unions of their boxes (callers pass boxes already rounded
+//! outward), so a node holds its children and a leaf its entries exactly as
+//! [`raypipe_core::image::instanced::TopLevel`] checks. Nodes are laid out depth first,
+//! each node's subtree finished before its sibling's starts (the refit relies on it).
 
 use glam::Vec3A;
 use raypipe_core::image::{BvhNode, MAX_TREE_DEPTH};
 
-/// Bins per split.
+/// Bins per axis.
 const BINS: usize = 16;
 
 /// A built tree: nodes (0 is the root; an inner node's children are adjacent) and the
@@ -33,9 +36,16 @@ struct Aabb {
 impl Aabb {
     const EMPTY: Aabb = Aabb { lo: Vec3A::splat(f32::INFINITY), hi: Vec3A::splat(f32::NEG_INFINITY) };
 
+    #[inline]
     fn grow(&mut self, o: &Aabb) {
         self.lo = self.lo.min(o.lo);
         self.hi = self.hi.max(o.hi);
+    }
+
+    #[inline]
+    fn grow_point(&mut self, p: Vec3A) {
+        self.lo = self.lo.min(p);
+        self.hi = self.hi.max(p);
     }
 
     fn area(&self) -> f32 {
@@ -44,48 +54,89 @@ impl Aabb {
     }
 }
 
-/// Builds the tree over `boxes` (`(lo, hi)` each), at most `max_leaf` boxes per leaf.
-pub fn build_box_bvh(boxes: &[([f32; 3], [f32; 3])], max_leaf: usize) -> BoxBvh {
-    let aabbs: Vec<Aabb> =
-        boxes.iter().map(|(lo, hi)| Aabb { lo: Vec3A::from_array(*lo), hi: Vec3A::from_array(*hi) }).collect();
-    let centroids: Vec<Vec3A> = aabbs.iter().map(|b| (b.lo + b.hi) * 0.5).collect();
-    let mut ids: Vec<u32> = (0..boxes.len() as u32).collect();
-    let mut out = BoxBvh { nodes: vec![node(Aabb::EMPTY, 0, 0)], list: Vec::with_capacity(boxes.len()), depth: 0 };
-    let max_leaf = max_leaf.max(1);
-    // (node, range of `ids`, depth)
-    let mut todo = vec![(0usize, 0usize, ids.len(), 1u32)];
-    while let Some((at, start, end, depth)) = todo.pop() {
-        out.depth = out.depth.max(depth);
-        let range = &mut ids[start..end];
-        let mut bounds = Aabb::EMPTY;
-        let mut cbounds = Aabb::EMPTY;
-        for &i in range.iter() {
-            bounds.grow(&aabbs[i as usize]);
-            let c = centroids[i as usize];
-            cbounds.grow(&Aabb { lo: c, hi: c });
-        }
-        let split = if range.len() <= 1 || depth + 1 >= MAX_TREE_DEPTH - 4 {
-            None
-        } else {
-            best_split(range, &aabbs, &centroids, &cbounds, &bounds, max_leaf)
-        };
-        let Some(mid) = split.map(|s| start + partition(range, &centroids, s)) else {
-            out.nodes[at] = node(bounds, out.list.len() as u32, range.len() as u32);
-            out.list.extend_from_slice(range);
-            continue;
-        };
-        let first = out.nodes.len();
-        out.nodes.push(node(Aabb::EMPTY, 0, 0));
-        out.nodes.push(node(Aabb::EMPTY, 0, 0));
-        out.nodes[at] = node(bounds, first as u32, 0);
-        todo.push((first + 1, mid, end, depth + 1));
-        todo.push((first, start, mid, depth + 1));
-    }
-    out
+/// A primitive: its box and id, 32 bytes (the top levels stream every primitive twice
+/// per level; a 48-byte record of two 16-byte vectors cost a third more).
+#[derive(Clone, Copy)]
+struct Prim {
+    lo: [f32; 3],
+    id: u32,
+    hi: [f32; 3],
+    _pad: u32,
 }
 
-fn node(b: Aabb, first: u32, count: u32) -> BvhNode {
-    BvhNode { min: b.lo.to_array(), first, max: b.hi.to_array(), count }
+impl Prim {
+    #[inline]
+    fn aabb(&self) -> Aabb {
+        Aabb { lo: Vec3A::from_array(self.lo), hi: Vec3A::from_array(self.hi) }
+    }
+
+    #[inline]
+    fn centroid2(&self) -> Vec3A {
+        // Twice the centroid: binning needs no halving.
+        Vec3A::from_array(self.lo) + Vec3A::from_array(self.hi)
+    }
+}
+
+/// A node's range with its bounds and (doubled) centroid bounds.
+struct Range {
+    at: usize,
+    start: usize,
+    end: usize,
+    depth: u32,
+    bounds: Aabb,
+    cbounds: Aabb,
+}
+
+/// Builds the tree over `boxes` (`(lo, hi)` each): ranges of more than `max_leaf`
+/// boxes are split where the SAH is least, the others are leaves (a range is a larger
+/// leaf only where the centroids cannot be told apart or the tree is at its depth
+/// limit).
+pub fn build_box_bvh(boxes: &[([f32; 3], [f32; 3])], max_leaf: usize) -> BoxBvh {
+    let mut prims: Vec<Prim> = Vec::with_capacity(boxes.len());
+    let (mut bounds, mut cbounds) = (Aabb::EMPTY, Aabb::EMPTY);
+    for (i, (lo, hi)) in boxes.iter().enumerate() {
+        let p = Prim { lo: *lo, id: i as u32, hi: *hi, _pad: 0 };
+        bounds.grow(&p.aabb());
+        cbounds.grow_point(p.centroid2());
+        prims.push(p);
+    }
+    let zero = BvhNode { min: [0.0; 3], first: 0, max: [0.0; 3], count: 0 };
+    let mut out = BoxBvh {
+        nodes: Vec::with_capacity(2 * boxes.len() / max_leaf.max(1) + 1),
+        list: Vec::with_capacity(boxes.len()),
+        depth: 0,
+    };
+    out.nodes.push(zero);
+    let max_leaf = max_leaf.max(1);
+    let mut todo = vec![Range { at: 0, start: 0, end: prims.len(), depth: 1, bounds, cbounds }];
+    while let Some(r) = todo.pop() {
+        out.depth = out.depth.max(r.depth);
+        let range = &mut prims[r.start..r.end];
+        // A leaf of up to `max_leaf` boxes is tested as one block (four triangles, as
+        // Embree's leaves; one instance at the top level): it is never split.
+        let split = if range.len() <= max_leaf || r.depth + 1 >= MAX_TREE_DEPTH - 4 {
+            None
+        } else {
+            best_split(range, &r.cbounds)
+        };
+        let node =
+            |b: &Aabb, first: u32, count: u32| BvhNode { min: b.lo.to_array(), first, max: b.hi.to_array(), count };
+        let Some(split) = split else {
+            out.nodes[r.at] = node(&r.bounds, out.list.len() as u32, range.len() as u32);
+            out.list.extend(range.iter().map(|p| p.id));
+            continue;
+        };
+        let (left, right) = partition(range, split);
+        let mid = r.start + left.count;
+        let first = out.nodes.len();
+        out.nodes.push(zero);
+        out.nodes.push(zero);
+        out.nodes[r.at] = node(&r.bounds, first as u32, 0);
+        let depth = r.depth + 1;
+        todo.push(Range { at: first + 1, start: mid, end: r.end, depth, bounds: right.bounds, cbounds: right.cbounds });
+        todo.push(Range { at: first, start: r.start, end: mid, depth, bounds: left.bounds, cbounds: left.cbounds });
+    }
+    out
 }
 
 /// A split: the axis and the bin boundary (centroids in bins below it go left).
@@ -98,48 +149,46 @@ struct Split {
 }
 
 impl Split {
+    #[inline]
     fn bin_of(&self, c: Vec3A) -> usize {
         (((c[self.axis] - self.lo) * self.scale) as usize).min(BINS - 1)
     }
 }
 
-/// The cheapest bin boundary over all three axes, or `None` when a leaf is cheaper
-/// (and small enough) or the centroids cannot be told apart.
-fn best_split(
-    range: &[u32],
-    aabbs: &[Aabb],
-    centroids: &[Vec3A],
-    cbounds: &Aabb,
-    bounds: &Aabb,
-    max_leaf: usize,
-) -> Option<Split> {
+/// The bins' boundaries on all three axes of one pass, and the cheapest, or `None` when
+/// the centroids cannot be told apart.
+fn best_split(range: &[Prim], cbounds: &Aabb) -> Option<Split> {
     let extent = cbounds.hi - cbounds.lo;
+    let scale = Vec3A::select(extent.cmpgt(Vec3A::ZERO), Vec3A::splat(BINS as f32 * 0.99999) / extent, Vec3A::ZERO);
+    let mut counts = [[0u32; BINS]; 3];
+    let mut boxes = [[Aabb::EMPTY; BINS]; 3];
+    let top = Vec3A::splat((BINS - 1) as f32);
+    for p in range {
+        let b_box = p.aabb();
+        let b = ((p.centroid2() - cbounds.lo) * scale).min(top).to_array();
+        for axis in 0..3 {
+            let k = (b[axis] as usize).min(BINS - 1);
+            counts[axis][k] += 1;
+            boxes[axis][k].grow(&b_box);
+        }
+    }
     let mut best: Option<(f32, Split)> = None;
     for axis in 0..3 {
         if extent[axis] <= 0.0 {
             continue;
         }
-        let split = Split { axis, bin: 0, lo: cbounds.lo[axis], scale: BINS as f32 / extent[axis] * 0.99999 };
-        let mut counts = [0u32; BINS];
-        let mut boxes = [Aabb::EMPTY; BINS];
-        for &i in range {
-            let b = split.bin_of(centroids[i as usize]);
-            counts[b] += 1;
-            boxes[b].grow(&aabbs[i as usize]);
-        }
+        let (counts, boxes) = (&counts[axis], &boxes[axis]);
         // Sweep from the right, then from the left.
         let mut right_area = [0.0f32; BINS];
-        let mut acc = Aabb::EMPTY;
         let mut right_count = [0u32; BINS];
-        let mut n = 0;
+        let (mut acc, mut n) = (Aabb::EMPTY, 0);
         for b in (1..BINS).rev() {
             acc.grow(&boxes[b]);
             n += counts[b];
             right_area[b] = acc.area();
             right_count[b] = n;
         }
-        let mut left = Aabb::EMPTY;
-        let mut ln = 0;
+        let (mut left, mut ln) = (Aabb::EMPTY, 0);
         for b in 1..BINS {
             left.grow(&boxes[b - 1]);
             ln += counts[b - 1];
@@ -148,27 +197,46 @@ fn best_split(
             }
             let cost = left.area() * ln as f32 + right_area[b] * right_count[b] as f32;
             if best.is_none_or(|(c, _)| cost < c) {
-                best = Some((cost, Split { bin: b, ..split }));
+                best = Some((cost, Split { axis, bin: b, lo: cbounds.lo[axis], scale: scale[axis] }));
             }
         }
     }
-    let (cost, split) = best?;
-    // Relative to one box test per entry of a leaf: a node costs about one test.
-    let leaf_cost = range.len() as f32 * bounds.area();
-    let split_cost = bounds.area() + cost;
-    (range.len() > max_leaf || split_cost < leaf_cost).then_some(split)
+    best.map(|(_, split)| split)
 }
 
-/// Puts the ids whose centroid's bin is below the split first; returns how many.
-fn partition(range: &mut [u32], centroids: &[Vec3A], s: Split) -> usize {
-    let mut left = 0;
-    for k in 0..range.len() {
-        if s.bin_of(centroids[range[k] as usize]) < s.bin {
-            range.swap(k, left);
-            left += 1;
+/// One side of a partition: its count, bounds and centroid bounds.
+struct Side {
+    count: usize,
+    bounds: Aabb,
+    cbounds: Aabb,
+}
+
+/// Puts the primitives whose centroid's bin is below the split first (two indices
+/// moving inward, swapping only misplaced pairs); returns both sides with their bounds.
+fn partition(range: &mut [Prim], s: Split) -> (Side, Side) {
+    let mut left = Side { count: 0, bounds: Aabb::EMPTY, cbounds: Aabb::EMPTY };
+    let mut right = Side { count: 0, bounds: Aabb::EMPTY, cbounds: Aabb::EMPTY };
+    let goes_left = |p: &Prim| s.bin_of(p.centroid2()) < s.bin;
+    let (mut i, mut j) = (0usize, range.len());
+    loop {
+        while i < j && goes_left(&range[i]) {
+            left.bounds.grow(&range[i].aabb());
+            left.cbounds.grow_point(range[i].centroid2());
+            i += 1;
         }
+        while i < j && !goes_left(&range[j - 1]) {
+            right.bounds.grow(&range[j - 1].aabb());
+            right.cbounds.grow_point(range[j - 1].centroid2());
+            j -= 1;
+        }
+        if i >= j {
+            break;
+        }
+        range.swap(i, j - 1);
     }
-    left
+    left.count = i;
+    right.count = range.len() - i;
+    (left, right)
 }
 
 #[cfg(test)]
@@ -204,6 +272,7 @@ mod tests {
                     assert!(contains(&t.nodes[a], node.min, node.max), "node {i} outside node {a}");
                 }
                 if node.count > 0 {
+                    assert!(node.count <= 2, "leaf of {}", node.count);
                     for &e in &t.list[node.first as usize..(node.first + node.count) as usize] {
                         seen[e as usize] += 1;
                         let (lo, hi) = boxes[e as usize];

@@ -8,6 +8,7 @@
 pub mod animate;
 pub mod args;
 pub mod bench;
+pub mod bench_updates;
 pub mod bricked_study;
 pub mod build;
 pub mod cluster;

@@ -11,3 +11,4 @@ pub mod sweep;
 pub mod sweep_journal;
 pub mod sweep_plot;
 pub mod sweep_table;
+pub mod update_bench;

@@ -33,30 +33,99 @@ fn grow(lo: Vec3A, hi: Vec3A, margin: f32) -> ([f32; 3], [f32; 3]) {
     )
 }
 
-/// Recomputes every box of `nodes` (leaves index `prims`, triangle ids into
-/// `triangles`) from `positions`, leaf boxes grown by `margin`.
-pub fn refit(nodes: &mut [BvhNode], prims: &[u32], triangles: &[[u32; 3]], positions: &[Position], margin: f32) {
-    for i in (0..nodes.len()).rev() {
-        let n = nodes[i];
-        let (lo, hi) = if n.count > 0 {
+/// What refitting reads besides the nodes.
+#[derive(Clone, Copy)]
+struct Geometry<'a> {
+    prims: &'a [u32],
+    triangles: &'a [[u32; 3]],
+    positions: &'a [Position],
+    margin: f32,
+}
+
+impl Geometry<'_> {
+    /// Node `n`'s box: its triangles' grown by the margin (a leaf), or its children's
+    /// union (read through `child`).
+    #[inline]
+    fn node_box(&self, n: &BvhNode, child: impl Fn(u32) -> Option<BvhNode>) -> Option<([f32; 3], [f32; 3])> {
+        if n.count > 0 {
             let mut lo = Vec3A::splat(f32::INFINITY);
             let mut hi = Vec3A::splat(f32::NEG_INFINITY);
-            for &p in &prims[n.first as usize..(n.first + n.count) as usize] {
-                for v in triangles[p as usize] {
-                    let q = Vec3A::from_array(positions[v as usize].0);
+            for &p in self.prims.get(n.first as usize..(n.first + n.count) as usize)? {
+                for v in *self.triangles.get(p as usize)? {
+                    let q = Vec3A::from_array(self.positions.get(v as usize)?.0);
                     lo = lo.min(q);
                     hi = hi.max(q);
                 }
             }
-            grow(lo, hi, margin)
+            Some(grow(lo, hi, self.margin))
         } else {
-            let (a, b) = (nodes[n.first as usize], nodes[n.first as usize + 1]);
+            let (a, b) = (child(n.first)?, child(n.first + 1)?);
             let lo = Vec3A::from_array(a.min).min(Vec3A::from_array(b.min));
             let hi = Vec3A::from_array(a.max).max(Vec3A::from_array(b.max));
-            (lo.to_array(), hi.to_array())
-        };
-        nodes[i].min = lo;
-        nodes[i].max = hi;
+            Some((lo.to_array(), hi.to_array()))
+        }
+    }
+}
+
+/// Refits the nodes with indices `base .. base + part.len()`, last first; `false` if a
+/// child lies outside them.
+fn refit_part(part: &mut [BvhNode], base: usize, g: &Geometry<'_>) -> bool {
+    for i in (0..part.len()).rev() {
+        let n = part[i];
+        let child = |c: u32| (c as usize).checked_sub(base).and_then(|k| part.get(k)).copied();
+        let Some((lo, hi)) = g.node_box(&n, child) else { return false };
+        part[i].min = lo;
+        part[i].max = hi;
+    }
+    true
+}
+
+/// Refits the descendants of a node, which sit at `base .. base + part.len()`: its two
+/// children first, then the first child's descendants, then the second's — the order
+/// raypipe's builders lay trees out in (each node's subtree is finished before its
+/// sibling's is begun). The two subtrees are refitted in parallel down to `depth`
+/// levels; `false` if the tree is not laid out so.
+fn refit_descendants(part: &mut [BvhNode], base: usize, g: &Geometry<'_>, depth: u32) -> bool {
+    if part.len() < 2 || depth == 0 || part.len() < 4096 {
+        return refit_part(part, base, g);
+    }
+    let right = part[1];
+    // The second child's descendants start at its first child (none for a leaf).
+    let split = if right.count == 0 { right.first as usize } else { base + part.len() };
+    let Some(k) = split.checked_sub(base).filter(|&k| (2..=part.len()).contains(&k)) else { return false };
+    let (children, rest) = part.split_at_mut(2);
+    let (left, right) = rest.split_at_mut(k - 2);
+    let (a, b) = rayon::join(
+        || refit_descendants(left, base + 2, g, depth - 1),
+        || refit_descendants(right, base + k, g, depth - 1),
+    );
+    // The two children themselves, from their children (now refitted).
+    let child = |c: u32| {
+        let c = c as usize;
+        if c >= base + k { right.get(c - base - k) } else { left.get(c.checked_sub(base + 2)?) }.copied()
+    };
+    for i in [1usize, 0] {
+        let Some((lo, hi)) = g.node_box(&children[i], child) else { return false };
+        children[i].min = lo;
+        children[i].max = hi;
+    }
+    a && b
+}
+
+/// Recomputes every box of `nodes` (leaves index `prims`, triangle ids into
+/// `triangles`) from `positions`, leaf boxes grown by `margin`: the top of the tree's
+/// subtrees on the worker pool, as raypipe's builders lay them out, and any other tree
+/// node by node.
+pub fn refit(nodes: &mut [BvhNode], prims: &[u32], triangles: &[[u32; 3]], positions: &[Position], margin: f32) {
+    let g = Geometry { prims, triangles, positions, margin };
+    let parallel = nodes.len() > 1 && {
+        let (root, rest) = nodes.split_at_mut(1);
+        let done = refit_descendants(rest, 1, &g, 3);
+        let child = |c: u32| (c as usize).checked_sub(1).and_then(|k| rest.get(k)).copied();
+        done && g.node_box(&root[0], child).map(|(lo, hi)| (root[0].min, root[0].max) = (lo, hi)).is_some()
+    };
+    if !parallel {
+        refit_part(nodes, 0, &g);
     }
 }
 
@@ -115,5 +184,42 @@ mod tests {
             }
         }
         assert!(sah_cost(&nodes) > 1.0);
+    }
+
+    /// The parallel refit of a large tree gives exactly the node-by-node refit's boxes,
+    /// for the layouts of both builders, and for a tree laid out otherwise.
+    #[test]
+    fn the_parallel_refit_equals_the_sequential_one() {
+        let mut g = 11u64;
+        let mut r = || {
+            g = g.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (g >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let positions: Vec<Position> = (0..60_000).map(|_| Position([r() * 9.0, r() * 3.0, r() * 5.0])).collect();
+        let triangles: Vec<[u32; 3]> = (0..20_000).map(|t| [3 * t, 3 * t + 1, 3 * t + 2]).collect();
+        let boxes: Vec<([f32; 3], [f32; 3])> = triangles
+            .iter()
+            .map(|t| {
+                let p = |k: usize| Vec3A::from_array(positions[t[k] as usize].0);
+                (p(0).min(p(1)).min(p(2)).to_array(), p(0).max(p(1)).max(p(2)).to_array())
+            })
+            .collect();
+        let sah = crate::build::box_bvh::build_box_bvh(&boxes, 4);
+        for (nodes, prims) in [build_lbvh(&triangles, &positions, 4), (sah.nodes, sah.list)] {
+            let g = Geometry { prims: &prims, triangles: &triangles, positions: &positions, margin: 0.01 };
+            let mut one = nodes.clone();
+            assert!(refit_part(&mut one, 0, &g));
+            let mut par = nodes.clone();
+            refit(&mut par, &prims, &triangles, &positions, 0.01);
+            assert_eq!(one, par);
+            // Swapping two sibling subtrees' places breaks the layout: still right.
+            let mut odd = nodes.clone();
+            let (a, b) = (odd[1], odd[2]);
+            (odd[1], odd[2]) = (b, a);
+            let mut seq = odd.clone();
+            assert!(refit_part(&mut seq, 0, &g));
+            refit(&mut odd, &prims, &triangles, &positions, 0.01);
+            assert_eq!(seq, odd);
+        }
     }
 }
