@@ -16,7 +16,9 @@
 //! [`AMBIENT_SCALE`] (BART's `am 2.5` times the kitchen's ambient colours passes 1, which
 //! would whiten every surface).
 
+mod keyframes;
 pub mod parser;
+mod primitives;
 pub mod shapes;
 pub mod spline;
 pub mod tokens;

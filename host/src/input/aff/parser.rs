@@ -10,8 +10,7 @@ use anyhow::{anyhow, bail, Result};
 use glam::{DMat3, DMat4, DQuat, DVec3};
 use raypipe_core::image::{LightRecord, MaterialRecord, ShadingVertex, NULL_INDEX};
 
-use super::shapes::{cone, polygon, sphere, Shape};
-use super::spline::{Key, PositionSpline, RotationSpline};
+use super::shapes::{cone, sphere, Shape};
 use super::tokens::Tokens;
 use super::track::Track;
 use crate::input::texture::TextureImage;
@@ -104,22 +103,22 @@ pub struct Parsed {
 }
 
 /// The reader's state between commands.
-struct State {
-    parsed: Parsed,
+pub(super) struct State {
+    pub(super) parsed: Parsed,
     /// The current material (index into `materials`, with its texture-less form).
-    material: ([f32; 3], MaterialRecord),
-    material_index: HashMap<Vec<u32>, u32>,
-    texture_index: HashMap<String, u32>,
+    pub(super) material: ([f32; 3], MaterialRecord),
+    pub(super) material_index: HashMap<Vec<u32>, u32>,
+    pub(super) texture_index: HashMap<String, u32>,
     /// Where each keyframe block was read (file and line).
-    track_origin: HashMap<String, String>,
+    pub(super) track_origin: HashMap<String, String>,
     /// Open blocks: the mover and local map to restore when each closes.
-    blocks: Vec<(usize, DMat4)>,
-    owner: usize,
-    local: DMat4,
-    detail: i64,
-    includes: Vec<PathBuf>,
-    root_dir: PathBuf,
-    triangles: usize,
+    pub(super) blocks: Vec<(usize, DMat4)>,
+    pub(super) owner: usize,
+    pub(super) local: DMat4,
+    pub(super) detail: i64,
+    pub(super) includes: Vec<PathBuf>,
+    pub(super) root_dir: PathBuf,
+    pub(super) triangles: usize,
 }
 
 /// Reads the AFF scene whose entry file is `path`.
@@ -398,7 +397,7 @@ impl State {
     }
 
     /// The index of the current material, with `texture`.
-    fn material_id(&mut self, texture: u32) -> u32 {
+    pub(super) fn material_id(&mut self, texture: u32) -> u32 {
         let (ambient, mut record) = self.material;
         record.texture = texture;
         let mut key: Vec<u32> = ambient.iter().map(|a| a.to_bits()).collect();
@@ -413,7 +412,7 @@ impl State {
 
     /// Adds a primitive with the current material (and `texture`) to the current
     /// mover's geometry, placed by the open static transforms.
-    fn add(&mut self, t: &Tokens<'_>, shape: Shape, texture: Option<u32>) -> Result<()> {
+    pub(super) fn add(&mut self, t: &Tokens<'_>, shape: Shape, texture: Option<u32>) -> Result<()> {
         self.triangles += shape.triangles.len();
         if self.triangles > MAX_TRIANGLES {
             return Err(t.error(format!("the scene passes {MAX_TRIANGLES} triangles")));
@@ -456,181 +455,6 @@ impl State {
             g.materials.push(material);
         }
         Ok(())
-    }
-
-    fn poly(&mut self, t: &mut Tokens<'_>, patch: bool) -> Result<()> {
-        let each = if patch { 6 } else { 3 };
-        let n = t.count("a polygon's vertex count", each)?;
-        if n < 3 {
-            return Err(t.error(format!("a polygon of {n} vertices")));
-        }
-        let mut verts = Vec::with_capacity(n);
-        let mut normals = Vec::new();
-        for _ in 0..n {
-            verts.push(DVec3::from(t.vec3("a polygon vertex")?));
-            if patch {
-                normals.push(DVec3::from(t.vec3("a patch normal")?));
-            }
-        }
-        self.add(t, polygon(verts, patch.then_some(normals)), None)
-    }
-
-    /// A PPM texture, read once per name: beside the file naming it, or in the scene's
-    /// `TextureFiles` folder (BART's layout).
-    fn texture(&mut self, name: &str, t: &Tokens<'_>, path: &Path) -> Result<u32> {
-        if let Some(&i) = self.texture_index.get(name) {
-            return Ok(i);
-        }
-        let dir = path.parent().unwrap_or(Path::new("."));
-        let candidates = [
-            dir.join(name),
-            self.root_dir.join("../TextureFiles").join(name),
-            self.root_dir.join("TextureFiles").join(name),
-        ];
-        let Some(found) = candidates.iter().find(|p| p.is_file()) else {
-            return Err(t.error(format!("texture '{name}' is not beside the file or in TextureFiles")));
-        };
-        let bytes = crate::input::read_file::read_bytes(found, crate::input::read_file::DATA_LIMIT)?;
-        let image =
-            crate::input::ppm::decode_ppm(&bytes).map_err(|e| t.error(format!("texture {}: {e}", found.display())))?;
-        self.parsed.textures.push(image);
-        let i = self.parsed.textures.len() as u32 - 1;
-        self.texture_index.insert(name.to_string(), i);
-        Ok(i)
-    }
-
-    fn textured_triangle(&mut self, t: &mut Tokens<'_>, patch: bool, path: &Path) -> Result<()> {
-        let name = t.word("a texture name")?.to_string();
-        let texture = self.texture(&name, t, path)?;
-        let mut shape = Shape { triangles: vec![[0, 1, 2]], uvs: Some(Vec::new()), ..Default::default() };
-        let mut normals = Vec::new();
-        for _ in 0..3 {
-            shape.positions.push(DVec3::from(t.vec3("a textured triangle")?));
-            if patch {
-                normals.push(DVec3::from(t.vec3("a textured triangle's normal")?));
-            }
-            let uv = [t.number("a texture coordinate")?, t.number("a texture coordinate")?];
-            if let Some(u) = shape.uvs.as_mut() {
-                u.push(uv);
-            }
-        }
-        shape.normals = patch.then_some(normals);
-        self.add(t, shape, Some(texture))
-    }
-
-    fn animated_triangle(&mut self, t: &mut Tokens<'_>) -> Result<()> {
-        let n = t.count("an animated triangle's key count", 19)?;
-        if n == 0 {
-            return Err(t.error("an animated triangle without keys"));
-        }
-        let material = self.material_id(NULL_INDEX);
-        let mut tri = AnimatedTriangle { times: Vec::with_capacity(n), verts: Vec::with_capacity(n), material };
-        for _ in 0..n {
-            let time = t.number("an animated triangle's key time")?;
-            if tri.times.last().is_some_and(|&last| time < last) {
-                return Err(t.error(format!("an animated triangle's key times go backwards (to {time})")));
-            }
-            let mut v = [DVec3::ZERO; 3];
-            for vert in &mut v {
-                *vert = self.local.transform_point3(DVec3::from(t.vec3("an animated vertex")?));
-                t.vec3("an animated normal")?;
-            }
-            tri.times.push(time);
-            tri.verts.push(v);
-        }
-        self.triangles += 1;
-        self.parsed.animated[self.owner].push(tri);
-        Ok(())
-    }
-
-    fn mesh(&mut self, t: &mut Tokens<'_>, path: &Path) -> Result<()> {
-        let expect = |t: &mut Tokens<'_>, w: &str| -> Result<()> {
-            let line = t.line();
-            let got = t.word(w)?;
-            if got != w {
-                bail!("{}:{line}: a mesh expects '{w}', found '{got}'", t.name);
-            }
-            Ok(())
-        };
-        expect(t, "vertices")?;
-        let nv = t.count("a mesh's vertex count", 3)?;
-        let verts: Vec<DVec3> = (0..nv).map(|_| t.vec3("a mesh vertex").map(DVec3::from)).collect::<Result<_>>()?;
-        let mut normals = None;
-        let mut uvs = None;
-        let mut texture = None;
-        let mut word = t.word("a mesh's triangles")?;
-        if word == "normals" {
-            let n = t.count("a mesh's normal count", 3)?;
-            normals = Some((0..n).map(|_| t.vec3("a mesh normal").map(DVec3::from)).collect::<Result<Vec<_>>>()?);
-            word = t.word("a mesh's triangles")?;
-        }
-        if word == "texturecoords" {
-            let n = t.count("a mesh's texture coordinate count", 2)?;
-            let name = t.word("a mesh's texture name")?.to_string();
-            texture = Some(self.texture(&name, t, path)?);
-            uvs = Some(
-                (0..n)
-                    .map(|_| Ok([t.number("a texture coordinate")?, t.number("a texture coordinate")?]))
-                    .collect::<Result<Vec<_>>>()?,
-            );
-            word = t.word("a mesh's triangles")?;
-        }
-        if word != "triangles" {
-            return Err(t.error(format!("a mesh expects 'triangles', found '{word}'")));
-        }
-        let per = 3 * (1 + normals.is_some() as usize + uvs.is_some() as usize);
-        let nt = t.count("a mesh's triangle count", per)?;
-        // Each corner is a (vertex, normal, uv) triple: corners that share all three
-        // share a vertex.
-        let mut shape = Shape {
-            normals: normals.as_ref().map(|_| Vec::new()),
-            uvs: uvs.as_ref().map(|_| Vec::new()),
-            ..Default::default()
-        };
-        let mut corners: HashMap<[u32; 3], u32> = HashMap::new();
-        let index = |t: &mut Tokens<'_>, limit: usize, what: &str| -> Result<u32> {
-            let v = t.number(what)?;
-            if v < 0.0 || v.fract() != 0.0 || v as usize >= limit {
-                return Err(t.error(format!("{what} {v} does not exist ({limit} given)")));
-            }
-            Ok(v as u32)
-        };
-        for _ in 0..nt {
-            let mut v = [0u32; 3];
-            let mut n = [u32::MAX; 3];
-            let mut u = [u32::MAX; 3];
-            for k in &mut v {
-                *k = index(t, verts.len(), "a mesh triangle's vertex")?;
-            }
-            if let Some(ns) = &normals {
-                for k in &mut n {
-                    *k = index(t, ns.len(), "a mesh triangle's normal")?;
-                }
-            }
-            if let Some(us) = &uvs {
-                for k in &mut u {
-                    *k = index(t, us.len(), "a mesh triangle's texture coordinate")?;
-                }
-            }
-            let mut tri = [0u32; 3];
-            for c in 0..3 {
-                let key = [v[c], n[c], u[c]];
-                let next = shape.positions.len() as u32;
-                let id = *corners.entry(key).or_insert(next);
-                if id == next {
-                    shape.positions.push(verts[v[c] as usize]);
-                    if let (Some(out), Some(ns)) = (shape.normals.as_mut(), normals.as_ref()) {
-                        out.push(ns[n[c] as usize]);
-                    }
-                    if let (Some(out), Some(us)) = (shape.uvs.as_mut(), uvs.as_ref()) {
-                        out.push(us[u[c] as usize]);
-                    }
-                }
-                tri[c] = id;
-            }
-            shape.triangles.push(tri);
-        }
-        self.add(t, shape, texture)
     }
 
     fn include(&mut self, t: &mut Tokens<'_>, path: &Path) -> Result<()> {
@@ -677,101 +501,6 @@ impl State {
         self.parsed.animated.push(Vec::new());
         self.owner = self.parsed.movers.len() - 1;
         self.local = DMat4::IDENTITY;
-        Ok(())
-    }
-
-    fn keyframes(&mut self, t: &mut Tokens<'_>) -> Result<()> {
-        let name = t.word("keyframes' name")?.to_string();
-        let origin = format!("{}:{}", t.name, t.previous_line());
-        t.open("keyframes")?;
-        // A file included twice (BART's car includes each wheel file from two places)
-        // gives its keyframes twice: the same block, read once.
-        let again = self.track_origin.get(&name).is_some_and(|o| *o == origin);
-        if self.parsed.tracks.contains_key(&name) && !again {
-            return Err(t.error(format!("keyframes '{name}' are given twice (first at {})", self.track_origin[&name])));
-        }
-        let mut track = Track::default();
-        loop {
-            let kind = t.word("keyframes")?;
-            if kind == "}" {
-                break;
-            }
-            let each = match kind {
-                "transl" | "scale" => 7,
-                "rot" => 8,
-                "visibility" => 2,
-                other => return Err(t.error(format!("keyframes '{name}': unknown motion '{other}'"))),
-            };
-            let n = t.count("a keyframe count", each)?;
-            let least = if kind == "visibility" { 1 } else { 4 };
-            if n < least {
-                return Err(t.error(format!("keyframes '{name}': {kind} needs at least {least} keys, has {n}")));
-            }
-            let mut times = Vec::with_capacity(n);
-            let mut rows = Vec::with_capacity(n);
-            let mut jumped = false;
-            for _ in 0..n {
-                let time = t.number("a key time")?;
-                // BART repeats the first key's time (the first key only shapes a tangent),
-                // and four of its robots' tracks jump back in time. The benchmark's reader
-                // takes the first segment that ends after `t`, which reaches the keys
-                // after a jump only once `t` passes the keys before it; [`locate`] does
-                // the same, so they are read as they are, with a warning.
-                if let Some(&last) = times.last() {
-                    if time < last && !jumped {
-                        jumped = true;
-                        self.parsed.warnings.push(format!(
-                            "{}:{}: keyframes '{name}': {kind} times go back from {last} to {time}; the keys from there on apply only after {last}, as in BART's reader",
-                            t.name,
-                            t.previous_line()
-                        ));
-                    }
-                }
-                times.push(time);
-                let row: Vec<f64> = (1..each).map(|_| t.number("a key value")).collect::<Result<_>>()?;
-                rows.push(row);
-            }
-            let tcb = |r: &[f64]| [r[r.len() - 3], r[r.len() - 2], r[r.len() - 1]];
-            let clash = |t: &Tokens<'_>| t.error(format!("keyframes '{name}': {kind} is given twice"));
-            match kind {
-                "transl" | "scale" => {
-                    let keys: Vec<Key<DVec3>> = times
-                        .iter()
-                        .zip(&rows)
-                        .map(|(&time, r)| Key { t: time, v: DVec3::new(r[0], r[1], r[2]), tcb: tcb(r) })
-                        .collect();
-                    let slot = if kind == "transl" { &mut track.transl } else { &mut track.scale };
-                    if slot.replace(PositionSpline::new(&keys)).is_some() {
-                        return Err(clash(t));
-                    }
-                }
-                "rot" => {
-                    if rows.iter().any(|r| DVec3::new(r[0], r[1], r[2]).length_squared() == 0.0) {
-                        return Err(t.error(format!("keyframes '{name}': a rotation about a zero axis")));
-                    }
-                    let keys: Vec<Key<(DVec3, f64)>> = times
-                        .iter()
-                        .zip(&rows)
-                        .map(|(&time, r)| Key {
-                            t: time,
-                            v: (DVec3::new(r[0], r[1], r[2]), r[3].to_radians()),
-                            tcb: tcb(r),
-                        })
-                        .collect();
-                    if track.rot.replace(RotationSpline::new(&keys)).is_some() {
-                        return Err(clash(t));
-                    }
-                }
-                _ => {
-                    if !track.visibility.is_empty() {
-                        return Err(clash(t));
-                    }
-                    track.visibility = times.iter().zip(&rows).map(|(&time, r)| (time, r[0] != 0.0)).collect();
-                }
-            }
-        }
-        self.track_origin.insert(name.clone(), origin);
-        self.parsed.tracks.insert(name, track);
         Ok(())
     }
 }
