@@ -185,13 +185,8 @@ fn merged_meshes(
     for (i, entry) in file.mesh.iter().enumerate() {
         let what = format!("{name}: mesh {} ({})", i + 1, entry.file);
         let child = dir.join(&entry.file);
-        if is_scene_file(&child) {
-            bail!("{what}: a scene file cannot include another");
-        }
         if !loaded.contains_key(&child) {
-            let Some((mesh, w)) = load_mesh(&child)? else {
-                bail!("{what}: is a scene image; a scene file lists meshes (OBJ, PLY, glTF)");
-            };
+            let (mesh, w) = listed_mesh(&what, &child, load_mesh)?;
             warnings.extend(w);
             loaded.insert(child.clone(), mesh);
         }
@@ -226,6 +221,18 @@ fn merged_meshes(
     merged.validate(&name)?;
     camera.check(&name)?;
     Ok((merged, warnings, camera))
+}
+
+/// Reads the mesh file `child` that entry `what` lists: a mesh, not another scene file
+/// or a scene image.
+fn listed_mesh(what: &str, child: &Path, load_mesh: MeshLoader<'_>) -> Result<(Mesh, Vec<String>)> {
+    if is_scene_file(child) {
+        bail!("{what}: a scene file cannot include another");
+    }
+    match load_mesh(child)? {
+        Some(loaded) => Ok(loaded),
+        None => bail!("{what}: is a scene image; a scene file lists meshes (OBJ, PLY, glTF)"),
+    }
 }
 
 /// The dim ambient term added to a scene file's own lights.
@@ -291,15 +298,10 @@ fn instanced_scene(name: &str, mut file: SceneFile, dir: &Path, load_mesh: MeshL
     for (i, entry) in file.instance.iter().enumerate() {
         let what = format!("{name}: instance {} ({})", i + 1, entry.file);
         let child = dir.join(&entry.file);
-        if is_scene_file(&child) {
-            bail!("{what}: a scene file cannot include another");
-        }
         let bottom = match bottom_of.get(&child) {
             Some(&b) => b,
             None => {
-                let Some((mesh, w)) = load_mesh(&child)? else {
-                    bail!("{what}: is a scene image; a scene file lists meshes (OBJ, PLY, glTF)");
-                };
+                let (mesh, w) = listed_mesh(&what, &child, load_mesh)?;
                 scene.warnings.extend(w);
                 scene.bottoms.push(mesh);
                 scene.bottom_names.push(entry.file.clone());
