@@ -3,6 +3,8 @@
 //! the helpers they share. The command-line suite lives in `host/tests/cli.rs`, because
 //! cargo tells only the binary's own package where the built `raypipe` is.
 
+pub mod instanced_soup;
+
 use std::path::{Path, PathBuf};
 
 use raypipe::build::grid::GridResolution;

@@ -5,9 +5,8 @@
 //! same triangle, except for rays within rounding distance of an edge or of another
 //! triangle at the same depth, which are counted and reported.
 
-use glam::{EulerRot, Mat4, Quat, Vec3};
+use glam::Vec3;
 use proptest::prelude::*;
-use raypipe::build::instanced::{affine_of, Instance, InstancedScene};
 use raypipe::input::mesh::Mesh;
 use raypipe::render::instanced::tracer::{occluded_instance, trace_instance, trace_instance_packet};
 use raypipe::render::instanced::Instances;
@@ -17,37 +16,7 @@ use raypipe_core::image::instanced::InstancedView;
 use raypipe_core::packet::{PacketCounters, RayPacket};
 use raypipe_core::traverse::instanced::{occluded_instanced, trace_instanced, InstanceHit};
 use raypipe_core::{Hit, NoProbe, Ray, RayCounters, Watertight};
-
-type Soup = (Vec<[f32; 3]>, Vec<[u32; 3]>);
-
-fn coord() -> impl Strategy<Value = f32> {
-    prop_oneof![3 => (-4i32..=4).prop_map(|i| i as f32 * 0.5), 1 => -2.0f32..2.0]
-}
-
-fn soup() -> impl Strategy<Value = Soup> {
-    (
-        prop::collection::vec([coord(), coord(), coord()], 3..20),
-        prop::collection::vec(any::<[prop::sample::Index; 3]>(), 1..20),
-    )
-        .prop_map(|(positions, picks)| {
-            let n = positions.len();
-            (positions, picks.iter().map(|t| t.map(|i| i.index(n) as u32)).collect())
-        })
-}
-
-/// Scale (uniform or not), rotation about three axes, translation.
-fn transform() -> impl Strategy<Value = Mat4> {
-    (
-        [0.4f32..2.5, 0.4f32..2.5, 0.4f32..2.5],
-        any::<bool>(),
-        [-3.2f32..3.2, -3.2f32..3.2, -3.2f32..3.2],
-        [-6.0f32..6.0, -6.0f32..6.0, -6.0f32..6.0],
-    )
-        .prop_map(|(s, uniform, r, t)| {
-            let s = if uniform { Vec3::splat(s[0]) } else { Vec3::from(s) };
-            Mat4::from_scale_rotation_translation(s, Quat::from_euler(EulerRot::ZYX, r[0], r[1], r[2]), Vec3::from(t))
-        })
-}
+use raypipe_tests::instanced_soup::{scene_of, soup, transform};
 
 /// Rays from far away, three in four aimed at a point of a random triangle of the
 /// placed scene (so that most hit), the others anywhere.
@@ -82,22 +51,6 @@ fn aimed(flat: &Mesh, origin: [f32; 3], aim: &Aim) -> Ray {
         }
     };
     Ray::new(o, dir)
-}
-
-fn scene_of(bottoms: &[Soup], placed: &[(prop::sample::Index, Mat4)]) -> InstancedScene {
-    InstancedScene {
-        name: "soup".into(),
-        bottoms: bottoms
-            .iter()
-            .map(|(p, t)| Mesh { positions: p.clone(), triangles: t.clone(), ..Default::default() })
-            .collect(),
-        bottom_names: (0..bottoms.len()).map(|b| format!("soup {b}")).collect(),
-        instances: placed
-            .iter()
-            .map(|(b, m)| Instance { bottom: b.index(bottoms.len()) as u32, to_world: affine_of(*m), material: None })
-            .collect(),
-        ..Default::default()
-    }
 }
 
 fn same(a: Option<InstanceHit>, b: Option<InstanceHit>) -> bool {

@@ -29,8 +29,14 @@ fn frames(
     let view = scene.view().unwrap();
     let opts = RenderOptions { algo, max_depth: 2, ..Default::default() };
     let shader = opts.shader(Vec3::from(views[0].background));
-    simulate_frames(&view, views, measure, cfg, &FrameSetup { shader, sampler: opts.sampler(), ..Default::default() })
-        .unwrap()
+    simulate_frames(
+        &raypipe_hw::chip::scene::ChipScene::Flat(view),
+        views,
+        measure,
+        cfg,
+        &FrameSetup { shader, sampler: opts.sampler(), ..Default::default() },
+    )
+    .unwrap()
 }
 
 fn dram() -> HwConfig {

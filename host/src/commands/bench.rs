@@ -248,7 +248,13 @@ fn bench_simulator(
         let start = Instant::now();
         let measure = chip::Measure::default();
         let setup = FrameSetup { intersector: kind, ..Default::default() };
-        let mut out = chip::simulate_frames(view, std::slice::from_ref(cam), &measure, cfg, &setup)?;
+        let mut out = chip::simulate_frames(
+            &raypipe_hw::chip::scene::ChipScene::Flat(*view),
+            std::slice::from_ref(cam),
+            &measure,
+            cfg,
+            &setup,
+        )?;
         walls.push(start.elapsed().as_secs_f64());
         last = out.pop().map(|f| f.report);
     }

@@ -11,6 +11,7 @@ use crate::render::tracer::IntersectorKind;
 use crate::render::{Algorithm, RenderOptions};
 use crate::scene::{Accel, Scene};
 use anyhow::{bail, Result};
+use raypipe_hw::chip::scene::ChipScene;
 use raypipe_hw::Report;
 
 use super::{camera_for, check_image_path, load_scene, structure_summary, warn};
@@ -319,7 +320,7 @@ pub(crate) struct Simulated {
     /// The scene's name, its structure and triangle count (for the summary line).
     pub scene: String,
     pub structure: String,
-    pub triangles: u32,
+    pub triangles: u64,
     /// Wall-clock seconds of the simulation proper.
     pub seconds: f64,
 }
@@ -360,6 +361,9 @@ pub(crate) fn run_simulation(a: &SimulateArgs, cache: Option<&SceneCache>, show_
     let mut structure = a.structure.clone();
     structure.default_accel = <Accel as clap::ValueEnum>::from_str(&cfg.structure, true)
         .map_err(|_| anyhow::anyhow!("the chip's structure {:?} is not one raypipe builds", cfg.structure))?;
+    if let Some(path) = a.scene.as_deref().filter(|p| crate::input::instanced::is_instanced(p)) {
+        return super::simulate_instanced::run_instanced_simulation(a, path, &cfg, &structure, show_progress);
+    }
     let scene = match cache {
         Some(c) => c.get(a, &structure)?,
         None => {
@@ -379,7 +383,32 @@ pub(crate) fn run_simulation(a: &SimulateArgs, cache: Option<&SceneCache>, show_
         // One view: repeated for its warm-up frames, then measured.
         None => vec![cam; a.measure.warmup_frames.saturating_add(1).min(crate::input::camera_path::MAX_FRAMES)],
     };
-    let measure = Measure {
+    let measure = measure_of(a);
+    if measure.warmup_frames >= views.len() {
+        bail!("--warmup-frames {}: the walkthrough has only {} frames", measure.warmup_frames, views.len());
+    }
+    let start = Instant::now();
+    let shadow_caster = opts.algo == Algorithm::Shadow;
+    let setup = FrameSetup { intersector: kind, shader, shadow_caster, sampler: opts.sampler(), show_progress };
+    let mut frames = chip::simulate_frames(&ChipScene::Flat(view), &views, &measure, &cfg, &setup)?;
+    let seconds = start.elapsed().as_secs_f64();
+    for (f, cam) in frames.iter_mut().zip(&views) {
+        f.report.run = run_identity(a, view.bytes(), &structure_summary(&view), &opts, &cfg, kind, cam);
+    }
+    let report = frames.last().map(|f| f.report.clone()).ok_or_else(|| anyhow::anyhow!("no frame simulated"))?;
+    Ok(Simulated {
+        frames,
+        report,
+        scene: scene.name.clone(),
+        structure: format!("{}, {}", structure_summary(&view), structure_origin(a, &cfg, &scene)),
+        triangles: view.triangle_count() as u64,
+        seconds,
+    })
+}
+
+/// What `a` measures: warm-up, region of interest, intervals, waveforms and trace.
+pub(crate) fn measure_of(a: &SimulateArgs) -> Measure {
+    Measure {
         warmup_frames: a.measure.warmup_frames,
         roi: a.measure.roi,
         interval: a.measure.interval,
@@ -390,39 +419,33 @@ pub(crate) fn run_simulation(a: &SimulateArgs, cache: Option<&SceneCache>, show_
         }),
         trace: a.measure.trace.clone(),
         trace_window: a.measure.trace_window,
-    };
-    if measure.warmup_frames >= views.len() {
-        bail!("--warmup-frames {}: the walkthrough has only {} frames", measure.warmup_frames, views.len());
     }
-    let start = Instant::now();
-    let shadow_caster = opts.algo == Algorithm::Shadow;
-    let setup = FrameSetup { intersector: kind, shader, shadow_caster, sampler: opts.sampler(), show_progress };
-    let mut frames = chip::simulate_frames(&view, &views, &measure, &cfg, &setup)?;
-    let seconds = start.elapsed().as_secs_f64();
-    for (f, cam) in frames.iter_mut().zip(&views) {
-        f.report.run = raypipe_hw::observe::report::RunIdentity {
-            scene: a.scene.as_ref().map_or("built-in Cornell box".to_string(), |p| p.display().to_string()),
-            scene_hash: format!("{:016x}", raypipe_hw::observe::report::fnv1a64(view.bytes())),
-            structure: structure_summary(&view),
-            algorithm: format!("{:?}", opts.algo).to_lowercase(),
-            intersector: match cfg.datapath {
-                raypipe_hw::Datapath::F32 => kind.name().to_string(),
-                d => format!("fixed-watertight {}", d.name()),
-            },
-            camera: format!(
-                "eye {:?} look_at {:?} up {:?} vfov {} deg, {}x{}",
-                cam.eye, cam.look_at, cam.up, cam.vfov_deg, cam.width, cam.height
-            ),
-            raypipe_version: env!("CARGO_PKG_VERSION").to_string(),
-        };
+}
+
+/// The run's identity in its report: the scene (and a hash of its bytes), structure,
+/// algorithm, triangle test and camera.
+pub(crate) fn run_identity(
+    a: &SimulateArgs,
+    bytes: &[u8],
+    structure: &str,
+    opts: &RenderOptions,
+    cfg: &raypipe_hw::HwConfig,
+    kind: IntersectorKind,
+    cam: &raypipe_core::image::CameraRecord,
+) -> raypipe_hw::observe::report::RunIdentity {
+    raypipe_hw::observe::report::RunIdentity {
+        scene: a.scene.as_ref().map_or("built-in Cornell box".to_string(), |p| p.display().to_string()),
+        scene_hash: format!("{:016x}", raypipe_hw::observe::report::fnv1a64(bytes)),
+        structure: structure.to_string(),
+        algorithm: format!("{:?}", opts.algo).to_lowercase(),
+        intersector: match cfg.datapath {
+            raypipe_hw::Datapath::F32 => kind.name().to_string(),
+            d => format!("fixed-watertight {}", d.name()),
+        },
+        camera: format!(
+            "eye {:?} look_at {:?} up {:?} vfov {} deg, {}x{}",
+            cam.eye, cam.look_at, cam.up, cam.vfov_deg, cam.width, cam.height
+        ),
+        raypipe_version: env!("CARGO_PKG_VERSION").to_string(),
     }
-    let report = frames.last().map(|f| f.report.clone()).ok_or_else(|| anyhow::anyhow!("no frame simulated"))?;
-    Ok(Simulated {
-        frames,
-        report,
-        scene: scene.name.clone(),
-        structure: format!("{}, {}", structure_summary(&view), structure_origin(a, &cfg, &scene)),
-        triangles: view.triangle_count(),
-        seconds,
-    })
 }

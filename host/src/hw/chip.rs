@@ -7,7 +7,8 @@ use std::path::Path;
 use anyhow::{anyhow, bail, Result};
 use raypipe_core::image::CameraRecord;
 use raypipe_core::shade::shader::Shader;
-use raypipe_core::{Intersector, SceneView};
+use raypipe_core::Intersector;
+use raypipe_hw::chip::scene::ChipScene;
 use raypipe_hw::observe::counters::{counters, delta};
 use raypipe_hw::observe::waves::Waves;
 use raypipe_hw::{Datapath, HwConfig, Report, Simulator};
@@ -97,7 +98,7 @@ pub struct Interval {
 /// Simulates the frames `views` one after the other on one chip — a walkthrough, or one
 /// view repeated for warm-up — measured as `measure` says.
 pub fn simulate_frames(
-    scene: &SceneView<'_>,
+    scene: &ChipScene<'_>,
     views: &[CameraRecord],
     measure: &Measure,
     cfg: &HwConfig,
@@ -110,8 +111,13 @@ pub fn simulate_frames(
         .map(|(i, c)| Ok(eye_rays(c, &format!("camera of frame {i}"))?.with_sampler(sampler)))
         .collect::<Result<Vec<_>>>()?;
     let Some(first) = views.first() else { bail!("no frame to simulate") };
-    if cfg.datapath != Datapath::F32 {
-        if let Some(why) = fixed_point_unsupported(scene) {
+    if let (ChipScene::Instanced(_), true) = (scene, shadow_caster) {
+        bail!(
+            "--algo shadow rasterizes one flat triangle list: simulate a two-level scene with --algo cast or whitted"
+        );
+    }
+    if let (Some(flat), true) = (scene.flat(), cfg.datapath != Datapath::F32) {
+        if let Some(why) = fixed_point_unsupported(flat) {
             bail!(
                 "datapath {}: {why}; the fixed-point box test is for BVHs (build with --accel bvh, bvh4 or bvh8)",
                 cfg.datapath.name()
@@ -139,7 +145,7 @@ pub fn simulate_frames(
 
 /// One simulation's inputs, run with the triangle test `I` (and its box tests).
 struct Run<'a, 's> {
-    scene: &'a SceneView<'s>,
+    scene: &'a ChipScene<'s>,
     eyes: &'a [raypipe_core::camera::EyeRays],
     measure: &'a Measure,
     background: raypipe_core::Vec3,
@@ -152,7 +158,7 @@ struct Run<'a, 's> {
 impl Run<'_, '_> {
     fn go<I: Intersector>(&self) -> Result<Vec<FrameRun>> {
         let Run { scene, eyes, measure, background, cfg, shader, shadow_caster, show_progress } = *self;
-        let mut sim = Simulator::<I>::with_shader(*scene, eyes[0], background, shader, cfg)
+        let mut sim = Simulator::<I>::for_scene(scene.clone(), eyes[0], background, shader, cfg)
             .map_err(|e| anyhow!("hardware configuration: {e}"))?;
         // Observers only read the chip: the reports are the same without them.
         let mut vcd_file = None;
@@ -184,7 +190,7 @@ impl Run<'_, '_> {
             if f > 0 {
                 sim.next_frame(*eye).map_err(|e| anyhow!(e))?;
             }
-            if shadow_caster {
+            if let (true, Some(scene)) = (shadow_caster, scene.flat()) {
                 // Visibility from the host's rasterizer (the G-buffer pass), as on the host.
                 let hits = (0..eye.samples()).flat_map(|s| gbuffer_visibility::<I>(scene, eye, s)).map(|(_, hit)| hit);
                 sim.set_visibility(hits.collect());

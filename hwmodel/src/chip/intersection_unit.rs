@@ -5,7 +5,8 @@
 //! `initiation_interval` cycles and leave `latency` cycles later. Up to
 //! `intersection.jobs` packets are in flight at once, so one packet's memory wait
 //! overlaps another's tests. A leaf shared by several rays (a packet's shared walk) is
-//! fetched once for all of them; each triangle once per job.
+//! fetched once for all of them; each triangle once per job. In a two-level scene each
+//! lane's leaf and rays are its instance's bottom image's, read at that image's address.
 //!
 //! Ports: `leaves` in, `results` out, and a memory port with a list/triangle cache.
 
@@ -13,10 +14,11 @@ use std::marker::PhantomData;
 
 use raypipe_core::intersect::triangle::Intersector;
 use raypipe_core::traverse::walk::{test_fetched, Leaf};
-use raypipe_core::{DataClass, SceneView};
+use raypipe_core::DataClass;
 
 use crate::chip::fifo::Fifo;
 use crate::chip::jobs::{lanes, LeafJob, Query};
+use crate::chip::scene::ChipScene;
 use crate::config::HwConfig;
 use crate::memory::port::{Fetch, MemPort, Recorder};
 use crate::observe::stall::Stall;
@@ -141,40 +143,48 @@ impl<I: Intersector> IntersectionUnit<I> {
 
     /// Runs a job's kernels at once (functional first) and records its reads by level:
     /// list entries, then each distinct triangle's record and its vertices.
-    fn accept(&mut self, scene: &SceneView<'_>, mut job: Box<LeafJob>, now: u64) -> Job {
+    fn accept(&mut self, scene: &ChipScene<'_>, mut job: Box<LeafJob>, now: u64) -> Job {
         let mut rec = Recorder::default();
-        // Distinct leaves and the rays at each.
-        let mut groups: Vec<(Leaf, u64)> = Vec::new();
+        // Distinct leaves (of distinct bottoms) and the rays at each.
+        let mut groups: Vec<((u32, Leaf), u64)> = Vec::new();
         for i in crate::lane_iter(job.lanes) {
-            let leaf = job.leaves[i];
-            match groups.iter_mut().find(|(l, _)| *l == leaf) {
+            let key = (job.bottoms[i], job.leaves[i]);
+            match groups.iter_mut().find(|(l, _)| *l == key) {
                 Some((_, m)) => *m |= 1 << i,
-                None => groups.push((leaf, 1 << i)),
+                None => groups.push((key, 1 << i)),
             }
         }
-        let mut tris: Vec<(u32, I::Triangle)> = Vec::new();
+        let mut tris: Vec<((u32, u32), I::Triangle)> = Vec::new();
         let any_hit = job.query == Query::AnyHit;
         let mut tests = 0u64;
-        for (leaf, mask) in groups {
+        for ((bottom, leaf), mask) in groups {
+            let (view, base) = match scene {
+                ChipScene::Flat(v) => (v, 0),
+                ChipScene::Instanced(s) => match s.bottom(bottom) {
+                    Some(b) => b,
+                    None => continue,
+                },
+            };
+            rec.base = base;
             let mut prims = Vec::new();
             let mut k = 0;
             loop {
                 rec.at_level(0);
-                let Some(prim) = leaf.entry(scene, k, &mut rec) else { break };
+                let Some(prim) = leaf.entry(view, k, &mut rec) else { break };
                 prims.push(prim);
                 k += 1;
             }
             for &prim in &prims {
-                if !tris.iter().any(|(p, _)| *p == prim) {
+                if !tris.iter().any(|(p, _)| *p == (bottom, prim)) {
                     rec.at_level(1);
-                    tris.push((prim, I::fetch(scene, prim, &mut rec)));
+                    tris.push(((bottom, prim), I::fetch(view, prim, &mut rec)));
                 }
             }
             for i in crate::lane_iter(mask) {
                 let ray = job.rays[i];
                 let prep = I::prepare(&ray);
                 for &prim in &prims {
-                    let Some((_, tri)) = tris.iter().find(|(p, _)| *p == prim) else { continue };
+                    let Some((_, tri)) = tris.iter().find(|(p, _)| *p == (bottom, prim)) else { continue };
                     tests += 1;
                     job.tests[i] += 1;
                     if test_fetched::<I>(&prep, &ray, any_hit, tri, prim, &mut job.best[i]) {
@@ -193,7 +203,7 @@ impl<I: Intersector> IntersectionUnit<I> {
     pub fn tick(
         &mut self,
         now: u64,
-        scene: &SceneView<'_>,
+        scene: &ChipScene<'_>,
         leaves: &mut Fifo<Box<LeafJob>>,
         results: &mut Fifo<Box<LeafJob>>,
     ) -> bool {

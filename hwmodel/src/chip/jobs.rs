@@ -71,7 +71,9 @@ pub struct LeafJob {
     pub query: Query,
     /// Each lane's leaf.
     pub leaves: [Leaf; LANES],
-    /// The rays.
+    /// Each lane's bottom image, in a two-level scene (its leaf is in that image).
+    pub bottoms: [u32; LANES],
+    /// The rays (in a two-level scene, each in its instance's object space).
     pub rays: [Ray; LANES],
     /// Each lane's best hit so far (updated by the intersection unit).
     pub best: [Option<Hit>; LANES],
@@ -90,6 +92,8 @@ pub struct HitPacket {
     pub lanes: u64,
     /// Their closest hits (any-hit packets: any hit, or `None` if unblocked).
     pub hits: [Option<Hit>; LANES],
+    /// In a two-level scene, the instance of each lane's hit.
+    pub instances: [u32; LANES],
     /// What tracing it cost.
     pub cost: Box<PacketCost>,
 }

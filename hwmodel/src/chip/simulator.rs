@@ -17,6 +17,7 @@ use crate::chip::fifo::{AnyFifo, Fifo};
 use crate::chip::intersection_unit::IntersectionUnit;
 use crate::chip::jobs::{HitPacket, LeafJob, RayPacketJob};
 use crate::chip::rgs::Rgs;
+use crate::chip::scene::ChipScene;
 use crate::chip::traversal_unit::TraversalUnit;
 use crate::config::HwConfig;
 use crate::memory::port::{LatencyStats, MemPort};
@@ -37,7 +38,7 @@ enum UnitRef {
 /// The modelled chip with its scene and frame.
 pub struct Simulator<'s, I: Intersector> {
     pub(crate) cfg: HwConfig,
-    scene: SceneView<'s>,
+    scene: ChipScene<'s>,
     pub(crate) rgs: Rgs,
     pub(crate) tus: Vec<TraversalUnit<I::Nodes>>,
     pub(crate) ius: Vec<IntersectionUnit<I>>,
@@ -81,17 +82,52 @@ impl<'s, I: Intersector> Simulator<'s, I> {
         shader: Option<Shader>,
         cfg: &HwConfig,
     ) -> Result<Self, String> {
+        Self::build(ChipScene::Flat(scene), eye, background, shader, cfg)
+    }
+
+    /// The chip for the frame `eye` of `scene`, flat or two-level: in a two-level scene
+    /// rays walk the top level, enter instances through the transformation units and
+    /// walk their bottoms; ray casting or Whitted (`shader`).
+    pub fn for_scene(
+        scene: ChipScene<'s>,
+        eye: EyeRays,
+        background: Vec3,
+        shader: Option<Shader>,
+        cfg: &HwConfig,
+    ) -> Result<Self, String> {
+        if let ChipScene::Instanced(_) = scene {
+            if let Some(Shader::Path(_)) = shader {
+                return Err("path tracing samples emitters by triangle id, which instances share".into());
+            }
+            if cfg.datapath != crate::Datapath::F32 {
+                return Err(format!(
+                    "datapath {}: the top level's box test is f32; a two-level scene needs datapath f32",
+                    cfg.datapath.name()
+                ));
+            }
+        }
+        Self::build(scene, eye, background, shader, cfg)
+    }
+
+    fn build(
+        scene: ChipScene<'s>,
+        eye: EyeRays,
+        background: Vec3,
+        shader: Option<Shader>,
+        cfg: &HwConfig,
+    ) -> Result<Self, String> {
         cfg.validate()?;
         let units = cfg.traversal.units as usize;
         let f = &cfg.fifo;
         let mut order = vec![UnitRef::Rgs];
         order.extend((0..units).map(UnitRef::Traversal));
         order.extend((0..units).map(UnitRef::Intersection));
-        let words = scene.bytes().len().div_ceil(4);
+        let words = scene.size().div_ceil(4) as usize;
+        let bounds = scene.test_bounds();
         Ok(Simulator {
             cfg: cfg.clone(),
             scene,
-            rgs: Rgs::new(eye, scene.test_bounds(), background, shader, cfg),
+            rgs: Rgs::new(eye, bounds, background, shader, cfg),
             tus: (0..units).map(|u| TraversalUnit::new(u, cfg)).collect(),
             ius: (0..units).map(|u| IntersectionUnit::new(u, cfg)).collect(),
             ray_fifos: (0..units).map(|u| Fifo::new(format!("rays{u}"), f.rays)).collect(),
@@ -140,6 +176,11 @@ impl<'s, I: Intersector> Simulator<'s, I> {
     /// framebuffer writes) gone from its port.
     pub fn is_done(&self) -> bool {
         self.rgs.is_done() && !self.any_staged()
+    }
+
+    /// True for a two-level scene (the transformation units take part).
+    pub fn is_two_level(&self) -> bool {
+        matches!(self.scene, ChipScene::Instanced(_))
     }
 
     /// Packets of primary rays in the frame.
@@ -396,6 +437,10 @@ impl<'s, I: Intersector> Simulator<'s, I> {
             vec![("rgs.generate".to_string(), &self.rgs.gen_stats), ("rgs.shade".to_string(), &self.rgs.shade_stats)];
         units.extend(self.tus.iter().map(|t| (format!("traversal{}", t.id), &t.stats)));
         units.extend(self.ius.iter().map(|i| (format!("intersection{}", i.id), &i.stats)));
+        let two_level = self.is_two_level();
+        let transform_units = self.tus.iter().filter(|_| two_level).map(|t| &t.transform);
+        let transform: Vec<_> = transform_units.map(|t| (format!("transform{}", t.id), &t.tstats)).collect();
+        units.extend(self.tus.iter().filter(|_| two_level).map(|t| (format!("transform{}", t.id), &t.transform.stats)));
         let fifos = self.fifos().map(|f| (f.name().to_string(), f.depth(), f.stats())).collect();
         let ports: Vec<&MemPort> = std::iter::once(&self.rgs.port)
             .chain(self.tus.iter().map(|t| &t.port))
@@ -414,15 +459,16 @@ impl<'s, I: Intersector> Simulator<'s, I> {
                 }
             }
         }
-        let node = if self.scene.grid().is_some() {
+        let view = self.scene.structure_view();
+        let node = if view.grid().is_some() {
             NodeTest::Grid
-        } else if self.scene.bvh4().is_some() {
+        } else if view.bvh4().is_some() {
             NodeTest::Boxes(4)
-        } else if self.scene.bvh8().is_some() {
+        } else if view.bvh8().is_some() {
             NodeTest::Boxes(8)
-        } else if self.scene.bvh().is_some() {
+        } else if view.bvh().is_some() {
             NodeTest::Boxes(2)
-        } else if self.scene.kdtree().is_some() {
+        } else if view.kdtree().is_some() {
             NodeTest::Kd
         } else {
             NodeTest::None
@@ -434,6 +480,7 @@ impl<'s, I: Intersector> Simulator<'s, I> {
             cycles: self.cycles(),
             units,
             traversal: self.tus.iter().map(|t| (format!("traversal{}", t.id), &t.tstats)).collect(),
+            transform,
             port_bytes: ports.iter().map(|p| (port_name(p), p.delivered.iter().sum())).collect(),
             latency,
             utilization: self.memory.utilization(self.cycles(), self.cfg.clock_mhz),

@@ -13,33 +13,30 @@
 //! reads are recorded), *fetch* (the port replays the reads through the node cache), and
 //! *test* once the data has arrived (the datapath, then `step_latency` cycles of pipeline).
 //! Only then is its result used. When the packet stands at a leaf it goes to the coupled
-//! intersection unit; when the walk is over, to shading.
+//! intersection unit; when the walk is over, to shading. In a two-level scene each ray
+//! walks alone, and rays whose step handed out an instance go through the unit's
+//! transformation unit ([`crate::chip::transform_unit`]) before the packet steps again.
+//! The registers and the kernels a step runs are the thread's
+//! ([`crate::chip::traversal_thread`]).
 //!
 //! Ports: `rays` in, `leaves` out, `results` in, `hits` out, and a memory port with a node
 //! cache.
 
 use std::collections::VecDeque;
 
-use raypipe_core::packet::step::{PacketEvent, PacketStep, PacketWalk};
 use raypipe_core::traverse::boxes::datapath::{FloatNodes, NodeTests};
-use raypipe_core::traverse::walk::{Leaf, Walk, WalkEvent};
-use raypipe_core::{DataClass, Ray, SceneView};
+use raypipe_core::DataClass;
 use serde::Serialize;
 
 use crate::chip::fifo::Fifo;
-use crate::chip::jobs::{lanes, HitPacket, LeafJob, PacketCost, Query, RayPacketJob, NO_RAY};
+use crate::chip::jobs::{lanes, HitPacket, LeafJob, RayPacketJob};
+use crate::chip::scene::ChipScene;
+use crate::chip::transform_unit::TransformUnit;
+use crate::chip::traversal_thread::{Next, Thread};
 use crate::config::HwConfig;
 use crate::memory::port::{Fetch, MemPort, Recorder};
 use crate::observe::stall::Stall;
 use crate::observe::unit_stats::{Activity, UnitStats};
-
-/// What a thread does once its step's result is there.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Next {
-    Step,
-    SendLeaf,
-    Finish,
-}
 
 /// A thread's control state; the unit keeps one bit mask of threads per state, so that
 /// picking a thread is a find-first-set, as in hardware.
@@ -54,47 +51,27 @@ enum State {
     Queued = 3,
     /// Its tests ran; the result is in the step pipeline.
     Pipeline = 4,
-    SendLeaf = 5,
-    AtIntersection = 6,
-    Finished = 7,
+    /// Some of its rays entered instances: waiting for or in the transformation unit.
+    Transforming = 5,
+    SendLeaf = 6,
+    AtIntersection = 7,
+    Finished = 8,
 }
 
-const STATES: usize = 8;
+const STATES: usize = 9;
 
 /// Report names of the thread states.
-pub const STATE_NAMES: [&str; STATES] =
-    ["free", "ready", "fetching", "queued_for_datapath", "step_pipeline", "send_leaf", "at_intersection", "finished"];
-
-/// The walk registers of one packet.
-enum Regs<D: NodeTests> {
-    /// A tree: one walk for the packet.
-    Shared(Box<PacketWalk<64>>),
-    /// The grid (or no structure), or any structure with a datapath whose box tests are
-    /// not the packet walk's `f32` ones (fixed point): one walk per ray.
-    PerRay(Vec<Walk<D>>),
-}
-
-/// One packet's registers (its control state is its bit in the unit's state masks).
-struct Thread<D: NodeTests> {
-    index: u32,
-    query: Query,
-    traced: u64,
-    /// Lanes whose walk is not over (any-hit lanes leave at their first hit).
-    live: u64,
-    /// Lanes waiting at a leaf.
-    at_leaf: u64,
-    rays: Box<[Ray; 64]>,
-    regs: Regs<D>,
-    leaves: Box<[Leaf; 64]>,
-    then: Next,
-    fetch: Fetch,
-    /// Ray–node tests of the step in flight.
-    tested: u64,
-    /// What the packet has cost so far.
-    cost: Box<PacketCost>,
-    data_at: u64,
-    result_at: u64,
-}
+pub const STATE_NAMES: [&str; STATES] = [
+    "free",
+    "ready",
+    "fetching",
+    "queued_for_datapath",
+    "step_pipeline",
+    "transforming",
+    "send_leaf",
+    "at_intersection",
+    "finished",
+];
 
 /// Counters of the traversal unit beyond activity.
 #[derive(Clone, Debug, Default, PartialEq, Eq, Serialize)]
@@ -125,6 +102,8 @@ pub struct TraversalUnit<D: NodeTests = FloatNodes> {
     busy_until: u64,
     /// The node port.
     pub port: MemPort,
+    /// The transformation unit (two-level scenes).
+    pub transform: TransformUnit,
     /// Activity and SIMD lanes.
     pub stats: UnitStats,
     /// Steps, node reads, thread states.
@@ -145,24 +124,7 @@ impl<D: NodeTests> TraversalUnit<D> {
     /// A unit with `cfg.traversal.threads` free threads (validated: 1 to 64).
     pub fn new(id: usize, cfg: &HwConfig) -> TraversalUnit<D> {
         let n = cfg.traversal.threads.clamp(1, 64) as usize;
-        let threads = (0..n)
-            .map(|_| Thread {
-                index: 0,
-                query: Query::Closest,
-                traced: 0,
-                live: 0,
-                at_leaf: 0,
-                rays: Box::new([NO_RAY; 64]),
-                regs: Regs::PerRay(Vec::new()),
-                leaves: Box::new([Leaf::All { count: 0 }; 64]),
-                then: Next::Step,
-                fetch: Fetch::default(),
-                tested: 0,
-                cost: Box::new(PacketCost::new(0)),
-                data_at: 0,
-                result_at: 0,
-            })
-            .collect();
+        let threads = (0..n).map(|_| Thread::new()).collect();
         let mut masks = [0u64; STATES];
         masks[State::Free as usize] = if n == 64 { u64::MAX } else { (1u64 << n) - 1 };
         TraversalUnit {
@@ -176,6 +138,7 @@ impl<D: NodeTests> TraversalUnit<D> {
             queued: VecDeque::new(),
             busy_until: 0,
             port: MemPort::new(format!("traversal{id}"), &cfg.cache.nodes, cfg.memory.port_staging()),
+            transform: TransformUnit::new(id, cfg),
             stats: UnitStats::default(),
             tstats: TraversalStats::default(),
             last_states: [0; STATES],
@@ -196,7 +159,7 @@ impl<D: NodeTests> TraversalUnit<D> {
 
     /// True if no packet is in flight.
     pub fn is_empty(&self) -> bool {
-        self.count(State::Free) as usize == self.threads.len()
+        self.count(State::Free) as usize == self.threads.len() && self.transform.is_empty()
     }
 
     /// The first cycle after `now` at which time alone changes something (data arrives,
@@ -208,94 +171,23 @@ impl<D: NodeTests> TraversalUnit<D> {
         let pipeline = crate::lane_iter(self.masks[State::Pipeline as usize]).map(|k| self.threads[k].result_at);
         // The datapath's end frees it for a queued step and changes the unit's activity.
         let datapath = Some(self.busy_until);
-        fetching.chain(pipeline).chain(datapath).filter(|&w| w > now).min()
+        let transform = self.transform.next_wake(now);
+        fetching.chain(pipeline).chain(datapath).chain(transform).filter(|&w| w > now).min()
     }
 
     /// One line describing the threads (for the watchdog).
     pub fn describe(&self) -> String {
         let parts: Vec<String> =
             (0..STATES).map(|s| format!("{} {}", self.masks[s].count_ones(), STATE_NAMES[s])).collect();
-        format!("traversal{}: {}", self.id, parts.join(", "))
+        format!("traversal{}: {}; {}", self.id, parts.join(", "), self.transform.describe())
     }
 
-    /// Sets up thread `k` for a new packet.
-    fn start(&mut self, k: usize, scene: &SceneView<'_>, job: &RayPacketJob) {
-        let t = &mut self.threads[k];
-        t.index = job.index;
-        *t.cost = PacketCost::new(job.issued);
-        t.query = job.query;
-        t.traced = job.lanes;
-        t.live = job.lanes;
-        t.at_leaf = 0;
-        *t.rays = job.rays;
-        // The packet walk's box tests are f32: another datapath walks each ray alone.
-        let shared = if D::FLOAT { PacketWalk::<64>::start(scene, &job.rays, job.lanes) } else { None };
-        t.regs = match shared {
-            Some(w) => Regs::Shared(Box::new(w)),
-            None => {
-                let mut walks = match std::mem::replace(&mut t.regs, Regs::PerRay(Vec::new())) {
-                    Regs::PerRay(w) if w.len() == 64 => w,
-                    _ => vec![Walk::All { visited: true, best: None }; 64],
-                };
-                for i in crate::lane_iter(job.lanes) {
-                    walks[i] = Walk::start(scene, &job.rays[i]);
-                }
-                Regs::PerRay(walks)
-            }
-        };
-    }
-
-    /// Issues one step of thread `k`: the kernel runs now, its reads are recorded for the
-    /// fetch; its result is used once they have arrived.
-    fn issue(&mut self, k: usize, now: u64, scene: &SceneView<'_>) {
+    /// Issues one step of thread `k`: the kernels run now, their reads are recorded for
+    /// the fetch; the result is used once they have arrived.
+    fn issue(&mut self, k: usize, now: u64, scene: &ChipScene<'_>) {
         let t = &mut self.threads[k];
         let mut rec = Recorder::default();
-        let mut tested = 0u64;
-        match &mut t.regs {
-            Regs::Shared(w) => match w.step(scene, &t.rays[..], &mut rec) {
-                PacketEvent::Node { lanes } => {
-                    tested = lanes;
-                    t.then = Next::Step;
-                }
-                PacketEvent::Leaf { leaf, lanes } => {
-                    let at = lanes & t.live;
-                    if at == 0 {
-                        // Every ray here is blocked (any-hit): nothing to intersect.
-                        w.finish_leaf();
-                        t.then = Next::Step;
-                    } else {
-                        for i in crate::lane_iter(at) {
-                            t.leaves[i] = leaf;
-                        }
-                        t.at_leaf = at;
-                        t.then = Next::SendLeaf;
-                    }
-                }
-                PacketEvent::Done => t.then = Next::Finish,
-            },
-            Regs::PerRay(walks) => {
-                let stepping = t.live & !t.at_leaf;
-                for i in crate::lane_iter(stepping) {
-                    rec.at_level(0);
-                    match walks[i].step(scene, &t.rays[i], &mut rec) {
-                        WalkEvent::Inner => {}
-                        WalkEvent::Leaf(leaf) => {
-                            t.leaves[i] = leaf;
-                            t.at_leaf |= 1 << i;
-                        }
-                        WalkEvent::Done => t.live &= !(1 << i),
-                    }
-                }
-                tested = stepping;
-                t.then = if t.live & !t.at_leaf != 0 {
-                    Next::Step
-                } else if t.at_leaf != 0 {
-                    Next::SendLeaf
-                } else {
-                    Next::Finish
-                };
-            }
-        }
+        let tested = t.step(scene, &mut rec);
         self.tstats.steps += 1;
         for i in crate::lane_iter(tested) {
             t.cost.steps[i] += 1;
@@ -315,16 +207,27 @@ impl<D: NodeTests> TraversalUnit<D> {
     fn after_step(&self, k: usize) -> State {
         match self.threads[k].then {
             Next::Step => State::Ready,
+            Next::Transform => State::Transforming,
             Next::SendLeaf => State::SendLeaf,
             Next::Finish => State::Finished,
         }
+    }
+
+    /// Moves thread `k` on once its step's result is there; rays entering instances
+    /// ask the transformation unit.
+    fn advance(&mut self, k: usize) {
+        let next = self.after_step(k);
+        if next == State::Transforming {
+            self.transform.request(k, lanes(self.threads[k].entering));
+        }
+        self.set(k, next);
     }
 
     /// One cycle. Returns true if anything moved.
     pub fn tick(
         &mut self,
         now: u64,
-        scene: &SceneView<'_>,
+        scene: &ChipScene<'_>,
         rays: &mut Fifo<Box<RayPacketJob>>,
         leaves: &mut Fifo<Box<LeafJob>>,
         results: &mut Fifo<Box<LeafJob>>,
@@ -336,6 +239,7 @@ impl<D: NodeTests> TraversalUnit<D> {
         moved |= self.send_leaves(leaves);
         moved |= self.take_packet(scene, rays);
         moved |= self.retire_steps(now);
+        moved |= self.transform_rays(now, scene);
         moved |= self.start_datapath(now);
         moved |= self.issue_step(now, scene);
         moved |= self.fetch_nodes(now);
@@ -343,117 +247,63 @@ impl<D: NodeTests> TraversalUnit<D> {
         moved
     }
 
-    /// A packet back from the intersection unit: its rays finish the leaf. Returns true if anything moved.
+    /// A packet back from the intersection unit: its rays finish the leaf. Returns true
+    /// if anything moved.
     fn take_results(&mut self, results: &mut Fifo<Box<LeafJob>>) -> bool {
-        let mut moved = false;
-        if self.masks[State::AtIntersection as usize] != 0 {
-            if let Some(job) = results.pop() {
-                let k = job.thread as usize;
-                if k < self.threads.len() {
-                    let t = &mut self.threads[k];
-                    for i in crate::lane_iter(job.lanes) {
-                        t.cost.tests[i] += job.tests[i];
-                    }
-                    t.cost.bytes += job.bytes;
-                    match &mut t.regs {
-                        Regs::Shared(w) => {
-                            for i in crate::lane_iter(job.lanes) {
-                                if let Some(b) = w.best_mut(i) {
-                                    *b = job.best[i];
-                                }
-                                if t.query == Query::AnyHit && job.best[i].is_some() {
-                                    t.live &= !(1 << i);
-                                }
-                            }
-                            w.finish_leaf();
-                        }
-                        Regs::PerRay(walks) => {
-                            for i in crate::lane_iter(job.lanes) {
-                                *walks[i].best_mut() = job.best[i];
-                                if t.query == Query::AnyHit && job.best[i].is_some() {
-                                    // Blocked: a shadow ray needs no more of the walk.
-                                    t.live &= !(1 << i);
-                                } else {
-                                    walks[i].finish_leaf();
-                                }
-                            }
-                        }
-                    }
-                    t.at_leaf &= !job.lanes;
-                    self.set(k, State::Ready);
-                }
-                moved = true;
-            }
+        if self.masks[State::AtIntersection as usize] == 0 {
+            return false;
         }
-        moved
+        let Some(job) = results.pop() else { return false };
+        let k = job.thread as usize;
+        if k < self.threads.len() {
+            self.threads[k].take_results(&job);
+            self.set(k, State::Ready);
+        }
+        true
     }
 
     /// A finished packet to shading. Returns true if anything moved.
     fn send_finished(&mut self, hits: &mut Fifo<Box<HitPacket>>) -> bool {
-        let mut moved = false;
-        if let Some(k) = first_from(self.masks[State::Finished as usize], 0) {
-            if hits.can_push() {
-                let t = &self.threads[k];
-                let cost = t.cost.clone();
-                let mut out = Box::new(HitPacket { index: t.index, lanes: t.traced, hits: [None; 64], cost });
-                for i in crate::lane_iter(t.traced) {
-                    out.hits[i] = match &t.regs {
-                        Regs::Shared(w) => w.best(i),
-                        Regs::PerRay(walks) => walks[i].best(),
-                    };
-                }
-                let _ = hits.push(out);
-                self.set(k, State::Free);
-                moved = true;
-            } else {
-                hits.note_full();
-            }
+        let Some(k) = first_from(self.masks[State::Finished as usize], 0) else { return false };
+        if !hits.can_push() {
+            hits.note_full();
+            return false;
         }
-        moved
+        let _ = hits.push(self.threads[k].hit_packet());
+        self.set(k, State::Free);
+        true
     }
 
     /// A packet at its leaves to the intersection unit. Returns true if anything moved.
     fn send_leaves(&mut self, leaves: &mut Fifo<Box<LeafJob>>) -> bool {
-        let mut moved = false;
-        if let Some(k) = first_from(self.masks[State::SendLeaf as usize], 0) {
-            if leaves.can_push() {
-                let t = &self.threads[k];
-                let mut job = Box::new(LeafJob {
-                    packet: t.index,
-                    thread: k as u8,
-                    lanes: t.at_leaf,
-                    query: t.query,
-                    leaves: *t.leaves,
-                    rays: *t.rays,
-                    best: [None; 64],
-                    tests: [0; 64],
-                    bytes: 0,
-                });
-                for i in crate::lane_iter(t.at_leaf) {
-                    job.best[i] = match &t.regs {
-                        Regs::Shared(w) => w.best(i),
-                        Regs::PerRay(walks) => walks[i].best(),
-                    };
-                }
-                let _ = leaves.push(job);
-                self.set(k, State::AtIntersection);
-                moved = true;
-            } else {
-                leaves.note_full();
-            }
+        let Some(k) = first_from(self.masks[State::SendLeaf as usize], 0) else { return false };
+        if !leaves.can_push() {
+            leaves.note_full();
+            return false;
         }
-        moved
+        let _ = leaves.push(self.threads[k].leaf_job(k as u8));
+        self.set(k, State::AtIntersection);
+        true
     }
 
     /// A new packet into a free thread. Returns true if anything moved.
-    fn take_packet(&mut self, scene: &SceneView<'_>, rays: &mut Fifo<Box<RayPacketJob>>) -> bool {
-        let mut moved = false;
-        if let Some(k) = first_from(self.masks[State::Free as usize], 0) {
-            if let Some(job) = rays.pop() {
-                self.start(k, scene, &job);
-                self.set(k, if job.lanes == 0 { State::Finished } else { State::Ready });
-                moved = true;
-            }
+    fn take_packet(&mut self, scene: &ChipScene<'_>, rays: &mut Fifo<Box<RayPacketJob>>) -> bool {
+        let Some(k) = first_from(self.masks[State::Free as usize], 0) else { return false };
+        let Some(job) = rays.pop() else { return false };
+        self.threads[k].start(scene, &job);
+        self.set(k, if job.lanes == 0 { State::Finished } else { State::Ready });
+        true
+    }
+
+    /// The transformation unit's cycle: a thread whose rays are in object space moves on.
+    /// Returns true if anything moved.
+    fn transform_rays(&mut self, now: u64, scene: &ChipScene<'_>) -> bool {
+        let (done, moved) = self.transform.tick(now);
+        if let Some(k) = done {
+            let next = self.threads[k].entered(scene);
+            self.threads[k].then = next;
+            let state = self.after_step(k);
+            self.set(k, state);
         }
         moved
     }
@@ -463,8 +313,7 @@ impl<D: NodeTests> TraversalUnit<D> {
         let mut moved = false;
         for k in crate::lane_iter(self.masks[State::Pipeline as usize]) {
             if self.threads[k].result_at <= now {
-                let next = self.after_step(k);
-                self.set(k, next);
+                self.advance(k);
                 moved = true;
             }
         }
@@ -490,7 +339,7 @@ impl<D: NodeTests> TraversalUnit<D> {
     }
 
     /// Issue one step of one ready packet (round robin). Returns true if anything moved.
-    fn issue_step(&mut self, now: u64, scene: &SceneView<'_>) -> bool {
+    fn issue_step(&mut self, now: u64, scene: &ChipScene<'_>) -> bool {
         let mut moved = false;
         if let Some(k) = first_from(self.masks[State::Ready as usize], self.next_issue) {
             self.next_issue = (k as u32 + 1) % 64;
@@ -512,8 +361,7 @@ impl<D: NodeTests> TraversalUnit<D> {
                     self.queued.push_back(k);
                     self.set(k, State::Queued);
                 } else {
-                    let next = self.after_step(k);
-                    self.set(k, next);
+                    self.advance(k);
                 }
                 moved = true;
             }
@@ -555,6 +403,8 @@ impl<D: NodeTests> TraversalUnit<D> {
             Stall::StepLatency
         } else if self.count(State::Ready) > 0 {
             Stall::IssueSlot
+        } else if self.count(State::Transforming) > 0 {
+            Stall::Transform
         } else if self.count(State::SendLeaf) + self.count(State::Finished) > 0 {
             Stall::OutputFull
         } else {
@@ -572,11 +422,13 @@ impl<D: NodeTests> TraversalUnit<D> {
         self.stats.reset();
         self.tstats = TraversalStats::default();
         self.port.reset_stats();
+        self.transform.reset_stats();
     }
 
     /// Accounts `n` more cycles like the last one (the clock skipped them).
     pub fn repeat_last(&mut self, n: u64) {
         self.stats.repeat_last(n);
+        self.transform.repeat_last(n);
         for s in 0..STATES {
             self.tstats.thread_state_cycles[s] += n * self.last_states[s];
         }

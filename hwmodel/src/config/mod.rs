@@ -42,6 +42,8 @@ pub struct HwConfig {
     pub traversal: TraversalConfig,
     /// List and intersection units (one per traversal unit).
     pub intersection: IntersectionConfig,
+    /// Transformation units (one per traversal unit; instanced scenes).
+    pub transform: TransformConfig,
     /// FIFO depths.
     pub fifo: FifoConfig,
     /// Caches.
@@ -99,6 +101,23 @@ pub struct IntersectionConfig {
     /// Leaf jobs in flight at once (fetching their lists and triangles, waiting for the
     /// datapath, in the pipeline).
     pub jobs: u32,
+}
+
+/// The transformation unit beside each traversal unit: a ray entering an instance is
+/// carried into its object space (origin and direction through the instance's 3×4
+/// world-to-object map, Wald & Slusallek 2001 §8.3), as SaarCOR's dynamic-scene prototype
+/// does in its pipeline (Schmittler, Woop, Wagner, Paul & Slusallek, Graphics Hardware
+/// 2004). A group of up to `lanes_per_cycle` rays enters every `initiation_interval`
+/// cycles and leaves `latency` cycles later.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct TransformConfig {
+    /// Pipeline latency of one ray's transformation, in cycles.
+    pub latency: u32,
+    /// Cycles between two groups entering the pipeline.
+    pub initiation_interval: u32,
+    /// Rays transformed per group (the datapath's width).
+    pub lanes_per_cycle: u32,
 }
 
 /// Depth of each kind of FIFO (entries are whole packets).
@@ -257,6 +276,7 @@ impl Default for HwConfig {
             rgs: RgsConfig::default(),
             traversal: TraversalConfig::default(),
             intersection: IntersectionConfig::default(),
+            transform: TransformConfig::default(),
             fifo: FifoConfig::default(),
             cache: CachesConfig::default(),
             memory: MemoryConfig::default(),
@@ -282,6 +302,16 @@ impl Default for TraversalConfig {
 impl Default for IntersectionConfig {
     fn default() -> Self {
         IntersectionConfig { latency: 20, initiation_interval: 1, lanes_per_cycle: 1, jobs: 4 }
+    }
+}
+
+impl Default for TransformConfig {
+    /// One ray every two cycles: its origin (a point) and direction (a vector) pass one
+    /// after the other through three 4-wide dot products (the 3×4 map's rows); the
+    /// latency is a multiply and a two-level add tree at the depths of the intersection
+    /// pipeline's float units. Derived from the arithmetic, not read off a chip.
+    fn default() -> Self {
+        TransformConfig { latency: 12, initiation_interval: 2, lanes_per_cycle: 1 }
     }
 }
 

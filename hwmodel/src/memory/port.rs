@@ -25,8 +25,8 @@ use crate::observe::stall::Stall;
 pub struct Access {
     /// Traffic class index.
     pub class: usize,
-    /// Byte address in the scene image.
-    pub addr: u32,
+    /// Byte address in the chip's scene memory.
+    pub addr: u64,
     /// Bytes read.
     pub bytes: u32,
 }
@@ -39,6 +39,9 @@ pub struct Recorder {
     pub levels: Vec<Vec<Access>>,
     /// The level reads go to now.
     pub level: usize,
+    /// Where the image the kernel reads lies in the chip's scene memory: its reads'
+    /// addresses are offsets in that image (an instanced scene's bottoms and globals).
+    pub base: u64,
 }
 
 impl Recorder {
@@ -64,7 +67,7 @@ impl MemoryProbe for Recorder {
         while self.levels.len() <= self.level {
             self.levels.push(Vec::new());
         }
-        self.levels[self.level].push(Access { class: class as usize, addr, bytes });
+        self.levels[self.level].push(Access { class: class as usize, addr: self.base + addr as u64, bytes });
     }
 
     #[inline]
@@ -193,7 +196,7 @@ pub struct MemPort {
     /// Most requests waiting in `staged` before the port stops making new ones.
     pub staged_limit: usize,
     /// Reads of this cycle (address, bytes), for the distinct-data count.
-    pub read_log: Vec<(u32, u32)>,
+    pub read_log: Vec<(u64, u32)>,
     /// Bytes requested from the memory, per class.
     pub requested: [u64; CLASSES],
     /// Bytes delivered to this port, per class.
@@ -312,8 +315,8 @@ impl MemPort {
             match self.route.get(a.class).copied().flatten() {
                 Some(c) => {
                     let cache = &self.caches[c].1;
-                    let first = cache.line_of(a.addr as u64);
-                    let last = cache.line_of(a.addr as u64 + a.bytes.max(1) as u64 - 1);
+                    let first = cache.line_of(a.addr);
+                    let last = cache.line_of(a.addr + a.bytes.max(1) as u64 - 1);
                     for line in first..=last {
                         // One lookup per line, however many reads of the level share it.
                         if !f.lookups.iter().any(|l| l.cache == Some(c) && l.key == line) {
@@ -326,7 +329,7 @@ impl MemPort {
                         }
                     }
                 }
-                None => f.lookups.push(Lookup1 { class: a.class, cache: None, key: a.addr as u64, bytes: a.bytes }),
+                None => f.lookups.push(Lookup1 { class: a.class, cache: None, key: a.addr, bytes: a.bytes }),
             }
         }
     }

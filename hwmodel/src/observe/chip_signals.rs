@@ -1,6 +1,7 @@
 //! What the waveform and the trace read off the chip, without changing it: the signals
 //! sampled after each clock edge (FIFO occupancies, unit activities, threads by state,
-//! requests waiting per port, the memory's queue) and the events logged each cycle
+//! requests waiting per port, the memory's queue; in a two-level scene the
+//! transformation units' activity and requests waiting) and the events logged each cycle
 //! (FIFO pushes and pops, packets shaded, memory transactions).
 
 use raypipe_core::intersect::triangle::Intersector;
@@ -37,6 +38,13 @@ impl<I: Intersector> Simulator<'_, I> {
         for i in &self.ius {
             s.push(activity(&format!("intersection{}", i.id)));
         }
+        for t in self.tus.iter().filter(|_| self.is_two_level()) {
+            s.push(activity(&format!("transform{}", t.id)));
+            s.push(Signal {
+                name: format!("transform{}.waiting", t.id),
+                width: bits(self.cfg.traversal.threads as u64),
+            });
+        }
         for p in self.ports() {
             s.push(Signal { name: format!("memory.ports.{}.waiting", port_label(p)), width: 16 });
         }
@@ -56,6 +64,10 @@ impl<I: Intersector> Simulator<'_, I> {
             out.extend(t.thread_states());
         }
         out.extend(self.ius.iter().map(|i| activity_code(&i.stats)));
+        for t in self.tus.iter().filter(|_| self.is_two_level()) {
+            out.push(activity_code(&t.transform.stats));
+            out.push(t.transform.waiting());
+        }
         out.extend(self.ports().map(|p| p.staged.len() as u64));
         out.push(self.memory.queue_len() as u64);
         out.push(self.accepted);

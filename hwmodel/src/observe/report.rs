@@ -8,6 +8,7 @@ use serde::Serialize;
 use raypipe_core::shade::ray_record::RayKind;
 
 use crate::chip::fifo::FifoStats;
+use crate::chip::transform_unit::TransformStats;
 use crate::chip::traversal_unit::{TraversalStats, STATE_NAMES};
 use crate::config::HwConfig;
 use crate::memory::cache::Cache;
@@ -46,6 +47,10 @@ pub struct UnitReport {
     /// Traversal units: mean threads in each state over the frame.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub thread_states: Option<BTreeMap<String, f64>>,
+    /// Transformation units: rays transformed, requests served, and cycles × requests
+    /// waiting behind others.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub transform: Option<TransformStats>,
     /// Bytes delivered to the unit's memory port.
     pub bytes: u64,
 }
@@ -269,6 +274,8 @@ pub struct Sources<'a> {
     pub units: Vec<(String, &'a UnitStats)>,
     /// Traversal units' own counters, by unit name.
     pub traversal: Vec<(String, &'a TraversalStats)>,
+    /// Transformation units' own counters, by unit name (two-level scenes).
+    pub transform: Vec<(String, &'a TransformStats)>,
     /// Bytes delivered per unit port, by unit name.
     pub port_bytes: Vec<(String, u64)>,
     /// Read latencies per class over all ports.
@@ -389,6 +396,7 @@ fn unit_reports(s: &Sources<'_>) -> Vec<UnitReport> {
                         .map(|(n, c)| (n.to_string(), *c as f64 / ticked))
                         .collect()
                 }),
+                transform: s.transform.iter().find(|(n, _)| n == name).map(|(_, t)| (*t).clone()),
                 bytes: s.port_bytes.iter().find(|(n, _)| n == name).map_or(0, |(_, b)| *b),
             }
         })

@@ -28,10 +28,12 @@ pub enum Stall {
     OutputFull,
     /// A thread is ready but another one took the issue slot.
     IssueSlot,
+    /// Rays entering instances wait for the transformation unit.
+    Transform,
 }
 
 /// Number of reasons.
-pub const STALLS: usize = 11;
+pub const STALLS: usize = 12;
 
 impl Stall {
     /// Every reason, in report order.
@@ -47,6 +49,7 @@ impl Stall {
         Stall::AtIntersection,
         Stall::OutputFull,
         Stall::IssueSlot,
+        Stall::Transform,
     ];
 
     /// The report's name.
@@ -63,6 +66,7 @@ impl Stall {
             Stall::AtIntersection => "all_threads_at_intersection",
             Stall::OutputFull => "output_fifo_full",
             Stall::IssueSlot => "issue_slot",
+            Stall::Transform => "transform_unit",
         }
     }
 
@@ -75,6 +79,7 @@ impl Stall {
             Stall::OutputFull => "a full output FIFO",
             Stall::StepLatency | Stall::PipelineLatency | Stall::IssueSlot | Stall::CachePort => "their pipeline",
             Stall::AtIntersection => "the intersection unit",
+            Stall::Transform => "the transformation unit",
         }
     }
 }

@@ -72,6 +72,7 @@ pub fn verdict(units: &[UnitReport], utilization: f64) -> String {
     let trav = Waits::of(units, "traversal");
     let isect = Waits::of(units, "intersection");
     let shade = Waits::of(units, "rgs.shade");
+    let transform = Waits::of(units, "transform");
     let about =
         |w: &Option<Waits>, what: &str| w.as_ref().map_or(String::new(), |w| format!("; {what} {}", w.clause()));
     if utilization >= 0.8 {
@@ -83,7 +84,7 @@ pub fn verdict(units: &[UnitReport], utilization: f64) -> String {
         );
     }
     let mut best = ("traversal", trav.as_ref().map_or(0.0, |k| k.busy));
-    for (name, k) in [("intersection", &isect), ("shading", &shade)] {
+    for (name, k) in [("intersection", &isect), ("shading", &shade), ("transform", &transform)] {
         let b = k.as_ref().map_or(0.0, |k| k.busy);
         if b > best.1 {
             best = (name, b);
@@ -120,6 +121,7 @@ mod tests {
             stall_reasons: reasons.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
             node_reads_per_step: None,
             thread_states: None,
+            transform: None,
             bytes: 0,
         }
     }

@@ -98,3 +98,17 @@ pub struct BottomRecord {
     pub reserved: [u32; 3],
 }
 const _: () = assert!(core::mem::size_of::<BottomRecord>() == 64);
+
+/// Where the index's parts lie for `instances` instances, `bottoms` bottom images and
+/// `nodes` top-level nodes: the byte offsets of the instance records, the nodes and the
+/// list, and the list's end (the globals image starts at the next 64-byte boundary). The
+/// file's layout, and the addresses a driver holding a top level in memory reports its
+/// reads at, so that a model sees the same memory either way.
+pub const fn index_layout(instances: u32, bottoms: u32, nodes: u32) -> ([u32; 3], u64) {
+    let dir_at = 128 + 128 * instances as u64;
+    let nodes_at = dir_at + 64 * bottoms as u64;
+    let list_at = nodes_at + 32 * nodes as u64;
+    let list_end = list_at + 4 * instances as u64;
+    // Labels past 4 GiB wrap (the index of a file that parses is far smaller).
+    ([128, nodes_at as u32, list_at as u32], list_end)
+}

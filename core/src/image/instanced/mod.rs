@@ -22,7 +22,8 @@ mod view;
 
 pub use error::InstancedError;
 pub use layout::{
-    BottomRecord, InstanceRecord, InstancedHeader, INSTANCED_CHECKSUM_OFFSET, INSTANCED_MAGIC, INSTANCED_VERSION,
+    index_layout, BottomRecord, InstanceRecord, InstancedHeader, INSTANCED_CHECKSUM_OFFSET, INSTANCED_MAGIC,
+    INSTANCED_VERSION,
 };
 pub use top_level::{mapped_box, TopLevel, TopParts};
 pub use view::InstancedView;

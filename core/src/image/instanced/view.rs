@@ -91,14 +91,13 @@ impl<'a> InstancedView<'a> {
         index: &'a [u8],
     ) -> Result<(&'a [InstanceRecord], &'a [BottomRecord], &'a [BvhNode], &'a [u32], [u32; 3], u64), InstancedError>
     {
-        let (ni, nb, nn) = (header.instance_count as u64, header.bottom_count as u64, header.node_count as u64);
-        let dir_at = 128 + 128 * ni;
-        let nodes_at = dir_at + 64 * nb;
-        let list_at = nodes_at + 32 * nn;
-        let list_end = list_at + 4 * ni;
+        let (ni, nb, nn) = (header.instance_count, header.bottom_count, header.node_count);
+        let (addrs, list_end) = super::layout::index_layout(ni, nb, nn);
         if list_end > index.len() as u64 || ni == 0 || nb == 0 || nn == 0 {
             return Err(InstancedError::BadLayout);
         }
+        // Below the index's length, so no label wrapped.
+        let (dir_at, nodes_at, list_at) = (128 + 128 * ni as u64, addrs[1] as u64, addrs[2] as u64);
         let cut = |a: u64, b: u64| &index[a as usize..b as usize];
         let bad = |_| InstancedError::BadLayout;
         let instances: &[InstanceRecord] = bytemuck::try_cast_slice(cut(128, dir_at)).map_err(bad)?;
@@ -106,7 +105,7 @@ impl<'a> InstancedView<'a> {
         let nodes: &[BvhNode] = bytemuck::try_cast_slice(cut(nodes_at, list_at)).map_err(bad)?;
         let list: &[u32] = bytemuck::try_cast_slice(cut(list_at, list_end)).map_err(bad)?;
         // The index is below 4 GiB whenever these fit; probe addresses are labels.
-        Ok((instances, bottoms, nodes, list, [128, nodes_at as u32, list_at as u32], list_end))
+        Ok((instances, bottoms, nodes, list, addrs, list_end))
     }
 
     /// Every bottom image after the index, 64-byte aligned, in file order without

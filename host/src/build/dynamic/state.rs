@@ -5,7 +5,7 @@ use std::time::Instant;
 
 use anyhow::{anyhow, bail, Result};
 use glam::Vec3A;
-use raypipe_core::image::instanced::{InstanceRecord, TopLevel, TopParts};
+use raypipe_core::image::instanced::{index_layout, InstanceRecord, TopLevel, TopParts};
 use raypipe_core::image::{BvhNode, FrameGeometry, Header, Position};
 use raypipe_core::math::affine::Affine34;
 
@@ -264,8 +264,10 @@ impl DynamicState {
             };
             bottoms.push(v);
         }
-        let parts =
-            TopParts { instances: &self.instances, nodes: &self.top.nodes, list: &self.top.list, addrs: [0; 3] };
+        // The file's addresses, so a model reads the frame as it would read the file.
+        let count = |n: usize| n as u32;
+        let (addrs, _) = index_layout(count(self.instances.len()), count(bottoms.len()), count(self.top.nodes.len()));
+        let parts = TopParts { instances: &self.instances, nodes: &self.top.nodes, list: &self.top.list, addrs };
         let top = TopLevel::new(
             parts,
             |b| bottoms.get(b as usize).map(|v| v.bounds()),

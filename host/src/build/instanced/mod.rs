@@ -7,7 +7,7 @@ pub mod writer;
 
 use anyhow::{anyhow, bail, Result};
 use glam::{DMat3, DVec3, Vec3};
-use raypipe_core::image::instanced::{mapped_box, InstanceRecord, TopLevel, TopParts};
+use raypipe_core::image::instanced::{index_layout, mapped_box, InstanceRecord, TopLevel, TopParts};
 use raypipe_core::image::{LightRecord, MaterialRecord, FLAG_DEFAULT_LIGHT, NULL_INDEX};
 use raypipe_core::math::affine::{self, Affine34};
 use raypipe_core::traverse::instanced::trace_instanced;
@@ -366,7 +366,12 @@ impl InstancedScene {
             .map(|i| SceneView::parse(i).map_err(|e| anyhow!("internal error: {e}")))
             .collect::<Result<Vec<_>>>()?;
         let top = TopLevel::new(
-            TopParts { instances: parts.records, nodes: &parts.top.nodes, list: &parts.top.list, addrs: [0; 3] },
+            TopParts {
+                instances: parts.records,
+                nodes: &parts.top.nodes,
+                list: &parts.top.list,
+                addrs: index_layout(parts.records.len() as u32, views.len() as u32, parts.top.nodes.len() as u32).0,
+            },
             |b| views.get(b as usize).map(|v| v.bounds()),
             self.materials.len() as u32,
         )

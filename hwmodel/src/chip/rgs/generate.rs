@@ -55,6 +55,7 @@ impl Rgs {
                     index: b as u32,
                     lanes: 0,
                     hits: [None; 64],
+                    instances: [0; 64],
                     cost: Box::new(PacketCost::new(now)),
                 });
                 for j in 0..self.packet_size as usize {

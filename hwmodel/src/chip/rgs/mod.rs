@@ -26,10 +26,11 @@ use raypipe_core::shade::color::rgb8;
 use raypipe_core::shade::radiance_sum::RadianceSum;
 use raypipe_core::shade::ray_record::{RayKind, RayRecord};
 use raypipe_core::shade::shader::Shader;
-use raypipe_core::{SceneView, Vec3};
+use raypipe_core::Vec3;
 
 use crate::chip::fifo::Fifo;
 use crate::chip::jobs::{HitPacket, RayPacketJob};
+use crate::chip::scene::ChipScene;
 use crate::config::HwConfig;
 use crate::memory::port::MemPort;
 use crate::observe::unit_stats::UnitStats;
@@ -278,7 +279,7 @@ impl Rgs {
     pub fn tick(
         &mut self,
         now: u64,
-        scene: &SceneView<'_>,
+        scene: &ChipScene<'_>,
         rays: &mut [Fifo<Box<RayPacketJob>>],
         hits: &mut [Fifo<Box<HitPacket>>],
     ) -> bool {

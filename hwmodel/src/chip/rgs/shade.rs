@@ -2,17 +2,24 @@
 //! — up to `rgs.shade_jobs` at once — and core's shading kernel runs on them at once; its
 //! reads are fetched through the shading cache, `shade_per_cycle` rays are shaded per
 //! cycle once the data has arrived, and only then is the framebuffer written (a posted
-//! write per packet) and the rays the shader emitted released.
+//! write per packet) and the rays the shader emitted released. A hit in a two-level
+//! scene is shaded from its instance's world-space surface with the globals image's
+//! lights ([`raypipe_core::shade::instance_surface`]), as the host shades it.
 
 use raypipe_core::shade::escaped::eye_escaped;
-use raypipe_core::shade::lambert::shade;
+use raypipe_core::shade::instance_surface::instance_surface;
+use raypipe_core::shade::lambert::{shade, shade_surface};
 use raypipe_core::shade::ray_record::{RayKind, RayRecord};
-use raypipe_core::SceneView;
+use raypipe_core::shade::shader::Shader;
+use raypipe_core::shade::whitted::shade_whitted_surface;
+use raypipe_core::traverse::instanced::InstanceHit;
+use raypipe_core::{Hit, Vec3};
 
 use super::shade_job::{ShadeJob, Stage};
 use super::{Rgs, FRAMEBUFFER_BASE};
 use crate::chip::fifo::Fifo;
 use crate::chip::jobs::{lanes, HitPacket};
+use crate::chip::scene::{ChipScene, InstancedScene};
 use crate::memory::port::{Fetch, Recorder};
 use crate::memory::traffic::FRAMEBUFFER;
 use crate::observe::stall::Stall;
@@ -38,7 +45,7 @@ impl Rgs {
     /// The shader's cycle: jobs done leave (framebuffer write, emitted rays released), the
     /// datapath takes the oldest job whose data is there, a new packet comes in if a job
     /// slot is free, and waiting jobs fetch. Returns true if anything moved.
-    pub(super) fn tick_shade(&mut self, now: u64, scene: &SceneView<'_>, hits: &mut [Fifo<Box<HitPacket>>]) -> bool {
+    pub(super) fn tick_shade(&mut self, now: u64, scene: &ChipScene<'_>, hits: &mut [Fifo<Box<HitPacket>>]) -> bool {
         let mut moved = false;
         let mut k = 0;
         while k < self.shading.len() {
@@ -125,7 +132,7 @@ impl Rgs {
     }
 
     /// Shades one finished packet into the framebuffer.
-    fn shade(&mut self, now: u64, scene: &SceneView<'_>, packet: &HitPacket) {
+    fn shade(&mut self, now: u64, scene: &ChipScene<'_>, packet: &HitPacket) {
         let b = packet.index as usize;
         let mut where_: [Option<(u32, u32)>; 64] = [None; 64];
         for (j, p) in where_.iter_mut().enumerate().take(self.packet_size as usize) {
@@ -156,6 +163,36 @@ impl Rgs {
                 self.eye.sample_ray_in_scene(x, y, s, self.bounds.0, self.bounds.1)
             };
             let share = 1.0 / samples as f32;
+            let scene = match scene {
+                ChipScene::Flat(v) => v,
+                ChipScene::Instanced(two) => {
+                    let hit = packet.hits[j].map(|h| (h, packet.instances[j]));
+                    let value = match ray {
+                        Some(ray) => {
+                            let rec = RayRecord::eye_sample(ray, pixel as u32, s, samples, self.eye.cone());
+                            let c = self.shade_instanced(two, &rec, hit, &mut probe, &mut |r| emitted.push(r));
+                            if self.shader.is_some() {
+                                c
+                            } else {
+                                c / samples as f32
+                            }
+                        }
+                        None => {
+                            probe.base = two.globals_base();
+                            let (x_y_s, bg) = ((x, y, s), self.background);
+                            eye_escaped(&two.globals, &self.eye, x_y_s, bg, &mut probe) / samples as f32
+                        }
+                    };
+                    match self.radiance.get_mut(pixel) {
+                        Some(sum) => sum.add(value),
+                        None => self.framebuffer[pixel] = value,
+                    }
+                    if s == 0 {
+                        self.hits[pixel] = if packet.lanes & (1 << j) != 0 { packet.hits[j] } else { None };
+                    }
+                    continue;
+                }
+            };
             match (&self.shader, ray) {
                 (Some(shader), Some(ray)) => {
                     let sum = &mut self.radiance[pixel];
@@ -222,7 +259,7 @@ impl Rgs {
     }
     /// Takes a secondary packet back: unblocked shadow rays add their weight, the others
     /// are shaded (and may emit more records).
-    fn shade_secondary(&mut self, now: u64, scene: &SceneView<'_>, packet: &HitPacket) {
+    fn shade_secondary(&mut self, now: u64, scene: &ChipScene<'_>, packet: &HitPacket) {
         let records = self.in_flight.remove(&packet.index).unwrap_or_default();
         let mut probe = Recorder::default();
         let mut emitted = Vec::new();
@@ -234,8 +271,20 @@ impl Rgs {
                 if hit.is_none() {
                     slot.add(rec.weight);
                 }
-            } else if let Some(shader) = &self.shader {
-                slot.add(shader.shade(scene, rec, hit, &mut probe, &mut |r| emitted.push(r)));
+                continue;
+            }
+            match (scene, &self.shader) {
+                (ChipScene::Flat(view), Some(shader)) => {
+                    slot.add(shader.shade(view, rec, hit, &mut probe, &mut |r| emitted.push(r)))
+                }
+                (ChipScene::Instanced(two), Some(_)) => {
+                    let hit = hit.map(|h| (h, packet.instances[j]));
+                    let c = self.shade_instanced(two, rec, hit, &mut probe, &mut |r| emitted.push(r));
+                    if let Some(slot) = self.radiance.get_mut(rec.pixel as usize) {
+                        slot.add(c);
+                    }
+                }
+                (_, None) => {}
             }
         }
         self.rays_retired += lanes(packet.lanes);
@@ -244,5 +293,30 @@ impl Rgs {
         let lane_pixels = records.iter().map(|r| r.pixel).collect();
         let done = Shaded { pixels: lane_pixels, probe, rays, emitted, write: (0, 0), primary: false };
         self.push_job(now, packet, done);
+    }
+
+    /// The radiance of `rec`, which hit `hit` (in that instance) or nothing, as the host
+    /// shades a two-level scene: the instance's surface read in its bottom image, lit
+    /// with the globals image (ray casting's colour, or Whitted's with its records
+    /// emitted).
+    fn shade_instanced(
+        &self,
+        two: &InstancedScene<'_>,
+        rec: &RayRecord,
+        hit: Option<(Hit, u32)>,
+        probe: &mut Recorder,
+        emit: &mut impl FnMut(RayRecord),
+    ) -> Vec3 {
+        let surface = hit.and_then(|(hit, instance)| {
+            let bottom = two.top.instances().get(instance as usize)?.bottom;
+            probe.base = two.bottom(bottom)?.1;
+            let (top, bottoms, globals) = (&two.top, &two.bottoms, &two.globals);
+            instance_surface(top, bottoms, globals, &rec.ray, &InstanceHit { hit, instance }, rec.cone, probe)
+        });
+        probe.base = two.globals_base();
+        match &self.shader {
+            Some(Shader::Whitted(o)) => shade_whitted_surface(&two.globals, rec, surface, o, probe, emit),
+            _ => shade_surface(&two.globals, &rec.ray, surface, self.background, probe),
+        }
     }
 }
