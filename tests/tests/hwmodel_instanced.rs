@@ -106,3 +106,51 @@ proptest! {
         }
     }
 }
+
+/// The transformation unit's latency is paid, and only it: on a chip with one thread
+/// of one ray and perfect memory nothing overlaps, so ten more cycles of latency cost
+/// exactly ten cycles per transformed ray, and the rays transformed do not change.
+#[test]
+fn each_cycle_of_transform_latency_is_paid_once_per_entering_ray() {
+    use raypipe::build::instanced::{affine_of, Instance, InstancedScene as Placed};
+    use raypipe::input::mesh::Mesh;
+    let quad = Mesh {
+        positions: vec![[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 1.0, 0.0]],
+        triangles: vec![[0, 1, 2], [0, 2, 3]],
+        ..Default::default()
+    };
+    let at = |x: f32, z: f32| Instance {
+        bottom: 0,
+        to_world: affine_of(glam::Mat4::from_translation(Vec3::new(x, 0.0, z))),
+        material: None,
+    };
+    let placed = Placed {
+        name: "quads".into(),
+        bottoms: vec![quad],
+        bottom_names: vec!["quad".into()],
+        instances: vec![at(-1.5, 0.0), at(1.5, -1.0), at(0.0, -2.0)],
+        ..Default::default()
+    };
+    let built = placed.build(&BuildOptions { accel: Accel::Bvh, ..Default::default() }).unwrap();
+    let view = InstancedView::parse(&built.bytes).unwrap();
+    let s = Instances::of(&view, "quads").unwrap();
+    let cam = CameraRecord { width: 12, height: 8, ..*s.globals.camera().unwrap() };
+    let run = |latency: u32| {
+        let mut c = HwConfig::preset("minimal").unwrap();
+        c.memory.model = MemoryModel::Perfect;
+        c.transform.latency = latency;
+        let eye = EyeRays::new(&Camera::from(&cam)).unwrap();
+        let scene = ChipScene::Instanced(InstancedScene::new(s.top, s.bottoms.clone(), s.globals));
+        let mut sim = Simulator::<Watertight>::for_scene(scene, eye, Vec3::ZERO, None, &c).unwrap();
+        sim.run(|_, _| {}).unwrap();
+        let r = sim.report();
+        let t = r.units.iter().find(|u| u.name == "transform0").and_then(|u| u.transform.clone()).unwrap();
+        (r.cycles, t.rays, t.requests, sim.framebuffer())
+    };
+    let (fast, rays, requests, image) = run(1);
+    let (slow, rays_slow, requests_slow, image_slow) = run(11);
+    assert!(rays > 0 && rays == rays_slow && requests == requests_slow);
+    assert_eq!(requests, rays, "one ray per packet");
+    assert_eq!(slow - fast, 10 * requests, "latency 1 → 11");
+    assert!(image == image_slow, "timing never changes the image");
+}

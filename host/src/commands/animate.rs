@@ -10,7 +10,7 @@ use anyhow::{anyhow, bail, Result};
 use clap::Args;
 
 use super::args::{AlgoArgs, DisplayArgs, RunArgs, StructureArgs};
-use crate::build::dynamic::{DynamicImages, DynamicState, Update};
+use crate::build::dynamic::{BaseViews, CommitStats, DynamicImages, DynamicState, Update};
 use crate::input::aff::{load_aff, AffScene};
 use crate::output;
 use crate::render::instanced::frame::{check_algorithm, render_instanced};
@@ -18,14 +18,9 @@ use crate::render::tracer::IntersectorKind;
 use crate::render::RenderOptions;
 use crate::study::animation_report::{AnimationReport, FrameTimes};
 
-/// `raypipe animate`.
-#[derive(Args, Debug)]
-pub struct AnimateArgs {
-    /// The scene's entry AFF file (e.g. kitchen/aff/kitchen.aff).
-    pub scene: PathBuf,
-    /// The frames to render, `A..B` (B excluded) or one frame `A`; default: all of them.
-    #[arg(long, value_name = "A..B")]
-    pub frames: Option<String>,
+/// How the host updates moved meshes' structures each frame.
+#[derive(Args, Debug, Clone)]
+pub struct UpdateArgs {
     /// How moved meshes' structures follow them: refit, rebuild (Morton LBVH), full
     /// (binned SAH), auto (refit until the SAH cost grows past --auto-threshold, then
     /// rebuild) or parker (no structure for the moving triangles).
@@ -35,6 +30,58 @@ pub struct AnimateArgs {
     /// when last built.
     #[arg(long, value_name = "RATIO", default_value_t = 1.5)]
     pub auto_threshold: f64,
+}
+
+/// An animated scene ready to play: the AFF scene, its images built and validated once
+/// (the bottoms' structures as `structure` says), and the state that moves them.
+pub(crate) struct Animation {
+    /// The scene and its tracks.
+    pub aff: AffScene,
+    /// The bottoms' images.
+    pub images: DynamicImages,
+    /// Seconds reading and building.
+    pub load_secs: f64,
+}
+
+impl Animation {
+    /// Reads the AFF scene at `path` and builds its images.
+    pub fn open(path: &Path, structure: &StructureArgs, u: &UpdateArgs) -> Result<Animation> {
+        if !(u.auto_threshold.is_finite() && u.auto_threshold >= 1.0) {
+            bail!("--auto-threshold {} must be a ratio of at least 1", u.auto_threshold);
+        }
+        let loading = Instant::now();
+        let aff = load_aff(path)?;
+        crate::output::warnings::warnings(&aff.scene.name, &aff.scene.warnings);
+        let mut opts = structure.options();
+        opts.camera = aff.scene.camera;
+        let images = DynamicImages::build(&aff.scene, &aff.deforming, &opts, u.update)?;
+        Ok(Animation { aff, images, load_secs: loading.elapsed().as_secs_f64() })
+    }
+
+    /// The state that moves the scene's views (built once).
+    pub fn state(&self, views: &BaseViews<'_>, u: &UpdateArgs) -> Result<DynamicState> {
+        DynamicState::new(&self.aff.scene, views, &self.aff.deforming, u.update, u.auto_threshold)
+    }
+
+    /// Posts frame `k`'s changes and commits them: the update's statistics and seconds.
+    pub fn update(&self, state: &mut DynamicState, views: &BaseViews<'_>, k: u32) -> Result<(CommitStats, f64)> {
+        let start = Instant::now();
+        post_frame(&self.aff, state, self.aff.time(k))?;
+        let stats = state.commit(views);
+        Ok((stats, start.elapsed().as_secs_f64()))
+    }
+}
+
+/// `raypipe animate`.
+#[derive(Args, Debug)]
+pub struct AnimateArgs {
+    /// The scene's entry AFF file (e.g. kitchen/aff/kitchen.aff).
+    pub scene: PathBuf,
+    /// The frames to render, `A..B` (B excluded) or one frame `A`; default: all of them.
+    #[arg(long, value_name = "A..B")]
+    pub frames: Option<String>,
+    #[command(flatten)]
+    pub updates: UpdateArgs,
     /// Folder for the frames (frame-0000.png, …); created if missing.
     #[arg(short, long, value_name = "DIR")]
     pub output: PathBuf,
@@ -58,10 +105,10 @@ pub struct AnimateArgs {
     pub run: RunArgs,
 }
 
-/// The frame range `A..B` or `A` of `n` frames.
-fn frame_range(spec: Option<&str>, n: u32) -> Result<std::ops::Range<u32>> {
+/// The frame range `A..B` or `A` of `n` frames, given with option `flag`.
+pub(crate) fn frame_range(flag: &str, spec: Option<&str>, n: u32) -> Result<std::ops::Range<u32>> {
     let Some(s) = spec else { return Ok(0..n) };
-    let bad = || anyhow!("--frames {s}: expected A..B or A, frames 0..{n}");
+    let bad = || anyhow!("{flag} {s}: expected A..B or A, frames 0..{n}");
     let (a, b) = match s.split_once("..") {
         Some((a, b)) => (a.trim().parse::<u32>().map_err(|_| bad())?, b.trim().parse::<u32>().map_err(|_| bad())?),
         None => {
@@ -70,7 +117,7 @@ fn frame_range(spec: Option<&str>, n: u32) -> Result<std::ops::Range<u32>> {
         }
     };
     if a >= b || b > n {
-        bail!("--frames {s}: the scene has frames 0..{n}");
+        bail!("{flag} {s}: the scene has frames 0..{n}");
     }
     Ok(a..b)
 }
@@ -90,33 +137,24 @@ fn post_frame(aff: &AffScene, state: &mut DynamicState, t: f64) -> Result<()> {
 
 pub(crate) fn cmd_animate(a: AnimateArgs) -> Result<()> {
     a.run.check()?;
-    if !(a.auto_threshold.is_finite() && a.auto_threshold >= 1.0) {
-        bail!("--auto-threshold {} must be a ratio of at least 1", a.auto_threshold);
-    }
-    let loading = Instant::now();
-    let aff = load_aff(&a.scene)?;
-    crate::output::warnings::warnings(&aff.scene.name, &aff.scene.warnings);
-    let range = frame_range(a.frames.as_deref(), aff.frame_count())?;
+    let anim = Animation::open(&a.scene, &a.structure, &a.updates)?;
+    let aff = &anim.aff;
+    let range = frame_range("--frames", a.frames.as_deref(), aff.frame_count())?;
     let mut ropts = RenderOptions { threads: a.run.threads, ..Default::default() };
     a.algo.apply(&mut ropts)?;
     check_algorithm(&ropts)?;
-    let mut opts = a.structure.options();
-    opts.camera = aff.scene.camera;
-    let images = DynamicImages::build(&aff.scene, &aff.deforming, &opts, a.update)?;
-    let views = images.views()?;
-    let mut state = DynamicState::new(&aff.scene, &views, &aff.deforming, a.update, a.auto_threshold)?;
-    let load_secs = loading.elapsed().as_secs_f64();
+    let views = anim.images.views()?;
+    let mut state = anim.state(&views, &a.updates)?;
     ropts.intersector = IntersectorKind::resolve(a.run.intersector, &views.bottoms[0]);
     std::fs::create_dir_all(&a.output).map_err(|e| anyhow!("{}: cannot create: {e}", a.output.display()))?;
     let display = a.display.choice(ropts.algo);
     let bar = output::progress::bar(range.len() as u64, "frames", true);
-    let mut report = AnimationReport::new(&aff, &a, load_secs);
+    let mut report = AnimationReport::new(aff, &a, anim.load_secs);
     let pool = crate::render::thread_pool(a.run.threads)?;
     for k in range.clone() {
         let t = aff.time(k);
         let update = Instant::now();
-        post_frame(&aff, &mut state, t)?;
-        let stats = state.commit(&views);
+        let (stats, _) = anim.update(&mut state, &views, k)?;
         let frame = state.frame(&views)?;
         let update_secs = update.elapsed().as_secs_f64();
         let mut camera = aff.camera(t);

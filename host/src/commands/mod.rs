@@ -24,6 +24,7 @@ pub mod render_bricked;
 pub mod render_instanced;
 pub mod report;
 pub mod simulate;
+mod simulate_animate;
 mod simulate_instanced;
 pub mod stats;
 pub mod stream;

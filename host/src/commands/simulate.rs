@@ -80,6 +80,17 @@ pub struct SimulateArgs {
     pub walk: WalkArgs,
     #[command(flatten)]
     pub measure: MeasureArgs,
+    /// Run an animated AFF scene (BART) through the chip: all its frames, or frames
+    /// A..B (B excluded), or one frame A; each frame's image is written as
+    /// `OUTPUT-NNNN.png`, its line to --frames, the last frame's report to --report.
+    #[arg(long, value_name = "A..B", num_args = 0..=1, default_missing_value = "all")]
+    pub animate: Option<String>,
+    #[command(flatten)]
+    pub updates: super::animate::UpdateArgs,
+    /// With --animate: render every frame on the host too, and stop with an error if the
+    /// chip's image differs from it in any pixel.
+    #[arg(long, requires = "animate")]
+    pub check_host: bool,
 }
 
 /// What `simulate` measures: warm-up, region of interest, intervals.
@@ -136,6 +147,9 @@ pub(crate) fn parse_roi(s: &str) -> Result<(u64, u64), String> {
 
 pub(crate) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
     check_image_path(&a.output)?;
+    if let Some(spec) = &a.animate {
+        return super::simulate_animate::cmd_simulate_animate(&a, spec);
+    }
     let mut display = a.display.choice(a.algo.algo);
     // Every output's directory before anything is written: never one without the other.
     output::check_writable(&a.output)?;
@@ -357,10 +371,10 @@ pub(crate) fn run_simulation(a: &SimulateArgs, cache: Option<&SceneCache>, show_
             cfg.datapath.name()
         );
     }
-    // The chip's own structure unless the command line names one.
-    let mut structure = a.structure.clone();
-    structure.default_accel = <Accel as clap::ValueEnum>::from_str(&cfg.structure, true)
-        .map_err(|_| anyhow::anyhow!("the chip's structure {:?} is not one raypipe builds", cfg.structure))?;
+    if a.animate.is_some() {
+        bail!("--animate runs on its own (raypipe simulate SCENE.aff --animate), not as a sweep point");
+    }
+    let structure = chip_structure(a, &cfg)?;
     if let Some(path) = a.scene.as_deref().filter(|p| crate::input::instanced::is_instanced(p)) {
         return super::simulate_instanced::run_instanced_simulation(a, path, &cfg, &structure, show_progress);
     }
@@ -448,4 +462,13 @@ pub(crate) fn run_identity(
         ),
         raypipe_version: env!("CARGO_PKG_VERSION").to_string(),
     }
+}
+
+/// The structure arguments with the chip's own structure as the default (used unless the
+/// command line names one).
+pub(crate) fn chip_structure(a: &SimulateArgs, cfg: &raypipe_hw::HwConfig) -> Result<StructureArgs> {
+    let mut structure = a.structure.clone();
+    structure.default_accel = <Accel as clap::ValueEnum>::from_str(&cfg.structure, true)
+        .map_err(|_| anyhow::anyhow!("the chip's structure {:?} is not one raypipe builds", cfg.structure))?;
+    Ok(structure)
 }

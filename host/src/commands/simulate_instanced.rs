@@ -11,7 +11,7 @@ use raypipe_hw::HwConfig;
 
 use super::args::StructureArgs;
 use super::simulate::{measure_of, run_identity, SimulateArgs, Simulated};
-use super::{camera_for, structure_summary};
+use super::{camera_of, structure_summary};
 use crate::hw::chip;
 use crate::hw::frame_setup::FrameSetup;
 use crate::input::instanced::load_instanced;
@@ -37,7 +37,9 @@ pub(crate) fn run_instanced_simulation(
         }
     }
     let s = file.instances()?;
-    let cam = camera_for(&s.globals, &a.camera)?;
+    // The globals image holds no triangle to judge the view by: no coverage hint.
+    let cam = camera_of(&s.globals, &a.camera)?;
+    crate::render::eye_rays(&cam, "camera")?;
     let mut opts = RenderOptions::default();
     a.algo.apply(&mut opts)?;
     check_algorithm(&opts)?;

@@ -60,8 +60,8 @@ impl AnimationReport {
             ),
             format!(
                 "update   {} (auto threshold {}), algorithm {:?}, load and first build {load_secs:.3} s",
-                a.update.name(),
-                a.auto_threshold,
+                a.updates.update.name(),
+                a.updates.auto_threshold,
                 a.algo.algo
             )
             .to_lowercase(),

@@ -18,6 +18,7 @@ mod outputs;
 mod render;
 mod report;
 mod simulate;
+mod simulate_instanced;
 mod stats;
 mod stream;
 mod sweep;
