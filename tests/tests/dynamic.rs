@@ -1,6 +1,7 @@
 //! Scenes that move: a deforming soup and a static one, placed by instances whose
 //! transforms change, animated over frames. Whatever the update — refit, fast or full
-//! rebuild, the automatic choice, Parker's unstructured meshes — every frame's hits are
+//! rebuild, the automatic choice, Parker's unstructured meshes, Reinhard's hierarchical
+//! grid with wrap-around — every frame's hits are
 //! bit for bit those of the same frame built from scratch as a static instanced scene,
 //! for single rays and packets. Bad updates are refused with a message naming them.
 
@@ -115,7 +116,7 @@ proptest! {
             let view = InstancedView::parse(&built.bytes).expect("valid");
             want.push(hits(&Instances::of(&view, "frame").expect("valid"), &rays));
         }
-        for update in [Update::Refit, Update::Rebuild, Update::Full, Update::Auto, Update::Parker] {
+        for update in [Update::Refit, Update::Rebuild, Update::Full, Update::Auto, Update::Parker, Update::Reinhard] {
             let images = DynamicImages::build(&base, &[true, false], &opts, update).expect("images build");
             let views = images.views().expect("valid images");
             let mut state = DynamicState::new(&base, &views, &[true, false], update, threshold).expect("state");
@@ -171,4 +172,58 @@ fn bad_updates_are_refused_by_name() {
     // Nothing bad was applied: the frame is still valid.
     state.commit(&views);
     assert!(state.frame(&views).is_ok());
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 16, ..ProptestConfig::default() })]
+
+    /// Reinhard's grid stays put while its triangles drift out of it — they wrap around,
+    /// nothing is rebuilt — and is rebuilt only once their box has outgrown it; every
+    /// frame's hits are those of the frame built from scratch.
+    #[test]
+    fn reinhard_wraps_drifting_triangles_and_rebuilds_when_they_spread(
+        seed in any::<u64>(),
+        n in 4usize..150,
+        drift in prop::array::uniform3(-5.0f32..5.0),
+        accel in prop_oneof![Just(Accel::Grid), Just(Accel::Bvh)],
+    ) {
+        let deforming = soup(n, seed);
+        // Frames 0-3 drift by `drift` per frame (the soup is 4 wide); frames 4-5 spread it
+        // threefold each time around its centre.
+        let at = |f: usize| -> Vec<[f32; 3]> {
+            let (moved, spread) = (f.min(3) as f32, 3f32.powi(f.saturating_sub(3) as i32));
+            deforming.positions.iter().map(|p| [0, 1, 2].map(|a| p[a] * spread + drift[a] * moved)).collect()
+        };
+        let base = InstancedScene {
+            name: "drift".into(),
+            bottoms: vec![deforming.clone()],
+            bottom_names: vec!["soup".into()],
+            instances: vec![Instance { bottom: 0, to_world: affine_of(Mat4::IDENTITY), material: None }],
+            ..Default::default()
+        };
+        let opts = BuildOptions { accel, ..Default::default() };
+        let images = DynamicImages::build(&base, &[true], &opts, Update::Reinhard).expect("images build");
+        let views = images.views().expect("valid images");
+        let mut state = DynamicState::new(&base, &views, &[true], Update::Reinhard, 1.5).expect("state");
+        for f in 0..6 {
+            let positions = at(f);
+            if f > 0 {
+                state.set_vertices(0, &positions).expect("vertices");
+                let stats = state.commit(&views);
+                let spreading = f >= 4;
+                prop_assert_eq!(stats.rebuilds > 0, spreading, "frame {}: {:?}", f, stats);
+            }
+            let mut scratch = base.clone();
+            scratch.bottoms[0].positions = positions;
+            let built = scratch.build(&opts).expect("frame builds");
+            let view = InstancedView::parse(&built.bytes).expect("valid");
+            let want = Instances::of(&view, "frame").expect("valid");
+            // Rays at the soup where it is now.
+            let c = Vec3::from(drift) * f.min(3) as f32;
+            let s = 3f32.powi(f.saturating_sub(3) as i32);
+            let rays: Vec<Ray> = rays(96).iter().map(|r| Ray::new(r.origin * s + c, r.dir)).collect();
+            let frame = state.frame(&views).expect("a valid frame");
+            prop_assert_eq!(hits(&frame, &rays), hits(&want, &rays), "frame {}", f);
+        }
+    }
 }

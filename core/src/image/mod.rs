@@ -30,5 +30,5 @@ pub use records::{
     Bvh4Node, Bvh8Node, BvhNode, CameraRecord, GridRecord, KdNode, LightAlias, LightRecord, MaterialRecord, Position,
     ShadingVertex, TextureRecord, TriBlock4, TriangleRecord, WaldTriangle, WideNode, NULL_INDEX,
 };
-pub use structure_views::{Bvh4View, Bvh8View, BvhView, GridView, KdTreeView, WideBvhView};
-pub use view::{FrameGeometry, SceneView};
+pub use structure_views::{Bvh4View, Bvh8View, BvhView, GridView, GridWrap, KdTreeView, WideBvhView};
+pub use view::{FrameGeometry, GridLevel, SceneView, MAX_LEVELS};

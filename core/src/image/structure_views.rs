@@ -22,9 +22,38 @@ pub struct GridView<'a> {
     pub(in crate::image) lists: &'a [u32],
     pub(in crate::image) cells_addr: u32,
     pub(in crate::image) lists_addr: u32,
+    /// A wrapped grid (a level of Reinhard's hierarchical grid): `dims` are the logical
+    /// box's cells, `cells` the physical grid's.
+    pub(in crate::image) wrap: Option<GridWrap>,
+}
+
+/// How a wrapped grid's logical cells land on its physical cells (Reinhard, Smits &
+/// Hansen 2000): logical cell `c` is physical cell `(c + offset) mod dims`, so objects
+/// that leave the physical box re-enter it on the other side.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct GridWrap {
+    /// Physical cells per axis.
+    pub dims: [u32; 3],
+    /// The physical cell of logical cell 0, per axis.
+    pub offset: [i32; 3],
 }
 
 impl<'a> GridView<'a> {
+    /// Reads the cell of logical cell `cell` (index `index` in an unwrapped grid): the
+    /// offset of its list, or [`NULL_INDEX`].
+    #[inline]
+    pub fn voxel_cell<P: MemoryProbe>(&self, index: u32, cell: [i32; 3], probe: &mut P) -> u32 {
+        let Some(w) = self.wrap else { return self.cell(index, probe) };
+        let at = |a: usize| (cell[a] as i64 + w.offset[a] as i64).rem_euclid(w.dims[a].max(1) as i64) as u32;
+        let physical = at(0) + w.dims[0] * (at(1) + w.dims[1] * at(2));
+        self.cell(physical, probe)
+    }
+
+    /// The wrap of a level of a hierarchical grid, if this is one.
+    pub fn wrap(&self) -> Option<GridWrap> {
+        self.wrap
+    }
+
     /// Number of cells.
     pub fn cell_count(&self) -> usize {
         self.cells.len()

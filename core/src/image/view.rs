@@ -18,7 +18,9 @@ use super::structure_views::{Bvh4View, Bvh8View, BvhView, GridView, KdTreeView};
 use super::validate;
 use crate::probe::{DataClass, MemoryProbe};
 
+mod levels;
 mod update;
+pub use levels::{GridLevel, MAX_LEVELS};
 pub use update::FrameGeometry;
 
 /// A validated scene image, borrowed in place. Cheap to copy.
@@ -29,6 +31,8 @@ pub struct SceneView<'a> {
     positions: &'a [Position],
     triangles: &'a [TriangleRecord],
     grid: Option<GridView<'a>>,
+    // The levels of a hierarchical grid with wrap-around (an animated mesh's frame only).
+    levels: [Option<GridView<'a>>; MAX_LEVELS],
     bvh: Option<BvhView<'a>>,
     bvh4: Option<Bvh4View<'a>>,
     bvh8: Option<Bvh8View<'a>>,
@@ -139,6 +143,7 @@ impl<'a> SceneView<'a> {
             positions,
             triangles,
             grid,
+            levels: [None; MAX_LEVELS],
             bvh,
             bvh4,
             bvh8,
@@ -245,6 +250,18 @@ impl<'a> SceneView<'a> {
     /// The uniform grid, if the image holds one.
     pub fn grid(&self) -> Option<&GridView<'a>> {
         self.grid.as_ref()
+    }
+
+    /// Level `k` of a hierarchical grid (finest first), if the view has one
+    /// ([`SceneView::with_levels`]).
+    pub fn level(&self, k: usize) -> Option<&GridView<'a>> {
+        self.levels.get(k).and_then(|l| l.as_ref())
+    }
+
+    /// Bytes of the hierarchical grid's cells and lists, which lie beside the image
+    /// (their reads are labelled from the image's end on).
+    pub fn level_bytes(&self) -> u64 {
+        self.levels.iter().flatten().map(|g| 4 * (g.cell_count() + g.list_entry_count()) as u64).sum()
     }
 
     /// The default camera record, if the image holds one.

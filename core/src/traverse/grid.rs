@@ -70,7 +70,7 @@ impl GridTraversal {
             self.dda = None;
             return GridEvent::Done;
         }
-        match grid.cell(voxel.index, probe) {
+        match grid.voxel_cell(voxel.index, voxel.cell, probe) {
             NULL_INDEX => GridEvent::Empty(voxel),
             list => GridEvent::Cell { voxel, list },
         }

@@ -40,6 +40,14 @@ pub enum Leaf {
         /// Number of triangles.
         count: u32,
     },
+    /// A cell of level `level` of a hierarchical grid: its null-terminated list starting
+    /// at entry `start` of the level's lists.
+    Level {
+        /// The level.
+        level: u8,
+        /// First list entry.
+        start: u32,
+    },
 }
 
 impl Leaf {
@@ -62,6 +70,11 @@ impl Leaf {
                 Some(scene.leaf_prim(first.wrapping_add(k), probe))
             }
             Leaf::All { count } => (k < count).then_some(k),
+            Leaf::Level { level, start } => match scene.level(level as usize)?.list_entry(start.wrapping_add(k), probe)
+            {
+                NULL_INDEX => None,
+                prim => Some(prim),
+            },
         }
     }
 }
@@ -150,6 +163,16 @@ pub enum Walk<D: NodeTests = FloatNodes> {
     Bvh4(Bvh4Traversal<D::Wide>),
     /// 8-wide BVH.
     Bvh8(Bvh8Traversal<D::Wide>),
+    /// A hierarchical grid with wrap-around ([`SceneView::with_levels`]): its levels
+    /// walked one after the other, each seeded with the best hit of those before.
+    Levels {
+        /// The level being walked.
+        level: u8,
+        /// Its grid walk.
+        trav: GridTraversal,
+        /// The voxel whose list is being tested.
+        voxel: Option<Voxel>,
+    },
     /// No structure: one leaf of every triangle.
     All {
         /// The single leaf was handed out.
@@ -163,7 +186,9 @@ impl<D: NodeTests> Walk<D> {
     /// Starts `ray` in the scene's structure. (An eye ray's bounding-box test comes
     /// before this, in the ray generator.)
     pub fn start(scene: &SceneView<'_>, ray: &Ray) -> Walk<D> {
-        if let Some(grid) = scene.grid() {
+        if let Some(level) = scene.level(0) {
+            Walk::Levels { level: 0, trav: GridTraversal::new(level, ray), voxel: None }
+        } else if let Some(grid) = scene.grid() {
             Walk::Grid(GridTraversal::new(grid, ray), None)
         } else if scene.bvh4().is_some() {
             Walk::Bvh4(Bvh4Traversal::new(ray))
@@ -217,6 +242,30 @@ impl<D: NodeTests> Walk<D> {
                 Some(bvh) => tree(trav.step(bvh, probe)),
                 None => WalkEvent::Done,
             },
+            Walk::Levels { level, trav, voxel } => {
+                let Some(grid) = scene.level(*level as usize) else { return WalkEvent::Done };
+                match trav.step(grid, probe) {
+                    GridEvent::Empty(v) => {
+                        trav.finish_voxel(&v);
+                        WalkEvent::Inner
+                    }
+                    GridEvent::Cell { voxel: v, list } => {
+                        *voxel = Some(v);
+                        WalkEvent::Leaf(Leaf::Level { level: *level, start: list })
+                    }
+                    GridEvent::Done => match scene.level(*level as usize + 1) {
+                        // The next level, the best hit so far carried over.
+                        Some(next) => {
+                            let best = trav.best;
+                            *trav = GridTraversal::new(next, ray);
+                            trav.best = best;
+                            *level += 1;
+                            WalkEvent::Inner
+                        }
+                        None => WalkEvent::Done,
+                    },
+                }
+            }
             Walk::All { visited, .. } => {
                 if *visited {
                     WalkEvent::Done
@@ -232,7 +281,7 @@ impl<D: NodeTests> Walk<D> {
     #[inline]
     pub fn finish_leaf(&mut self) {
         match self {
-            Walk::Grid(trav, voxel) => {
+            Walk::Grid(trav, voxel) | Walk::Levels { trav, voxel, .. } => {
                 if let Some(v) = voxel.take() {
                     trav.finish_voxel(&v);
                 }
@@ -248,7 +297,7 @@ impl<D: NodeTests> Walk<D> {
     /// The closest hit so far.
     pub fn best(&self) -> Option<Hit> {
         match self {
-            Walk::Grid(trav, _) => trav.best,
+            Walk::Grid(trav, _) | Walk::Levels { trav, .. } => trav.best,
             Walk::Kd(trav) => trav.best,
             Walk::Bvh(trav) => trav.best,
             Walk::Bvh4(trav) => trav.best,
@@ -260,7 +309,7 @@ impl<D: NodeTests> Walk<D> {
     /// The closest hit so far, for the intersection kernel to update.
     pub fn best_mut(&mut self) -> &mut Option<Hit> {
         match self {
-            Walk::Grid(trav, _) => &mut trav.best,
+            Walk::Grid(trav, _) | Walk::Levels { trav, .. } => &mut trav.best,
             Walk::Kd(trav) => &mut trav.best,
             Walk::Bvh(trav) => &mut trav.best,
             Walk::Bvh4(trav) => &mut trav.best,

@@ -23,7 +23,8 @@ use crate::study::animation_report::{AnimationReport, FrameTimes};
 pub struct UpdateArgs {
     /// How moved meshes' structures follow them: refit, rebuild (Morton LBVH), full
     /// (binned SAH), auto (refit until the SAH cost grows past --auto-threshold, then
-    /// rebuild) or parker (no structure for the moving triangles).
+    /// rebuild), parker (no structure for the moving triangles) or reinhard (a
+    /// hierarchical grid with wrap-around, triangles moved between its cells).
     #[arg(long, value_enum, default_value_t = Update::Auto)]
     pub update: Update,
     /// auto: rebuild once a refitted tree's SAH cost exceeds this many times its cost

@@ -56,7 +56,11 @@ pub fn trace<I: Intersector, P: MemoryProbe>(
     probe: &mut P,
     counters: &mut RayCounters,
 ) -> Option<Hit> {
-    if let Some(grid) = scene.grid() {
+    if scene.level(0).is_some() {
+        // A hierarchical grid (an animated mesh under Reinhard's update): its levels'
+        // walk, one step kernel for all of them.
+        raypipe_core::traverse::walk::trace_walk::<I, P>(scene, ray, probe)
+    } else if let Some(grid) = scene.grid() {
         trace_grid::<I, P>(scene, grid, ray, probe, counters)
     } else if let Some(bvh) = scene.bvh4() {
         trace_bvh4::<I, P>(scene, bvh, ray, probe, counters)
@@ -216,8 +220,8 @@ pub fn trace_packet<I: Intersector, P: MemoryProbe, const N: usize>(
     } else if let Some(kd) = scene.kdtree() {
         trace_kdtree_packet::<I, P, N>(scene, kd, packet, hits, probe, counters)
     } else {
-        // No packet kernel (no structure, or the 8-wide BVH, whose single-ray kernel is
-        // its fast path): each ray by itself.
+        // No packet kernel (no structure, a hierarchical grid, or the 8-wide BVH, whose
+        // single-ray kernel is its fast path): each ray by itself.
         raypipe_core::packet::ray_by_ray(packet, hits, counters, |r, c| trace::<I, P>(scene, r, probe, c));
     }
 }

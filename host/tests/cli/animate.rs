@@ -10,7 +10,7 @@ fn every_update_renders_the_same_frames() {
     let scene = fixtures().join("aff/scene.aff");
     let scene = scene.to_str().unwrap();
     let mut first: Option<Vec<(u32, u32, Vec<u8>)>> = None;
-    for update in ["refit", "rebuild", "full", "auto", "parker"] {
+    for update in ["refit", "rebuild", "full", "auto", "parker", "reinhard"] {
         let out = d.join(update);
         let o = raypipe(
             d,

@@ -54,7 +54,7 @@ fn animated_frames_on_the_chip_are_the_hosts() {
     let d = dir.path();
     let scene = fixtures().join("aff/scene.aff");
     let scene = scene.to_str().unwrap();
-    for (algo, update) in [("cast", "refit"), ("whitted", "rebuild")] {
+    for (algo, update) in [("cast", "refit"), ("whitted", "rebuild"), ("whitted", "reinhard")] {
         let o = raypipe(d, &["animate", scene, "--algo", algo, "--update", update, "--frames", "0..3", "-o", "host"]);
         assert!(o.status.success(), "{}", stderr(&o));
         let args = ["simulate", scene, "--animate", "0..3", "--algo", algo, "--update", update, "-o", "chip/f.png"];

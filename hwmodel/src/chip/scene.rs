@@ -45,7 +45,8 @@ impl<'s> InstancedScene<'s> {
             .iter()
             .map(|b| {
                 let base = at;
-                at = align64(at + b.bytes().len() as u64);
+                // A hierarchical grid's levels follow their image.
+                at = align64(at + b.bytes().len() as u64 + b.level_bytes());
                 base
             })
             .collect();

@@ -83,5 +83,6 @@ pub(in crate::image) fn grid<'a>(
         lists,
         cells_addr: s.addr(K::GridCells),
         lists_addr: s.addr(K::PrimLists),
+        wrap: None,
     })
 }

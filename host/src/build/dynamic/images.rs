@@ -35,9 +35,10 @@ pub struct BaseViews<'i> {
 
 impl DynamicImages {
     /// Builds `scene`'s images; the meshes `deforming` marks get a binary BVH (no
-    /// structure under [`Update::Parker`]), the others `opts.accel`.
+    /// structure under [`Update::Parker`], and under [`Update::Reinhard`], whose grid
+    /// lives beside the image), the others `opts.accel`.
     pub fn build(scene: &InstancedScene, deforming: &[bool], opts: &BuildOptions, update: Update) -> Result<Self> {
-        let moving = if update == Update::Parker { Accel::None } else { Accel::Bvh };
+        let moving = if matches!(update, Update::Parker | Update::Reinhard) { Accel::None } else { Accel::Bvh };
         let accel_of = |b: usize| if deforming.get(b).copied().unwrap_or(false) { moving } else { opts.accel };
         let parts = scene.build_parts(opts, &accel_of)?;
         Ok(DynamicImages {

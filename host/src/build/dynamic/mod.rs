@@ -9,14 +9,15 @@
 //! [`DynamicState`] holds what moves: each deforming mesh's vertices, header and tree,
 //! and the instances. Per frame the caller posts changes, [`DynamicState::commit`]
 //! updates only the changed meshes — refit, fast rebuild (LBVH), full rebuild (binned
-//! SAH), or automatically a refit that turns into a rebuild once its SAH cost has grown
-//! past a threshold — and rebuilds the top level; [`DynamicState::frame`] validates what
+//! SAH), automatically a refit that turns into a rebuild once its SAH cost has grown
+//! past a threshold, or moves in Reinhard's hierarchical grid — and rebuilds the top level; [`DynamicState::frame`] validates what
 //! moved ([`raypipe_core::SceneView::with_geometry`], [`raypipe_core::image::instanced::TopLevel::new`])
 //! and hands the kernels the frame.
 
 pub mod images;
 pub mod lbvh;
 pub mod refit;
+pub mod reinhard;
 pub mod state;
 
 pub use images::{BaseViews, DynamicImages};
@@ -38,6 +39,10 @@ pub enum Update {
     /// Parker's baseline: deforming meshes have no structure at all; every ray that
     /// reaches their instance tests all their triangles, and an update copies vertices.
     Parker,
+    /// Reinhard, Smits & Hansen's hierarchical grid with wrap-around: a moved triangle
+    /// is deleted from its cells and inserted into its new ones at the level matching
+    /// its size; the grid is rebuilt only when the triangles' box has outgrown it.
+    Reinhard,
 }
 
 impl Update {
@@ -49,6 +54,7 @@ impl Update {
             Update::Full => "full",
             Update::Auto => "auto",
             Update::Parker => "parker",
+            Update::Reinhard => "reinhard",
         }
     }
 }

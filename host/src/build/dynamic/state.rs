@@ -12,6 +12,7 @@ use raypipe_core::math::affine::Affine34;
 use super::images::BaseViews;
 use super::lbvh::build_lbvh;
 use super::refit::{bounds_of, margin_for, refit, sah_cost};
+use super::reinhard::HierGrid;
 use super::Update;
 use crate::build::box_bvh::{build_box_bvh, BoxBvh};
 use crate::build::instanced::{inverse, world_box, InstancedScene};
@@ -30,6 +31,8 @@ struct MeshState {
     changed: bool,
     /// The tree's SAH cost when it was last built.
     built_cost: f64,
+    /// Reinhard's update: the hierarchical grid (no tree).
+    grid: Option<HierGrid>,
 }
 
 /// What one commit did and what it cost.
@@ -119,9 +122,17 @@ impl DynamicState {
                 prims: Vec::new(),
                 changed: false,
                 built_cost: 0.0,
+                grid: None,
             };
-            if update != Update::Parker {
-                rebuild(&mut state, update != Update::Rebuild);
+            match update {
+                Update::Parker => {}
+                Update::Reinhard => {
+                    let mut grid = HierGrid::build(&state.positions, &state.triangles);
+                    let (lo, hi) = bounds_of(&state.positions);
+                    grid.flatten(lo, hi);
+                    state.grid = Some(grid);
+                }
+                _ => rebuild(&mut state, update != Update::Rebuild),
             }
             meshes.push(Some(state));
         }
@@ -196,6 +207,22 @@ impl DynamicState {
             let start = Instant::now();
             match self.update {
                 Update::Parker => {}
+                Update::Reinhard => {
+                    if let Some(grid) = m.grid.as_mut() {
+                        let u = grid.update(&m.positions, &m.triangles);
+                        grid.flatten(lo, hi);
+                        // An incremental move counts as a refit, a new grid as a rebuild.
+                        let secs = start.elapsed().as_secs_f64();
+                        if u.rebuilt {
+                            stats.rebuilds += 1;
+                            stats.rebuild_seconds += secs;
+                        } else {
+                            stats.refits += 1;
+                            stats.refit_seconds += secs;
+                        }
+                    }
+                    continue;
+                }
                 Update::Refit | Update::Auto => {
                     refit(&mut m.nodes, &m.prims, &m.triangles, &m.positions, margin_for(lo, hi));
                     let growth = sah_cost(&m.nodes) / m.built_cost.max(f64::MIN_POSITIVE);
@@ -252,6 +279,10 @@ impl DynamicState {
         let mut bottoms = Vec::with_capacity(base.bottoms.len());
         for (b, view) in base.bottoms.iter().enumerate() {
             let v = match self.meshes.get(b) {
+                Some(Some(m)) if m.grid.is_some() => {
+                    let levels = m.grid.as_ref().map(|g| g.levels()).unwrap_or_default();
+                    view.with_levels(&m.header, &m.positions, &levels).map_err(|e| anyhow!("{name}: mesh {b}: {e}"))?
+                }
                 Some(Some(m)) => view
                     .with_geometry(FrameGeometry {
                         header: &m.header,
