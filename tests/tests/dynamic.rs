@@ -129,7 +129,8 @@ proptest! {
                     let stats = state.commit(&views);
                     prop_assert!(stats.triangles == n as u64);
                 }
-                let frame = state.frame(&views).expect("a valid frame");
+                let levels = state.levels();
+                let frame = state.frame(&views, &levels).expect("a valid frame");
                 let got = hits(&frame, &rays);
                 prop_assert_eq!(&got, want, "{:?}, frame {}", update, f);
             }
@@ -171,7 +172,7 @@ fn bad_updates_are_refused_by_name() {
     assert!(err(state.set_transform(3, placed(0, 0))).contains("instance 3 does not exist"));
     // Nothing bad was applied: the frame is still valid.
     state.commit(&views);
-    assert!(state.frame(&views).is_ok());
+    assert!(state.frame(&views, &state.levels()).is_ok());
 }
 
 proptest! {
@@ -222,7 +223,8 @@ proptest! {
             let c = Vec3::from(drift) * f.min(3) as f32;
             let s = 3f32.powi(f.saturating_sub(3) as i32);
             let rays: Vec<Ray> = rays(96).iter().map(|r| Ray::new(r.origin * s + c, r.dir)).collect();
-            let frame = state.frame(&views).expect("a valid frame");
+            let levels = state.levels();
+            let frame = state.frame(&views, &levels).expect("a valid frame");
             prop_assert_eq!(hits(&frame, &rays), hits(&want, &rays), "frame {}", f);
         }
     }

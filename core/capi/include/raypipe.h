@@ -13,7 +13,7 @@
 /**
  * Words of storage a parsed scene takes (`RpScene`).
  */
-#define RP_SCENE_WORDS 80
+#define RP_SCENE_WORDS 82
 
 /**
  * `RpHit::material` of an image without materials.

@@ -23,7 +23,7 @@ use raypipe_core::traverse::walk::trace_walk;
 use raypipe_core::{Hit, NoProbe, Ray, RayCounters, SceneError, SceneView, Vec3, Watertight};
 
 /// Words of storage a parsed scene takes (`RpScene`).
-pub const RP_SCENE_WORDS: usize = 80;
+pub const RP_SCENE_WORDS: usize = 82;
 
 /// A parsed scene: opaque storage for the validated view of an image. Fill it with
 /// `rp_scene_parse`; it borrows the image, which must stay in place.

@@ -31,8 +31,9 @@ pub struct SceneView<'a> {
     positions: &'a [Position],
     triangles: &'a [TriangleRecord],
     grid: Option<GridView<'a>>,
-    // The levels of a hierarchical grid with wrap-around (an animated mesh's frame only).
-    levels: [Option<GridView<'a>>; MAX_LEVELS],
+    // The levels of a hierarchical grid with wrap-around (an animated mesh's frame only;
+    // validated by `with_levels`, kept as the caller's slice so the view stays small).
+    levels: &'a [GridLevel<'a>],
     bvh: Option<BvhView<'a>>,
     bvh4: Option<Bvh4View<'a>>,
     bvh8: Option<Bvh8View<'a>>,
@@ -143,7 +144,7 @@ impl<'a> SceneView<'a> {
             positions,
             triangles,
             grid,
-            levels: [None; MAX_LEVELS],
+            levels: &[],
             bvh,
             bvh4,
             bvh8,
@@ -254,14 +255,18 @@ impl<'a> SceneView<'a> {
 
     /// Level `k` of a hierarchical grid (finest first), if the view has one
     /// ([`SceneView::with_levels`]).
-    pub fn level(&self, k: usize) -> Option<&GridView<'a>> {
-        self.levels.get(k).and_then(|l| l.as_ref())
+    #[inline]
+    pub fn level(&self, k: usize) -> Option<GridView<'a>> {
+        let level = self.levels.get(k)?;
+        // Each level's reads are labelled after the image and the levels before it.
+        let before: u64 = self.levels[..k].iter().map(|l| 4 * (l.cells.len() + l.lists.len()) as u64).sum();
+        Some(levels::level_view(level, (self.bytes.len() as u64).wrapping_add(before) as u32))
     }
 
     /// Bytes of the hierarchical grid's cells and lists, which lie beside the image
     /// (their reads are labelled from the image's end on).
     pub fn level_bytes(&self) -> u64 {
-        self.levels.iter().flatten().map(|g| 4 * (g.cell_count() + g.list_entry_count()) as u64).sum()
+        self.levels.iter().map(|l| 4 * (l.cells.len() + l.lists.len()) as u64).sum()
     }
 
     /// The default camera record, if the image holds one.

@@ -187,7 +187,7 @@ impl<D: NodeTests> Walk<D> {
     /// before this, in the ray generator.)
     pub fn start(scene: &SceneView<'_>, ray: &Ray) -> Walk<D> {
         if let Some(level) = scene.level(0) {
-            Walk::Levels { level: 0, trav: GridTraversal::new(level, ray), voxel: None }
+            Walk::Levels { level: 0, trav: GridTraversal::new(&level, ray), voxel: None }
         } else if let Some(grid) = scene.grid() {
             Walk::Grid(GridTraversal::new(grid, ray), None)
         } else if scene.bvh4().is_some() {
@@ -244,7 +244,7 @@ impl<D: NodeTests> Walk<D> {
             },
             Walk::Levels { level, trav, voxel } => {
                 let Some(grid) = scene.level(*level as usize) else { return WalkEvent::Done };
-                match trav.step(grid, probe) {
+                match trav.step(&grid, probe) {
                     GridEvent::Empty(v) => {
                         trav.finish_voxel(&v);
                         WalkEvent::Inner
@@ -257,7 +257,7 @@ impl<D: NodeTests> Walk<D> {
                         // The next level, the best hit so far carried over.
                         Some(next) => {
                             let best = trav.best;
-                            *trav = GridTraversal::new(next, ray);
+                            *trav = GridTraversal::new(&next, ray);
                             trav.best = best;
                             *level += 1;
                             WalkEvent::Inner

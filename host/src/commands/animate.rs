@@ -156,7 +156,8 @@ pub(crate) fn cmd_animate(a: AnimateArgs) -> Result<()> {
         let t = aff.time(k);
         let update = Instant::now();
         let (stats, _) = anim.update(&mut state, &views, k)?;
-        let frame = state.frame(&views)?;
+        let levels = state.levels();
+        let frame = state.frame(&views, &levels)?;
         let update_secs = update.elapsed().as_secs_f64();
         let mut camera = aff.camera(t);
         if let Some((w, h)) = a.size {

@@ -92,7 +92,8 @@ pub(crate) fn cmd_simulate_animate(a: &SimulateArgs, spec: &str) -> Result<()> {
     for k in range.clone() {
         let update = Instant::now();
         let (stats, _) = anim.update(&mut state, &views, k)?;
-        let frame = state.frame(&views)?;
+        let levels = state.levels();
+        let frame = state.frame(&views, &levels)?;
         let update_secs = update.elapsed().as_secs_f64();
         let mut camera = aff.camera(aff.time(k));
         if let Some((w, h)) = a.camera.size {

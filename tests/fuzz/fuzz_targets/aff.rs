@@ -36,6 +36,6 @@ fuzz_target!(|data: &[u8]| {
             let _ = state.set_vertices(b, &verts);
         }
         state.commit(&views);
-        assert!(state.frame(&views).is_ok(), "a committed frame validates");
+        assert!(state.frame(&views, &state.levels()).is_ok(), "a committed frame validates");
     }
 });

@@ -50,34 +50,31 @@ impl<'a> SceneView<'a> {
     /// level as `parse` checks a grid — finite corner, positive cell, bounded dims,
     /// cells that match the physical grid and start lists inside it, lists that end with
     /// a null entry and name triangles — and that its logical box holds the frame's
-    /// bounds, so no triangle is outside the walk.
+    /// bounds, so no triangle is outside the walk. The view keeps `levels` (a slice:
+    /// the view stays as small as any other).
     pub fn with_levels<'b>(
         &self,
         header: &'b Header,
         positions: &'b [Position],
-        levels: &[GridLevel<'b>],
+        levels: &'b [GridLevel<'b>],
     ) -> Result<SceneView<'b>, SceneError>
     where
         'a: 'b,
     {
-        let mut view = self.with_geometry(FrameGeometry { header, positions, nodes: &[], prims: &[] })?;
+        let view = self.with_geometry(FrameGeometry { header, positions, nodes: &[], prims: &[] })?;
         if self.grid.is_some() || self.bvh.is_some() || levels.len() > MAX_LEVELS {
             return Err(SceneError::BadGrid);
         }
-        let (lo, hi) = (Vec3::from(header.bounds_min), Vec3::from(header.bounds_max));
-        // The levels' data lies outside the image: their reads are labelled past its end.
-        let mut addr = self.bytes.len() as u32;
-        for (k, level) in levels.iter().enumerate() {
-            let grid = level_view(level, self.triangles.len() as u32, (lo, hi), addr)?;
-            addr = addr.wrapping_add(4 * (level.cells.len() + level.lists.len()) as u32);
-            view.levels[k] = Some(grid);
+        let bounds = (Vec3::from(header.bounds_min), Vec3::from(header.bounds_max));
+        for level in levels {
+            check_level(level, self.triangles.len() as u32, bounds)?;
         }
-        Ok(view)
+        Ok(SceneView { levels, ..view })
     }
 }
 
-/// Checks one level and makes its grid view.
-fn level_view<'b>(l: &GridLevel<'b>, nt: u32, (lo, hi): (Vec3, Vec3), addr: u32) -> Result<GridView<'b>, SceneError> {
+/// Checks one level.
+fn check_level(l: &GridLevel<'_>, nt: u32, (lo, hi): (Vec3, Vec3)) -> Result<(), SceneError> {
     use SectionKind as K;
     if !finite3(l.min) || !l.cell.is_finite() || l.cell <= 0.0 {
         return Err(SceneError::NonFinite { section: K::Grid, record: 0 });
@@ -87,8 +84,7 @@ fn level_view<'b>(l: &GridLevel<'b>, nt: u32, (lo, hi): (Vec3, Vec3), addr: u32)
     if !dims_ok || physical != Some(l.cells.len() as u32) || l.cells.len() as u32 >= NULL_INDEX {
         return Err(SceneError::BadGrid);
     }
-    let min = Vec3::from(l.min);
-    let max = min + Vec3::new(l.dims[0] as f32, l.dims[1] as f32, l.dims[2] as f32) * l.cell;
+    let (min, max) = corners(l);
     if !(min.cmple(lo).all() && max.cmpge(hi).all() && max.is_finite()) {
         return Err(SceneError::OutOfBounds { section: K::Grid, record: 0 });
     }
@@ -102,8 +98,20 @@ fn level_view<'b>(l: &GridLevel<'b>, nt: u32, (lo, hi): (Vec3, Vec3), addr: u32)
     if l.lists.last().is_some_and(|&e| e != NULL_INDEX) {
         return Err(SceneError::UnterminatedList);
     }
-    indices_below(K::PrimLists, l.lists.iter().copied(), nt, true)?;
-    Ok(GridView {
+    indices_below(K::PrimLists, l.lists.iter().copied(), nt, true)
+}
+
+/// The logical box of a level.
+fn corners(l: &GridLevel<'_>) -> (Vec3, Vec3) {
+    let min = Vec3::from(l.min);
+    (min, min + Vec3::new(l.dims[0] as f32, l.dims[1] as f32, l.dims[2] as f32) * l.cell)
+}
+
+/// A checked level's grid view, its reads labelled from `addr` on.
+#[inline]
+pub(super) fn level_view<'b>(l: &GridLevel<'b>, addr: u32) -> GridView<'b> {
+    let (min, max) = corners(l);
+    GridView {
         min,
         max,
         cell_size: Vec3::splat(l.cell),
@@ -113,5 +121,5 @@ fn level_view<'b>(l: &GridLevel<'b>, nt: u32, (lo, hi): (Vec3, Vec3), addr: u32)
         cells_addr: addr,
         lists_addr: addr.wrapping_add(4 * l.cells.len() as u32),
         wrap: Some(l.wrap),
-    })
+    }
 }

@@ -21,7 +21,7 @@ pub mod reinhard;
 pub mod state;
 
 pub use images::{BaseViews, DynamicImages};
-pub use state::{CommitStats, DynamicState};
+pub use state::{CommitStats, DynamicState, FrameLevels};
 
 /// How a changed mesh's structure follows its vertices at a commit.
 #[derive(Clone, Copy, Debug, PartialEq, clap::ValueEnum)]

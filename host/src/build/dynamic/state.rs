@@ -6,7 +6,7 @@ use std::time::Instant;
 use anyhow::{anyhow, bail, Result};
 use glam::Vec3A;
 use raypipe_core::image::instanced::{index_layout, InstanceRecord, TopLevel, TopParts};
-use raypipe_core::image::{BvhNode, FrameGeometry, Header, Position};
+use raypipe_core::image::{BvhNode, FrameGeometry, GridLevel, Header, Position};
 use raypipe_core::math::affine::Affine34;
 
 use super::images::BaseViews;
@@ -20,6 +20,9 @@ use crate::render::instanced::Instances;
 
 /// Triangles per leaf of a rebuilt tree.
 const LEAF: usize = 4;
+
+/// Each mesh's hierarchical-grid levels for a frame (empty where it has none).
+pub type FrameLevels<'s> = Vec<Vec<GridLevel<'s>>>;
 
 /// A deforming mesh's moving parts.
 struct MeshState {
@@ -272,16 +275,27 @@ impl DynamicState {
         self.moved = false;
     }
 
+    /// The hierarchical grids' levels of the meshes under [`Update::Reinhard`] (empty for
+    /// the others), for [`DynamicState::frame`]; the caller keeps them while the frame is
+    /// in use.
+    pub fn levels(&self) -> FrameLevels<'_> {
+        self.meshes
+            .iter()
+            .map(|m| m.as_ref().and_then(|m| m.grid.as_ref()).map(|g| g.levels()).unwrap_or_default())
+            .collect()
+    }
+
     /// The frame for the kernels: each deforming mesh's view with its moved vertices and
-    /// tree, the others as built, and the top level — what moved validated once.
-    pub fn frame<'s>(&'s self, base: &'s BaseViews<'_>) -> Result<Instances<'s>> {
+    /// tree (or the grid `levels` holds for it), the others as built, and the top level —
+    /// what moved validated once.
+    pub fn frame<'s>(&'s self, base: &'s BaseViews<'_>, levels: &'s FrameLevels<'s>) -> Result<Instances<'s>> {
         let name = &self.name;
         let mut bottoms = Vec::with_capacity(base.bottoms.len());
         for (b, view) in base.bottoms.iter().enumerate() {
             let v = match self.meshes.get(b) {
                 Some(Some(m)) if m.grid.is_some() => {
-                    let levels = m.grid.as_ref().map(|g| g.levels()).unwrap_or_default();
-                    view.with_levels(&m.header, &m.positions, &levels).map_err(|e| anyhow!("{name}: mesh {b}: {e}"))?
+                    let grid = levels.get(b).map_or(&[][..], |l| &l[..]);
+                    view.with_levels(&m.header, &m.positions, grid).map_err(|e| anyhow!("{name}: mesh {b}: {e}"))?
                 }
                 Some(Some(m)) => view
                     .with_geometry(FrameGeometry {
