@@ -82,7 +82,7 @@ impl<'s, I: Intersector> Simulator<'s, I> {
         shader: Option<Shader>,
         cfg: &HwConfig,
     ) -> Result<Self, String> {
-        Self::build(ChipScene::Flat(scene), eye, background, shader, cfg)
+        Self::for_scene(ChipScene::Flat(scene), eye, background, shader, cfg)
     }
 
     /// The chip for the frame `eye` of `scene`, flat or two-level: in a two-level scene
@@ -106,16 +106,6 @@ impl<'s, I: Intersector> Simulator<'s, I> {
                 ));
             }
         }
-        Self::build(scene, eye, background, shader, cfg)
-    }
-
-    fn build(
-        scene: ChipScene<'s>,
-        eye: EyeRays,
-        background: Vec3,
-        shader: Option<Shader>,
-        cfg: &HwConfig,
-    ) -> Result<Self, String> {
         cfg.validate()?;
         let units = cfg.traversal.units as usize;
         let f = &cfg.fifo;
