@@ -49,11 +49,6 @@ impl<'a> GridView<'a> {
         self.cell(physical, probe)
     }
 
-    /// The wrap of a level of a hierarchical grid, if this is one.
-    pub fn wrap(&self) -> Option<GridWrap> {
-        self.wrap
-    }
-
     /// Number of cells.
     pub fn cell_count(&self) -> usize {
         self.cells.len()

@@ -57,15 +57,6 @@ pub struct HierGrid {
     margin: f32,
 }
 
-/// Counts of one update.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct HierUpdate {
-    /// Triangles moved to other cells (deleted and inserted).
-    pub moved: u32,
-    /// The grid was built anew (the logical box grew too far).
-    pub rebuilt: bool,
-}
-
 /// The box of triangle `t`, grown by `margin`.
 fn tri_box(positions: &[Position], t: &[u32; 3], margin: f32) -> (Vec3A, Vec3A) {
     let p = |k: usize| Vec3A::from_array(positions[t[k] as usize].0);
@@ -162,14 +153,13 @@ impl HierGrid {
 
     /// Moves the triangles whose cells changed (a delete and an insert each), or builds
     /// the grid anew when the triangles' box has outgrown [`REBUILD_GROWTH`] times the
-    /// physical box.
-    pub fn update(&mut self, positions: &[Position], triangles: &[[u32; 3]]) -> HierUpdate {
+    /// physical box. Returns true when it was built anew.
+    pub fn update(&mut self, positions: &[Position], triangles: &[[u32; 3]]) -> bool {
         let (lo, hi) = bounds_of(positions);
         if ((hi - lo) - REBUILD_GROWTH * self.extent).max_element() > 0.0 {
             *self = HierGrid::build(positions, triangles);
-            return HierUpdate { moved: triangles.len() as u32, rebuilt: true };
+            return true;
         }
-        let mut moved = 0;
         for (i, t) in triangles.iter().enumerate() {
             let place = self.place(tri_box(positions, t, self.margin));
             let old = self.places[i];
@@ -177,10 +167,9 @@ impl HierGrid {
                 self.remove(i as u32, &old);
                 self.insert(i as u32, &place);
                 self.places[i] = place;
-                moved += 1;
             }
         }
-        HierUpdate { moved, rebuilt: false }
+        false
     }
 
     /// Lays the levels out for the kernels over the logical box `lo..hi` (the frame's

@@ -212,11 +212,11 @@ impl DynamicState {
                 Update::Parker => {}
                 Update::Reinhard => {
                     if let Some(grid) = m.grid.as_mut() {
-                        let u = grid.update(&m.positions, &m.triangles);
+                        let rebuilt = grid.update(&m.positions, &m.triangles);
                         grid.flatten(lo, hi);
                         // An incremental move counts as a refit, a new grid as a rebuild.
                         let secs = start.elapsed().as_secs_f64();
-                        if u.rebuilt {
+                        if rebuilt {
                             stats.rebuilds += 1;
                             stats.rebuild_seconds += secs;
                         } else {
