@@ -9,7 +9,7 @@ cd "$(dirname "$0")/../.."
 seconds=${1:-20}
 scratch=$(mktemp -d)
 trap 'rm -rf "$scratch"' EXIT
-for target in scene_image bricked instanced aff obj_mtl npy camera_file hw_config gltf ply streamed_meshes scene_file sweep_spec cluster_recording; do
+for target in scene_image bricked instanced aff obj_mtl npy camera_file hw_config dramsim3_ini gltf ply streamed_meshes scene_file sweep_spec cluster_recording; do
   mkdir -p "$scratch/$target"
   out=$(cargo +nightly fuzz run --fuzz-dir tests/fuzz -O "$target" "$scratch/$target" "tests/fuzz/corpus/$target" \
     -- -max_total_time="$seconds" -max_len=8192 -print_final_stats=1 2>&1) || {

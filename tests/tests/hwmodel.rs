@@ -50,12 +50,7 @@ fn config() -> impl Strategy<Value = HwConfig> {
     (
         base_config(),
         (1u32..9, 1u32..5, 1u32..5, 1u32..3),
-        (
-            1u32..3,
-            1u32..5,
-            any::<bool>(),
-            prop_oneof![Just(MemoryModel::Perfect), Just(MemoryModel::Fixed), Just(MemoryModel::Dram)],
-        ),
+        (1u32..3, 1u32..5, any::<bool>(), memory_model()),
         (1u32..6, prop_oneof![Just(4u32), Just(32), Just(64)], any::<bool>(), any::<bool>()),
     )
         .prop_map(|(mut c, (tl, il, jobs, sj), (ports, mshrs, l2, model), (queue, burst, odd, closed))| {
@@ -75,7 +70,10 @@ fn config() -> impl Strategy<Value = HwConfig> {
             if l2 {
                 c.cache.l2.size_bytes = 4096;
             }
-            c.memory.model = model;
+            c.memory.model = model.0;
+            if let Some(name) = model.1 {
+                c.memory.dramsim3.config = name.to_string();
+            }
             c.memory.queue_depth = queue;
             c.memory.min_burst_bytes = burst;
             if closed {
@@ -86,6 +84,20 @@ fn config() -> impl Strategy<Value = HwConfig> {
             ordered_hierarchy(&mut c);
             c
         })
+}
+
+/// The memory models this build has: DRAMsim3 too with the `dramsim3` feature, on one
+/// of four of its shipped memories (`None`: one of raypipe's own models).
+fn memory_model() -> impl Strategy<Value = (MemoryModel, Option<&'static str>)> {
+    let own = prop_oneof![Just(MemoryModel::Perfect), Just(MemoryModel::Fixed), Just(MemoryModel::Dram)];
+    let own = own.prop_map(|m| (m, None));
+    #[cfg(feature = "dramsim3")]
+    let own = prop_oneof![
+        3 => own,
+        1 => prop::sample::select(vec!["DDR3_4Gb_x8_1600", "DDR4_8Gb_x8_2400", "LPDDR4_8Gb_x16_2400", "HBM2_8Gb_x128"])
+            .prop_map(|c| (MemoryModel::Dramsim3, Some(c))),
+    ];
+    own
 }
 
 /// Makes each cache no slower than what is behind it, as `validate` demands: the L1s
@@ -255,7 +267,18 @@ proptest! {
             let mut perfect = cfg.clone();
             perfect.memory.model = MemoryModel::Perfect;
             let p = run(&view, &cam, &perfect, Clocking::default());
-            prop_assert!(p.cycles() <= sim.cycles(), "perfect {} > {:?} {}", p.cycles(), cfg.memory.model, sim.cycles());
+            // DRAMsim3's controller reorders requests (FR-FCFS), so data can come back in
+            // another order than asked and the units' work reorders with it: a scheduling
+            // anomaly (Graham 1969) that can finish a frame a little sooner than perfect
+            // memory's fixed order does. raypipe's own models answer in order.
+            let slack = if cfg.memory.model == MemoryModel::Dramsim3 { sim.cycles() / 100 } else { 0 };
+            prop_assert!(
+                p.cycles() <= sim.cycles() + slack,
+                "perfect {} > {:?} {}",
+                p.cycles(),
+                cfg.memory.model,
+                sim.cycles()
+            );
         }
     }
 }

@@ -81,6 +81,20 @@ pub fn summary(report: &Report) -> String {
         by_class.join(", "),
         100.0 * m.utilization
     ));
+    if let Some(d) = &m.dramsim3 {
+        let [mean, _, p99, _] = d.read_latency_ns;
+        line(format!(
+            "dramsim3       {} ({}): {:.2} of {:.1} GB/s, reads {mean:.1} ns mean / {p99:.1} ns p99, \
+             {:.1}% row hits, {} refreshes, {:.1} µJ",
+            d.config.rsplit('/').next().unwrap_or(&d.config),
+            d.protocol,
+            d.bandwidth_gb_s,
+            d.peak_gb_s,
+            100.0 * d.row_hit_rate,
+            d.refreshes,
+            d.energy_nj / 1e3
+        ));
+    }
     line(format!(
         "scene traffic  {:.2}x the {} distinct bytes read",
         m.traffic_over_compulsory, m.distinct_scene_bytes

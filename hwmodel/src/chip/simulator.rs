@@ -124,7 +124,7 @@ impl<'s, I: Intersector> Simulator<'s, I> {
             leaf_fifos: (0..units).map(|u| Fifo::new(format!("leaves{u}"), f.leaves)).collect(),
             result_fifos: (0..units).map(|u| Fifo::new(format!("results{u}"), f.results)).collect(),
             hit_fifos: (0..units).map(|u| Fifo::new(format!("hits{u}"), f.hits)).collect(),
-            memory: Memory::new(cfg),
+            memory: Memory::new(cfg)?,
             touched: vec![0; words.div_ceil(64)],
             order,
             shuffle: None,
@@ -163,9 +163,9 @@ impl<'s, I: Intersector> Simulator<'s, I> {
     }
 
     /// True when the frame is done: every packet shaded and every request (the last
-    /// framebuffer writes) gone from its port.
+    /// framebuffer writes) gone from its port and answered.
     pub fn is_done(&self) -> bool {
-        self.rgs.is_done() && !self.any_staged()
+        self.rgs.is_done() && !self.any_staged() && self.memory.is_idle()
     }
 
     /// True for a two-level scene (the transformation units take part).
@@ -226,6 +226,7 @@ impl<'s, I: Intersector> Simulator<'s, I> {
                 progress(last_done, total);
             }
         }
+        self.memory.finish_frame();
         progress(total, total);
         Ok(true)
     }
@@ -252,7 +253,7 @@ impl<'s, I: Intersector> Simulator<'s, I> {
             return Err("next_frame: the current frame is not done".into());
         }
         // The next frame starts once the last one's data is in (the report's end).
-        self.now = self.now.max(self.memory.drained_at());
+        self.now = self.now.max(self.memory.resume_at());
         self.frame += 1;
         self.rgs.next_frame(eye, &self.cfg);
         self.reset_stats();
@@ -476,6 +477,7 @@ impl<'s, I: Intersector> Simulator<'s, I> {
             utilization: self.memory.utilization(self.cycles(), self.cfg.clock_mhz),
             delivered,
             dram: self.memory.dram(),
+            dramsim3: self.dramsim3_report(),
             fifos,
             caches,
             channel: &self.memory.stats,
@@ -488,6 +490,18 @@ impl<'s, I: Intersector> Simulator<'s, I> {
         });
         report.energy = Some(self.cfg.energy.estimate(&self.cfg, &report, node));
         report
+    }
+}
+
+impl<I: Intersector> Simulator<'_, I> {
+    /// DRAMsim3's report over the frame so far, if that is the memory.
+    fn dramsim3_report(&self) -> Option<crate::observe::dramsim3_report::Dramsim3Report> {
+        #[cfg(feature = "dramsim3")]
+        if let Some(d) = self.memory.dramsim3() {
+            let frame_ns = self.cycles() as f64 * 1e3 / self.cfg.clock_mhz;
+            return Some(crate::observe::dramsim3_report::Dramsim3Report::of(d, frame_ns));
+        }
+        None
     }
 }
 

@@ -186,13 +186,37 @@ pub enum MemoryModel {
     Fixed,
     /// DRAM with channels, banks, rows and their timing ([`DramConfig`]).
     Dram,
+    /// DRAMsim3 itself, with one of its configuration files ([`Dramsim3Config`]);
+    /// needs the `dramsim3` cargo feature.
+    Dramsim3,
+}
+
+/// The error for `memory.model = "dramsim3"` in a build without DRAMsim3.
+pub const NO_DRAMSIM3: &str = "memory.model = \"dramsim3\" needs raypipe built with the dramsim3 feature \
+     (cargo install --features dramsim3; it builds DRAMsim3 with cmake)";
+
+/// DRAMsim3's memory.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Dramsim3Config {
+    /// One of DRAMsim3's shipped configurations by name (`DDR4_8Gb_x8_2400`), or the
+    /// path of a DRAMsim3 `.ini` file.
+    pub config: String,
+}
+
+impl Default for Dramsim3Config {
+    /// DDR3-1600, 4 Gb x8 devices, one 64-bit channel with 8 KiB rows: the memory
+    /// [`DramConfig`]'s defaults describe.
+    fn default() -> Self {
+        Dramsim3Config { config: "DDR3_4Gb_x8_1600".into() }
+    }
 }
 
 /// The memory behind all caches.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct MemoryConfig {
-    /// `"perfect"`, `"fixed"` or `"dram"`.
+    /// `"perfect"`, `"fixed"`, `"dram"` or `"dramsim3"`.
     pub model: MemoryModel,
     /// Fixed model: cycles from a transfer's end to its data arriving.
     pub latency: u32,
@@ -205,6 +229,8 @@ pub struct MemoryConfig {
     pub min_burst_bytes: u32,
     /// The DRAM model's parameters.
     pub dram: DramConfig,
+    /// DRAMsim3's configuration.
+    pub dramsim3: Dramsim3Config,
 }
 
 impl MemoryConfig {
@@ -349,6 +375,7 @@ impl Default for MemoryConfig {
             queue_depth: 16,
             min_burst_bytes: 32,
             dram: DramConfig::default(),
+            dramsim3: Dramsim3Config::default(),
         }
     }
 }

@@ -27,6 +27,12 @@ impl HwConfig {
         for (name, c) in self.caches() {
             c.validate(name)?;
         }
+        if self.memory.model == MemoryModel::Dramsim3 {
+            if !cfg!(feature = "dramsim3") {
+                return Err(super::NO_DRAMSIM3.into());
+            }
+            crate::memory::dramsim3_ini::load(&self.memory.dramsim3.config)?;
+        }
         self.validate_hierarchy()?;
         if self.memory.model == MemoryModel::Dram {
             self.memory.dram.validate()?;
@@ -152,7 +158,8 @@ impl HwConfig {
 
 impl HwConfig {
     /// The memory's fastest answer in chip cycles (fixed: its latency and one transfer
-    /// cycle; DRAM: the controller and CL), or `None` for perfect memory.
+    /// cycle; DRAM: the controller and CL; DRAMsim3: its read latency and one burst), or
+    /// `None` for perfect memory (or a DRAMsim3 configuration that cannot be read).
     pub fn memory_fastest_answer(&self) -> Option<f64> {
         let m = &self.memory;
         match m.model {
@@ -162,6 +169,9 @@ impl HwConfig {
                 let d = &m.dram;
                 Some(d.controller_latency as f64 + d.t_cl as f64 * self.clock_mhz / d.clock_mhz)
             }
+            MemoryModel::Dramsim3 => crate::memory::dramsim3_ini::load(&m.dramsim3.config)
+                .ok()
+                .map(|(_, _, g)| g.fastest_read_ns() * self.clock_mhz / 1e3),
         }
     }
 }

@@ -6,7 +6,10 @@
 //!   (the compute bound);
 //! * **fixed** — one channel moving `bytes_per_cycle`, a request a whole number of
 //!   `min_burst_bytes`, its data `latency` cycles after its transfer;
-//! * **dram** — [`crate::memory::dram`]'s channels, banks and rows.
+//! * **dram** — [`crate::memory::dram`]'s channels, banks and rows;
+//! * **dramsim3** — DRAMsim3 itself ([`crate::memory::dramsim3`], with the `dramsim3`
+//!   feature): its data arrives when DRAMsim3 calls back, not at a time known when the
+//!   request is taken, so a request may wait *accepted but unscheduled* for several edges.
 //!
 //! Requests are taken at the clock edge from the ports in a fixed order (shading,
 //! traversal units, intersection units), oldest first, while the request queue has room
@@ -15,6 +18,9 @@
 
 pub mod cache;
 pub mod dram;
+#[cfg(feature = "dramsim3")]
+pub mod dramsim3;
+pub mod dramsim3_ini;
 pub mod port;
 pub mod traffic;
 
@@ -25,7 +31,7 @@ use serde::Serialize;
 use crate::config::{HwConfig, MemoryModel};
 use crate::memory::cache::{Cache, Lookup};
 use crate::memory::dram::Dram;
-use crate::memory::port::{MemPort, Request};
+use crate::memory::port::{MemPort, Request, UNSCHEDULED};
 use crate::memory::traffic::CLASSES;
 
 /// Marks every request still staged in `ports` as passed over at this edge.
@@ -54,11 +60,29 @@ pub struct ChannelStats {
 struct L2 {
     cache: Cache,
     ports: u32,
-    fills: Vec<u64>,
+    fills: Vec<Ready>,
+}
+
+/// When a memory request's data is there: at a known cycle, or when the memory request
+/// `token` (DRAMsim3's) is called back.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Ready {
+    At(u64),
+    Token(u32),
+}
+
+/// A port's request whose data waits on DRAMsim3: no earlier than `at`, and `add` cycles
+/// after each memory request it waits for (the L2's hit latency behind a fill).
+#[derive(Clone, Debug)]
+struct Pending {
+    port: usize,
+    request: Request,
+    at: u64,
+    on: Vec<(u32, u64)>,
 }
 
 /// The memory's registers.
-#[derive(Clone, Debug)]
+#[derive(Debug)]
 pub struct Memory {
     model: MemoryModel,
     latency: u64,
@@ -72,15 +96,31 @@ pub struct Memory {
     dram: Option<Dram>,
     l2: Option<L2>,
     last_done: u64,
+    /// DRAMsim3, when that is the model.
+    #[cfg(feature = "dramsim3")]
+    ds3: Option<Box<dramsim3::Dramsim3>>,
+    /// The cycle each DRAMsim3 request's data is there from (`UNSCHEDULED` until known).
+    tokens: Vec<u64>,
+    /// Port requests waiting on DRAMsim3.
+    pending: Vec<Pending>,
     /// Statistics.
     pub stats: ChannelStats,
 }
 
 impl Memory {
-    /// An idle memory for `cfg`.
-    pub fn new(cfg: &HwConfig) -> Memory {
+    /// An idle memory for `cfg` (an error if DRAMsim3 cannot be set up).
+    pub fn new(cfg: &HwConfig) -> Result<Memory, String> {
         let m = &cfg.memory;
-        Memory {
+        #[cfg(feature = "dramsim3")]
+        let ds3 = match m.model {
+            MemoryModel::Dramsim3 => Some(Box::new(dramsim3::Dramsim3::new(&m.dramsim3, cfg.clock_mhz)?)),
+            _ => None,
+        };
+        #[cfg(not(feature = "dramsim3"))]
+        if m.model == MemoryModel::Dramsim3 {
+            return Err(crate::config::NO_DRAMSIM3.into());
+        }
+        Ok(Memory {
             model: m.model,
             latency: m.latency as u64,
             bytes_per_cycle: m.bytes_per_cycle.max(1) as u64,
@@ -95,8 +135,12 @@ impl Memory {
                 fills: Vec::new(),
             }),
             last_done: 0,
+            #[cfg(feature = "dramsim3")]
+            ds3,
+            tokens: Vec::new(),
+            pending: Vec::new(),
             stats: ChannelStats::default(),
-        }
+        })
     }
 
     /// Zeroes the statistics (queue, lines, rows and timing state stay).
@@ -105,11 +149,88 @@ impl Memory {
         if let Some(d) = self.dram.as_mut() {
             d.reset_stats();
         }
+        #[cfg(feature = "dramsim3")]
+        if let Some(d) = self.ds3.as_mut() {
+            d.reset_stats();
+        }
     }
 
     /// Requests accepted and not yet started (as last updated at an edge).
     pub fn queue_len(&self) -> usize {
+        #[cfg(feature = "dramsim3")]
+        if let Some(d) = self.ds3.as_ref() {
+            return d.queued();
+        }
         self.queue.len()
+    }
+
+    /// DRAMsim3, if that is the model.
+    #[cfg(feature = "dramsim3")]
+    pub fn dramsim3(&self) -> Option<&dramsim3::Dramsim3> {
+        self.ds3.as_deref()
+    }
+
+    /// True once no request waits on the memory's callbacks (always, but for DRAMsim3).
+    pub fn is_idle(&self) -> bool {
+        #[cfg(feature = "dramsim3")]
+        if let Some(d) = self.ds3.as_ref() {
+            return !d.busy() && self.pending.is_empty();
+        }
+        true
+    }
+
+    /// At the end of a frame: DRAMsim3 ticks, idle, to the end of its counters' epoch.
+    pub fn finish_frame(&mut self) {
+        #[cfg(feature = "dramsim3")]
+        if let Some(d) = self.ds3.as_mut() {
+            d.close_epoch();
+        }
+    }
+
+    /// The chip cycle from which the memory can take the next frame's requests (after
+    /// DRAMsim3's closing epoch, whose idle cycles belong to no frame).
+    pub fn resume_at(&self) -> u64 {
+        #[cfg(feature = "dramsim3")]
+        if let Some(d) = self.ds3.as_ref() {
+            return self.last_done.max(d.chip_now());
+        }
+        self.last_done
+    }
+
+    /// At the edge ending `now`: DRAMsim3 ticks to the edge, and the requests whose data
+    /// it has called back get their ready cycle.
+    #[cfg_attr(not(feature = "dramsim3"), allow(unused_variables))]
+    fn deliver(&mut self, now: u64, ports: &mut [&mut MemPort]) -> bool {
+        #[cfg(feature = "dramsim3")]
+        if let Some(d) = self.ds3.as_mut() {
+            d.advance(now);
+            for (token, cycle) in d.take_done() {
+                if let Some(t) = self.tokens.get_mut(token as usize) {
+                    *t = cycle;
+                }
+            }
+        }
+        let tokens = &self.tokens;
+        let known = |p: &Pending| p.on.iter().all(|&(t, _)| tokens.get(t as usize).is_some_and(|&c| c != UNSCHEDULED));
+        if !self.pending.iter().any(known) {
+            return false;
+        }
+        let (ready, waiting): (Vec<Pending>, Vec<Pending>) =
+            std::mem::take(&mut self.pending).into_iter().partition(known);
+        self.pending = waiting;
+        for p in ready {
+            let at = p.on.iter().map(|&(t, add)| self.tokens[t as usize] + add).fold(p.at, u64::max);
+            self.last_done = self.last_done.max(at);
+            if let Some(port) = ports.get_mut(p.port) {
+                port.set_ready(&p.request, at);
+            }
+        }
+        true
+    }
+
+    /// True if the memory's request queue is full.
+    fn queue_full(&self) -> bool {
+        self.model != MemoryModel::Perfect && self.queue_len() >= self.queue_depth
     }
 
     /// The DRAM, if that is the model.
@@ -123,12 +244,12 @@ impl Memory {
         while self.queue.front().is_some_and(|&s| s <= now) {
             self.queue.pop_front();
         }
+        let mut took = self.deliver(now, ports);
         let mut l2_lookups = self.l2.as_ref().map_or(0, |l| l.ports);
-        let mut took = false;
         for p in 0..ports.len() {
             let port = &mut *ports[p];
             while let Some(r) = port.staged.front().copied() {
-                if self.model != MemoryModel::Perfect && self.queue.len() >= self.queue_depth {
+                if self.queue_full() {
                     refuse(&mut ports[p..]);
                     return took;
                 }
@@ -143,10 +264,16 @@ impl Memory {
                     l2_lookups -= 1;
                     self.through_l2(now, &r)
                 } else {
-                    self.serve(now, r.addr, r.bytes, r.class, r.write)
+                    match self.serve(now, r.addr, r.bytes, r.class, r.write) {
+                        Ready::At(t) => (t, Vec::new()),
+                        Ready::Token(t) => (0, vec![(t, 0)]),
+                    }
                 };
                 port.staged.pop_front();
-                port.set_ready(&r, ready);
+                match ready {
+                    (at, on) if on.is_empty() => port.set_ready(&r, at),
+                    (at, on) => self.pending.push(Pending { port: p, request: r, at, on }),
+                }
                 took = true;
             }
         }
@@ -154,9 +281,17 @@ impl Memory {
     }
 
     /// A read through the L2: a hit after its latency, a line being filled when it
-    /// arrives, a miss after the memory has served the L2 line.
-    fn through_l2(&mut self, now: u64, r: &Request) -> u64 {
-        let Some(mut l2) = self.l2.take() else { return self.serve(now, r.addr, r.bytes, r.class, false) };
+    /// arrives, a miss after the memory has served the L2 line. Returns the cycle its
+    /// data is there from, or that cycle at the earliest and the DRAMsim3 requests it
+    /// still waits for (with the hit latency after each).
+    fn through_l2(&mut self, now: u64, r: &Request) -> (u64, Vec<(u32, u64)>) {
+        let Some(mut l2) = self.l2.take() else {
+            return match self.serve(now, r.addr, r.bytes, r.class, false) {
+                Ready::At(t) => (t, Vec::new()),
+                Ready::Token(t) => (0, vec![(t, 0)]),
+            };
+        };
+        let mut on = Vec::new();
         let line_bytes = l2.cache.line_bytes() as u64;
         let first = l2.cache.line_of(r.addr);
         let last = l2.cache.line_of(r.addr + r.bytes.max(1) as u64 - 1);
@@ -165,7 +300,18 @@ impl Memory {
         for line in first..=last {
             match l2.cache.lookup(line) {
                 Lookup::Present { fill } => {
-                    let f = l2.fills.get(fill as usize).copied().unwrap_or(0);
+                    let f = match l2.fills.get(fill as usize).copied().unwrap_or(Ready::At(0)) {
+                        Ready::At(f) => f,
+                        Ready::Token(t) => match self.tokens.get(t as usize).copied() {
+                            Some(c) if c != UNSCHEDULED => c,
+                            _ => {
+                                // Its fill is still with DRAMsim3: a merge.
+                                self.stats.l2[1] += 1;
+                                on.push((t, l2.cache.hit_latency as u64));
+                                continue;
+                            }
+                        },
+                    };
                     if f <= now {
                         self.stats.l2[0] += 1;
                         ready = ready.max(hit_at);
@@ -180,16 +326,20 @@ impl Memory {
                     let id = l2.fills.len() as u32;
                     l2.fills.push(f);
                     l2.cache.install(line, id);
-                    ready = ready.max(f + l2.cache.hit_latency as u64);
+                    match f {
+                        Ready::At(f) => ready = ready.max(f + l2.cache.hit_latency as u64),
+                        Ready::Token(t) => on.push((t, l2.cache.hit_latency as u64)),
+                    }
                 }
             }
         }
         self.l2 = Some(l2);
-        ready
+        (ready, on)
     }
 
-    /// The memory model serves `bytes` at `addr`: the cycle its data arrives.
-    fn serve(&mut self, now: u64, addr: u64, bytes: u32, class: usize, write: bool) -> u64 {
+    /// The memory model serves `bytes` at `addr`: the cycle its data arrives, or the
+    /// DRAMsim3 request that will tell.
+    fn serve(&mut self, now: u64, addr: u64, bytes: u32, class: usize, write: bool) -> Ready {
         self.stats.requests[class] += 1;
         let (start, done) = match self.model {
             MemoryModel::Perfect => {
@@ -207,24 +357,42 @@ impl Memory {
                 (start_slot / bpc, end_slot.div_ceil(bpc) + self.latency)
             }
             MemoryModel::Dram => {
-                let Some(d) = self.dram.as_mut() else { return now + 1 };
+                let Some(d) = self.dram.as_mut() else { return Ready::At(now + 1) };
                 let burst = d.burst_bytes();
                 let first = addr / burst * burst;
                 let moved = (addr + bytes.max(1) as u64).div_ceil(burst) * burst - first;
                 self.stats.bytes[class] += moved;
                 d.access(now + 1, addr, bytes, write)
             }
+            MemoryModel::Dramsim3 => return self.serve_dramsim3(addr, bytes, class, write),
         };
         if start > now + 1 {
             self.queue.push_back(start);
         }
         self.last_done = self.last_done.max(done);
-        done
+        Ready::At(done)
+    }
+
+    /// DRAMsim3 takes the request as transactions; its data's cycle comes with the last
+    /// callback. (Without the feature, [`Memory::new`] builds no such memory.)
+    #[cfg_attr(not(feature = "dramsim3"), allow(unused_variables))]
+    fn serve_dramsim3(&mut self, addr: u64, bytes: u32, class: usize, write: bool) -> Ready {
+        let token = self.tokens.len() as u32;
+        self.tokens.push(UNSCHEDULED);
+        #[cfg(feature = "dramsim3")]
+        if let Some(d) = self.ds3.as_mut() {
+            self.stats.bytes[class] += d.submit(token, addr, bytes, write);
+        }
+        Ready::Token(token)
     }
 
     /// The earliest cycle after `now` at which the queue frees a slot, if requests wait
     /// for one.
     pub fn next_wake(&self, now: u64, waiting: bool) -> Option<u64> {
+        if !self.is_idle() {
+            // DRAMsim3 does not say in advance when it will call back: tick every cycle.
+            return Some(now + 1);
+        }
         if !waiting {
             return None;
         }
@@ -249,6 +417,12 @@ impl Memory {
             (MemoryModel::Dram, Some(d)) => {
                 d.bus_busy as f64 / (cycles * d.clock_mhz() / chip_mhz * d.channels() as f64)
             }
+            #[cfg(feature = "dramsim3")]
+            (MemoryModel::Dramsim3, _) => self.ds3.as_ref().map_or(0.0, |d| {
+                // Bytes moved over what the channels' peak could have moved in the time.
+                let ns = cycles * 1e3 / chip_mhz;
+                d.stats.bytes as f64 / (d.geometry.peak_bytes_per_ns() * ns)
+            }),
             _ => 0.0,
         }
     }

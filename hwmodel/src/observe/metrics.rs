@@ -70,6 +70,17 @@ pub fn metrics(r: &Report) -> Vec<(String, f64)> {
             m.push((format!("stall.{kind}.{}", s.name()), share(n)));
         }
     }
+    if let Some(d) = &r.memory.dram {
+        m.push(("dram.row_hit_rate".into(), d.row_hit_rate));
+    }
+    if let Some(d) = &r.memory.dramsim3 {
+        m.push(("dramsim3.bandwidth_gb_s".into(), d.bandwidth_gb_s));
+        m.push(("dramsim3.read_latency_ns".into(), d.read_latency_ns[0]));
+        m.push(("dramsim3.read_latency_p99_ns".into(), d.read_latency_ns[2]));
+        m.push(("dramsim3.row_hit_rate".into(), d.row_hit_rate));
+        m.push(("dramsim3.refreshes".into(), d.refreshes as f64));
+        m.push(("dramsim3.energy_mj".into(), d.energy_nj * 1e-6));
+    }
     if let Some(e) = &r.energy {
         m.push(("energy_per_frame_mj".into(), e.joules_per_frame * 1e3));
         m.push(("energy_per_ray_nj".into(), e.joules_per_ray * 1e9));

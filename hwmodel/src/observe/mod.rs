@@ -2,6 +2,7 @@
 
 pub mod chip_signals;
 pub mod counters;
+pub mod dramsim3_report;
 pub mod energy;
 pub mod metrics;
 pub mod report;

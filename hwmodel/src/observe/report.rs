@@ -112,7 +112,7 @@ pub struct MemoryReport {
     pub distinct_scene_bytes: u64,
     /// Scene bytes transferred over distinct scene bytes read (1.0 is the floor).
     pub traffic_over_compulsory: f64,
-    /// `"perfect"`, `"fixed"` or `"dram"`.
+    /// `"perfect"`, `"fixed"`, `"dram"` or `"dramsim3"`.
     pub model: String,
     /// Read latency (cycles from a unit's request to its data) per class: mean, count and
     /// a log2 histogram (`"<N"`: requests below N cycles).
@@ -122,6 +122,9 @@ pub struct MemoryReport {
     /// DRAM: row-buffer hit rate and per-bank counters (absent for other models).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub dram: Option<DramReport>,
+    /// DRAMsim3: bandwidth, latency, row hits, commands, energy (absent for other models).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dramsim3: Option<super::dramsim3_report::Dramsim3Report>,
 }
 
 /// Latencies of one data class.
@@ -286,6 +289,8 @@ pub struct Sources<'a> {
     pub delivered: u64,
     /// The DRAM, if that is the model.
     pub dram: Option<&'a crate::memory::dram::Dram>,
+    /// DRAMsim3's report, if that is the model.
+    pub dramsim3: Option<super::dramsim3_report::Dramsim3Report>,
     /// FIFOs: name, depth, counters.
     pub fifos: Vec<(String, usize, &'a FifoStats)>,
     /// Caches by port name.
@@ -480,5 +485,6 @@ fn memory_report(s: &Sources<'_>, rays: u64) -> MemoryReport {
             .map(|(k, v)| (k.to_string(), v))
             .collect(),
         dram: s.dram.map(|d| DramReport { row_hit_rate: d.row_hit_rate(), banks: d.stats.clone() }),
+        dramsim3: s.dramsim3.clone(),
     }
 }
