@@ -129,6 +129,11 @@ pub struct MeasureArgs {
     /// is more than a viewer opens).
     #[arg(long, value_name = "A..B", value_parser = parse_roi, requires = "trace")]
     pub trace_window: Option<(u64, u64)>,
+    /// Every request the memory served (after the L2), one per line: `cycle addr bytes
+    /// R|W`, cycles of the chip's clock — to replay against another memory model
+    /// (bench/dram_validate.sh).
+    #[arg(long, value_name = "FILE.txt")]
+    pub memory_trace: Option<PathBuf>,
     /// Per-pixel cost heatmaps of the (last) frame: PREFIX-cycles.png (cycles its packets
     /// were in flight), PREFIX-steps.png (ray–node tests), PREFIX-tests.png (ray–triangle
     /// tests), PREFIX-bytes.png (scene bytes read for it).
@@ -157,7 +162,7 @@ pub(crate) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
     if a.measure.interval.is_some() {
         output::check_writable(&a.measure.intervals)?;
     }
-    for p in a.measure.vcd.iter().chain(&a.measure.trace).chain(&a.measure.cost_image) {
+    for p in a.measure.vcd.iter().chain(&a.measure.trace).chain(&a.measure.cost_image).chain(&a.measure.memory_trace) {
         output::check_writable(p)?;
     }
     let walk = a.walk.camera_path.is_some() || a.walk.orbit.is_some();
@@ -433,6 +438,7 @@ pub(crate) fn measure_of(a: &SimulateArgs) -> Measure {
         }),
         trace: a.measure.trace.clone(),
         trace_window: a.measure.trace_window,
+        memory_trace: a.measure.memory_trace.clone(),
     }
 }
 

@@ -56,6 +56,8 @@ pub struct Measure {
     pub trace: Option<std::path::PathBuf>,
     /// Only cycles A..B in the trace.
     pub trace_window: Option<(u64, u64)>,
+    /// The memory's request stream (`cycle addr bytes R|W` per line).
+    pub memory_trace: Option<std::path::PathBuf>,
 }
 
 /// Waveforms to write: the VCD file, its window of cycles (of the whole run) and the
@@ -183,6 +185,9 @@ impl Run<'_, '_> {
         if measure.trace.is_some() {
             sim.enable_trace();
         }
+        if measure.memory_trace.is_some() {
+            sim.record_memory_stream();
+        }
         let bar = progress::bar(0, "simulate", show_progress);
         let mut out = Vec::new();
         let mut before = 0;
@@ -256,6 +261,13 @@ impl Run<'_, '_> {
         if let (Some(path), Some(log)) = (&measure.trace, sim.take_trace()) {
             let doc = crate::output::trace_events::to_json(&log, cfg.clock_mhz, measure.trace_window);
             crate::output::write_bytes(path, doc.to_string().as_bytes())?;
+        }
+        if let (Some(path), Some(stream)) = (&measure.memory_trace, sim.take_memory_stream()) {
+            let mut text = String::from("# cycle addr bytes R|W (chip cycles)\n");
+            for r in stream {
+                text.push_str(&format!("{} {} {} {}\n", r.cycle, r.addr, r.bytes, if r.write { 'W' } else { 'R' }));
+            }
+            crate::output::write_bytes(path, text.as_bytes())?;
         }
         Ok(out)
     }

@@ -494,6 +494,17 @@ impl<'s, I: Intersector> Simulator<'s, I> {
 }
 
 impl<I: Intersector> Simulator<'_, I> {
+    /// Records every request the memory model serves from now on (`cycle addr bytes
+    /// R|W`), to replay them against another memory (`memory::replay`).
+    pub fn record_memory_stream(&mut self) {
+        self.memory.stream = Some(Vec::new());
+    }
+
+    /// The requests recorded so far.
+    pub fn take_memory_stream(&mut self) -> Option<Vec<crate::memory::replay::StreamRequest>> {
+        self.memory.stream.take()
+    }
+
     /// DRAMsim3's report over the frame so far, if that is the memory.
     fn dramsim3_report(&self) -> Option<crate::observe::dramsim3_report::Dramsim3Report> {
         #[cfg(feature = "dramsim3")]

@@ -22,6 +22,7 @@ pub mod dram;
 pub mod dramsim3;
 pub mod dramsim3_ini;
 pub mod port;
+pub mod replay;
 pub mod traffic;
 
 use std::collections::VecDeque;
@@ -103,6 +104,8 @@ pub struct Memory {
     tokens: Vec<u64>,
     /// Port requests waiting on DRAMsim3.
     pending: Vec<Pending>,
+    /// When recording: every request the memory model served (after the L2), in order.
+    pub stream: Option<Vec<replay::StreamRequest>>,
     /// Statistics.
     pub stats: ChannelStats,
 }
@@ -139,6 +142,7 @@ impl Memory {
             ds3,
             tokens: Vec::new(),
             pending: Vec::new(),
+            stream: None,
             stats: ChannelStats::default(),
         })
     }
@@ -341,6 +345,9 @@ impl Memory {
     /// DRAMsim3 request that will tell.
     fn serve(&mut self, now: u64, addr: u64, bytes: u32, class: usize, write: bool) -> Ready {
         self.stats.requests[class] += 1;
+        if let Some(log) = self.stream.as_mut() {
+            log.push(replay::StreamRequest { cycle: now, addr, bytes, write });
+        }
         let (start, done) = match self.model {
             MemoryModel::Perfect => {
                 self.stats.bytes[class] += bytes as u64;
