@@ -246,7 +246,7 @@ impl MemoryConfig {
 }
 
 /// DRAM parameters (timings in DRAM clock cycles, as a datasheet gives them).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct DramConfig {
     /// DRAM command clock in MHz (the data rate is twice this).
@@ -278,6 +278,10 @@ pub struct DramConfig {
     pub t_refi: u32,
     /// Refresh cycle time (every bank of the channel is busy).
     pub t_rfc: u32,
+    /// ACTIVATE to ACTIVATE of another bank of the channel, at least.
+    pub t_rrd: u32,
+    /// Four-activate window: at most four ACTIVATEs of a channel in any `t_faw` cycles.
+    pub t_faw: u32,
     /// Chip cycles through the memory controller, each way together.
     pub controller_latency: u32,
 }
@@ -382,9 +386,10 @@ impl Default for MemoryConfig {
 
 impl Default for DramConfig {
     /// DDR3-1600 11-11-11 (JEDEC JESD79-3F speed bin DDR3-1600K; e.g. Micron
-    /// MT41K256M16 datasheet): 800 MHz, tRCD = tRP = CL = 13.75 ns, tRAS = 35 ns,
-    /// tWR = 15 ns, tREFI = 7.8 µs, tRFC = 260 ns (4 Gb); one 64-bit channel of 8 banks
-    /// with 8 KiB rows, BL8.
+    /// MT41K512M8 datasheet): 800 MHz, tRCD = tRP = CL = 13.75 ns, tRAS = 35 ns,
+    /// tWR = 15 ns, tREFI = 7.8 µs, tRFC = 260 ns (4 Gb), tRRD = 6 ns and tFAW = 30 ns
+    /// (1 KB pages); one 64-bit channel of eight x8 devices: 8 banks with 8 KiB rows, BL8.
+    /// DRAMsim3's `DDR3_4Gb_x8_1600.ini` describes the same memory.
     fn default() -> Self {
         DramConfig {
             clock_mhz: 800.0,
@@ -401,6 +406,8 @@ impl Default for DramConfig {
             t_wr: 12,
             t_refi: 6240,
             t_rfc: 208,
+            t_rrd: 5,
+            t_faw: 24,
             controller_latency: 10,
         }
     }

@@ -255,6 +255,8 @@ impl DramConfig {
             ("t_ras", d.t_ras),
             ("t_wr", d.t_wr),
             ("t_rfc", d.t_rfc),
+            ("t_rrd", d.t_rrd),
+            ("t_faw", d.t_faw),
             ("controller_latency", d.controller_latency),
         ] {
             if v > 100_000 {

@@ -46,6 +46,8 @@ pub struct Dram {
     banks: Vec<Bank>,
     /// Per channel: the data bus is free from this DRAM cycle.
     bus_free: Vec<u64>,
+    /// Per channel: its last four ACTIVATEs, oldest first (tRRD, tFAW).
+    acts: Vec<[Option<u64>; 4]>,
     /// Per bank, channel-major.
     pub stats: Vec<BankStats>,
     /// DRAM cycles the data buses carried data, all channels.
@@ -67,6 +69,7 @@ impl Dram {
             ratio: chip_mhz / cfg.clock_mhz,
             banks: vec![Bank::default(); n],
             bus_free: vec![0; cfg.channels as usize],
+            acts: vec![[None; 4]; cfg.channels as usize],
             stats: vec![BankStats::default(); n],
             bus_busy: 0,
         }
@@ -101,6 +104,20 @@ impl Dram {
         (dram as f64 * self.ratio).ceil() as u64
     }
 
+    /// An ACTIVATE wanted at `t` on `channel`: no sooner than tRRD after the last one and
+    /// tFAW after the fourth last (the controller issues commands in request order, so
+    /// a channel's ACTIVATEs are in time order). Returns when it issues, and records it.
+    fn activate(&mut self, channel: usize, t: u64) -> u64 {
+        let acts = &mut self.acts[channel];
+        let (rrd, faw) = (self.cfg.t_rrd as u64, self.cfg.t_faw as u64);
+        let last = acts[3].map_or(0, |a| a + rrd);
+        let window = acts[0].map_or(0, |a| a + faw);
+        let at = t.max(last).max(window);
+        acts.rotate_left(1);
+        acts[3] = Some(at);
+        at
+    }
+
     /// Moves `t` out of any refresh window of its channel (every `t_refi` cycles all banks
     /// refresh for `t_rfc`); returns the time and its refresh epoch.
     fn after_refresh(&self, t: u64) -> (u64, u64) {
@@ -122,7 +139,7 @@ impl Dram {
     /// `arrive`: returns the chip cycle its first command issued and the chip cycle its
     /// data has all crossed the bus (reads) or been written and recovered (writes).
     pub fn access(&mut self, arrive: u64, addr: u64, bytes: u32, write: bool) -> (u64, u64) {
-        let c = &self.cfg;
+        let c = self.cfg;
         let burst = self.burst_bytes();
         let (channels, banks) = (c.channels as u64, c.banks as u64);
         let first = addr / burst;
@@ -145,25 +162,32 @@ impl Dram {
             }
             let stats = &mut self.stats[k];
             stats.accesses += 1;
+            // The ACTIVATE the access needs (wanted at that cycle), if any.
             let column_at = match bank.open_row {
                 Some(r) if r == row => {
                     stats.row_hits += 1;
-                    t
+                    None
                 }
                 Some(_) => {
                     stats.row_conflicts += 1;
                     // PRECHARGE no earlier than tRAS after the ACTIVATE, then ACTIVATE.
                     let pre = t.max(bank.activated + c.t_ras as u64);
-                    let act = pre + c.t_rp as u64;
-                    bank.activated = act;
                     t = pre;
-                    act + c.t_rcd as u64
+                    Some(pre + c.t_rp as u64)
                 }
                 None => {
                     stats.row_empty += 1;
-                    bank.activated = t;
-                    t + c.t_rcd as u64
+                    Some(t)
                 }
+            };
+            let (t_rcd, channel_k) = (c.t_rcd as u64, channel as usize);
+            let column_at = match column_at {
+                Some(wanted) => {
+                    let act = self.activate(channel_k, wanted);
+                    bank.activated = act;
+                    act + t_rcd
+                }
+                None => t,
             };
             start = start.min(t);
             // Data follows the column command by CL; the bus carries one burst at a time.
@@ -263,6 +287,18 @@ mod tests {
         let per = done as f64 / n as f64;
         assert!((39.0..=40.0).contains(&per), "{per} cycles per random access, tRC is 39");
         assert_eq!(d.row_hit_rate(), 0.0);
+    }
+
+    #[test]
+    fn activates_keep_trrd_apart_and_four_to_a_tfaw_window() {
+        // Eight reads to eight banks at once: ACTIVATEs at 0, 5, 10, 15 (tRRD = 5), the
+        // fifth no sooner than tFAW = 24 after the first, then 29, 34, 39.
+        let mut d = Dram::new(&ddr3(), 800.0);
+        let row = 8192u64;
+        let starts: Vec<u64> = (0..8).map(|b| d.access(0, b * row, 64, false).0).collect();
+        assert_eq!(starts, vec![0; 8], "every access starts at once (its bank is idle)");
+        let acts: Vec<u64> = d.banks.iter().map(|b| b.activated).collect();
+        assert_eq!(acts, vec![0, 5, 10, 15, 24, 29, 34, 39]);
     }
 
     #[test]

@@ -162,7 +162,8 @@ pub fn replay_dramsim3(
 
 /// raypipe's DRAM model set to DRAMsim3's `DDR4_8Gb_x8_2400` file (JEDEC DDR4-2400,
 /// 17-17-17 at tCK = 0.83 ns; 16 banks in 4 groups, which the model does not tell
-/// apart; 8 KiB rows; tRFC 350 ns for 8 Gb; tREFI 7.8 µs), with no controller latency.
+/// apart, so tRRD and tCCD are the same-group (long) ones for every pair; 8 KiB rows;
+/// tRFC 350 ns for 8 Gb; tREFI 7.8 µs; tFAW 21 ns), with no controller latency.
 pub fn ddr4_2400() -> DramConfig {
     DramConfig {
         clock_mhz: 1200.0,
@@ -179,6 +180,8 @@ pub fn ddr4_2400() -> DramConfig {
         t_wr: 18,
         t_refi: 9360,
         t_rfc: 420,
+        t_rrd: 6,
+        t_faw: 26,
         controller_latency: 0,
     }
 }
