@@ -46,8 +46,8 @@ pub struct Dram {
     banks: Vec<Bank>,
     /// Per channel: the data bus is free from this DRAM cycle.
     bus_free: Vec<u64>,
-    /// Per channel: its last four ACTIVATEs, oldest first (tRRD, tFAW).
-    acts: Vec<[Option<u64>; 4]>,
+    /// Per channel: its recent ACTIVATEs, in time order (tRRD, tFAW).
+    acts: Vec<Vec<u64>>,
     /// Per bank, channel-major.
     pub stats: Vec<BankStats>,
     /// DRAM cycles the data buses carried data, all channels.
@@ -65,11 +65,11 @@ impl Dram {
     pub fn new(cfg: &DramConfig, chip_mhz: f64) -> Dram {
         let n = (cfg.channels * cfg.banks) as usize;
         Dram {
-            cfg: cfg.clone(),
+            cfg: *cfg,
             ratio: chip_mhz / cfg.clock_mhz,
             banks: vec![Bank::default(); n],
             bus_free: vec![0; cfg.channels as usize],
-            acts: vec![[None; 4]; cfg.channels as usize],
+            acts: vec![Vec::new(); cfg.channels as usize],
             stats: vec![BankStats::default(); n],
             bus_busy: 0,
         }
@@ -104,17 +104,50 @@ impl Dram {
         (dram as f64 * self.ratio).ceil() as u64
     }
 
-    /// An ACTIVATE wanted at `t` on `channel`: no sooner than tRRD after the last one and
-    /// tFAW after the fourth last (the controller issues commands in request order, so
-    /// a channel's ACTIVATEs are in time order). Returns when it issues, and records it.
+    /// An ACTIVATE wanted at `t` on `channel`: the earliest cycle from `t` that keeps it
+    /// tRRD from every other ACTIVATE of the channel and leaves at most four in any tFAW
+    /// window. Banks are served in parallel, so ACTIVATEs need not come in request
+    /// order. Returns when it issues, and records it.
     fn activate(&mut self, channel: usize, t: u64) -> u64 {
-        let acts = &mut self.acts[channel];
         let (rrd, faw) = (self.cfg.t_rrd as u64, self.cfg.t_faw as u64);
-        let last = acts[3].map_or(0, |a| a + rrd);
-        let window = acts[0].map_or(0, |a| a + faw);
-        let at = t.max(last).max(window);
-        acts.rotate_left(1);
-        acts[3] = Some(at);
+        let acts = &mut self.acts[channel];
+        let mut at = t;
+        // Each pass moves `at` past one conflict; every move is forward, so it ends.
+        'search: loop {
+            for &a in acts.iter() {
+                if a + rrd > at && at + rrd > a {
+                    at = a + rrd;
+                    continue 'search;
+                }
+            }
+            if faw > 0 {
+                // Windows of tFAW cycles holding `at`: each may hold three others at most.
+                let near: Vec<u64> = acts.iter().copied().filter(|&a| a + faw > at && at + faw > a).collect();
+                for &start in near.iter().filter(|&&a| a <= at) {
+                    if near.iter().filter(|&&a| a >= start && a < start + faw).count() >= 4 {
+                        at = start + faw;
+                        continue 'search;
+                    }
+                }
+                for &end in near.iter().filter(|&&a| a > at) {
+                    let from = (end + 1).saturating_sub(faw);
+                    if near.iter().filter(|&&a| a >= from && a <= end).count() >= 4 && from <= at {
+                        at = end + rrd.max(1);
+                        continue 'search;
+                    }
+                }
+            }
+            break;
+        }
+        let pos = acts.partition_point(|&a| a <= at);
+        acts.insert(pos, at);
+        // Keep the ACTIVATEs that can still constrain one: requests arrive in order, so
+        // none will want a cycle much before the latest arrival's.
+        let horizon = at.saturating_sub(4 * (faw + rrd) + 1024);
+        let old = acts.partition_point(|&a| a < horizon);
+        if acts.len() > 256 {
+            acts.drain(..old.max(acts.len() - 256));
+        }
         at
     }
 
