@@ -251,6 +251,12 @@ proptest! {
         // which `run` demands silent, agrees).
         let every = run(&view, &cam, &cfg, Clocking { every_cycle: true, ..Clocking::default() });
         prop_assert_eq!(every.report().to_json(), r.to_json());
+        // No frame beats its closed-form lower bounds (bytes over the channel's peak,
+        // tests over the datapaths' lanes, rays over the generation and shading rates).
+        for (name, &bound) in &r.bounds.cycles {
+            prop_assert!(r.cycles as f64 >= bound - 1e-9, "{name}: {} cycles < bound {bound}", r.cycles);
+        }
+        prop_assert!(r.bounds.achieved_over_largest.is_nan() || r.bounds.achieved_over_largest >= 1.0 - 1e-9);
         // Every stall cycle has exactly one reason.
         for u in &r.units {
             prop_assert_eq!(u.stall_reasons.values().sum::<u64>(), u.stall_cycles, "{}", u.name);

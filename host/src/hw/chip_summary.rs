@@ -95,6 +95,14 @@ pub fn summary(report: &Report) -> String {
             d.energy_nj / 1e3
         ));
     }
+    let b = &report.bounds;
+    let parts: Vec<String> = b.cycles.iter().map(|(k, c)| format!("{k} {c:.0}")).collect();
+    line(format!(
+        "lower bounds   {} cycles; achieved {:.2}x the largest ({})",
+        parts.join(", "),
+        b.achieved_over_largest,
+        b.largest
+    ));
     line(format!(
         "scene traffic  {:.2}x the {} distinct bytes read",
         m.traffic_over_compulsory, m.distinct_scene_bytes

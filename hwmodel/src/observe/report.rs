@@ -238,6 +238,8 @@ pub struct Report {
     pub caches: Vec<CacheReport>,
     /// The memory channel.
     pub memory: MemoryReport,
+    /// The frame's closed-form lower bounds and the achieved cycles over the largest.
+    pub bounds: super::bounds::Bounds,
     /// Conservation checks.
     pub conservation: Conservation,
     /// Energy and area estimates (`config.energy`'s figures over the counters).
@@ -335,6 +337,7 @@ impl Report {
         let caches = cache_reports(&s);
         let memory = memory_report(&s, rays);
         let bottleneck = crate::observe::verdict::verdict(&units, memory.utilization);
+        let bounds = super::bounds::bounds(s.cfg, s.cycles, &units, &memory);
         Report {
             schema: SCHEMA,
             config: s.cfg.clone(),
@@ -358,6 +361,7 @@ impl Report {
             fifos,
             caches,
             memory,
+            bounds,
             conservation: Conservation {
                 rays_issued: s.rays.0,
                 rays_retired: s.rays.1,
