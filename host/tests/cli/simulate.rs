@@ -293,3 +293,29 @@ fn waveforms_and_traces_observe_without_changing_the_run() {
     );
     assert!(!d.join("z.vcd").exists());
 }
+
+#[test]
+fn the_memory_trace_lists_every_request_the_memory_served() {
+    let dir = tempfile::tempdir().unwrap();
+    let args = ["simulate", "--size", "16x16", "--report", "r.json", "--memory-trace", "m.txt"];
+    let o = raypipe(dir.path(), &args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("r.json")).unwrap()).unwrap();
+    let text = std::fs::read_to_string(dir.path().join("m.txt")).unwrap();
+    let lines: Vec<&str> = text.lines().filter(|l| !l.starts_with('#')).collect();
+    assert_eq!(lines.len() as u64, json["memory"]["requests"].as_u64().unwrap());
+    // The requests' bytes are the memory's (before rounding to bursts): all requested.
+    let bytes: u64 = lines.iter().map(|l| l.split(' ').nth(2).unwrap().parse::<u64>().unwrap()).sum();
+    assert_eq!(bytes, json["conservation"]["bytes_requested"].as_u64().unwrap());
+    assert!(lines.iter().any(|l| l.ends_with(" W")) && lines.iter().any(|l| l.ends_with(" R")));
+    // The report's bounds: the achieved cycles are at least the largest.
+    assert!(json["bounds"]["achieved_over_largest"].as_f64().unwrap() >= 1.0);
+    // Without the dramsim3 feature, DRAMsim3 is refused in one line.
+    if !cfg!(feature = "dramsim3") {
+        let o = raypipe(dir.path(), &["simulate", "--size", "8x8", "--set", "memory.model=dramsim3"]);
+        assert!(!o.status.success());
+        assert_eq!(stderr(&o).trim().lines().count(), 1, "{}", stderr(&o));
+        assert!(stderr(&o).contains("dramsim3 feature"), "{}", stderr(&o));
+    }
+}
