@@ -7,7 +7,7 @@
 //! * **fixed** — one channel moving `bytes_per_cycle`, a request a whole number of
 //!   `min_burst_bytes`, its data `latency` cycles after its transfer;
 //! * **dram** — [`crate::memory::dram`]'s channels, banks and rows;
-//! * **dramsim3** — DRAMsim3 itself ([`crate::memory::dramsim3`], with the `dramsim3`
+//! * **dramsim3** — DRAMsim3 itself (`memory::dramsim3`, with the `dramsim3`
 //!   feature): its data arrives when DRAMsim3 calls back, not at a time known when the
 //!   request is taken, so a request may wait *accepted but unscheduled* for several edges.
 //!
