@@ -19,8 +19,6 @@
 use std::collections::{HashMap, VecDeque};
 use std::path::PathBuf;
 
-use serde::Serialize;
-
 use crate::config::Dramsim3Config;
 use crate::memory::dramsim3_ini::{self, Dramsim3Geometry};
 
@@ -33,21 +31,18 @@ const EPOCH_CYCLES: u64 = 1 << 14;
 const FS_PER_NS: f64 = 1e6;
 
 /// DRAMsim3's counters and the chip's view of its transactions.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Dramsim3Stats {
     /// Transactions added (reads, writes).
     pub transactions: [u64; 2],
     /// Bytes the transactions moved.
     pub bytes: u64,
     /// Read latencies in memory cycles, add to callback, in completion order.
-    #[serde(skip)]
-    pub read_latency: Vec<u32>,
-    /// Memory cycles ticked.
-    pub cycles: u64,
+    pub read_latency: Vec<u64>,
 }
 
 /// DRAMsim3's counters summed over the epochs since the statistics were last zeroed.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Dramsim3Counters {
     /// Epochs (per channel) summed.
     pub epochs: u64,
@@ -206,7 +201,7 @@ impl Dramsim3 {
             }
             self.in_flight -= 1;
             if !write {
-                self.stats.read_latency.push((clk - added) as u32);
+                self.stats.read_latency.push(clk - added);
             }
             let finished = self.remaining.get_mut(&token).map(|r| {
                 r.0 -= 1;
@@ -218,7 +213,6 @@ impl Dramsim3 {
             }
         }
         self.clk += 1;
-        self.stats.cycles += 1;
     }
 
     /// Ticks every memory cycle that ends by the edge ending chip cycle `now`.
@@ -312,7 +306,7 @@ mod tests {
         assert_eq!(d.submit(0, 4096, 64, false), 64);
         let done = drain(&mut d, 0);
         assert_eq!(done.len(), 1);
-        let lat = d.stats.read_latency[0] as u64;
+        let lat = d.stats.read_latency[0];
         // ACTIVATE, tRCD = 11, READ, CL = 11, BL8 = 4 cycles: 26, plus DRAMsim3's
         // command-queue cycles (at most a few).
         assert!((26..=30).contains(&lat), "{lat} memory cycles");

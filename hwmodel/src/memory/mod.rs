@@ -72,6 +72,17 @@ enum Ready {
     Token(u32),
 }
 
+impl Ready {
+    /// The cycle the data is there from at the earliest, and the DRAMsim3 requests (with
+    /// cycles after each) it still waits for.
+    fn waits(self) -> (u64, Vec<(u32, u64)>) {
+        match self {
+            Ready::At(t) => (t, Vec::new()),
+            Ready::Token(t) => (0, vec![(t, 0)]),
+        }
+    }
+}
+
 /// A port's request whose data waits on DRAMsim3: no earlier than `at`, and `add` cycles
 /// after each memory request it waits for (the L2's hit latency behind a fill).
 #[derive(Clone, Debug)]
@@ -268,10 +279,7 @@ impl Memory {
                     l2_lookups -= 1;
                     self.through_l2(now, &r)
                 } else {
-                    match self.serve(now, r.addr, r.bytes, r.class, r.write) {
-                        Ready::At(t) => (t, Vec::new()),
-                        Ready::Token(t) => (0, vec![(t, 0)]),
-                    }
+                    self.serve(now, r.addr, r.bytes, r.class, r.write).waits()
                 };
                 port.staged.pop_front();
                 match ready {
@@ -289,12 +297,7 @@ impl Memory {
     /// data is there from, or that cycle at the earliest and the DRAMsim3 requests it
     /// still waits for (with the hit latency after each).
     fn through_l2(&mut self, now: u64, r: &Request) -> (u64, Vec<(u32, u64)>) {
-        let Some(mut l2) = self.l2.take() else {
-            return match self.serve(now, r.addr, r.bytes, r.class, false) {
-                Ready::At(t) => (t, Vec::new()),
-                Ready::Token(t) => (0, vec![(t, 0)]),
-            };
-        };
+        let Some(mut l2) = self.l2.take() else { return self.serve(now, r.addr, r.bytes, r.class, false).waits() };
         let mut on = Vec::new();
         let line_bytes = l2.cache.line_bytes() as u64;
         let first = l2.cache.line_of(r.addr);

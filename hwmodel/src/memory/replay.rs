@@ -101,13 +101,12 @@ pub fn parse_trace(text: &str) -> Result<Vec<StreamRequest>, String> {
 }
 
 /// Latency figures of `lat` (cycles) at `ns` per cycle, with bytes moved over `span`.
-fn figures(lat: &mut [u64], ns: f64, bytes: u64, span: u64, row_hit_rate: f64) -> ReplayFigures {
-    lat.sort_unstable();
-    let n = lat.len().max(1);
+fn figures(lat: &[u64], ns: f64, bytes: u64, span: u64, row_hit_rate: f64) -> ReplayFigures {
+    let [mean_ns, _, p99_ns, _] = crate::observe::dramsim3_report::latency_summary(lat, ns);
     ReplayFigures {
         requests: lat.len() as u64,
-        mean_ns: lat.iter().sum::<u64>() as f64 / n as f64 * ns,
-        p99_ns: lat.get((lat.len().saturating_sub(1) as f64 * 0.99).round() as usize).copied().unwrap_or(0) as f64 * ns,
+        mean_ns,
+        p99_ns,
         bandwidth_gb_s: if span > 0 { bytes as f64 / (span as f64 * ns) } else { 0.0 },
         row_hit_rate,
     }
@@ -126,7 +125,7 @@ pub fn replay_dram(cfg: &DramConfig, mhz: f64, stream: &[StreamRequest]) -> Repl
             - r.addr / d.burst_bytes() * d.burst_bytes();
     }
     let start = stream.first().map_or(0, |r| r.cycle);
-    figures(&mut lat, 1e3 / mhz, bytes, end.saturating_sub(start), d.row_hit_rate())
+    figures(&lat, 1e3 / mhz, bytes, end.saturating_sub(start), d.row_hit_rate())
 }
 
 /// DRAMsim3 on `stream`, clocked at `mhz` (the stream's cycles).
@@ -152,12 +151,12 @@ pub fn replay_dramsim3(
         now += 1;
     }
     d.close_epoch();
-    let mut lat: Vec<u64> = stream.iter().zip(&ready).map(|(r, &at)| at - r.cycle).collect();
+    let lat: Vec<u64> = stream.iter().zip(&ready).map(|(r, &at)| at - r.cycle).collect();
     let end = ready.iter().copied().max().unwrap_or(0);
     let c = d.counters();
     let hit_rate = if c.column_commands > 0 { c.row_hits as f64 / c.column_commands as f64 } else { 0.0 };
     let start = stream.first().map_or(0, |r| r.cycle);
-    Ok(figures(&mut lat, 1e3 / mhz, d.stats.bytes, end.saturating_sub(start), hit_rate))
+    Ok(figures(&lat, 1e3 / mhz, d.stats.bytes, end.saturating_sub(start), hit_rate))
 }
 
 /// raypipe's DRAM model set to DRAMsim3's `DDR4_8Gb_x8_2400` file (JEDEC DDR4-2400,

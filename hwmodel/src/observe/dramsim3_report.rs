@@ -40,7 +40,7 @@ pub struct Dramsim3Report {
 }
 
 /// Mean, median, 99th percentile and maximum of `cycles`, times `ns` per cycle.
-pub fn latency_summary(cycles: &[u32], ns: f64) -> [f64; 4] {
+pub fn latency_summary(cycles: &[u64], ns: f64) -> [f64; 4] {
     if cycles.is_empty() {
         return [0.0; 4];
     }
@@ -82,7 +82,7 @@ mod tests {
 
     #[test]
     fn the_summary_is_mean_median_tail_and_max() {
-        let cycles: Vec<u32> = (1..=100).collect();
+        let cycles: Vec<u64> = (1..=100).collect();
         let [mean, p50, p99, max] = latency_summary(&cycles, 2.0);
         assert_eq!(mean, 101.0);
         assert_eq!(p50, 102.0);
