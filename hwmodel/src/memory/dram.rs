@@ -112,26 +112,26 @@ impl Dram {
         let (rrd, faw) = (self.cfg.t_rrd as u64, self.cfg.t_faw as u64);
         let acts = &mut self.acts[channel];
         let mut at = t;
-        // Each pass moves `at` past one conflict; every move is forward, so it ends.
+        // `acts` is in time order: only the ACTIVATEs within tRRD or tFAW of `at` can
+        // constrain it. Each pass moves `at` past one conflict, forward, so it ends.
         'search: loop {
-            for &a in acts.iter() {
-                if a + rrd > at && at + rrd > a {
-                    at = a + rrd;
-                    continue 'search;
-                }
+            let within = |d: u64| &acts[acts.partition_point(|&a| a + d <= at)..acts.partition_point(|&a| a < at + d)];
+            if let Some(&a) = within(rrd).first() {
+                at = a + rrd;
+                continue 'search;
             }
             if faw > 0 {
                 // Windows of tFAW cycles holding `at`: each may hold three others at most.
-                let near: Vec<u64> = acts.iter().copied().filter(|&a| a + faw > at && at + faw > a).collect();
-                for &start in near.iter().filter(|&&a| a <= at) {
-                    if near.iter().filter(|&&a| a >= start && a < start + faw).count() >= 4 {
+                let near = within(faw);
+                for (i, &start) in near.iter().enumerate().take_while(|(_, &a)| a <= at) {
+                    if near[i..].iter().take_while(|&&a| a < start + faw).count() >= 4 {
                         at = start + faw;
                         continue 'search;
                     }
                 }
-                for &end in near.iter().filter(|&&a| a > at) {
+                for (i, &end) in near.iter().enumerate().skip_while(|(_, &a)| a <= at) {
                     let from = (end + 1).saturating_sub(faw);
-                    if near.iter().filter(|&&a| a >= from && a <= end).count() >= 4 && from <= at {
+                    if from <= at && near[..=i].iter().filter(|&&a| a >= from).count() >= 4 {
                         at = end + rrd.max(1);
                         continue 'search;
                     }
