@@ -4,8 +4,9 @@
 //! * memory: bytes through the channel ÷ its peak bytes per cycle (the fixed model's
 //!   `bytes_per_cycle`; a DRAM's channels × bus × 2 transfers per memory clock);
 //! * traversal: ray–node tests ÷ (`lanes_per_cycle` × units);
-//! * intersection: ray–triangle tests ÷ (`lanes_per_cycle` ÷ `initiation_interval` ×
-//!   units);
+//! * intersection: the last group of `lanes_per_cycle` ray–triangle tests enters no
+//!   sooner than (tests ÷ (`lanes_per_cycle` × units) − 1) × `initiation_interval`, and
+//!   its results leave `latency` cycles later;
 //! * generation: rays generated ÷ `rays_per_cycle`; shading: rays shaded ÷
 //!   `shade_per_cycle`.
 //!
@@ -44,8 +45,8 @@ pub fn peak_bytes_per_cycle(cfg: &HwConfig, memory: &MemoryReport) -> Option<f64
     }
 }
 
-/// The bounds of a frame of `cycles` with these units and memory.
-pub fn bounds(cfg: &HwConfig, cycles: u64, units: &[UnitReport], memory: &MemoryReport) -> Bounds {
+/// The bounds of a frame of `cycles` with these units, ray–triangle tests and memory.
+pub fn bounds(cfg: &HwConfig, cycles: u64, units: &[UnitReport], tests: u64, memory: &MemoryReport) -> Bounds {
     let lanes = |prefix: &str| units.iter().filter(|u| u.name.starts_with(prefix)).map(|u| u.active_lanes).sum::<u64>();
     let tu = cfg.traversal.units.max(1) as f64;
     let mut b = BTreeMap::new();
@@ -53,9 +54,11 @@ pub fn bounds(cfg: &HwConfig, cycles: u64, units: &[UnitReport], memory: &Memory
         b.insert("memory".to_string(), memory.total_bytes as f64 / peak);
     }
     b.insert("traversal".into(), lanes("traversal") as f64 / (cfg.traversal.lanes_per_cycle.max(1) as f64 * tu));
+    // The pipeline takes tests (a job's rays × its triangles), not lanes, per interval.
     let ii = cfg.intersection.initiation_interval.max(1) as f64;
-    let per_cycle = cfg.intersection.lanes_per_cycle.max(1) as f64 / ii * tu;
-    b.insert("intersection".into(), lanes("intersection") as f64 / per_cycle);
+    let groups = tests as f64 / (cfg.intersection.lanes_per_cycle.max(1) as f64 * tu);
+    let last_in = (groups - 1.0).max(0.0) * ii;
+    b.insert("intersection".into(), if tests > 0 { last_in + cfg.intersection.latency as f64 } else { 0.0 });
     b.insert("generation".into(), lanes("rgs.generate") as f64 / cfg.rgs.rays_per_cycle.max(1) as f64);
     b.insert("shading".into(), lanes("rgs.shade") as f64 / cfg.rgs.shade_per_cycle.max(1) as f64);
     let (largest, top) =

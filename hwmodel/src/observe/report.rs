@@ -337,7 +337,7 @@ impl Report {
         let caches = cache_reports(&s);
         let memory = memory_report(&s, rays);
         let bottleneck = crate::observe::verdict::verdict(&units, memory.utilization);
-        let bounds = super::bounds::bounds(s.cfg, s.cycles, &units, &memory);
+        let bounds = super::bounds::bounds(s.cfg, s.cycles, &units, s.tests, &memory);
         Report {
             schema: SCHEMA,
             config: s.cfg.clone(),
