@@ -86,6 +86,13 @@ fn check_conservation(r: &StreamReport, screen: u64) {
         }
         let t = &r.table2;
         assert!(t.traverse_passes + t.intersect_passes >= t.optimal_passes, "{t:?}");
+        // Purcell's SIMD efficiency: a share of the screen's fragments.
+        if let Some(paper) = t.simd_screen {
+            assert!(paper > 0.0 && paper <= 1.0, "{t:?}");
+        }
+        for p in r.passes.iter().filter(|p| p.wave == 0 && matches!(p.kind, Some(PassKind::Traverse | PassKind::Intersect))) {
+            assert_eq!(p.covered, screen, "{p:?}");
+        }
     }
 }
 

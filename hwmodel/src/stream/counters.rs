@@ -53,9 +53,18 @@ pub struct PassRecord {
     pub instructions: u64,
     /// Rays still waiting to traverse or intersect after the pass.
     pub active_after: u64,
+    /// Fragments the pass covered (the screen's rows that hold rays).
+    pub covered: u64,
 }
 
 impl PassRecord {
+    /// Purcell's SIMD efficiency of the pass (2002 §5.1, Table 2): the fraction of the
+    /// pass's fragments — every ray of the screen — doing useful work, per iteration.
+    pub fn screen_efficiency(&self) -> Option<f64> {
+        let n = self.covered * self.iterations.max(1) as u64;
+        (n > 0).then(|| self.useful as f64 / n as f64)
+    }
+
     /// SIMD efficiency of the pass: useful iterations over iterations run.
     pub fn simd_efficiency(&self) -> Option<f64> {
         let n = self.useful + self.idle;

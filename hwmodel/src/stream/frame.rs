@@ -309,6 +309,7 @@ impl<'s, I: Intersector> StreamMachine<'s, I> {
             simd_traverse: ratio(tu, tu + ti),
             simd_intersect: ratio(iu, iu + ii),
             simd_overall: if multipass { ratio(tu + iu, tu + ti + iu + ii) } else { ratio(fu, fu + fi) },
+            simd_screen: multipass.then(|| screen_efficiency(&passes)).flatten(),
         };
         let costs = self.costs().clone();
         let kernels = Kernel::ALL
@@ -390,4 +391,12 @@ impl<'s, I: Intersector> StreamMachine<'s, I> {
     pub fn texture_cache(&self) -> &TextureCache {
         &self.cache
     }
+}
+
+/// Purcell's SIMD efficiency: the mean, over the traversal and intersection passes, of
+/// each pass's fraction of screen rays doing useful work.
+fn screen_efficiency(passes: &[PassRecord]) -> Option<f64> {
+    let loops = passes.iter().filter(|p| matches!(p.kind, Some(PassKind::Traverse | PassKind::Intersect)));
+    let (sum, n) = loops.filter_map(PassRecord::screen_efficiency).fold((0.0, 0u64), |(s, n), e| (s + e, n + 1));
+    (n > 0).then(|| sum / n as f64)
 }

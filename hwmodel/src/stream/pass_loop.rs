@@ -92,7 +92,7 @@ impl<I: Intersector> StreamMachine<'_, I> {
         let mut stencil = Stencil::new(n, width);
         let covered = stencil.covered();
         let new_pass =
-            |kind, iterations| PassRecord { wave, screen, kind: Some(kind), iterations, ..Default::default() };
+            |kind, iterations| PassRecord { wave, screen, kind: Some(kind), iterations, covered, ..Default::default() };
         if generate {
             self.generate_pass(new_pass(PassKind::Generate, 1), rays, &mut stencil, covered);
         }

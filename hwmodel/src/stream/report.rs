@@ -51,6 +51,10 @@ pub struct Table2 {
     pub simd_intersect: Option<f64>,
     /// Of the traversal and intersection work together.
     pub simd_overall: Option<f64>,
+    /// Purcell's SIMD efficiency (§5.1, Table 2's last column): the mean over the
+    /// traversal and intersection passes of the fraction of the screen's rays doing
+    /// useful work in the pass (multipass).
+    pub simd_screen: Option<f64>,
 }
 
 /// One kernel's row: its costs per invocation and its totals.
