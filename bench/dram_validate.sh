@@ -4,7 +4,8 @@
 # five synthetic streams at half and at full peak load, then the requests of one frame
 # (saarcor preset, 512×384, kd-tree, primary rays) of the conference room, the Stanford
 # bunny and Sponza, recorded with `simulate --memory-trace` on raypipe's DRAM. Prints the
-# Markdown table. Needs cmake (DRAMsim3 is built by the dramsim3 crate) and the scenes
+# Markdown table; then the same frames simulated in closed loop on both memories (the
+# DRAM model set to DRAMsim3's DDR3-1600 file, no controller latency): frame cycles. Needs cmake (DRAMsim3 is built by the dramsim3 crate) and the scenes
 # under $RAYPIPE_SCENES (default scenes/; docs/scenes.md says where to download them).
 #
 #   bench/dram_validate.sh [OUT]       (default OUT: dram-validate-out)
@@ -14,7 +15,7 @@ out=${1:-dram-validate-out}
 mkdir -p "$out"
 manifest="$here/../Cargo.toml"
 cargo build --release --quiet --manifest-path "$manifest" -p raypipe-hw --features dramsim3 --example dram_validate
-cargo build --release --quiet --manifest-path "$manifest" -p raypipe
+cargo build --release --quiet --manifest-path "$manifest" -p raypipe --features dramsim3
 rp="$here/../target/release/raypipe"
 dv="$here/../target/release/examples/dram_validate"
 scenes=${RAYPIPE_SCENES:-$here/../scenes}
@@ -43,6 +44,22 @@ for scene in conference/conference.obj.gz:conference stanford_bunny/stanford-bun
         "$dv" "$memory" "$out/$name.trace" 533 | sed "s|\"stream\":\"[^\"]*\"|\"stream\":\"$name frame\"|" >>"$rows"
     done
 done
+ddr3="--set memory.dram.clock_mhz=800 --set memory.dram.t_rcd=11 --set memory.dram.t_rp=11 --set memory.dram.t_cl=11
+ --set memory.dram.t_ras=28 --set memory.dram.t_wr=12 --set memory.dram.t_refi=6240 --set memory.dram.t_rfc=208
+ --set memory.dram.t_rrd=5 --set memory.dram.t_faw=24 --set memory.dram.controller_latency=0
+ --set memory.dramsim3.config=DDR3_4Gb_x8_1600"
+for name in conference bunny sponza; do
+    [ -f "$out/$name.json" ] || continue
+    path=$(python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['run']['scene'])" "$out/$name.json")
+    camera="$here/../fixtures/cameras/$name.camera"
+    cam=""
+    [ -f "$camera" ] && cam="--camera $camera"
+    for m in dram dramsim3; do
+        # shellcheck disable=SC2086
+        "$rp" simulate "$path" $cam --size 512x384 --preset saarcor --accel kd $ddr3 --set memory.model=$m \
+            -o "$out/$name-$m.png" --report "$out/$name-$m.json" --quiet >/dev/null
+    done
+done
 python3 - "$rows" <<'PY'
 import json, sys
 print("| memory | stream | mean latency ns (raypipe / DRAMsim3) | p99 ns | bandwidth GB/s | row hits |")
@@ -57,4 +74,19 @@ for line in open(sys.argv[1]):
     mem = {"ddr3": "DDR3-1600", "ddr4": "DDR4-2400"}[r["memory"]]
     print(f"| {mem} | {r['stream']} | {pair('mean_ns')} | {pair('p99_ns')} | "
           f"{pair('bandwidth_gb_s', '{:.2f}')} | {a['row_hit_rate']:.1%} / {b['row_hit_rate']:.1%} |")
+import os
+out = os.path.dirname(sys.argv[1])
+print()
+print("| frame (saarcor, DDR3-1600) | cycles: dram / dramsim3 | row hits | achieved / largest bound |")
+print("|---|---|---|---|")
+for name in ["conference", "bunny", "sponza"]:
+    try:
+        a = json.load(open(f"{out}/{name}-dram.json"))
+        b = json.load(open(f"{out}/{name}-dramsim3.json"))
+    except OSError:
+        continue
+    ra, rb = a["memory"]["dram"]["row_hit_rate"], b["memory"]["dramsim3"]["row_hit_rate"]
+    print(f"| {name} | {a['cycles']} / {b['cycles']} ({a['cycles'] / b['cycles']:.2f}×) | {ra:.1%} / {rb:.1%} | "
+          f"{a['bounds']['achieved_over_largest']:.2f} ({a['bounds']['largest']}) / "
+          f"{b['bounds']['achieved_over_largest']:.2f} ({b['bounds']['largest']}) |")
 PY
