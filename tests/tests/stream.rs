@@ -90,7 +90,9 @@ fn check_conservation(r: &StreamReport, screen: u64) {
         if let Some(paper) = t.simd_screen {
             assert!(paper > 0.0 && paper <= 1.0, "{t:?}");
         }
-        for p in r.passes.iter().filter(|p| p.wave == 0 && matches!(p.kind, Some(PassKind::Traverse | PassKind::Intersect))) {
+        for p in
+            r.passes.iter().filter(|p| p.wave == 0 && matches!(p.kind, Some(PassKind::Traverse | PassKind::Intersect)))
+        {
             assert_eq!(p.covered, screen, "{p:?}");
         }
     }

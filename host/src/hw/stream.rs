@@ -74,9 +74,10 @@ fn si(x: f64) -> String {
 pub fn table2(r: &StreamReport, label: &str) -> String {
     let t = &r.table2;
     let mut s = String::new();
+    let h = ["Tr", "In", "other", "passes", "maxTr", "maxIn", "optimal", "ratio", "SIMDt", "SIMDi", "SIMD", "paper"];
     s += &format!(
         "{:<28} {:>6} {:>6} {:>6} {:>7} {:>6} {:>6} {:>7} {:>6}  {:>5} {:>5} {:>5} {:>6}\n",
-        "Table 2", "Tr", "In", "other", "passes", "maxTr", "maxIn", "optimal", "ratio", "SIMDt", "SIMDi", "SIMD", "paper"
+        "Table 2", h[0], h[1], h[2], h[3], h[4], h[5], h[6], h[7], h[8], h[9], h[10], h[11]
     );
     s += &format!(
         "{:<28} {:>6} {:>6} {:>6} {:>7} {:>6} {:>6} {:>7} {:>6}  {:>5} {:>5} {:>5} {:>6}\n",
