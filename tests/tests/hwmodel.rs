@@ -268,23 +268,17 @@ proptest! {
                 prop_assert!(u.node_reads_per_step.unwrap_or(0.0) <= 1.0, "{}: {:?}", u.name, u.node_reads_per_step);
             }
         }
-        // Perfect memory is the bound: no other memory is faster.
-        if cfg.memory.model != MemoryModel::Perfect {
+        // Perfect memory is the bound for raypipe's own memories, which answer in order:
+        // none is faster on any chip drawn. Not for DRAMsim3: its controller reorders
+        // requests (FR-FCFS), data comes back in another order than asked, the units'
+        // work reorders with it, and a frame can end sooner than under perfect memory's
+        // fixed order — a scheduling anomaly (Graham 1969), seen at 2.7% and 5.2% of
+        // frames of a few packets. The closed-form bounds above hold for it.
+        if !matches!(cfg.memory.model, MemoryModel::Perfect | MemoryModel::Dramsim3) {
             let mut perfect = cfg.clone();
             perfect.memory.model = MemoryModel::Perfect;
             let p = run(&view, &cam, &perfect, Clocking::default());
-            // DRAMsim3's controller reorders requests (FR-FCFS), so data can come back in
-            // another order than asked and the units' work reorders with it: a scheduling
-            // anomaly (Graham 1969) that can finish a frame a little sooner than perfect
-            // memory's fixed order does. raypipe's own models answer in order.
-            let slack = if cfg.memory.model == MemoryModel::Dramsim3 { sim.cycles() / 100 } else { 0 };
-            prop_assert!(
-                p.cycles() <= sim.cycles() + slack,
-                "perfect {} > {:?} {}",
-                p.cycles(),
-                cfg.memory.model,
-                sim.cycles()
-            );
+            prop_assert!(p.cycles() <= sim.cycles(), "perfect {} > {:?} {}", p.cycles(), cfg.memory.model, sim.cycles());
         }
     }
 }

@@ -56,6 +56,8 @@ pub struct Dramsim3Counters {
     pub row_hits: u64,
     /// READ and WRITE commands.
     pub column_commands: u64,
+    /// READ commands (each moves one transaction's bytes over the bus).
+    pub read_commands: u64,
     /// ACTIVATE commands.
     pub activates: u64,
     /// PRECHARGE commands.
@@ -264,6 +266,7 @@ impl Dramsim3 {
             c.writes += u("num_writes_done");
             c.row_hits += u("num_read_row_hits") + u("num_write_row_hits");
             c.column_commands += u("num_read_cmds") + u("num_write_cmds");
+            c.read_commands += u("num_read_cmds");
             c.activates += u("num_act_cmds");
             c.precharges += u("num_pre_cmds");
             c.refreshes += u("num_ref_cmds") + u("num_refb_cmds");

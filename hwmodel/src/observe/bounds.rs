@@ -2,7 +2,9 @@
 //! frame's work in fewer cycles than any of them, whatever its schedule.
 //!
 //! * memory: bytes through the channel ÷ its peak bytes per cycle (the fixed model's
-//!   `bytes_per_cycle`; a DRAM's channels × bus × 2 transfers per memory clock);
+//!   `bytes_per_cycle`; a DRAM's channels × bus × 2 transfers per memory clock; for
+//!   DRAMsim3, whose write buffer drains after the frame, the bytes its READ commands
+//!   moved);
 //! * traversal: ray–node tests ÷ (`lanes_per_cycle` × units);
 //! * intersection: the last group of `lanes_per_cycle` ray–triangle tests enters no
 //!   sooner than (tests ÷ (`lanes_per_cycle` × units) − 1) × `initiation_interval`, and
@@ -51,7 +53,13 @@ pub fn bounds(cfg: &HwConfig, cycles: u64, units: &[UnitReport], tests: u64, mem
     let tu = cfg.traversal.units.max(1) as f64;
     let mut b = BTreeMap::new();
     if let Some(peak) = peak_bytes_per_cycle(cfg, memory) {
-        b.insert("memory".to_string(), memory.total_bytes as f64 / peak);
+        // DRAMsim3 answers a write at once and drains its write buffer after, and serves
+        // some reads without the bus: only its READ commands must cross it in the frame.
+        let bytes = match &memory.dramsim3 {
+            Some(d) => d.bus_read_bytes,
+            None => memory.total_bytes,
+        };
+        b.insert("memory".to_string(), bytes as f64 / peak);
     }
     b.insert("traversal".into(), lanes("traversal") as f64 / (cfg.traversal.lanes_per_cycle.max(1) as f64 * tu));
     // The pipeline takes tests (a job's rays × its triangles), not lanes, per interval.

@@ -17,6 +17,9 @@ pub struct Dramsim3Report {
     pub writes: u64,
     /// Bytes the transactions moved.
     pub bytes: u64,
+    /// Bytes READ commands moved over the bus (reads served from the write buffer or
+    /// merged with another read to the same address cross it once or not at all).
+    pub bus_read_bytes: u64,
     /// Bytes over the frame's time, GB/s.
     pub bandwidth_gb_s: f64,
     /// The channels' peak, GB/s.
@@ -63,6 +66,7 @@ impl Dramsim3Report {
             reads: s.transactions[0],
             writes: s.transactions[1],
             bytes: s.bytes,
+            bus_read_bytes: c.read_commands * d.geometry.transaction_bytes(),
             bandwidth_gb_s: if frame_ns > 0.0 { s.bytes as f64 / frame_ns } else { 0.0 },
             peak_gb_s: d.geometry.peak_bytes_per_ns(),
             read_latency_ns: latency_summary(&s.read_latency, d.t_ck_ns()),
