@@ -8,7 +8,8 @@
 //!
 //! The parts, named after the paper's concepts: [`config`] (architecture, oracle,
 //! unrolling), [`stencil`], [`ray_state`] (the state textures), [`oracle`],
-//! [`pass_loop`] (multipass), [`branching`], [`shading_pass`], [`cost_model`] (Table 1),
+//! [`pass_loop`] (multipass), [`branching`], [`shading_pass`], [`cost_model`] (Table 1;
+//! counts in [`scalar_counts`]),
 //! [`texture_cache`] (§4.1), [`gpu`] (frame time), [`counters`] and [`report`];
 //! [`frame`] runs a frame. The model's image is the host's image, bit for bit.
 
@@ -23,6 +24,7 @@ pub mod oracle;
 pub mod pass_loop;
 pub mod ray_state;
 pub mod report;
+pub mod scalar_counts;
 pub mod shading_pass;
 pub mod stencil;
 pub mod texture_cache;
