@@ -43,10 +43,19 @@ pub struct StreamArgs {
     /// Texture cache "SIZE,WAYS,LINE" (e.g. 64K,1,48, the default) or "off".
     #[arg(long, value_name = "SIZE,WAYS,LINE", default_value = "64K,1,48")]
     pub cache: raypipe_hw::stream::TextureCacheConfig,
-    /// State-texture reads go through the texture cache too (default: they bypass it).
+    /// State-texture reads bypass the texture cache (default: they go through it, as
+    /// every texture read does on Purcell's machine).
     #[arg(long)]
-    pub cache_state: bool,
-    /// Kernel cost table (TOML) over raypipe's counted one: [kernel] instructions, r, w, m.
+    pub uncached_state: bool,
+    /// Words a fragment program writes per pass (Purcell §2.2: two RGBA outputs, 8).
+    #[arg(long, default_value_t = 8, value_name = "WORDS")]
+    pub output_words: u32,
+    /// How instructions are counted: vec4 (4-wide fragment-program instructions, as the
+    /// paper counts) or scalar (one per scalar operation).
+    #[arg(long, default_value = "vec4")]
+    pub isa: raypipe_hw::stream::Isa,
+    /// Kernel cost table (TOML) over raypipe's counted one: [kernel] instructions, r, w,
+    /// b_instructions, br, bw, m.
     #[arg(long, value_name = "FILE.toml")]
     pub costs: Option<PathBuf>,
     /// Machine rates "INSTR_PER_S,BYTES_PER_S" (default: Radeon 9700 Pro, 2.6e9,19.84e9).
@@ -191,16 +200,17 @@ fn machine_of(a: &StreamArgs) -> Result<(StreamConfig, CostModel)> {
         suppress: a.suppress,
         simd: a.simd,
         cache: a.cache,
-        cache_state: a.cache_state,
+        cache_state: !a.uncached_state,
+        output_words: a.output_words,
         machine: a.machine.unwrap_or_default(),
     };
     cfg.validate().map_err(|e| anyhow!("stream configuration: {e}"))?;
     let costs = match &a.costs {
         Some(p) => {
             let text = crate::input::read_file::read_text(p, crate::input::read_file::TEXT_LIMIT)?;
-            CostModel::from_toml(&text, &p.display().to_string()).map_err(|e| anyhow!("{}: {e}", p.display()))?
+            CostModel::from_toml(&text, &p.display().to_string(), a.isa).map_err(|e| anyhow!("{}: {e}", p.display()))?
         }
-        None => CostModel::default(),
+        None => CostModel::counted(a.isa),
     };
     Ok((cfg, costs))
 }

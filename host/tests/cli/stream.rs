@@ -34,7 +34,7 @@ fn stream_machine_tables_report_charts_and_bad_input() {
         }
     }
     // A cost file replaces raypipe's counts.
-    std::fs::write(dir.path().join("paper.toml"), "[intersect]\ninstructions = 41\nm = 11\n").unwrap();
+    std::fs::write(dir.path().join("paper.toml"), "[intersect]\nb_instructions = 41\nm = 11\n").unwrap();
     let o = raypipe(
         dir.path(),
         &["stream", "--size", "32x32", "--costs", "paper.toml", "--no-charts", "--arch", "branching"],
@@ -50,6 +50,8 @@ fn stream_machine_tables_report_charts_and_bad_input() {
         (vec!["--unroll", "traverse=0"], "traverse"),
         (vec!["--cache", "64K,3,50"], "cache"),
         (vec!["--machine", "1e9"], "machine"),
+        (vec!["--output-words", "6"], "output words"),
+        (vec!["--isa", "vec3"], "vec3"),
         (vec!["--costs", "bad.toml"], "intersekt"),
         (vec!["--costs", "missing.toml"], "missing.toml"),
         (vec!["--arch", "branching", "--suppress"], "multipass"),

@@ -1,7 +1,9 @@
 //! The branching architecture (Purcell 2002 §4.2) over one screen of rays: one pass in
 //! which each fragment runs the fused program — eye ray, setup, then `while` not done:
 //! `if` waiting to traverse, a step, `else` a triangle — with its state in registers:
-//! no stencil, no state words.
+//! no stencil, no state words between kernels. Its stream input and output are charged
+//! as Table 1 charges them: a secondary ray's record read, colours and emitted records
+//! written (the cost model's BR and BW).
 //!
 //! Fragments run in lock-step groups of `simd`: in each iteration a branch that any
 //! ray of the group takes is executed by the whole group, so a group whose rays
@@ -37,7 +39,10 @@ impl<I: Intersector> StreamMachine<'_, I> {
             rays.iter().map(|r| r.map(|(ray, any_hit)| StreamRay::<I>::setup(&self.grid, ray, any_hit))).collect();
         let traced = state.iter().flatten().count() as u64;
         fused.processed += traced;
-        self.charge(Kernel::Setup, traced, 0, [0; 4], fused);
+        // A secondary ray's record is the pass's stream input (eye rays are made in
+        // registers).
+        let inputs = if generate { 0 } else { traced };
+        self.charge(Kernel::Setup, traced, inputs, [0; 4], fused);
 
         let simd = self.cfg.simd.max(1) as usize;
         let (mut exec, mut words) = ([0u64; 2], [[0u64; 4]; 2]);

@@ -95,9 +95,15 @@ pub struct StreamConfig {
     /// Branching: fragments that run in lock step (1: each fragment branches alone;
     /// a wider group runs both branches whenever its rays disagree).
     pub simd: u32,
+    /// Words a fragment program may write in one pass: Purcell 2002 §2.2 allows "1 or 2
+    /// floating point RGBA (4-vectors)" of output, so 8. A kernel with more to write
+    /// runs as several passes over the same fragments, each reading its inputs again.
+    pub output_words: u32,
     /// The texture cache.
     pub cache: TextureCacheConfig,
-    /// State-texture reads also go through the texture cache (else they bypass it).
+    /// State-texture reads go through the texture cache, as every texture read does on
+    /// the paper's machine (§5.3: the streaming state "displaces cacheable data");
+    /// `false` lets them bypass it.
     pub cache_state: bool,
     /// The machine that turns totals into a frame time.
     pub machine: Machine,
@@ -111,8 +117,9 @@ impl Default for StreamConfig {
             unroll: Unroll::default(),
             suppress: false,
             simd: 1,
+            output_words: 8,
             cache: TextureCacheConfig::default(),
-            cache_state: false,
+            cache_state: true,
             machine: Machine::default(),
         }
     }
@@ -124,6 +131,12 @@ impl StreamConfig {
         self.cache.validate()?;
         if !(1..=1024).contains(&self.simd) {
             return Err(format!("simd width {} is not between 1 and 1024", self.simd));
+        }
+        if !(4..=64).contains(&self.output_words) || !self.output_words.is_multiple_of(4) {
+            return Err(format!(
+                "{} output words per pass: expected whole RGBA outputs, 4 to 64 words",
+                self.output_words
+            ));
         }
         if self.arch == Architecture::Branching && (self.unroll != Unroll::default() || self.suppress) {
             return Err("loop unrolling and suppression are for the multipass architecture".into());

@@ -18,6 +18,7 @@ use crate::stream::cost_model::{CostModel, Kernel};
 use crate::stream::counters::{ByKernel, PassKind, PassRecord, RayWork};
 use crate::stream::ray_state::StreamRay;
 use crate::stream::report::{ratio, ClassRow, KernelRow, LoopTotals, StreamReport, Table2, Traffic};
+use crate::stream::stencil::covered_fragments;
 use crate::stream::texture_cache::TextureCache;
 use crate::stream::texture_cache::{CLASSES, CLASS_NAMES, STATE};
 
@@ -43,6 +44,7 @@ pub struct StreamMachine<'s, I: Intersector> {
     pub(crate) cfg: StreamConfig,
     pub(crate) costs: CostModel,
     pub(crate) cache: TextureCache,
+    pub(crate) state_textures: crate::stream::pass_loop::StateTextures,
     visibility: Option<Vec<(Option<Ray>, Option<Hit>)>>,
     /// Every pass, in order.
     pub passes: Vec<PassRecord>,
@@ -95,6 +97,7 @@ impl<'s, I: Intersector> StreamMachine<'s, I> {
             cfg: cfg.clone(),
             costs,
             cache: TextureCache::new(&cfg.cache),
+            state_textures: Default::default(),
             visibility: None,
             passes: Vec::new(),
             kernels: ByKernel::default(),
@@ -200,13 +203,20 @@ impl<'s, I: Intersector> StreamMachine<'s, I> {
                 Architecture::Branching => self.branching_screen(&rays, generate, &mut fused),
             }
         };
-        let shade = self.shading_pass(wave, screen, &frags, &ends, next);
+        let (mut shade, written) = self.shading_pass(wave, screen, &frags, &ends, next);
         match self.cfg.arch {
-            Architecture::Multipass => self.passes.push(shade),
+            Architecture::Multipass => {
+                shade.covered = covered_fragments(frags.len(), self.screen().0);
+                let repeats = self.output_repeats(Kernel::Shade, &shade, written);
+                self.passes.push(shade);
+                self.passes.extend(repeats);
+            }
             Architecture::Branching => {
                 fused.processed += shade.processed;
                 fused.useful += shade.useful;
                 fused.instructions += shade.instructions;
+                fused.state_read += shade.state_read;
+                fused.state_written += shade.state_written;
                 for c in 0..4 {
                     fused.random_words[c] += shade.random_words[c];
                 }
@@ -217,7 +227,8 @@ impl<'s, I: Intersector> StreamMachine<'s, I> {
     }
 
     /// Charges `invocations` of kernel `k` to the totals and to `pass`: instructions,
-    /// state words for `state_rays` rays (multipass), and random-access words (the
+    /// state words for `state_rays` rays (the multipass machine's state textures, or the
+    /// branching machine's stream input and output), and random-access words (the
     /// measured ones, unless the cost table fixes them).
     pub(crate) fn charge(
         &mut self,
@@ -228,16 +239,18 @@ impl<'s, I: Intersector> StreamMachine<'s, I> {
         pass: &mut PassRecord,
     ) {
         let c = self.costs.get(k);
+        let (instructions, r, w) = match self.cfg.arch {
+            Architecture::Multipass => (c.instructions, c.r, c.w),
+            Architecture::Branching => (c.b_instructions, c.br, c.bw),
+        };
         let t = self.kernels.get_mut(k);
         t.invocations += invocations;
-        t.instructions += invocations * c.instructions;
-        pass.instructions += invocations * c.instructions;
-        if self.cfg.arch == Architecture::Multipass {
-            t.state_read += state_rays * c.r;
-            t.state_written += state_rays * c.w;
-            pass.state_read += state_rays * c.r;
-            pass.state_written += state_rays * c.w;
-        }
+        t.instructions += invocations * instructions;
+        pass.instructions += invocations * instructions;
+        t.state_read += state_rays * r;
+        t.state_written += state_rays * w;
+        pass.state_read += state_rays * r;
+        pass.state_written += state_rays * w;
         let words: u64 = measured.iter().sum();
         t.random_words += match c.m {
             Some(m) => m * invocations as f64,
@@ -246,6 +259,42 @@ impl<'s, I: Intersector> StreamMachine<'s, I> {
         for (p, m) in pass.random_words.iter_mut().zip(measured) {
             *p += m;
         }
+    }
+
+    /// A multipass kernel that writes more words per fragment than a pass may output
+    /// (`write_words` > `output_words`, §2.2) runs again over the same fragments for
+    /// each further group of outputs: each repeat reads the stencil of every covered
+    /// fragment, the kernel's state inputs, and executes the kernel's instructions once
+    /// more (the program recomputes what it cannot carry over). The words written are
+    /// already charged. Returns the repeats, to be pushed after `first`.
+    pub(crate) fn output_repeats(&mut self, k: Kernel, first: &PassRecord, write_words: u64) -> Vec<PassRecord> {
+        let per_pass = self.cfg.output_words.max(4) as u64;
+        let extra = write_words.div_ceil(per_pass).saturating_sub(1);
+        if self.cfg.arch != Architecture::Multipass || extra == 0 {
+            return Vec::new();
+        }
+        let r = self.costs.get(k).r;
+        let t = self.kernels.get_mut(k);
+        let mut repeats = Vec::new();
+        for _ in 0..extra {
+            let mut p = PassRecord {
+                wave: first.wave,
+                screen: first.screen,
+                kind: first.kind,
+                iterations: 1,
+                processed: first.processed,
+                covered: first.covered,
+                instructions: first.instructions,
+                state_read: first.processed * r,
+                active_after: first.active_after,
+                ..Default::default()
+            };
+            p.stencil.reads = first.covered;
+            t.instructions += p.instructions;
+            t.state_read += p.state_read;
+            repeats.push(p);
+        }
+        repeats
     }
 
     /// Folds one ray's work into the maxima.
@@ -318,8 +367,9 @@ impl<'s, I: Intersector> StreamMachine<'s, I> {
                 let c = costs.get(k);
                 let t = *self.kernels.get(k);
                 let mean = if t.invocations > 0 { t.random_words / t.invocations as f64 } else { 0.0 };
-                let (r, w) = if multipass { (c.r, c.w) } else { (0, 0) };
-                KernelRow { kernel: k.name(), instructions: c.instructions, r, w, m: c.m.unwrap_or(mean), totals: t }
+                let (instructions, r, w) =
+                    if multipass { (c.instructions, c.r, c.w) } else { (c.b_instructions, c.br, c.bw) };
+                KernelRow { kernel: k.name(), instructions, r, w, m: c.m.unwrap_or(mean), totals: t }
             })
             .collect();
         let cache = self.texture_cache();
@@ -345,7 +395,11 @@ impl<'s, I: Intersector> StreamMachine<'s, I> {
         let fixed_m = costs.kernels.values().any(|c| c.m.is_some());
         let table_words: f64 = self.kernels.0.iter().map(|t| t.random_words).sum();
         let random = if fixed_m { (table_words * 4.0) as u64 } else { random };
-        let state_reads_bytes = if cfg.cache_state { cache.bytes_fetched(STATE) } else { state_read * 4 };
+        // State reads that went through the cache cost its lines; the rest (the shading
+        // pass's, the repeats', the branching machine's stream input) their words.
+        let cached_state_words = if cfg.cache_state { stats.words[STATE] } else { 0 };
+        let cached_state_bytes = if cfg.cache_state { cache.bytes_fetched(STATE) } else { 0 };
+        let state_reads_bytes = cached_state_bytes + state_read.saturating_sub(cached_state_words) * 4;
         let state = state_reads_bytes + state_written * 4;
         let stencil = stencil_reads + stencil_writes;
         let traffic = Traffic { random, random_uncached, state, stencil, total: random + state + stencil };

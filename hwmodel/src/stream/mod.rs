@@ -28,9 +28,10 @@ pub mod scalar_counts;
 pub mod shading_pass;
 pub mod stencil;
 pub mod texture_cache;
+pub mod vec4_counts;
 
 pub use config::{Architecture, StreamConfig, Unroll};
-pub use cost_model::{CostModel, Kernel};
+pub use cost_model::{CostModel, Isa, Kernel};
 pub use frame::StreamMachine;
 pub use gpu::Machine;
 pub use oracle::Oracle;

@@ -19,10 +19,55 @@ use crate::stream::oracle::{LoopPass, Waiting};
 use crate::stream::ray_state::StreamRay;
 use crate::stream::stencil::{RayStage, Stencil};
 
-/// State textures live in their own address space, above any scene image; one record
-/// of this many bytes per fragment.
-pub(crate) const STATE_BASE: u64 = 1 << 40;
-pub(crate) const STATE_STRIDE: u64 = 256;
+/// State textures live in their own address space, above any scene image: one
+/// screen-sized RGBA texture per texel of state ([`crate::stream::ray_state::words`]),
+/// fragment `i`'s texel at `16 i`, so that a 48-byte cache line holds three neighbours'
+/// texels — the locality a texture cache sees in Purcell's state textures.
+const STATE_BASE: u64 = 1 << 40;
+/// The state textures: the ray's two texels, the DDA's two (the list position in the
+/// second), the hit.
+const RAY_TEXELS: [u64; 2] = [0, 1];
+const DDA_TEXELS: [u64; 2] = [2, 3];
+const HIT_TEXEL: u64 = 4;
+
+/// The texels a loop kernel reads and writes.
+fn state_texels(k: Kernel) -> (&'static [u64], &'static [u64]) {
+    match k {
+        Kernel::Setup => (&RAY_TEXELS, &[2, 3, HIT_TEXEL]),
+        Kernel::Traverse => (&[0, 1, 2, 3, HIT_TEXEL], &DDA_TEXELS),
+        Kernel::Intersect => (&[0, 1, 2, 3, HIT_TEXEL], &[3, HIT_TEXEL]),
+        _ => (&[], &[]),
+    }
+}
+
+/// Versions of the state textures: a pass that writes a texture makes a new version
+/// (at a new address), so the cache never serves a texel the pass before overwrote —
+/// the invalidation a render-to-texture pass needs.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct StateTextures {
+    versions: [u64; 5],
+}
+
+impl StateTextures {
+    /// The byte address of fragment `i`'s texel of texture `t`.
+    fn addr(&self, t: u64, i: usize) -> u64 {
+        STATE_BASE + (((t << 20) | (self.versions[t as usize] & 0xF_FFFF)) << 28) + i as u64 * 16
+    }
+
+    /// Reads fragment `i`'s texels for kernel `k` through the probe.
+    fn read(&self, k: Kernel, i: usize, probe: &mut StreamProbe<'_>) {
+        for &t in state_texels(k).0 {
+            probe.state_read(self.addr(t, i), 4);
+        }
+    }
+
+    /// Kernel `k`'s pass is over: what it wrote is a new version.
+    fn wrote(&mut self, k: Kernel) {
+        for &t in state_texels(k).1 {
+            self.versions[t as usize] += 1;
+        }
+    }
+}
 
 /// A ray's current runs of traversal steps and intersections, to count the passes it
 /// needs at least ([`RayWork`]).
@@ -116,8 +161,8 @@ impl<I: Intersector> StreamMachine<'_, I> {
             };
             let mut p = new_pass(pass_kind, iterations);
             stencil.test_pass();
-            let r_words = self.costs.get(kernel).r;
             let (cache_state, suppress) = (self.cfg.cache_state, self.cfg.suppress);
+            let textures = std::mem::take(&mut self.state_textures);
             let mut probe = StreamProbe::new(&mut self.cache, iterations > 1 && !suppress);
             for &i in &alive {
                 let Some(ray) = state[i].as_mut() else { continue };
@@ -126,11 +171,12 @@ impl<I: Intersector> StreamMachine<'_, I> {
                 }
                 p.processed += 1;
                 if cache_state {
-                    probe.state_read(STATE_BASE + i as u64 * STATE_STRIDE, r_words);
+                    textures.read(kernel, i, &mut probe);
                 }
                 for _ in 0..iterations {
                     if ray.stage == stage {
                         probe.begin();
+                        ray.reread_entry(&self.grid, &mut probe);
                         ray.run_kernel(&self.scene, &self.grid, &mut probe);
                         p.useful += 1;
                         runs[i].step(stage, &mut work[i]);
@@ -154,6 +200,8 @@ impl<I: Intersector> StreamMachine<'_, I> {
             }
             let words = probe.take_words();
             drop(probe);
+            self.state_textures = textures;
+            self.state_textures.wrote(kernel);
             p.stencil = stencil.take_counts();
             let (executions, processed) = (p.useful + p.idle, p.processed);
             self.charge(kernel, executions, processed, words, &mut p);
@@ -197,13 +245,21 @@ impl<I: Intersector> StreamMachine<'_, I> {
     ) -> (Vec<Option<StreamRay<I>>>, Vec<usize>) {
         stencil.test_pass();
         let mut state: Vec<Option<StreamRay<I>>> = Vec::with_capacity(rays.len());
+        let textures = std::mem::take(&mut self.state_textures);
+        let mut probe = StreamProbe::new(&mut self.cache, false);
         for (i, r) in rays.iter().enumerate() {
+            if r.is_some() && self.cfg.cache_state {
+                textures.read(Kernel::Setup, i, &mut probe);
+            }
             state.push(r.map(|(ray, any_hit)| {
                 let s = StreamRay::<I>::setup(&self.grid, ray, any_hit);
                 stencil.set(i, s.stage);
                 s
             }));
         }
+        drop(probe);
+        self.state_textures = textures;
+        self.state_textures.wrote(Kernel::Setup);
         p.processed = state.iter().flatten().count() as u64;
         p.useful = p.processed;
         p.stencil = stencil.take_counts();
@@ -212,7 +268,11 @@ impl<I: Intersector> StreamMachine<'_, I> {
         let alive: Vec<usize> =
             (0..rays.len()).filter(|&i| state[i].is_some_and(|s| s.stage != RayStage::Done)).collect();
         p.active_after = alive.len() as u64;
+        // Twelve words to write: the paper's setup takes two passes (§3.1.2), and so
+        // does this one.
+        let repeats = self.output_repeats(Kernel::Setup, &p, self.costs.get(Kernel::Setup).w);
         self.passes.push(p);
+        self.passes.extend(repeats);
         (state, alive)
     }
 
@@ -262,4 +322,23 @@ fn bounds_after<I: Intersector>(alive: &[usize], state: &[Option<StreamRay<I>>],
         i_after_i = i_after_i.max(if stage == Some(RayStage::Intersect) { fi.saturating_sub(1) } else { fi });
     }
     (t_after_t + i, t + i_after_i)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn state_texels_share_lines_with_neighbours_and_never_outlive_a_write() {
+        let mut t = StateTextures::default();
+        // Three neighbours' 16-byte texels in one 48-byte line; textures apart.
+        assert_eq!(t.addr(2, 3) / 48, t.addr(2, 5) / 48);
+        assert_ne!(t.addr(2, 5) / 48, t.addr(2, 6) / 48);
+        assert_ne!(t.addr(1, 0) / 48, t.addr(2, 0) / 48);
+        // Traversal writes the DDA's texels: new addresses for them only.
+        let (dda, ray) = (t.addr(2, 7), t.addr(0, 7));
+        t.wrote(Kernel::Traverse);
+        assert_ne!(t.addr(2, 7), dda);
+        assert_eq!(t.addr(0, 7), ray);
+    }
 }

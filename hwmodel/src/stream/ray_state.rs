@@ -12,27 +12,35 @@
 
 use raypipe_core::image::{GridView, NULL_INDEX};
 use raypipe_core::intersect::triangle::test_triangle;
-use raypipe_core::traverse::dda::{Dda, Voxel};
+use raypipe_core::traverse::dda::Voxel;
 use raypipe_core::traverse::grid::{GridEvent, GridTraversal};
 use raypipe_core::{Hit, Intersector, MemoryProbe, Ray, SceneView};
 
 use crate::stream::stencil::RayStage;
 
-/// Words of the per-ray state textures, from the records the kernels keep between
-/// invocations (a word is 4 bytes, as a texture channel).
+/// Words of the per-ray state textures (a word is 4 bytes, a texture channel; the
+/// textures are RGBA, so a kernel reads and writes whole texels of 4 words). Only what
+/// cannot be recomputed bit for bit from the ray is stored, because a pass writes at
+/// most two RGBA outputs (§2.2) — see [`crate::stream::config::StreamConfig`]'s
+/// `output_words`.
 pub mod words {
     use super::*;
-    /// The ray: origin, direction, `t_min`, `t_max`.
+    /// The ray: origin and `t_min`, direction and `t_max` (two texels).
     pub const RAY: u64 = (core::mem::size_of::<Ray>() / 4) as u64;
-    /// The 3D-DDA's per-ray registers: the `Dda` record less the grid's constants
-    /// (dims, corner, cell size: 9 words) and the origin (in the ray texture: 3 words).
-    pub const TRAVERSAL: u64 = (core::mem::size_of::<Dda>() / 4) as u64 - 12;
+    /// The 3D-DDA's per-ray registers kept between passes: the cell, the next boundary
+    /// on each axis and `t_enter` (7 words). The step signs, 1/d and `t_end` are
+    /// recomputed from the ray by each traversal pass (the same operations on the same
+    /// words, so the same bits); the walk's end needs no flag — the next step finds
+    /// the boundary past `t_end` or the cell outside the grid; the exit of the voxel
+    /// being tested is the next voxel's `t_enter`, or `t_end`.
+    pub const TRAVERSAL: u64 = 7;
     /// The best hit so far: `t`, `u`, `v`, triangle.
     pub const HIT: u64 = (core::mem::size_of::<Hit>() / 4) as u64;
-    /// The voxel list being tested: position, the entry read ahead, the voxel's exit
-    /// distance (the hit is final if it lies before it).
-    pub const LIST: u64 = 3;
-    /// A pixel's colour (RGBA) or a shaded ray's radiance.
+    /// The voxel list being tested: the position of the entry to test next (in the
+    /// DDA's second texel). The entry itself is read again by the multipass
+    /// intersection kernel rather than stored.
+    pub const LIST: u64 = 1;
+    /// A pixel's colour (RGBA) or a ray's weight.
     pub const COLOR: u64 = 4;
 }
 
@@ -108,6 +116,15 @@ impl<I: Intersector> StreamRay<I> {
                     self.stage = RayStage::Intersect;
                 }
             }
+        }
+    }
+
+    /// The multipass machine's read of the entry to test, which it does not keep
+    /// between passes ([`words::LIST`]): the same word as the read-ahead copy.
+    pub fn reread_entry<P: MemoryProbe>(&self, grid: &GridView<'_>, probe: &mut P) {
+        if self.stage == RayStage::Intersect {
+            let entry = grid.list_entry(self.pos, probe);
+            debug_assert_eq!(entry, self.next_prim);
         }
     }
 

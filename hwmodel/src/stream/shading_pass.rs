@@ -23,7 +23,8 @@ use crate::stream::ray_state::StreamRay;
 use crate::stream::stencil::{covered_fragments, StencilCounts};
 
 impl<I: Intersector> StreamMachine<'_, I> {
-    /// Shades one screen; emitted records go to `next`.
+    /// Shades one screen; emitted records go to `next`. Returns the pass and the most
+    /// words one fragment writes (its colour and the records it emits).
     pub(crate) fn shading_pass(
         &mut self,
         wave: u32,
@@ -31,7 +32,7 @@ impl<I: Intersector> StreamMachine<'_, I> {
         frags: &[Fragment],
         ends: &[Option<StreamRay<I>>],
         next: &mut Vec<RayRecord>,
-    ) -> PassRecord {
+    ) -> (PassRecord, u64) {
         let (width, _) = self.screen();
         let mut p = PassRecord { wave, screen, kind: Some(PassKind::Shade), iterations: 1, ..Default::default() };
         if self.cfg.arch == Architecture::Multipass {
@@ -54,6 +55,7 @@ impl<I: Intersector> StreamMachine<'_, I> {
         let (sums, share) = (self.sums_radiance(), 1.0 / self.samples() as f32);
         let eye = self.eye;
         let mut probe = StreamProbe::new(&mut self.cache, false);
+        let mut most_emitted = 0;
         for (i, f) in frags.iter().enumerate() {
             let (rec, hit) = match f {
                 Fragment::Empty => {
@@ -110,7 +112,9 @@ impl<I: Intersector> StreamMachine<'_, I> {
                     textured += m.as_ref().is_some_and(reads_texture) as u64;
                     // The highlight is the shader's (the ray caster's Lambert has none).
                     glossy += m.as_ref().is_some_and(is_glossy) as u64;
+                    let before = next.len();
                     let c = s.shade(&scene, &rec, hit, &mut probe, &mut |r| next.push(r));
+                    most_emitted = most_emitted.max(next.len() - before);
                     if let Some(r) = self.radiance.get_mut(pixel) {
                         r.add(c);
                     }
@@ -129,6 +133,8 @@ impl<I: Intersector> StreamMachine<'_, I> {
         self.charge(Kernel::GlossyLight, glossy * shadowing, 0, [0; 4], &mut p);
         self.charge(Kernel::Spawn, emitted, emitted, [0; 4], &mut p);
         self.charge(Kernel::ShadowAdd, shadows, shadows, [0; 4], &mut p);
-        p
+        let (shade_w, spawn_w) = (self.costs.get(Kernel::Shade).w, self.costs.get(Kernel::Spawn).w);
+        let written = if p.processed > 0 { shade_w + most_emitted as u64 * spawn_w } else { 0 };
+        (p, written)
     }
 }
