@@ -3,7 +3,9 @@
 //! stage runs at that stage's throughput — its closed-form bound — plus no more than the
 //! pipeline's fill and drain.
 
-use raypipe::scene::{framing_camera, Accel};
+use raypipe::build::sah::BvhParams;
+use raypipe::input::mesh::Mesh;
+use raypipe::scene::{self, framing_camera, Accel, BuildOptions};
 use raypipe_core::camera::{Camera, EyeRays};
 use raypipe_core::{SceneView, Vec3, Watertight};
 use raypipe_hw::config::{CacheConfig, MemoryModel};
@@ -111,4 +113,57 @@ fn a_memory_bound_frame_runs_at_the_channel_bandwidth() {
     assert_eq!(bound, r.memory.total_bytes as f64);
     assert!(r.cycles as f64 >= bound);
     assert!(r.bounds.achieved_over_largest < 1.05, "{} cycles for a {bound}-cycle bound", r.cycles);
+}
+
+/// One ray through a known tree under perfect memory. The scene: a triangle facing the
+/// camera and a small one straight behind it, built into a BVH of one triangle per leaf
+/// without triangle splitting — a root over two leaves. The one eye ray (a 1×1 image
+/// through the middle of the box, one ray per packet) takes one node step, the root,
+/// which tests both children's boxes; the front leaf goes to intersection, where the ray
+/// hits, and the back leaf, popped afterwards, starts beyond the hit: one step, one
+/// triangle test. With one thread and one unit nothing overlaps, so the frame is exactly
+/// a constant plus the root step's two dependent node-cache lookups (the root's record,
+/// then its children's, whose address it holds) and its step latency, and the leaf's
+/// three dependent lookups in the triangle cache (list entry, triangle record, vertices)
+/// and its intersection latency.
+#[test]
+fn one_ray_through_a_known_tree_takes_exactly_its_latencies() {
+    let positions = vec![
+        [-4.0, -4.0, 0.0],
+        [4.0, -4.0, 0.0],
+        [0.0, 4.0, 0.0],
+        [-0.5, -0.5, -8.0],
+        [0.5, -0.5, -8.0],
+        [0.0, 0.5, -8.0],
+    ];
+    let mesh = Mesh { positions, triangles: vec![[0, 1, 2], [3, 4, 5]], ..Default::default() };
+    let bvh = BvhParams { max_leaf: 1, presplit_extent: 0.0, spatial_alpha: 0.0, ..BvhParams::default() };
+    let opts = BuildOptions { accel: Accel::Bvh, bvh, ..Default::default() };
+    let scene = scene::build("two".into(), mesh, Vec::new(), Default::default(), &opts).unwrap();
+    let view = scene.view().unwrap();
+    let (lo, hi) = view.bounds();
+    let mut cam = framing_camera(lo.to_array(), hi.to_array());
+    (cam.width, cam.height) = (1, 1);
+    let cycles = |step: u32, node_hit: u32, tri_hit: u32, isect: u32| {
+        let mut cfg = HwConfig::default();
+        cfg.memory.model = MemoryModel::Perfect;
+        cfg.packet_size = 1;
+        cfg.traversal.units = 1;
+        cfg.traversal.threads = 1;
+        cfg.traversal.step_latency = step;
+        cfg.cache.nodes.hit_latency = node_hit;
+        cfg.cache.triangles.hit_latency = tri_hit;
+        cfg.intersection.latency = isect;
+        let eye = EyeRays::new(&Camera::from(&cam)).unwrap();
+        let mut sim = Simulator::<Watertight>::new(view, eye, Vec3::from(cam.background), &cfg).unwrap();
+        sim.run(|_, _| {}).unwrap();
+        let r = sim.report();
+        (r.cycles, r.traversal_steps, r.triangle_tests, sim.hits()[0].map(|h| h.prim))
+    };
+    let (base, steps, tests, hit) = cycles(1, 1, 1, 1);
+    assert_eq!((steps, tests, hit), (1, 1, Some(0)), "the root, one test, a hit on the front triangle");
+    for (s, n, t, i) in [(5, 1, 1, 1), (1, 7, 1, 1), (1, 1, 4, 1), (1, 1, 1, 30), (9, 3, 6, 12)] {
+        let want = base + (s - 1) as u64 + 2 * (n - 1) as u64 + 3 * (t - 1) as u64 + (i - 1) as u64;
+        assert_eq!(cycles(s, n, t, i).0, want, "step {s}, node hit {n}, triangle hit {t}, intersection {i}");
+    }
 }
