@@ -11,7 +11,7 @@ use raypipe_core::camera::{Camera, EyeRays};
 use raypipe_core::image::CameraRecord;
 use raypipe_core::pixel_filter::Filter;
 use raypipe_core::{FixedWatertight, Hit, Intersector, NoProbe, RayCounters, SceneView, Vec3, Watertight};
-use raypipe_hw::config::{MemoryModel, PagePolicy};
+use raypipe_hw::config::{DramScheduling, MemoryModel, PagePolicy};
 use raypipe_hw::{HwConfig, Simulator};
 use raypipe_tests::build_soup;
 
@@ -45,15 +45,15 @@ fn accel() -> impl Strategy<Value = Accel> {
 }
 
 /// A random but valid chip, with the datapath widths, jobs in flight, cache ports and
-/// MSHRs, odd line sizes, an L2 and the three memory models drawn too.
+/// MSHRs, odd line sizes, an L2, the memory models and the DRAM's scheduler drawn too.
 fn config() -> impl Strategy<Value = HwConfig> {
     (
         base_config(),
         (1u32..9, 1u32..5, 1u32..5, 1u32..3),
         (1u32..3, 1u32..5, any::<bool>(), memory_model()),
-        (1u32..6, prop_oneof![Just(4u32), Just(32), Just(64)], any::<bool>(), any::<bool>()),
+        (1u32..6, prop_oneof![Just(4u32), Just(32), Just(64)], any::<bool>(), any::<bool>(), any::<bool>()),
     )
-        .prop_map(|(mut c, (tl, il, jobs, sj), (ports, mshrs, l2, model), (queue, burst, odd, closed))| {
+        .prop_map(|(mut c, (tl, il, jobs, sj), (ports, mshrs, l2, model), (queue, burst, odd, closed, fcfs))| {
             c.traversal.lanes_per_cycle = tl;
             c.intersection.lanes_per_cycle = il;
             c.intersection.jobs = jobs;
@@ -78,6 +78,9 @@ fn config() -> impl Strategy<Value = HwConfig> {
             c.memory.min_burst_bytes = burst;
             if closed {
                 c.memory.dram.page_policy = PagePolicy::Closed;
+            }
+            if fcfs {
+                c.memory.dram.scheduler = DramScheduling::Fcfs;
             }
             c.memory.dram.t_refi = 400;
             c.memory.dram.t_rfc = 30;

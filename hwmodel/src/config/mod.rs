@@ -264,6 +264,9 @@ pub struct DramConfig {
     pub burst_length: u32,
     /// `"open"`: a row stays open after an access; `"closed"`: precharged at once.
     pub page_policy: PagePolicy,
+    /// `"fr-fcfs"`: queued requests are issued row hits first, oldest first (Rixner et
+    /// al. 2000); `"fcfs"`: in the order the memory accepted them.
+    pub scheduler: DramScheduling,
     /// ACTIVATE to READ/WRITE.
     pub t_rcd: u32,
     /// PRECHARGE to ACTIVATE.
@@ -284,6 +287,18 @@ pub struct DramConfig {
     pub t_faw: u32,
     /// Chip cycles through the memory controller, each way together.
     pub controller_latency: u32,
+}
+
+/// How the DRAM controller orders the requests in its queue.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum DramScheduling {
+    /// First ready, first come first served: row hits before older requests.
+    #[default]
+    #[serde(rename = "fr-fcfs")]
+    FrFcfs,
+    /// First come, first served.
+    #[serde(rename = "fcfs")]
+    Fcfs,
 }
 
 /// DRAM page policy.
@@ -399,6 +414,7 @@ impl Default for DramConfig {
             bus_bytes: 8,
             burst_length: 8,
             page_policy: PagePolicy::Open,
+            scheduler: DramScheduling::FrFcfs,
             t_rcd: 11,
             t_rp: 11,
             t_cl: 11,

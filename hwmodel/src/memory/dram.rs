@@ -1,8 +1,9 @@
 //! A DRAM timing model: channels of banks with one open row each, a shared data bus per
 //! channel, the main JEDEC timings (tRCD, tRP, CL, tRAS, tWR), periodic refresh (tREFI,
-//! tRFC) and an open or closed page policy. Requests are served first come, first served
-//! in the order the memory accepts them, burst by burst; a request's data is there when
-//! its last burst has crossed the bus.
+//! tRFC) and an open or closed page policy. Requests are timed burst by burst in the
+//! order the controller issues them ([`crate::memory::dram_scheduler`]: FR-FCFS, or
+//! first come, first served); a request's data is there when its last burst has crossed
+//! the bus.
 //!
 //! Address mapping (row : bank : column : channel, low to high bits reversed): bursts are
 //! interleaved over channels, a channel's bytes fill a row of one bank before moving to
@@ -168,24 +169,43 @@ impl Dram {
         }
     }
 
+    /// Where byte `addr` lives: its channel, its bank (channel-major index) and its row
+    /// (row : bank : column : channel, the module comment's mapping).
+    fn locate(&self, addr: u64) -> (u64, usize, u64) {
+        let c = &self.cfg;
+        let (channels, banks, burst) = (c.channels as u64, c.banks as u64, self.burst_bytes());
+        let b = addr / burst;
+        let channel = b % channels;
+        let local = (b / channels) * burst;
+        let bank_in = (local / c.row_bytes as u64) % banks;
+        let row = local / (c.row_bytes as u64 * banks);
+        (channel, (channel * banks + bank_in) as usize, row)
+    }
+
+    /// What a scheduler sees of the bank holding byte `addr` at chip cycle `t`: its
+    /// index, whether the row is open (and no refresh has closed it by `t`), and the
+    /// chip cycle from which the bank takes its next command.
+    pub fn bank_view(&self, addr: u64, t: u64) -> (usize, bool, u64) {
+        let (_, k, row) = self.locate(addr);
+        let bank = &self.banks[k];
+        let (_, epoch) = self.after_refresh(self.to_dram(t).max(bank.ready));
+        let open = bank.open_row == Some(row) && bank.epoch == epoch;
+        (k, open, self.to_chip(bank.ready))
+    }
+
     /// Serves a request of `bytes` at byte `addr` that reaches the DRAM at chip cycle
     /// `arrive`: returns the chip cycle its first command issued and the chip cycle its
     /// data has all crossed the bus (reads) or been written and recovered (writes).
     pub fn access(&mut self, arrive: u64, addr: u64, bytes: u32, write: bool) -> (u64, u64) {
         let c = self.cfg;
         let burst = self.burst_bytes();
-        let (channels, banks) = (c.channels as u64, c.banks as u64);
         let first = addr / burst;
         let last = (addr + bytes.max(1) as u64 - 1) / burst;
         let mut start = u64::MAX;
         let mut done = 0;
         let t0 = self.to_dram(arrive);
         for b in first..=last {
-            let channel = b % channels;
-            let local = (b / channels) * burst;
-            let bank_in = (local / c.row_bytes as u64) % banks;
-            let row = local / (c.row_bytes as u64 * banks);
-            let k = (channel * banks + bank_in) as usize;
+            let (channel, k, row) = self.locate(b * burst);
             let (mut t, epoch) = self.after_refresh(t0.max(self.banks[k].ready));
             let mut bank = self.banks[k];
             if bank.epoch != epoch {

@@ -18,6 +18,7 @@
 
 pub mod cache;
 pub mod dram;
+pub mod dram_scheduler;
 #[cfg(feature = "dramsim3")]
 pub mod dramsim3;
 pub mod dramsim3_ini;
@@ -29,9 +30,10 @@ use std::collections::VecDeque;
 
 use serde::Serialize;
 
-use crate::config::{HwConfig, MemoryModel};
+use crate::config::{DramScheduling, HwConfig, MemoryModel};
 use crate::memory::cache::{Cache, Lookup};
 use crate::memory::dram::Dram;
+use crate::memory::dram_scheduler::DramScheduler;
 use crate::memory::port::{MemPort, Request, UNSCHEDULED};
 use crate::memory::traffic::CLASSES;
 
@@ -106,14 +108,17 @@ pub struct Memory {
     /// Fixed model: the channel is busy up to this byte slot (`cycle × bytes_per_cycle`).
     busy_slot: u64,
     dram: Option<Dram>,
+    /// The DRAM controller's queue, when it schedules FR-FCFS.
+    dram_queue: Option<DramScheduler>,
     l2: Option<L2>,
     last_done: u64,
     /// DRAMsim3, when that is the model.
     #[cfg(feature = "dramsim3")]
     ds3: Option<Box<dramsim3::Dramsim3>>,
-    /// The cycle each DRAMsim3 request's data is there from (`UNSCHEDULED` until known).
+    /// The cycle each DRAMsim3 or FR-FCFS request's data is there from (`UNSCHEDULED`
+    /// until known).
     tokens: Vec<u64>,
-    /// Port requests waiting on DRAMsim3.
+    /// Port requests waiting on DRAMsim3 or the FR-FCFS queue.
     pending: Vec<Pending>,
     /// When recording: every request the memory model served (after the L2), in order.
     pub stream: Option<Vec<replay::StreamRequest>>,
@@ -143,6 +148,8 @@ impl Memory {
             queue: VecDeque::new(),
             busy_slot: 0,
             dram: (m.model == MemoryModel::Dram).then(|| Dram::new(&m.dram, cfg.clock_mhz)),
+            dram_queue: (m.model == MemoryModel::Dram && m.dram.scheduler == DramScheduling::FrFcfs)
+                .then(DramScheduler::default),
             l2: Cache::new(&cfg.cache.l2).map(|cache| L2 {
                 cache,
                 ports: cfg.cache.l2.ports.max(1),
@@ -176,6 +183,9 @@ impl Memory {
         if let Some(d) = self.ds3.as_ref() {
             return d.queued();
         }
+        if let Some(q) = self.dram_queue.as_ref() {
+            return q.queued();
+        }
         self.queue.len()
     }
 
@@ -185,8 +195,11 @@ impl Memory {
         self.ds3.as_deref()
     }
 
-    /// True once no request waits on the memory's callbacks (always, but for DRAMsim3).
+    /// True once no request waits on the memory's callbacks or in the FR-FCFS queue.
     pub fn is_idle(&self) -> bool {
+        if let Some(q) = self.dram_queue.as_ref() {
+            return q.queued() == 0 && self.pending.is_empty();
+        }
         #[cfg(feature = "dramsim3")]
         if let Some(d) = self.ds3.as_ref() {
             return !d.busy() && self.pending.is_empty();
@@ -212,8 +225,9 @@ impl Memory {
         self.last_done
     }
 
-    /// At the edge ending `now`: DRAMsim3 ticks to the edge, and the requests whose data
-    /// it has called back get their ready cycle.
+    /// At the edge ending `now`: DRAMsim3 ticks to the edge, the FR-FCFS queue issues
+    /// what is ready in the next cycle, and the requests whose data is now known get
+    /// their ready cycle.
     #[cfg_attr(not(feature = "dramsim3"), allow(unused_variables))]
     fn deliver(&mut self, now: u64, ports: &mut [&mut MemPort]) -> bool {
         #[cfg(feature = "dramsim3")]
@@ -222,6 +236,13 @@ impl Memory {
             for (token, cycle) in d.take_done() {
                 if let Some(t) = self.tokens.get_mut(token as usize) {
                     *t = cycle;
+                }
+            }
+        }
+        if let (Some(q), Some(d)) = (self.dram_queue.as_mut(), self.dram.as_mut()) {
+            for (token, end) in q.issue(d, now + 1) {
+                if let Some(t) = self.tokens.get_mut(token as usize) {
+                    *t = end;
                 }
             }
         }
@@ -288,6 +309,10 @@ impl Memory {
                 }
                 took = true;
             }
+        }
+        // What was just taken may issue in the next cycle already.
+        if self.dram_queue.as_ref().is_some_and(|q| q.queued() > 0) {
+            self.deliver(now, ports);
         }
         took
     }
@@ -372,6 +397,12 @@ impl Memory {
                 let first = addr / burst * burst;
                 let moved = (addr + bytes.max(1) as u64).div_ceil(burst) * burst - first;
                 self.stats.bytes[class] += moved;
+                if let Some(q) = self.dram_queue.as_mut() {
+                    let token = self.tokens.len() as u32;
+                    self.tokens.push(UNSCHEDULED);
+                    q.submit(token, now + 1, addr, bytes, write);
+                    return Ready::Token(token);
+                }
                 d.access(now + 1, addr, bytes, write)
             }
             MemoryModel::Dramsim3 => return self.serve_dramsim3(addr, bytes, class, write),
@@ -399,7 +430,16 @@ impl Memory {
     /// The earliest cycle after `now` at which the queue frees a slot, if requests wait
     /// for one.
     pub fn next_wake(&self, now: u64, waiting: bool) -> Option<u64> {
-        if !self.is_idle() {
+        if let (Some(q), Some(d)) = (self.dram_queue.as_ref(), self.dram.as_ref()) {
+            // Pending requests learn their cycle at the next edge; a queued one issues
+            // in the cycle after the edge before it is ready.
+            if !self.pending.is_empty() {
+                return Some(now + 1);
+            }
+            if let Some(t) = q.next_ready(d, now) {
+                return Some(t.saturating_sub(1).max(now + 1));
+            }
+        } else if !self.is_idle() {
             // DRAMsim3 does not say in advance when it will call back: tick every cycle.
             return Some(now + 1);
         }
