@@ -226,8 +226,9 @@ impl<'s, I: Intersector> StreamMachine<'s, I> {
         Ok(())
     }
 
-    /// Charges `invocations` of kernel `k` to the totals and to `pass`: instructions,
-    /// state words for `state_rays` rays (the multipass machine's state textures, or the
+    /// Charges `invocations` of kernel `k` to the totals and to `pass`: instructions
+    /// (on the multipass machine, the kernel's per-pass part once for each of the
+    /// `state_rays` rays processed), state words for `state_rays` rays (the multipass machine's state textures, or the
     /// branching machine's stream input and output), and random-access words (the
     /// measured ones, unless the cost table fixes them).
     pub(crate) fn charge(
@@ -240,13 +241,16 @@ impl<'s, I: Intersector> StreamMachine<'s, I> {
     ) {
         let c = self.costs.get(k);
         let (instructions, r, w) = match self.cfg.arch {
-            Architecture::Multipass => (c.instructions, c.r, c.w),
-            Architecture::Branching => (c.b_instructions, c.br, c.bw),
+            // The pass's part once per processed ray, the rest per iteration.
+            Architecture::Multipass => {
+                (invocations * (c.instructions - c.per_pass.min(c.instructions)) + state_rays * c.per_pass, c.r, c.w)
+            }
+            Architecture::Branching => (invocations * c.b_instructions, c.br, c.bw),
         };
         let t = self.kernels.get_mut(k);
         t.invocations += invocations;
-        t.instructions += invocations * instructions;
-        pass.instructions += invocations * instructions;
+        t.instructions += instructions;
+        pass.instructions += instructions;
         t.state_read += state_rays * r;
         t.state_written += state_rays * w;
         pass.state_read += state_rays * r;

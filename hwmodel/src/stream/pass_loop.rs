@@ -173,10 +173,13 @@ impl<I: Intersector> StreamMachine<'_, I> {
                 if cache_state {
                     textures.read(kernel, i, &mut probe);
                 }
-                for _ in 0..iterations {
+                for it in 0..iterations {
                     if ray.stage == stage {
                         probe.begin();
-                        ray.reread_entry(&self.grid, &mut probe);
+                        if it == 0 {
+                            // Later iterations have the entry in a register.
+                            ray.reread_entry(&self.grid, &mut probe);
+                        }
                         ray.run_kernel(&self.scene, &self.grid, &mut probe);
                         p.useful += 1;
                         runs[i].step(stage, &mut work[i]);
