@@ -21,6 +21,8 @@ struct Bank {
     activated: u64,
     /// Earliest cycle the bank takes its next command.
     ready: u64,
+    /// Earliest cycle the bank may precharge: tWR after its last write's data.
+    precharge_ok: u64,
     /// Refresh epoch the row was opened in (a refresh closes every row).
     epoch: u64,
 }
@@ -223,8 +225,9 @@ impl Dram {
                 }
                 Some(_) => {
                     stats.row_conflicts += 1;
-                    // PRECHARGE no earlier than tRAS after the ACTIVATE, then ACTIVATE.
-                    let pre = t.max(bank.activated + c.t_ras as u64);
+                    // PRECHARGE no earlier than tRAS after the ACTIVATE and tWR after the
+                    // last write's data, then ACTIVATE.
+                    let pre = t.max(bank.activated + c.t_ras as u64).max(bank.precharge_ok);
                     t = pre;
                     Some(pre + c.t_rp as u64)
                 }
@@ -249,17 +252,16 @@ impl Dram {
             let end = data + self.burst_cycles();
             self.bus_free[channel as usize] = end;
             self.bus_busy += self.burst_cycles();
-            // The next column command to this bank: one burst later.
+            // The next column command to this bank: one burst later. A write's data must
+            // recover (tWR) before the row may close, not before the next column command.
             let mut next = column_at + self.burst_cycles();
-            let mut end_all = end;
             if write {
-                // Write recovery before the row may close.
-                end_all = end + c.t_wr as u64;
-                next = next.max(end_all);
+                bank.precharge_ok = end + c.t_wr as u64;
             }
+            let end_all = end;
             bank.open_row = Some(row);
             if c.page_policy == PagePolicy::Closed {
-                let pre = next.max(bank.activated + c.t_ras as u64);
+                let pre = next.max(bank.activated + c.t_ras as u64).max(bank.precharge_ok);
                 bank.open_row = None;
                 next = pre + c.t_rp as u64;
             }
@@ -352,6 +354,22 @@ mod tests {
         assert_eq!(starts, vec![0; 8], "every access starts at once (its bank is idle)");
         let acts: Vec<u64> = d.banks.iter().map(|b| b.activated).collect();
         assert_eq!(acts, vec![0, 5, 10, 15, 24, 29, 34, 39]);
+    }
+
+    #[test]
+    fn write_recovery_holds_the_precharge_not_the_next_column_command() {
+        let mut d = Dram::new(&ddr3(), 800.0);
+        // A write to a closed bank: ACTIVATE, tRCD, CL, the burst ends at 26.
+        let (_, written) = d.access(0, 0, 64, true);
+        assert_eq!(written, 26);
+        // A read of the same row follows one burst after the write's column command.
+        let (_, hit) = d.access(0, 64, 64, false);
+        assert_eq!(hit, 11 + 4 + 11 + 4);
+        // Another row of the bank: PRECHARGE waits for tWR after the write's data
+        // (26 + 12 = 38; tRAS ends at 28), then tRP, ACTIVATE, tRCD, CL, the burst.
+        let row = 8192 * 8;
+        let (_, conflict) = d.access(0, row, 64, false);
+        assert_eq!(conflict, 38 + 11 + 11 + 11 + 4);
     }
 
     #[test]
