@@ -273,6 +273,10 @@ pub struct DramConfig {
     pub t_rp: u32,
     /// READ to first data (CAS latency).
     pub t_cl: u32,
+    /// WRITE to first data (CAS write latency).
+    pub t_cwl: u32,
+    /// End of write data to a READ command of the channel (write-to-read turnaround).
+    pub t_wtr: u32,
     /// ACTIVATE to PRECHARGE, at least.
     pub t_ras: u32,
     /// End of write data to PRECHARGE.
@@ -418,6 +422,8 @@ impl Default for DramConfig {
             t_rcd: 11,
             t_rp: 11,
             t_cl: 11,
+            t_cwl: 8,
+            t_wtr: 6,
             t_ras: 28,
             t_wr: 12,
             t_refi: 6240,

@@ -252,6 +252,8 @@ impl DramConfig {
             ("t_rcd", d.t_rcd),
             ("t_rp", d.t_rp),
             ("t_cl", d.t_cl),
+            ("t_cwl", d.t_cwl),
+            ("t_wtr", d.t_wtr),
             ("t_ras", d.t_ras),
             ("t_wr", d.t_wr),
             ("t_rfc", d.t_rfc),

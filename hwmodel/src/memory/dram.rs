@@ -1,6 +1,7 @@
 //! A DRAM timing model: channels of banks with one open row each, a shared data bus per
-//! channel, the main JEDEC timings (tRCD, tRP, CL, tRAS, tWR), periodic refresh (tREFI,
-//! tRFC) and an open or closed page policy. Requests are timed burst by burst in the
+//! channel, the main JEDEC timings (tRCD, tRP, CL, CWL, tRAS, tWR, tRRD, tFAW, the
+//! write-to-read and read-to-write turnarounds), periodic refresh (tREFI, tRFC) and an
+//! open or closed page policy. Requests are timed burst by burst in the
 //! order the controller issues them ([`crate::memory::dram_scheduler`]: FR-FCFS, or
 //! first come, first served); a request's data is there when its last burst has crossed
 //! the bus.
@@ -51,6 +52,9 @@ pub struct Dram {
     bus_free: Vec<u64>,
     /// Per channel: its recent ACTIVATEs, in time order (tRRD, tFAW).
     acts: Vec<Vec<u64>>,
+    /// Per channel: the last READ and WRITE column commands (bus turnaround).
+    last_read: Vec<Option<u64>>,
+    last_write: Vec<Option<u64>>,
     /// Per bank, channel-major.
     pub stats: Vec<BankStats>,
     /// DRAM cycles the data buses carried data, all channels.
@@ -73,6 +77,8 @@ impl Dram {
             banks: vec![Bank::default(); n],
             bus_free: vec![0; cfg.channels as usize],
             acts: vec![Vec::new(); cfg.channels as usize],
+            last_read: vec![None; cfg.channels as usize],
+            last_write: vec![None; cfg.channels as usize],
             stats: vec![BankStats::default(); n],
             bus_busy: 0,
         }
@@ -245,10 +251,29 @@ impl Dram {
                 }
                 None => t,
             };
+            // Bus turnaround, as JEDEC (and DRAMsim3's timing table) give it: a READ
+            // waits CWL + the burst + tWTR after the channel's last WRITE; a WRITE
+            // waits CL + the burst − CWL + 1 after its last READ.
+            let burst = self.burst_cycles();
+            let column_at = if write {
+                self.last_read[channel_k].map_or(column_at, |r| {
+                    column_at.max((r + c.t_cl as u64 + burst + 1).saturating_sub(c.t_cwl as u64))
+                })
+            } else {
+                self.last_write[channel_k]
+                    .map_or(column_at, |w| column_at.max(w + c.t_cwl as u64 + burst + c.t_wtr as u64))
+            };
+            if write {
+                self.last_write[channel_k] = Some(self.last_write[channel_k].map_or(column_at, |w| w.max(column_at)));
+            } else {
+                self.last_read[channel_k] = Some(self.last_read[channel_k].map_or(column_at, |r| r.max(column_at)));
+            }
             start = start.min(t);
-            // Data follows the column command by CL; the bus carries one burst at a time.
+            // Data follows the column command by CL (CWL for a write); the bus carries
+            // one burst at a time.
             let bus = self.bus_free[channel as usize];
-            let data = (column_at + c.t_cl as u64).max(bus);
+            let latency = if write { c.t_cwl } else { c.t_cl } as u64;
+            let data = (column_at + latency).max(bus);
             let end = data + self.burst_cycles();
             self.bus_free[channel as usize] = end;
             self.bus_busy += self.burst_cycles();
@@ -357,19 +382,25 @@ mod tests {
     }
 
     #[test]
-    fn write_recovery_holds_the_precharge_not_the_next_column_command() {
+    fn write_recovery_and_turnaround_follow_jedec() {
         let mut d = Dram::new(&ddr3(), 800.0);
-        // A write to a closed bank: ACTIVATE, tRCD, CL, the burst ends at 26.
+        // A write to a closed bank: ACTIVATE, tRCD, CWL 8, the burst ends at 23.
         let (_, written) = d.access(0, 0, 64, true);
-        assert_eq!(written, 26);
-        // A read of the same row follows one burst after the write's column command.
+        assert_eq!(written, 11 + 8 + 4);
+        // A read of the same row: the write-to-read turnaround (CWL + burst + tWTR after
+        // the WRITE at 11), not tWR, holds it: READ at 29, data from 40 to 44.
         let (_, hit) = d.access(0, 64, 64, false);
-        assert_eq!(hit, 11 + 4 + 11 + 4);
+        assert_eq!(hit, 11 + 8 + 4 + 6 + 11 + 4);
         // Another row of the bank: PRECHARGE waits for tWR after the write's data
-        // (26 + 12 = 38; tRAS ends at 28), then tRP, ACTIVATE, tRCD, CL, the burst.
+        // (23 + 12 = 35; tRAS ends at 28), then tRP, ACTIVATE, tRCD, CL, the burst.
         let row = 8192 * 8;
         let (_, conflict) = d.access(0, row, 64, false);
-        assert_eq!(conflict, 38 + 11 + 11 + 11 + 4);
+        assert_eq!(conflict, 35 + 11 + 11 + 11 + 4);
+        // A write after those reads waits CL + burst − CWL + 1 after the last READ (57).
+        let mut e = Dram::new(&ddr3(), 800.0);
+        e.access(0, 0, 64, false);
+        let (_, w) = e.access(0, 64, 64, true);
+        assert_eq!(w, 11 + (11 + 4 + 1 - 8) + 8 + 4);
     }
 
     #[test]

@@ -187,8 +187,8 @@ pub fn replay_dramsim3(
 }
 
 /// raypipe's DRAM model set to DRAMsim3's `DDR4_8Gb_x8_2400` file (JEDEC DDR4-2400,
-/// 17-17-17 at tCK = 0.83 ns; 16 banks in 4 groups, which the model does not tell
-/// apart, so tRRD and tCCD are the same-group (long) ones for every pair; 8 KiB rows;
+/// 17-17-17 at tCK = 0.83 ns, CWL 12; 16 banks in 4 groups, which the model does not
+/// tell apart, so tRRD, tCCD and tWTR are the same-group (long) ones for every pair; 8 KiB rows;
 /// tRFC 350 ns for 8 Gb; tREFI 7.8 µs; tFAW 21 ns), with no controller latency.
 pub fn ddr4_2400() -> DramConfig {
     DramConfig {
@@ -203,6 +203,8 @@ pub fn ddr4_2400() -> DramConfig {
         t_rcd: 17,
         t_rp: 17,
         t_cl: 17,
+        t_cwl: 12,
+        t_wtr: 9,
         t_ras: 39,
         t_wr: 18,
         t_refi: 9360,
