@@ -38,7 +38,7 @@ pub const SETUP: u64 = 3 + 19 + 1 + 6 + 2 + 5;
 
 /// `Watertight::prepare` (core/src/intersect/watertight.rs): |d| `MAX`(d, −d) 1; the
 /// major axis kz, 2 compares and 2 selects: 4; kx, ky by select: 2; the winding swap: 1;
-/// sx, sy, sz: `RCP` of d[kz] and one `MUL`: 2 — 10. The branching machine prepares a
+/// sx, sy, sz: `RCP` of `d[kz]` and one `MUL`: 2 — 10. The branching machine prepares a
 /// ray once, in setup; the multipass machine does not keep the sheared ray between
 /// passes and prepares it in every intersection pass.
 pub const PREPARE: u64 = 1 + 4 + 2 + 1 + 2;
