@@ -1,0 +1,168 @@
+#!/usr/bin/env python3
+"""raypipe against Embree 3's C API on the same rays, in the same run.
+
+For each scene raypipe writes its triangles (in its triangle-id order) and the primary
+rays of one view (runs of 16 are 4x4 pixel blocks, runs of 64 are 8x8), and traces
+them; from its hits this script makes shadow rays to a point light above the scene and
+one cosine-distributed diffuse bounce (the same rays for both sides). The C harness
+bench/embree/rays.c (built here against Debian's libembree-dev) traces every set with
+Embree's paths: rtcIntersect1, rtcIntersect16 (coherent), rtcIntersect1M (stream mode;
+coherent for primary rays, incoherent for bounces), rtcOccluded1 and rtcOccluded16.
+raypipe runs its single-ray and packet paths on the 4- and 8-wide BVHs. Rounds are
+interleaved (every path once per round); the medians are reported, one core pinned
+(taskset) and then two. Hits are checked: a ray agrees when both miss, both hit the same
+triangle, or both hit at the same distance within a relative 1e-5; shadow rays agree
+when both say occluded or both say free.
+
+    apt-get install libembree-dev gcc
+    cargo build --release -p raypipe
+    python3 bench/embree_harness.py scenes/stanford_bunny/stanford-bunny.obj \\
+        scenes/sponza_dabrovic/sponza.obj.gz:fixtures/cameras/sponza.camera
+"""
+import argparse
+import os
+import re
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+def run(cmd, pin=None):
+    if pin is not None and shutil.which("taskset"):
+        cmd = ["taskset", "-c", pin, *cmd]
+    return subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
+
+
+def save_rays(path, origins, dirs, t_min, t_max):
+    rays = np.zeros((len(origins), 8), dtype=np.float32)
+    rays[:, 0:3], rays[:, 3:6], rays[:, 6], rays[:, 7] = origins, dirs, t_min, t_max
+    np.save(path, rays)
+
+
+def secondary_rays(tmp, rays, hits, tris, seed=1):
+    """Shadow rays to a point light above the scene's box, and one diffuse bounce, from
+    every primary hit (in the primary rays' order, so coherent rays stay together)."""
+    hit = hits["prim"] >= 0
+    o, d = rays[hit, 0:3].astype(np.float64), rays[hit, 3:6].astype(np.float64)
+    p = o + d * hits["t"][hit, None]
+    lo, hi = tris.reshape(-1, 3).min(axis=0), tris.reshape(-1, 3).max(axis=0)
+    extent = float(np.max(hi - lo))
+    eps = 1e-4 * extent
+    n = hits["ng"][hit].astype(np.float64)
+    n = np.where((np.sum(n * d, axis=1) > 0)[:, None], -n, n)  # facing the ray
+    start = p + n * eps
+    light = (lo + hi) / 2 + np.array([0.1, 0.9, 0.2]) * (hi - lo)
+    save_rays(os.path.join(tmp, "shadow.npy"), start, light - start, 0.0, 1.0 - 1e-4)
+    # Cosine-weighted directions about the normal (Malley's method).
+    rng = np.random.default_rng(seed)
+    u1, u2 = rng.random(len(n)), rng.random(len(n))
+    r, phi = np.sqrt(u1), 2 * np.pi * u2
+    a = np.where(np.abs(n[:, 0:1]) > 0.9, [[0.0, 1.0, 0.0]], [[1.0, 0.0, 0.0]])
+    t = np.cross(n, a)
+    t /= np.linalg.norm(t, axis=1)[:, None]
+    b = np.cross(n, t)
+    w = t * (r * np.cos(phi))[:, None] + b * (r * np.sin(phi))[:, None] + n * np.sqrt(1 - u1)[:, None]
+    save_rays(os.path.join(tmp, "bounce.npy"), start, w, 0.0, np.inf)
+    return int(hit.sum())
+
+
+def agree_closest(hits, path):
+    e = np.fromfile(path, dtype=[("prim", "<i4"), ("t", "<f4")])
+    r_prim, r_t = hits["prim"].astype(np.int64), hits["t"]
+    e_prim, e_t = e["prim"].astype(np.int64), e["t"]
+    both = (r_prim >= 0) & (e_prim >= 0)
+    with np.errstate(invalid="ignore"):  # misses carry t = inf on both sides
+        close = np.abs(e_t - r_t) <= 1e-5 * np.maximum(np.abs(e_t), np.abs(r_t))
+    same = (r_prim == e_prim) | (both & close)
+    return int((~same).sum())
+
+
+def agree_any(hits, path):
+    e = np.fromfile(path, dtype=np.uint8)
+    return int((hits["occluded"].astype(np.uint8) != e).sum())
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("scenes", nargs="+", help="MESH or MESH:CAMERA (a raypipe camera file)")
+    ap.add_argument("--size", default="1024x1024")
+    ap.add_argument("--rounds", type=int, default=5)
+    ap.add_argument("--threads", default="1,2", help="thread counts; 1 is pinned to one core")
+    ap.add_argument("--raypipe", default=os.path.join(HERE, "..", "target", "release", "raypipe"))
+    a = ap.parse_args()
+    if not shutil.which("gcc") or not os.path.exists("/usr/include/embree3/rtcore.h"):
+        sys.exit("error: needs gcc and Embree 3's headers: apt-get install gcc libembree-dev")
+    rp = a.raypipe
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        harness = os.path.join(tmp, "rays")
+        subprocess.run(["gcc", "-O2", "-o", harness, os.path.join(HERE, "embree", "rays.c"), "-lembree3",
+                        "-lpthread"], check=True)
+        for spec in a.scenes:
+            mesh, _, camera = spec.partition(":")
+            name = os.path.basename(mesh).split(".")[0]
+            cam = ["--camera", camera] if camera else []
+            rays_p, tris_p = os.path.join(tmp, "primary.npy"), os.path.join(tmp, "tris.npy")
+            run([rp, "rays", mesh, "-o", rays_p, "--triangles", tris_p, "--size", a.size, "--block", "8", *cam])
+            images = {}
+            for accel in ("bvh4", "bvh8"):
+                images[accel] = os.path.join(tmp, f"{accel}.rpsi")
+                run([rp, "build", mesh, "-o", images[accel], "--accel", accel, "--triangles", "blocks"])
+            hits_p = os.path.join(tmp, "primary-hits.npy")
+            run([rp, "trace", images["bvh4"], "--rays", rays_p, "--hits", hits_p, "--fields", "t,u,v,prim,ng"])
+            rays, tris = np.load(rays_p), np.load(tris_p)
+            primary_hits = np.load(hits_p)
+            secondary_rays(tmp, rays, primary_hits, tris)
+            kinds = [("primary", "closest", ["intersect1", "intersect16", "intersect1M"]),
+                     ("shadow", "any", ["occluded1", "occluded16"]),
+                     ("bounce", "closest", ["intersect1", "intersect16", "intersect1Mi"])]
+            for kind, query, embree_modes in kinds:
+                rays_k = os.path.join(tmp, f"{kind}.npy")
+                n = len(np.load(rays_k, mmap_mode="r"))
+                raypipe_modes = [(f"{acc} single", images[acc], "1") for acc in ("bvh4", "bvh8")]
+                raypipe_modes += [(f"bvh4 packets of {p}", images["bvh4"], p) for p in ("16", "64")]
+                for threads in [int(t) for t in a.threads.split(",")]:
+                    pin = "1" if threads == 1 else None
+                    times = {m[0]: [] for m in raypipe_modes}
+                    times.update({f"embree {m}": [] for m in embree_modes})
+                    for _ in range(a.rounds):
+                        for label, image, packet in raypipe_modes:
+                            out = run([rp, "trace", image, "--rays", rays_k, "--hits", os.path.join(tmp, "h.npy"),
+                                       "--query", query, "--threads", str(threads), "--runs", "3",
+                                       "--packet", packet], pin)
+                            times[label].append(float(re.search(r"\(([0-9.]+) Mrays/s\)", out).group(1)))
+                        for m in embree_modes:
+                            out = run([harness, tris_p, rays_k, m, str(threads), "3", "medium"], pin)
+                            times[f"embree {m}"].append(float(re.search(r"mrays=([0-9.]+)", out).group(1)))
+                    med = {k: statistics.median(v) for k, v in times.items()}
+                    # Agreement, once per kind: raypipe's hits against Embree's first path.
+                    ours = os.path.join(tmp, "ours.npy")
+                    fields = ["--fields", "t,u,v,prim"] if query == "closest" else []
+                    run([rp, "trace", images["bvh4"], "--rays", rays_k, "--hits", ours, "--query", query, *fields])
+                    theirs = os.path.join(tmp, "theirs.bin")
+                    run([harness, tris_p, rays_k, embree_modes[0], "1", "1", "medium", theirs])
+                    check = agree_closest if query == "closest" else agree_any
+                    differ = check(np.load(ours), theirs)
+                    best_r = max((k for k in med if not k.startswith("embree")), key=med.get)
+                    best_e = max((k for k in med if k.startswith("embree")), key=med.get)
+                    rows.append((name, kind, n, threads, med, best_r, best_e, differ))
+                    print(f"{name} {kind} {threads}T: " + ", ".join(f"{k} {v:.1f}" for k, v in med.items()),
+                          file=sys.stderr)
+    print("| scene | rays | threads | raypipe best (Mrays/s) | Embree best (Mrays/s) | ratio | rays that differ |")
+    print("|---|---|---|---|---|---|---|")
+    for name, kind, n, threads, med, br, be, differ in rows:
+        print(f"| {name} | {kind} ({n}) | {threads} | {br}: {med[br]:.1f} | {be[7:]}: {med[be]:.1f} | "
+              f"{med[br] / med[be]:.2f} | {differ} ({100 * differ / max(n, 1):.3f}%) |")
+    print("\nEvery path, medians in Mrays/s:\n")
+    for name, kind, n, threads, med, _, _, _ in rows:
+        print(f"- {name} {kind}, {threads} thread(s): " + ", ".join(f"{k} {v:.1f}" for k, v in med.items()))
+
+
+if __name__ == "__main__":
+    main()
