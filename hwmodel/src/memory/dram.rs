@@ -254,36 +254,32 @@ impl Dram {
             // Bus turnaround, as JEDEC (and DRAMsim3's timing table) give it: a READ
             // waits CWL + the burst + tWTR after the channel's last WRITE; a WRITE
             // waits CL + the burst − CWL + 1 after its last READ.
-            let burst = self.burst_cycles();
+            let burst_clocks = self.burst_cycles();
             let column_at = if write {
                 self.last_read[channel_k].map_or(column_at, |r| {
-                    column_at.max((r + c.t_cl as u64 + burst + 1).saturating_sub(c.t_cwl as u64))
+                    column_at.max((r + c.t_cl as u64 + burst_clocks + 1).saturating_sub(c.t_cwl as u64))
                 })
             } else {
                 self.last_write[channel_k]
-                    .map_or(column_at, |w| column_at.max(w + c.t_cwl as u64 + burst + c.t_wtr as u64))
+                    .map_or(column_at, |w| column_at.max(w + c.t_cwl as u64 + burst_clocks + c.t_wtr as u64))
             };
-            if write {
-                self.last_write[channel_k] = Some(self.last_write[channel_k].map_or(column_at, |w| w.max(column_at)));
-            } else {
-                self.last_read[channel_k] = Some(self.last_read[channel_k].map_or(column_at, |r| r.max(column_at)));
-            }
+            let last = if write { &mut self.last_write[channel_k] } else { &mut self.last_read[channel_k] };
+            *last = Some(last.map_or(column_at, |l| l.max(column_at)));
             start = start.min(t);
             // Data follows the column command by CL (CWL for a write); the bus carries
             // one burst at a time.
             let bus = self.bus_free[channel as usize];
             let latency = if write { c.t_cwl } else { c.t_cl } as u64;
             let data = (column_at + latency).max(bus);
-            let end = data + self.burst_cycles();
+            let end = data + burst_clocks;
             self.bus_free[channel as usize] = end;
-            self.bus_busy += self.burst_cycles();
+            self.bus_busy += burst_clocks;
             // The next column command to this bank: one burst later. A write's data must
             // recover (tWR) before the row may close, not before the next column command.
-            let mut next = column_at + self.burst_cycles();
+            let mut next = column_at + burst_clocks;
             if write {
                 bank.precharge_ok = end + c.t_wr as u64;
             }
-            let end_all = end;
             bank.open_row = Some(row);
             if c.page_policy == PagePolicy::Closed {
                 let pre = next.max(bank.activated + c.t_ras as u64).max(bank.precharge_ok);
@@ -292,7 +288,7 @@ impl Dram {
             }
             bank.ready = next;
             self.banks[k] = bank;
-            done = done.max(end_all);
+            done = done.max(end);
         }
         let ctrl = self.cfg.controller_latency as u64;
         (self.to_chip(start), self.to_chip(done) + ctrl)
