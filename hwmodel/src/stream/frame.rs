@@ -18,7 +18,6 @@ use crate::stream::cost_model::{CostModel, Kernel};
 use crate::stream::counters::{ByKernel, PassKind, PassRecord, RayWork};
 use crate::stream::ray_state::StreamRay;
 use crate::stream::report::{ratio, ClassRow, KernelRow, LoopTotals, StreamReport, Table2, Traffic};
-use crate::stream::stencil::covered_fragments;
 use crate::stream::texture_cache::TextureCache;
 use crate::stream::texture_cache::{CLASSES, CLASS_NAMES, STATE};
 
@@ -203,10 +202,9 @@ impl<'s, I: Intersector> StreamMachine<'s, I> {
                 Architecture::Branching => self.branching_screen(&rays, generate, &mut fused),
             }
         };
-        let (mut shade, written) = self.shading_pass(wave, screen, &frags, &ends, next);
+        let (shade, written) = self.shading_pass(wave, screen, &frags, &ends, next);
         match self.cfg.arch {
             Architecture::Multipass => {
-                shade.covered = covered_fragments(frags.len(), self.screen().0);
                 let repeats = self.output_repeats(Kernel::Shade, &shade, written);
                 self.passes.push(shade);
                 self.passes.extend(repeats);

@@ -36,7 +36,8 @@ impl<I: Intersector> StreamMachine<'_, I> {
         let (width, _) = self.screen();
         let mut p = PassRecord { wave, screen, kind: Some(PassKind::Shade), iterations: 1, ..Default::default() };
         if self.cfg.arch == Architecture::Multipass {
-            p.stencil = StencilCounts { reads: covered_fragments(frags.len(), width), writes: 0 };
+            p.covered = covered_fragments(frags.len(), width);
+            p.stencil = StencilCounts { reads: p.covered, writes: 0 };
         }
         // The lights the shader reads at a hit: those before the area lights, and for the
         // path tracer one emitter picked by power.
