@@ -99,6 +99,13 @@ impl Dram {
         (self.cfg.bus_bytes * self.cfg.burst_length) as u64
     }
 
+    /// Bytes a request of `bytes` at `addr` moves over the bus: the whole bursts it
+    /// touches.
+    pub fn bytes_moved(&self, addr: u64, bytes: u32) -> u64 {
+        let burst = self.burst_bytes();
+        (addr + bytes.max(1) as u64).div_ceil(burst) * burst - addr / burst * burst
+    }
+
     fn burst_cycles(&self) -> u64 {
         (self.cfg.burst_length / 2).max(1) as u64
     }

@@ -393,10 +393,7 @@ impl Memory {
             }
             MemoryModel::Dram => {
                 let Some(d) = self.dram.as_mut() else { return Ready::At(now + 1) };
-                let burst = d.burst_bytes();
-                let first = addr / burst * burst;
-                let moved = (addr + bytes.max(1) as u64).div_ceil(burst) * burst - first;
-                self.stats.bytes[class] += moved;
+                self.stats.bytes[class] += d.bytes_moved(addr, bytes);
                 if let Some(q) = self.dram_queue.as_mut() {
                     let token = self.tokens.len() as u32;
                     self.tokens.push(UNSCHEDULED);

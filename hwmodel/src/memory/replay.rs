@@ -117,11 +117,7 @@ fn figures(lat: &[u64], ns: f64, bytes: u64, span: u64, row_hit_rate: f64) -> Re
 pub fn replay_dram(cfg: &DramConfig, mhz: f64, stream: &[StreamRequest]) -> ReplayFigures {
     let mut d = Dram::new(cfg, mhz);
     let mut ready = vec![0u64; stream.len()];
-    let mut bytes = 0;
-    let burst = d.burst_bytes();
-    for r in stream {
-        bytes += (r.addr + r.bytes as u64).div_ceil(burst) * burst - r.addr / burst * burst;
-    }
+    let bytes: u64 = stream.iter().map(|r| d.bytes_moved(r.addr, r.bytes)).sum();
     if cfg.scheduler == DramScheduling::Fcfs {
         for (r, at) in stream.iter().zip(ready.iter_mut()) {
             *at = d.access(r.cycle + 1, r.addr, r.bytes, r.write).1;
