@@ -271,17 +271,19 @@ proptest! {
                 prop_assert!(u.node_reads_per_step.unwrap_or(0.0) <= 1.0, "{}: {:?}", u.name, u.node_reads_per_step);
             }
         }
-        // Perfect memory is the bound for raypipe's own memories, which answer in order:
-        // none is faster on any chip drawn. Not for DRAMsim3: its controller reorders
-        // requests (FR-FCFS), data comes back in another order than asked, the units'
-        // work reorders with it, and a frame can end sooner than under perfect memory's
-        // fixed order — a scheduling anomaly (Graham 1969), seen at 2.7% and 5.2% of
-        // frames of a few packets. The closed-form bounds above hold for it.
-        if !matches!(cfg.memory.model, MemoryModel::Perfect | MemoryModel::Dramsim3) {
+        // Perfect memory answers every request no later than any other memory, but the
+        // frame is a greedy schedule of rays over shared units: when data arrives at other
+        // times the units take their work in another order, and a frame can end sooner
+        // than under perfect memory — a scheduling anomaly (Graham 1969), seen here at
+        // 0.9% (fixed latency 0, 17 bytes a cycle, a grid), and at 2.7% and 5.2% under
+        // DRAMsim3's reordering. Graham bounds such anomalies in list schedules by a
+        // factor 2 − 1/m; a perfect-memory frame slower than twice another memory's is a
+        // defect, not an anomaly.
+        if cfg.memory.model != MemoryModel::Perfect {
             let mut perfect = cfg.clone();
             perfect.memory.model = MemoryModel::Perfect;
             let p = run(&view, &cam, &perfect, Clocking::default());
-            prop_assert!(p.cycles() <= sim.cycles(), "perfect {} > {:?} {}", p.cycles(), cfg.memory.model, sim.cycles());
+            prop_assert!(p.cycles() <= 2 * sim.cycles(), "perfect {} > 2 × {:?} {}", p.cycles(), cfg.memory.model, sim.cycles());
         }
     }
 }
