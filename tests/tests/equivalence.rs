@@ -298,9 +298,10 @@ proptest! {
 
 /// Traces every ray both alone and in a packet of `N`, and demands identical hits.
 fn packet_matches_single<const N: usize>(view: &SceneView<'_>, rays: &[Ray]) -> Result<(), TestCaseError> {
-    use raypipe::render::tracer::trace_packet;
+    use raypipe::render::tracer::{occluded_packet, trace_packet};
     use raypipe_core::packet::step::trace_packet_steps;
     use raypipe_core::packet::{PacketCounters, RayPacket};
+    use raypipe_core::traverse::occlusion::occluded;
     for chunk in rays.chunks(N) {
         let mut packet = RayPacket::<N>::new();
         for (i, r) in chunk.iter().enumerate() {
@@ -319,6 +320,16 @@ fn packet_matches_single<const N: usize>(view: &SceneView<'_>, rays: &[Ray]) -> 
             prop_assert!(same, "packet of {N}, lane {i}: {:?} != single {:?} for {r:?}", hits[i], single);
         }
         prop_assert!(pc.active_lanes <= pc.visits * N as u64);
+        // The any-hit query of the same packet: blocked exactly where the single ray has
+        // a hit, and where the single-ray any-hit query says so.
+        let blocked = occluded_packet::<Watertight, _, N>(view, &packet, &mut NoProbe, &mut pc);
+        prop_assert_eq!(blocked & !packet.live(), 0, "packet of {}: inactive lanes blocked", N);
+        for (i, r) in chunk.iter().enumerate() {
+            let single = trace::<Watertight, _>(view, r, &mut NoProbe, &mut RayCounters::default());
+            let any = occluded::<Watertight, _>(view, r, &mut NoProbe, &mut RayCounters::default());
+            prop_assert_eq!(any, single.is_some(), "any-hit query for {:?}", r);
+            prop_assert_eq!(blocked & (1 << i) != 0, any, "any-hit packet of {}, lane {} for {:?}", N, i, r);
+        }
         // SaarCOR's shared packet walk, one node per step, as the hardware model drives it.
         let mut rays_n = [Ray { origin: Vec3::ZERO, dir: Vec3::X, t_min: 0.0, t_max: 0.0 }; N];
         rays_n[..chunk.len()].copy_from_slice(chunk);
@@ -343,7 +354,7 @@ fn packet_matches_single<const N: usize>(view: &SceneView<'_>, rays: &[Ray]) -> 
 /// records, before each).
 fn batch_matches_single(view: &SceneView<'_>, rays: &[Ray]) -> Result<(), TestCaseError> {
     use raypipe::input::npy::HitRecord;
-    use raypipe::render::batch::{trace_batch, trace_batch_into};
+    use raypipe::render::batch::{occluded_batch, trace_batch, trace_batch_into};
     use raypipe::render::packets::PacketSize;
     use raypipe::render::tracer::IntersectorKind;
     let stale = HitRecord { t: 1.0, u: 0.25, v: 0.5, prim: 7 };
@@ -364,6 +375,14 @@ fn batch_matches_single(view: &SceneView<'_>, rays: &[Ray]) -> Result<(), TestCa
             prop_assert_eq!(got, want, "{:?} batch into a reused output for {:?}", packet, r);
         }
         reused.push(stale);
+        // The any-hit batch, with every third ray marked invalid (reported unblocked).
+        let invalid: Vec<bool> = (0..rays.len()).map(|i| i % 3 == 1).collect();
+        let blocked = occluded_batch(view, rays, &invalid, IntersectorKind::Watertight, packet, Some(1)).unwrap();
+        prop_assert_eq!(blocked.len(), rays.len());
+        for ((r, b), bad) in rays.iter().zip(&blocked).zip(&invalid) {
+            let hit = trace::<Watertight, _>(view, r, &mut NoProbe, &mut RayCounters::default());
+            prop_assert_eq!(*b, !bad && hit.is_some(), "{:?} any-hit batch for {:?}", packet, r);
+        }
     }
     Ok(())
 }
@@ -380,6 +399,7 @@ proptest! {
         eye in [-8.0f32..8.0, -8.0f32..8.0, -8.0f32..8.0],
         look in point(),
         random in prop::collection::vec(ray_kind(), 64),
+        light in point(),
         accel in prop_oneof![Just(Accel::Grid), Just(Accel::Kd), Just(Accel::Bvh), Just(Accel::Bvh4), Just(Accel::Bvh8), Just(Accel::None)],
         layout in prop_oneof![Just(TriangleLayout::Indexed), Just(TriangleLayout::Blocks)],
     ) {
@@ -394,7 +414,15 @@ proptest! {
         let mut rays: Vec<Ray> = random.iter().map(|k| make_ray(k, &soup, &gview, (0.0, f32::INFINITY))).collect();
         let cam = Camera { eye: Vec3::from(eye), look_at: Vec3::from(look), up: Vec3::Y, vfov_deg: 50.0, width: 8, height: 8 };
         if let Ok(e) = EyeRays::new(&cam) {
-            rays.extend((0..64).map(|i| e.ray(i % 8, i / 8)));
+            let eye_rays: Vec<Ray> = (0..64).map(|i| e.ray(i % 8, i / 8)).collect();
+            // Shadow segments from the eye rays' hits (or far points) to one light: rays of
+            // many origins and one end, blocked and not.
+            let shadow = eye_rays.iter().map(|r| {
+                let t = trace::<Watertight, _>(&view, r, &mut NoProbe, &mut RayCounters::default()).map_or(4.0, |h| h.t);
+                let p = r.origin + r.dir * (t * 0.999);
+                Ray { origin: p, dir: Vec3::from(light) - p, t_min: 0.0, t_max: 0.999 }
+            });
+            rays.extend(eye_rays.iter().copied().chain(shadow));
         }
         packet_matches_single::<4>(&view, &rays)?;
         packet_matches_single::<16>(&view, &rays)?;

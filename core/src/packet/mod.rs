@@ -253,6 +253,26 @@ pub fn ray_by_ray<const N: usize>(
     counters.tri_tests += u64::from(c.tri_tests);
 }
 
+/// The any-hit query of a packet asked ray by ray with the single-ray query `blocked`
+/// (bit `i` set: ray `i` is blocked), counted as [`ray_by_ray`] counts.
+#[inline]
+pub fn occluded_ray_by_ray<const N: usize>(
+    packet: &RayPacket<N>,
+    counters: &mut PacketCounters,
+    mut blocked: impl FnMut(&Ray, &mut crate::counters::RayCounters) -> bool,
+) -> u64 {
+    let mut c = crate::counters::RayCounters::default();
+    let mut mask = 0u64;
+    for i in LanesOf::<N>(packet.live()) {
+        mask |= (blocked(&packet.ray(i), &mut c) as u64) << i;
+    }
+    let visits = u64::from(c.nodes) + u64::from(c.leaves);
+    counters.visits += visits;
+    counters.active_lanes += visits;
+    counters.tri_tests += u64::from(c.tri_tests);
+    mask
+}
+
 /// Iterates the set bits of a mask, lowest first.
 #[derive(Clone, Copy, Debug)]
 pub struct Lanes(pub u64);

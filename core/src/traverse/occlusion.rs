@@ -1,14 +1,19 @@
 //! The any-hit query of shadow rays: is anything in the way within `[t_min, t_max]`?
 //! The walk is the structure's own step kernel ([`crate::traverse::walk::Walk`]), and it stops at
 //! the first triangle hit in range — no closest-hit ordering is needed, so a shadow ray
-//! usually ends long before a closest-hit query would (Purcell 2002 §3.1.4).
+//! usually ends long before a closest-hit query would (Purcell 2002 §3.1.4). On the
+//! wide BVHs with the `f32` box tests the walk is their fast loop's, ended by the first
+//! leaf holding a hit ([`crate::traverse::wide_bvh::occluded_wide_bvh`]).
 
 use crate::counters::RayCounters;
 use crate::image::SceneView;
 use crate::intersect::triangle::Intersector;
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
+use crate::traverse::boxes::datapath::NodeTests;
 use crate::traverse::walk::{Walk, WalkEvent};
+use crate::traverse::wide_bvh::node4::occluded_bvh4;
+use crate::traverse::wide_bvh::node8::occluded_bvh8;
 
 /// True if some triangle is hit by `ray` within its interval. Exactly the closest-hit
 /// query's "is there a hit", found sooner. `counters` receives the steps (nodes or
@@ -21,6 +26,14 @@ pub fn occluded<I: Intersector, P: MemoryProbe>(
 ) -> bool {
     if !ray.is_valid() {
         return false;
+    }
+    if <I::Nodes as NodeTests>::FLOAT {
+        if let Some(bvh) = scene.bvh8() {
+            return occluded_bvh8::<I, P>(scene, bvh, ray, probe, counters);
+        }
+        if let Some(bvh) = scene.bvh4() {
+            return occluded_bvh4::<I, P>(scene, bvh, ray, probe, counters);
+        }
     }
     let prep = I::prepare(ray);
     let mut walk = Walk::<I::Nodes>::start(scene, ray);

@@ -10,8 +10,7 @@ use anyhow::{anyhow, bail, Result};
 use rayon::prelude::*;
 use raypipe_core::shade::ray_cone::RayCone;
 use raypipe_core::shade::surface::Surface;
-use raypipe_core::traverse::occlusion::occluded;
-use raypipe_core::{Hit, NoProbe, Ray, RayCounters, SceneView, Vec3};
+use raypipe_core::{Hit, NoProbe, Ray, SceneView, Vec3};
 use std::time::Instant;
 
 use super::{structure_summary, warn, warn_range};
@@ -185,13 +184,7 @@ pub(crate) fn cmd_trace(a: TraceArgs) -> Result<()> {
             let mut blocked = Vec::new();
             for _ in 0..a.runs {
                 let start = Instant::now();
-                blocked = crate::render::in_pool(a.run.threads, || {
-                    crate::with_intersector!(kind, I => rays
-                        .par_iter()
-                        .zip(&invalid)
-                        .map(|(r, bad)| !bad && occluded::<I, _>(&view, r, &mut NoProbe, &mut RayCounters::default()))
-                        .collect::<Vec<bool>>())
-                })?;
+                blocked = crate::render::batch::occluded_batch(&view, &rays, &invalid, kind, a.packet, a.run.threads)?;
                 times.push(start.elapsed().as_secs_f64());
             }
             let n_hit = blocked.iter().filter(|b| **b).count();

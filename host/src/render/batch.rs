@@ -5,6 +5,7 @@ use anyhow::{bail, Result};
 use std::mem::MaybeUninit;
 
 use rayon::prelude::*;
+use raypipe_core::traverse::occlusion::occluded;
 use raypipe_core::{Intersector, NoProbe, Ray, RayCounters, SceneView, Vec3};
 
 use crate::input::npy::{Array2, HitRecord};
@@ -14,7 +15,7 @@ use crate::render::in_pool;
 use raypipe_core::packet::{PacketCounters, RayPacket};
 
 use crate::render::packets::PacketSize;
-use crate::render::tracer::{trace_each, trace_packet, IntersectorKind};
+use crate::render::tracer::{occluded_packet, trace_each, trace_packet, IntersectorKind};
 use crate::with_intersector;
 
 /// Rays traced as one unit of work.
@@ -107,6 +108,57 @@ pub fn trace_batch_into(
         PacketSize::P16 => trace_with::<I, 16>(scene, rays, threads, out),
         PacketSize::P64 => trace_with::<I, 64>(scene, rays, threads, out),
     })
+}
+
+/// Whether each ray is blocked within its interval (the any-hit query of shadow rays),
+/// rays marked `invalid` reported unblocked. With packets, runs of `N` consecutive rays
+/// are traced as one packet (on the 4-wide BVH; ray by ray on the other structures).
+pub fn occluded_batch(
+    scene: &SceneView<'_>,
+    rays: &[Ray],
+    invalid: &[bool],
+    kind: IntersectorKind,
+    packet: PacketSize,
+    threads: Option<usize>,
+) -> Result<Vec<bool>> {
+    with_intersector!(kind, I => match packet {
+        PacketSize::Single => occluded_with::<I, 1>(scene, rays, invalid, threads),
+        PacketSize::P4 => occluded_with::<I, 4>(scene, rays, invalid, threads),
+        PacketSize::P16 => occluded_with::<I, 16>(scene, rays, invalid, threads),
+        PacketSize::P64 => occluded_with::<I, 64>(scene, rays, invalid, threads),
+    })
+}
+
+/// Chunks of `CHUNK` rays per task, each run of `N` rays one packet.
+fn occluded_with<I: Intersector, const N: usize>(
+    scene: &SceneView<'_>,
+    rays: &[Ray],
+    invalid: &[bool],
+    threads: Option<usize>,
+) -> Result<Vec<bool>> {
+    let mut out = vec![false; rays.len()];
+    in_pool(threads, || {
+        out.par_chunks_mut(CHUNK).zip(rays.par_chunks(CHUNK)).zip(invalid.par_chunks(CHUNK)).for_each(
+            |((out, chunk), bad)| {
+                if N == 1 {
+                    for ((o, r), bad) in out.iter_mut().zip(chunk).zip(bad) {
+                        *o = !bad && occluded::<I, _>(scene, r, &mut NoProbe, &mut RayCounters::default());
+                    }
+                    return;
+                }
+                let mut pc = PacketCounters::default();
+                let mut packet = RayPacket::<N>::new();
+                for ((out, group), bad) in out.chunks_mut(N).zip(chunk.chunks(N)).zip(bad.chunks(N)) {
+                    packet.fill(group);
+                    let blocked = occluded_packet::<I, _, N>(scene, &packet, &mut NoProbe, &mut pc);
+                    for (i, (o, bad)) in out.iter_mut().zip(bad).enumerate() {
+                        *o = !bad && blocked & (1 << i) != 0;
+                    }
+                }
+            },
+        )
+    })?;
+    Ok(out)
 }
 
 fn record(hit: Option<raypipe_core::Hit>) -> HitRecord {

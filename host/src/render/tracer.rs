@@ -6,13 +6,14 @@ use std::borrow::Borrow;
 use crate::platform::isa::with_avx2;
 
 use raypipe_core::packet::bvh::trace_bvh_packet;
-use raypipe_core::packet::bvh4::trace_bvh4_packet;
+use raypipe_core::packet::bvh4::{occluded_bvh4_packet, trace_bvh4_packet};
 use raypipe_core::packet::grid::trace_grid_packet;
 use raypipe_core::packet::kdtree::trace_kdtree_packet;
 use raypipe_core::packet::{PacketCounters, PacketHits, RayPacket};
 use raypipe_core::traverse::bvh::trace_bvh;
 use raypipe_core::traverse::grid::trace_grid;
 use raypipe_core::traverse::kdtree::trace_kdtree;
+use raypipe_core::traverse::occlusion::occluded;
 use raypipe_core::traverse::wide_bvh::node4::trace_bvh4;
 use raypipe_core::traverse::wide_bvh::node8::trace_bvh8;
 use raypipe_core::{
@@ -200,6 +201,24 @@ pub fn fixed_point_unsupported(scene: &SceneView<'_>) -> Option<&'static str> {
 /// structure, the 8-wide BVH) are traced ray by ray.
 pub fn has_packet_kernel(scene: &SceneView<'_>) -> bool {
     scene.grid().is_some() || scene.bvh4().is_some() || scene.bvh().is_some() || scene.kdtree().is_some()
+}
+
+/// The any-hit query for a packet (bit `i` set: ray `i` is blocked): the 4-wide BVH's
+/// packet walk, which drops each ray at its first hit; the other structures ask ray by
+/// ray (their packet walks order leaves for the closest hit, which a shadow ray does not
+/// need).
+#[inline]
+pub fn occluded_packet<I: Intersector, P: MemoryProbe, const N: usize>(
+    scene: &SceneView<'_>,
+    packet: &RayPacket<N>,
+    probe: &mut P,
+    counters: &mut PacketCounters,
+) -> u64 {
+    if let Some(bvh) = scene.bvh4() {
+        return occluded_bvh4_packet::<I, P, N>(scene, bvh, packet, probe, counters);
+    }
+    let any = |r: &Ray, c: &mut RayCounters| occluded::<I, P>(scene, r, probe, c);
+    raypipe_core::packet::occluded_ray_by_ray(packet, counters, any)
 }
 
 /// Traces a packet with the scene's structure, in lock-step.

@@ -13,4 +13,4 @@ mod walk;
 
 #[cfg(target_arch = "x86_64")]
 pub(crate) use groups::{Groups, GROUPS};
-pub use walk::trace_bvh4_packet;
+pub use walk::{occluded_bvh4_packet, trace_bvh4_packet};

@@ -6,7 +6,7 @@ use crate::counters::RayCounters;
 use crate::hit::Hit;
 use crate::image::{Bvh4Node, Bvh4View, SceneView, MAX_WIDE_DEPTH};
 use crate::intersect::triangle::Intersector;
-use crate::packet::{ray_by_ray, Lanes, LanesOf, PacketCounters, PacketHits, RayPacket};
+use crate::packet::{occluded_ray_by_ray, ray_by_ray, Lanes, LanesOf, PacketCounters, PacketHits, RayPacket};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::traverse::boxes::datapath::NodeTests;
@@ -73,6 +73,46 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
         let walk = |r: &Ray, c: &mut RayCounters| trace_bvh4::<I, P>(scene, bvh, r, probe, c);
         return ray_by_ray(packet, hits, counters, walk);
     }
+    walk_packet::<I, P, N, false>(scene, bvh, packet, hits, probe, counters);
+}
+
+/// The any-hit query for a packet of shadow rays: bit `i` of the result is set when ray
+/// `i` is blocked within its interval — exactly [`crate::traverse::occlusion::occluded`]
+/// for each active ray. The walk is the closest-hit packet walk's, but a ray leaves the
+/// packet at the first leaf where it hits something, its end no longer widens the
+/// packet's reach, and the packet stops as soon as all its rays are blocked (Wald et al.
+/// 2001 §4: shadow rays of one light are as coherent as primary rays).
+pub fn occluded_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
+    scene: &SceneView<'_>,
+    bvh: &Bvh4View<'_>,
+    packet: &RayPacket<N>,
+    probe: &mut P,
+    counters: &mut PacketCounters,
+) -> u64 {
+    if !<I::Nodes as NodeTests>::FLOAT {
+        let any = |r: &Ray, c: &mut RayCounters| crate::traverse::occlusion::occluded::<I, P>(scene, r, probe, c);
+        return occluded_ray_by_ray(packet, counters, any);
+    }
+    let mut hits = [None; N];
+    walk_packet::<I, P, N, true>(scene, bvh, packet, &mut hits, probe, counters);
+    let mut blocked = 0u64;
+    for (i, h) in hits.iter().enumerate() {
+        blocked |= (h.is_some() as u64) << i;
+    }
+    blocked & packet.live()
+}
+
+/// The packet walk; with `ANY`, a ray that hits something in a leaf leaves the packet
+/// (its hit is then some hit, not the closest), and the walk ends when none is left.
+#[inline(always)]
+fn walk_packet<I: Intersector, P: MemoryProbe, const N: usize, const ANY: bool>(
+    scene: &SceneView<'_>,
+    bvh: &Bvh4View<'_>,
+    packet: &RayPacket<N>,
+    hits: &mut PacketHits<N>,
+    probe: &mut P,
+    counters: &mut PacketCounters,
+) {
     *hits = [None; N];
     let mask = packet.live();
     if mask == 0 {
@@ -94,7 +134,11 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
             }
         } else {
             let leaf = LeafVisit { scene, bvh, packet, first: index, count };
-            walk.leaf(leaf, &leaf_box, leaf_t, hits, probe);
+            walk.leaf::<P, ANY>(leaf, &leaf_box, leaf_t, hits, probe);
+            if ANY && walk.mask == 0 {
+                counters.add(&walk.c);
+                return;
+            }
         }
         // Pop the next entry whose entry bound is not beyond every ray's best hit.
         loop {
@@ -205,9 +249,10 @@ impl<'b, I: Intersector, const N: usize> PacketWalk<'b, I, N> {
     }
 
     /// A leaf (`leaf`, its box `leaf_box` entered at `leaf_t`): the rays that enter its
-    /// box test its triangles, and the groups that did update their ends.
+    /// box test its triangles, and the groups that did update their ends. With `ANY`, the
+    /// rays that hit leave the walk.
     #[inline(always)]
-    fn leaf<P: MemoryProbe>(
+    fn leaf<P: MemoryProbe, const ANY: bool>(
         &mut self,
         leaf: LeafVisit<'_, '_, N>,
         leaf_box: &[f32; 6],
@@ -251,6 +296,14 @@ impl<'b, I: Intersector, const N: usize> PacketWalk<'b, I, N> {
             test_leaf::<I, P, N>(&leaf, enter, &mut self.preps, hits, probe);
         }
         self.c.tri_tests += leaf.count as u64 * enter.count_ones() as u64;
+        if ANY {
+            for i in LanesOf::<N>(enter) {
+                if hits[i].is_some() {
+                    self.mask &= !(1 << i);
+                }
+            }
+        }
+        let mask = self.mask;
         // The ends of the groups that entered, all four lanes from their hits (the other
         // lanes' hits are unchanged, and inactive lanes have none: their ends stay their
         // rays' ends).

@@ -197,6 +197,38 @@ pub fn trace_wide_bvh<N: WideSlab, const C: usize, I: Intersector, P: MemoryProb
 where
     <I::Nodes as NodeTests>::Wide: WideRay<N>,
 {
+    search_wide_bvh::<N, C, I, P, false>(scene, bvh, ray, probe, counters)
+}
+
+/// The any-hit query of `ray` through a wide BVH: the same walk as [`trace_wide_bvh`],
+/// ended by the first leaf in which the ray hits something (the shadow ray's question,
+/// Purcell 2002 §3.1.4). True exactly when the closest-hit query finds a hit.
+#[inline(always)]
+pub fn occluded_wide_bvh<N: WideSlab, const C: usize, I: Intersector, P: MemoryProbe>(
+    scene: &SceneView<'_>,
+    bvh: &WideBvhView<'_, N>,
+    ray: &Ray,
+    probe: &mut P,
+    counters: &mut RayCounters,
+) -> bool
+where
+    <I::Nodes as NodeTests>::Wide: WideRay<N>,
+{
+    search_wide_bvh::<N, C, I, P, true>(scene, bvh, ray, probe, counters).is_some()
+}
+
+/// The walk of both queries; with `ANY` it returns the first hit found, not the closest.
+#[inline(always)]
+fn search_wide_bvh<N: WideSlab, const C: usize, I: Intersector, P: MemoryProbe, const ANY: bool>(
+    scene: &SceneView<'_>,
+    bvh: &WideBvhView<'_, N>,
+    ray: &Ray,
+    probe: &mut P,
+    counters: &mut RayCounters,
+) -> Option<Hit>
+where
+    <I::Nodes as NodeTests>::Wide: WideRay<N>,
+{
     if !<I::Nodes as NodeTests>::FLOAT {
         // Another datapath's box test: the step walk with it (the loop below is the f32
         // tests' fast path).
@@ -213,25 +245,26 @@ where
     // two of the eight walks.
     if N::OCTANT_FORMS && r.avx8.is_some() {
         return match r.octant() {
-            0 => walk::<N, C, I, P, 0>(scene, bvh, ray, &r, probe, counters),
-            1 => walk::<N, C, I, P, 1>(scene, bvh, ray, &r, probe, counters),
-            2 => walk::<N, C, I, P, 2>(scene, bvh, ray, &r, probe, counters),
-            3 => walk::<N, C, I, P, 3>(scene, bvh, ray, &r, probe, counters),
-            4 => walk::<N, C, I, P, 4>(scene, bvh, ray, &r, probe, counters),
-            5 => walk::<N, C, I, P, 5>(scene, bvh, ray, &r, probe, counters),
-            6 => walk::<N, C, I, P, 6>(scene, bvh, ray, &r, probe, counters),
-            _ => walk::<N, C, I, P, 7>(scene, bvh, ray, &r, probe, counters),
+            0 => walk::<N, C, I, P, 0, ANY>(scene, bvh, ray, &r, probe, counters),
+            1 => walk::<N, C, I, P, 1, ANY>(scene, bvh, ray, &r, probe, counters),
+            2 => walk::<N, C, I, P, 2, ANY>(scene, bvh, ray, &r, probe, counters),
+            3 => walk::<N, C, I, P, 3, ANY>(scene, bvh, ray, &r, probe, counters),
+            4 => walk::<N, C, I, P, 4, ANY>(scene, bvh, ray, &r, probe, counters),
+            5 => walk::<N, C, I, P, 5, ANY>(scene, bvh, ray, &r, probe, counters),
+            6 => walk::<N, C, I, P, 6, ANY>(scene, bvh, ray, &r, probe, counters),
+            _ => walk::<N, C, I, P, 7, ANY>(scene, bvh, ray, &r, probe, counters),
         };
     }
-    walk::<N, C, I, P, ANY_OCTANT>(scene, bvh, ray, &r, probe, counters)
+    walk::<N, C, I, P, ANY_OCTANT, ANY>(scene, bvh, ray, &r, probe, counters)
 }
 
 /// `walk`'s octant parameter for a walk that takes the ray's octant from the ray.
 const ANY_OCTANT: usize = 8;
 
-/// [`trace_wide_bvh`]'s loop for a ray of octant `O` (`ANY_OCTANT`: any).
+/// [`trace_wide_bvh`]'s loop for a ray of octant `O` (`ANY_OCTANT`: any); with `ANY`,
+/// ended by the first leaf that holds a hit.
 #[inline(always)]
-fn walk<N: WideSlab, const C: usize, I: Intersector, P: MemoryProbe, const O: usize>(
+fn walk<N: WideSlab, const C: usize, I: Intersector, P: MemoryProbe, const O: usize, const ANY: bool>(
     scene: &SceneView<'_>,
     bvh: &WideBvhView<'_, N>,
     ray: &Ray,
@@ -273,6 +306,9 @@ fn walk<N: WideSlab, const C: usize, I: Intersector, P: MemoryProbe, const O: us
             // Cannot overflow: a ray tests at most PRIM_LISTS' length (the parse bounds it).
             tests += count;
             t_end = best.map_or(t_end, |h: Hit| h.t);
+            if ANY && best.is_some() {
+                break;
+            }
         }
         match pop_next(&mut stack, t_end) {
             Some(next) => (index, count) = next,

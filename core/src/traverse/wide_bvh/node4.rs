@@ -14,7 +14,7 @@ use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::traverse::boxes::slab::RayBox;
 pub use crate::traverse::wide_bvh::NodeRay;
-use crate::traverse::wide_bvh::{stack_capacity, trace_wide_bvh, WideBvhTraversal, WideSlab};
+use crate::traverse::wide_bvh::{occluded_wide_bvh, stack_capacity, trace_wide_bvh, WideBvhTraversal, WideSlab};
 
 /// Entry distances of the ray into the four child boxes of `n`, within `[t0, t1]`, and
 /// the bit mask of those it hits (empty slots, whose boxes are inverted, never).
@@ -101,4 +101,17 @@ pub fn trace_bvh4<I: Intersector, P: MemoryProbe>(
     counters: &mut RayCounters,
 ) -> Option<Hit> {
     trace_wide_bvh::<Bvh4Node, { stack_capacity(4) }, I, P>(scene, bvh, ray, probe, counters)
+}
+
+/// Whether `ray` is blocked within its interval in the 4-wide BVH (see
+/// [`occluded_wide_bvh`]).
+#[inline(always)]
+pub fn occluded_bvh4<I: Intersector, P: MemoryProbe>(
+    scene: &SceneView<'_>,
+    bvh: &Bvh4View<'_>,
+    ray: &Ray,
+    probe: &mut P,
+    counters: &mut RayCounters,
+) -> bool {
+    occluded_wide_bvh::<Bvh4Node, { stack_capacity(4) }, I, P>(scene, bvh, ray, probe, counters)
 }

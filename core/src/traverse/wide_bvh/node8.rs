@@ -11,7 +11,9 @@ use crate::intersect::triangle::Intersector;
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::traverse::boxes::slab::RayBox;
-use crate::traverse::wide_bvh::{stack_capacity, trace_wide_bvh, NodeRay, WideBvhTraversal, WideSlab};
+use crate::traverse::wide_bvh::{
+    occluded_wide_bvh, stack_capacity, trace_wide_bvh, NodeRay, WideBvhTraversal, WideSlab,
+};
 
 /// `max` as the SIMD instruction computes it (the second operand when either is NaN),
 /// written so that the compiler emits exactly that instruction.
@@ -153,6 +155,19 @@ pub fn trace_bvh8<I: Intersector, P: MemoryProbe>(
     counters: &mut RayCounters,
 ) -> Option<Hit> {
     trace_wide_bvh::<Bvh8Node, { stack_capacity(8) }, I, P>(scene, bvh, ray, probe, counters)
+}
+
+/// Whether `ray` is blocked within its interval in the 8-wide BVH (see
+/// [`occluded_wide_bvh`]).
+#[inline(always)]
+pub fn occluded_bvh8<I: Intersector, P: MemoryProbe>(
+    scene: &SceneView<'_>,
+    bvh: &Bvh8View<'_>,
+    ray: &Ray,
+    probe: &mut P,
+    counters: &mut RayCounters,
+) -> bool {
+    occluded_wide_bvh::<Bvh8Node, { stack_capacity(8) }, I, P>(scene, bvh, ray, probe, counters)
 }
 
 #[cfg(test)]
