@@ -94,6 +94,7 @@ def main():
     ap.add_argument("--size", default="1024x1024")
     ap.add_argument("--rounds", type=int, default=5)
     ap.add_argument("--threads", default="1,2", help="thread counts; 1 is pinned to one core")
+    ap.add_argument("--kinds", default="primary,shadow,bounce", help="ray kinds to time")
     ap.add_argument("--raypipe", default=os.path.join(HERE, "..", "target", "release", "raypipe"))
     a = ap.parse_args()
     if not shutil.which("gcc") or not os.path.exists("/usr/include/embree3/rtcore.h"):
@@ -122,7 +123,7 @@ def main():
             kinds = [("primary", "closest", ["intersect1", "intersect16", "intersect1M"]),
                      ("shadow", "any", ["occluded1", "occluded16"]),
                      ("bounce", "closest", ["intersect1", "intersect16", "intersect1Mi"])]
-            for kind, query, embree_modes in kinds:
+            for kind, query, embree_modes in [k for k in kinds if k[0] in a.kinds.split(",")]:
                 rays_k = os.path.join(tmp, f"{kind}.npy")
                 n = len(np.load(rays_k, mmap_mode="r"))
                 raypipe_modes = [(f"{acc} single", images[acc], "1") for acc in ("bvh4", "bvh8")]
