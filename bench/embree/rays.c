@@ -11,9 +11,12 @@
  *   intersect1Mi  the same with the incoherent flag (secondary rays)
  *   occluded1     rtcOccluded1
  *   occluded16    rtcOccluded16, coherent
- * on THREADS threads (each takes a contiguous share of the runs of 16), ROUNDS times.
+ * on THREADS threads, ROUNDS times. The threads take chunks of 4096 rays from a shared
+ * counter as they finish the last (as raypipe's workers do): a fixed share per thread
+ * left one thread idle while the other finished the costlier half of the image.
  * Prints the build time, then per round nothing; at the end one line:
- *   MODE threads=T rays=N median_s=S mrays=M build_ms=B
+ *   MODE threads=T rays=N median_s=S mrays=M build_ms=B bytes=M
+ * (bytes: what Embree allocated for the scene, from its memory monitor).
  * and, with HITS, writes one record per ray: int32 prim (-1: miss) and float32 t for the
  * intersect modes, uint8 occluded for the occluded ones.
  *
@@ -22,6 +25,8 @@
 #include <embree3/rtcore.h>
 #include <math.h>
 #include <pthread.h>
+#include <stdatomic.h>
+#include <stdbool.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -69,12 +74,25 @@ static float *load_npy(const char *path, size_t *rows, size_t *cols) {
 typedef struct {
   RTCScene scene;
   const float *rays;
-  size_t cols, first, last; /* rays [first, last) */
+  size_t cols, first, last; /* the chunk being traced: rays [first, last) */
+  size_t count;             /* all rays */
+  _Atomic size_t *next;     /* the next chunk's first ray, shared by the threads */
   int mode;
   int32_t *prim;
   float *t;
   uint8_t *occluded;
 } Job;
+
+/* Rays a thread takes at a time: a multiple of the packet (16) and stream (256) sizes. */
+enum { CHUNK = 4096 };
+
+/* Embree's allocations, summed by its memory monitor (bytes < 0: freed). */
+static _Atomic long long allocated;
+static bool monitor(void *ptr, ssize_t bytes, bool post) {
+  (void)ptr, (void)post;
+  allocated += bytes;
+  return true;
+}
 
 enum { I1, I16, I1M, I1MI, O1, O16 };
 static const char *MODES[] = {"intersect1", "intersect16", "intersect1M", "intersect1Mi", "occluded1", "occluded16"};
@@ -96,8 +114,7 @@ static void note_hit(const Job *j, size_t i, const struct RTCRay *r, const struc
   }
 }
 
-static void *run(void *arg) {
-  Job *j = arg;
+static void trace_chunk(Job *j) {
   struct RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   if (j->mode == I16 || j->mode == I1M || j->mode == O16) ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
@@ -159,7 +176,17 @@ static void *run(void *arg) {
     }
     free(rh);
   }
-  return NULL;
+}
+
+static void *run(void *arg) {
+  Job *j = arg;
+  for (;;) {
+    size_t first = atomic_fetch_add(j->next, CHUNK);
+    if (first >= j->count) return NULL;
+    j->first = first;
+    j->last = first + CHUNK < j->count ? first + CHUNK : j->count;
+    trace_chunk(j);
+  }
 }
 
 int main(int argc, char **argv) {
@@ -183,6 +210,7 @@ int main(int argc, char **argv) {
   snprintf(config, sizeof config, "threads=%d", threads);
   RTCDevice device = rtcNewDevice(config);
   if (!device) die("embree", "no device");
+  rtcSetDeviceMemoryMonitorFunction(device, monitor, NULL);
   double t0 = now();
   RTCScene scene = rtcNewScene(device);
   rtcSetSceneBuildQuality(scene, quality);
@@ -210,12 +238,13 @@ int main(int argc, char **argv) {
   pthread_t *tid = calloc(threads, sizeof *tid);
   Job *jobs = calloc(threads, sizeof *jobs);
   double *secs = calloc(rounds, sizeof *secs);
-  size_t runs16 = (rn + 15) / 16;
+  long long scene_bytes = allocated;
+  _Atomic size_t next;
   for (int r = 0; r < rounds; r++) {
     double s = now();
+    atomic_store(&next, 0);
     for (int k = 0; k < threads; k++) {
-      size_t first = runs16 * k / threads * 16, last = runs16 * (k + 1) / threads * 16;
-      jobs[k] = (Job){scene, rays, rc, first, last < rn ? last : rn, mode, prim, t, occluded};
+      jobs[k] = (Job){scene, rays, rc, 0, 0, rn, &next, mode, prim, t, occluded};
       if (threads == 1) run(&jobs[k]);
       else pthread_create(&tid[k], NULL, run, &jobs[k]);
     }
@@ -225,8 +254,8 @@ int main(int argc, char **argv) {
   }
   qsort(secs, rounds, sizeof *secs, cmp);
   double med = secs[rounds / 2];
-  printf("%s threads=%d rays=%zu median_s=%.6f mrays=%.3f build_ms=%.1f\n", MODES[mode], threads, rn, med,
-         rn / med / 1e6, build_ms);
+  printf("%s threads=%d rays=%zu median_s=%.6f mrays=%.3f build_ms=%.1f bytes=%lld\n", MODES[mode], threads, rn,
+         med, rn / med / 1e6, build_ms, scene_bytes);
   if (hits_path) {
     FILE *f = fopen(hits_path, "wb");
     if (!f) die(hits_path, "cannot write");
