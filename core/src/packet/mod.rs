@@ -199,6 +199,17 @@ impl<const N: usize> RayPacket<N> {
         self.t_max[i] = r.t_max;
     }
 
+    /// True when every active ray starts at one point, bit for bit (a pinhole camera's
+    /// rays, a light's, a hemisphere of rays from one hit); true for no active ray.
+    #[inline]
+    pub fn one_origin(&self) -> bool {
+        let mut lanes = LanesOf::<N>(self.live());
+        let Some(first) = lanes.next() else { return true };
+        let o = |i: usize| [self.ox[i].to_bits(), self.oy[i].to_bits(), self.oz[i].to_bits()];
+        let first = o(first);
+        lanes.all(|i| o(i) == first)
+    }
+
     /// Ray `i`; past the last lane, the last lane's ray.
     #[inline]
     pub fn ray(&self, i: usize) -> Ray {
@@ -384,6 +395,25 @@ mod tests {
                 assert_eq!(bits(a), bits(b), "N = {N}, lane {i}");
             }
         }
+    }
+
+    #[test]
+    fn one_origin_looks_at_active_lanes_only() {
+        let ray = |x: f32| Ray::new(Vec3::new(x, 0.0, 0.0), Vec3::X);
+        let mut p = RayPacket::<4>::new();
+        assert!(p.one_origin(), "no active ray");
+        p.set(0, &ray(1.0));
+        p.set(2, &ray(1.0));
+        assert!(p.one_origin());
+        p.set(3, &ray(2.0));
+        assert!(!p.one_origin());
+        p.active &= !(1 << 3);
+        assert!(p.one_origin(), "an inactive lane's origin does not count");
+        // Bit for bit: -0 is another origin than +0.
+        p.set(1, &ray(-0.0));
+        p.set(0, &ray(0.0));
+        p.active = 0b11;
+        assert!(!p.one_origin());
     }
 
     #[test]

@@ -6,3 +6,4 @@ pub mod image_bytes;
 pub mod isa;
 pub mod memory;
 pub mod prefetch;
+pub mod thread_pools;

@@ -1,17 +1,17 @@
 //! Ray batches: rays from an array, closest hits out, traced on all cores in fixed-size
-//! chunks (the result does not depend on the thread count).
+//! chunks, each worker taking the next chunk as it finishes one (the result does not
+//! depend on the thread count).
 
 use anyhow::{bail, Result};
 use std::mem::MaybeUninit;
 
-use rayon::prelude::*;
 use raypipe_core::traverse::occlusion::occluded;
 use raypipe_core::{Intersector, NoProbe, Ray, RayCounters, SceneView, Vec3};
 
 use crate::input::npy::{Array2, HitRecord};
 use crate::platform::huge_pages;
 use crate::platform::prefetch::prefetch;
-use crate::render::in_pool;
+use crate::platform::thread_pools::for_each_claimed;
 use raypipe_core::packet::{PacketCounters, RayPacket};
 
 use crate::render::packets::PacketSize;
@@ -137,26 +137,23 @@ fn occluded_with<I: Intersector, const N: usize>(
     threads: Option<usize>,
 ) -> Result<Vec<bool>> {
     let mut out = vec![false; rays.len()];
-    in_pool(threads, || {
-        out.par_chunks_mut(CHUNK).zip(rays.par_chunks(CHUNK)).zip(invalid.par_chunks(CHUNK)).for_each(
-            |((out, chunk), bad)| {
-                if N == 1 {
-                    for ((o, r), bad) in out.iter_mut().zip(chunk).zip(bad) {
-                        *o = !bad && occluded::<I, _>(scene, r, &mut NoProbe, &mut RayCounters::default());
-                    }
-                    return;
-                }
-                let mut pc = PacketCounters::default();
-                let mut packet = RayPacket::<N>::new();
-                for ((out, group), bad) in out.chunks_mut(N).zip(chunk.chunks(N)).zip(bad.chunks(N)) {
-                    packet.fill(group);
-                    let blocked = occluded_packet::<I, _, N>(scene, &packet, &mut NoProbe, &mut pc);
-                    for (i, (o, bad)) in out.iter_mut().zip(bad).enumerate() {
-                        *o = !bad && blocked & (1 << i) != 0;
-                    }
-                }
-            },
-        )
+    let chunks = out.chunks_mut(CHUNK).zip(rays.chunks(CHUNK)).zip(invalid.chunks(CHUNK));
+    for_each_claimed(threads, chunks, |((out, chunk), bad)| {
+        if N == 1 {
+            for ((o, r), bad) in out.iter_mut().zip(chunk).zip(bad) {
+                *o = !bad && occluded::<I, _>(scene, r, &mut NoProbe, &mut RayCounters::default());
+            }
+            return;
+        }
+        let mut pc = PacketCounters::default();
+        let mut packet = RayPacket::<N>::new();
+        for ((out, group), bad) in out.chunks_mut(N).zip(chunk.chunks(N)).zip(bad.chunks(N)) {
+            packet.fill(group);
+            let blocked = occluded_packet::<I, _, N>(scene, &packet, &mut NoProbe, &mut pc);
+            for (i, (o, bad)) in out.iter_mut().zip(bad).enumerate() {
+                *o = !bad && blocked & (1 << i) != 0;
+            }
+        }
     })?;
     Ok(out)
 }
@@ -202,24 +199,23 @@ fn trace_with<I: Intersector, const N: usize>(
     if out.capacity() < n {
         *out = huge_pages::empty_vec::<HitRecord>(n);
     }
-    in_pool(threads, || {
-        out.spare_capacity_mut()[..n].par_chunks_mut(CHUNK).zip(rays.par_chunks(CHUNK)).for_each(|(out, chunk)| {
-            if N == 1 {
-                trace_singles::<I>(scene, out, chunk);
-            } else {
-                let mut pc = PacketCounters::default();
-                let mut hits = [None; N];
-                // One packet record, refilled: only the active mask needs clearing.
-                let mut packet = RayPacket::<N>::new();
-                for (out, group) in out.chunks_mut(N).zip(chunk.chunks(N)) {
-                    packet.fill(group);
-                    trace_packet::<I, _, N>(scene, &packet, &mut hits, &mut NoProbe, &mut pc);
-                    for (o, h) in out.iter_mut().zip(&hits) {
-                        o.write(record(*h));
-                    }
+    let chunks = out.spare_capacity_mut()[..n].chunks_mut(CHUNK).zip(rays.chunks(CHUNK));
+    for_each_claimed(threads, chunks, |(out, chunk)| {
+        if N == 1 {
+            trace_singles::<I>(scene, out, chunk);
+        } else {
+            let mut pc = PacketCounters::default();
+            let mut hits = [None; N];
+            // One packet record, refilled: only the active mask needs clearing.
+            let mut packet = RayPacket::<N>::new();
+            for (out, group) in out.chunks_mut(N).zip(chunk.chunks(N)) {
+                packet.fill(group);
+                trace_packet::<I, _, N>(scene, &packet, &mut hits, &mut NoProbe, &mut pc);
+                for (o, h) in out.iter_mut().zip(&hits) {
+                    o.write(record(*h));
                 }
             }
-        })
+        }
     })?;
     // SAFETY: the capacity is at least `n` (made so above), and each of the first `n`
     // records has been written: the output's chunks pair with the rays' chunks of the

@@ -158,14 +158,8 @@ pub fn in_pool<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Send) ->
     Ok(thread_pool(threads)?.install(f))
 }
 
-/// A pool of `threads` workers (all cores when `None`).
-pub fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
-    let mut b = rayon::ThreadPoolBuilder::new();
-    if let Some(n) = threads {
-        b = b.num_threads(n.max(1));
-    }
-    b.build().map_err(|e| anyhow!("cannot start worker threads: {e}"))
-}
+use crate::platform::thread_pools::map_claimed;
+pub use crate::platform::thread_pools::thread_pool;
 
 /// The tiles of a `w × h` image as `(x0, y0, x1, y1)`.
 pub fn tiles(w: u32, h: u32) -> Vec<(u32, u32, u32, u32)> {
@@ -245,16 +239,11 @@ fn render_with<I: Intersector>(
     let tiles = tiles(w, h);
     let frame = FrameJob::new(scene, eye, background, opts);
     let bar = progress::bar(tiles.len() as u64, "render", opts.progress);
-    let done: Vec<(Vec<Vec3>, RayTotals)> = in_pool(opts.threads, || {
-        tiles
-            .par_iter()
-            .map(|&tile| {
-                let out = frame.tile::<I>(tile);
-                bar.inc(1);
-                first.get_or_init(|| start.elapsed().as_secs_f64());
-                out
-            })
-            .collect()
+    let done: Vec<(Vec<Vec3>, RayTotals)> = map_claimed(opts.threads, &tiles, |&tile| {
+        let out = frame.tile::<I>(tile);
+        bar.inc(1);
+        first.get_or_init(|| start.elapsed().as_secs_f64());
+        out
     })?;
     bar.finish_and_clear();
     let (radiance, totals) = assemble((0, 0, w, h), &tiles, done);

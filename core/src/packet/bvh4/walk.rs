@@ -12,7 +12,7 @@ use crate::ray::Ray;
 use crate::traverse::boxes::datapath::NodeTests;
 use crate::traverse::boxes::slab::RayBox;
 use crate::traverse::wide_bvh::node4::slab4_exact;
-use crate::traverse::wide_bvh::node4::trace_bvh4;
+use crate::traverse::wide_bvh::node4::{occluded_bvh4, trace_bvh4};
 use glam::{BVec4A, Vec3, Vec3A, Vec4};
 
 use super::frustum::Frustum;
@@ -76,12 +76,15 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
     walk_packet::<I, P, N, false>(scene, bvh, packet, hits, probe, counters);
 }
 
-/// The any-hit query for a packet of shadow rays: bit `i` of the result is set when ray
-/// `i` is blocked within its interval — exactly [`crate::traverse::occlusion::occluded`]
-/// for each active ray. The walk is the closest-hit packet walk's, but a ray leaves the
-/// packet at the first leaf where it hits something, its end no longer widens the
-/// packet's reach, and the packet stops as soon as all its rays are blocked (Wald et al.
-/// 2001 §4: shadow rays of one light are as coherent as primary rays).
+/// The any-hit query for a packet: bit `i` of the result is set when ray `i` is blocked
+/// within its interval — exactly [`crate::traverse::occlusion::occluded`] for each
+/// active ray. Rays of one origin (a light's, a hemisphere from one point) take the
+/// closest-hit packet walk, but a ray leaves the packet at the first leaf where it hits
+/// something, its end no longer widens the packet's reach, and the packet stops as soon
+/// as all its rays are blocked. Rays of many origins (shadow rays from a block of
+/// pixels' hits) are asked one by one with the single-ray any-hit walk: their frustum
+/// spans the distance between the hits and the light, and a packet of 64 such rays ran
+/// at a third of the single rays' rate on Sponza (1.9 against 5.7 Mrays/s).
 pub fn occluded_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
     scene: &SceneView<'_>,
     bvh: &Bvh4View<'_>,
@@ -89,8 +92,8 @@ pub fn occluded_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
     probe: &mut P,
     counters: &mut PacketCounters,
 ) -> u64 {
-    if !<I::Nodes as NodeTests>::FLOAT {
-        let any = |r: &Ray, c: &mut RayCounters| crate::traverse::occlusion::occluded::<I, P>(scene, r, probe, c);
+    if !<I::Nodes as NodeTests>::FLOAT || !packet.one_origin() {
+        let any = |r: &Ray, c: &mut RayCounters| occluded_bvh4::<I, P>(scene, bvh, r, probe, c);
         return occluded_ray_by_ray(packet, counters, any);
     }
     let mut hits = [None; N];
