@@ -88,6 +88,37 @@ def agree_any(hits, path):
     return int((hits["occluded"].astype(np.uint8) != e).sum())
 
 
+def time_builds(rp, harness, mesh, name, tris_p, rays_p, tmp, a):
+    """Build time and bytes per triangle of each raypipe structure (`raypipe bench`: the
+    build alone, the OBJ already parsed) and of Embree's MEDIUM and HIGH builds (the
+    harness's commit time; bytes from Embree's memory monitor), one core pinned and then
+    all the threads asked for. Rounds interleaved, medians."""
+    few = os.path.join(tmp, "few.npy")
+    np.save(few, np.load(rays_p, mmap_mode="r")[:16])
+    n_tris = len(np.load(tris_p, mmap_mode="r"))
+    out = []
+    for threads in [int(t) for t in a.threads.split(",")]:
+        pin = "1" if threads == 1 else None
+        got = {}
+        for _ in range(a.rounds):
+            for accel in ("grid", "kd", "bvh", "bvh4", "bvh8"):
+                text = run([rp, "bench", mesh, "--accel", accel, "--runs", "1", "--threads", str(threads),
+                            "--size", "16x16", "--no-default", "--packet", "1"], pin)
+                row = [line for line in text.splitlines() if line.startswith(os.path.basename(mesh)[:28])][-1]
+                m = re.search(r"\s([0-9.]+)\s+([0-9.]+) single", row)
+                got.setdefault(f"raypipe {accel}", []).append((float(m.group(1)), float(m.group(2))))
+            for quality in ("medium", "high"):
+                text = run([harness, tris_p, few, "occluded1", str(threads), "1", quality], pin)
+                ms = float(re.search(r"build_ms=([0-9.]+)", text).group(1))
+                size = float(re.search(r"bytes=([0-9]+)", text).group(1))
+                got.setdefault(f"Embree {quality}", []).append((ms / 1e3, size / n_tris))
+        cells = [(k, statistics.median(x[0] for x in v), statistics.median(x[1] for x in v)) for k, v in got.items()]
+        out.append((name, threads, cells))
+        print(f"{name} builds {threads}T: " + ", ".join(f"{k} {sec:.3f} s {bpt:.0f} B/tri" for k, sec, bpt in cells),
+              file=sys.stderr)
+    return out
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("scenes", nargs="+", help="MESH or MESH:CAMERA (a raypipe camera file)")
@@ -95,12 +126,13 @@ def main():
     ap.add_argument("--rounds", type=int, default=5)
     ap.add_argument("--threads", default="1,2", help="thread counts; 1 is pinned to one core")
     ap.add_argument("--kinds", default="primary,shadow,bounce", help="ray kinds to time")
+    ap.add_argument("--builds", action="store_true", help="also time every structure's build beside Embree's")
     ap.add_argument("--raypipe", default=os.path.join(HERE, "..", "target", "release", "raypipe"))
     a = ap.parse_args()
     if not shutil.which("gcc") or not os.path.exists("/usr/include/embree3/rtcore.h"):
         sys.exit("error: needs gcc and Embree 3's headers: apt-get install gcc libembree-dev")
     rp = a.raypipe
-    rows = []
+    rows, builds = [], []
     with tempfile.TemporaryDirectory() as tmp:
         harness = os.path.join(tmp, "rays")
         subprocess.run(["gcc", "-O2", "-o", harness, os.path.join(HERE, "embree", "rays.c"), "-lembree3",
@@ -120,6 +152,8 @@ def main():
             rays, tris = np.load(rays_p), np.load(tris_p)
             primary_hits = np.load(hits_p)
             secondary_rays(tmp, rays, primary_hits, tris)
+            if a.builds:
+                builds.extend(time_builds(rp, harness, mesh, name, tris_p, rays_p, tmp, a))
             kinds = [("primary", "closest", ["intersect1", "intersect16", "intersect1M"]),
                      ("shadow", "any", ["occluded1", "occluded16"]),
                      ("bounce", "closest", ["intersect1", "intersect16", "intersect1Mi"])]
@@ -163,6 +197,12 @@ def main():
     for name, kind, n, threads, med, br, be, differ in rows:
         print(f"| {name} | {kind} ({n}) | {threads} | {br}: {med[br]:.1f} | {be[7:]}: {med[be]:.1f} | "
               f"{med[br] / med[be]:.2f} | {differ} ({100 * differ / max(n, 1):.3f}%) |")
+    if builds:
+        print("\nBuilds (median of the rounds; seconds, bytes per triangle):\n")
+        print("| scene | threads | " + " | ".join(b[0] for b in builds[0][2]) + " |")
+        print("|---|---|" + "---|" * len(builds[0][2]))
+        for name, threads, cells in builds:
+            print(f"| {name} | {threads} | " + " | ".join(f"{sec:.3f} s, {bpt:.0f} B" for _, sec, bpt in cells) + " |")
     print("\nEvery path, medians in Mrays/s:\n")
     for name, kind, n, threads, med, _, _, _ in rows:
         print(f"- {name} {kind}, {threads} thread(s): " + ", ".join(f"{k} {v:.1f}" for k, v in med.items()))
