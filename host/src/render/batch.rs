@@ -5,7 +5,6 @@
 use anyhow::{bail, Result};
 use std::mem::MaybeUninit;
 
-use raypipe_core::traverse::occlusion::occluded;
 use raypipe_core::{Intersector, NoProbe, Ray, RayCounters, SceneView, Vec3};
 
 use crate::input::npy::{Array2, HitRecord};
@@ -15,7 +14,7 @@ use crate::platform::thread_pools::for_each_claimed;
 use raypipe_core::packet::{PacketCounters, RayPacket};
 
 use crate::render::packets::PacketSize;
-use crate::render::tracer::{occluded_packet, trace_each, trace_packet, IntersectorKind};
+use crate::render::tracer::{occluded_each, occluded_packet, trace_each, trace_packet, IntersectorKind};
 use crate::with_intersector;
 
 /// Rays traced as one unit of work.
@@ -140,9 +139,13 @@ fn occluded_with<I: Intersector, const N: usize>(
     let chunks = out.chunks_mut(CHUNK).zip(rays.chunks(CHUNK)).zip(invalid.chunks(CHUNK));
     for_each_claimed(threads, chunks, |((out, chunk), bad)| {
         if N == 1 {
-            for ((o, r), bad) in out.iter_mut().zip(chunk).zip(bad) {
-                *o = !bad && occluded::<I, _>(scene, r, &mut NoProbe, &mut RayCounters::default());
-            }
+            let ray = |i: usize| chunk.get(i).filter(|_| !bad.get(i).copied().unwrap_or(true));
+            let blocked = |i: usize, b: bool| {
+                if let Some(o) = out.get_mut(i) {
+                    *o = b;
+                }
+            };
+            occluded_each::<I, _>(scene, chunk.len(), ray, &mut NoProbe, &mut RayCounters::default(), blocked);
             return;
         }
         let mut pc = PacketCounters::default();
