@@ -6,8 +6,6 @@
 
 use std::sync::{Arc, Mutex};
 
-use rayon::prelude::*;
-
 use anyhow::{anyhow, Result};
 
 /// The pools started so far, by requested thread count (`None`: all cores).
@@ -75,7 +73,9 @@ pub fn map_claimed<T: Sync, R: Send>(
     out.resize_with(items.len(), || None);
     for_each_claimed(threads, out.iter_mut().zip(items), |(slot, item)| *slot = Some(work(item)))?;
     // Every slot is written: each pair is claimed exactly once and the scope waits for all.
-    Ok(out.into_par_iter().map(|r| r.expect("every item was claimed")).collect())
+    // (Sequentially: a parallel pass here started rayon's global pool for a frame's
+    // thousand-odd moves.)
+    Ok(out.into_iter().map(|r| r.expect("every item was claimed")).collect())
 }
 
 #[cfg(test)]
