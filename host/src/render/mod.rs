@@ -137,13 +137,15 @@ pub struct Frame {
 }
 
 impl Frame {
-    /// A frame from linear radiance, row-major.
+    /// A frame from linear radiance, row-major. Converted on the current thread pool:
+    /// a 2048² frame's sRGB encoding took 0.10 s on one thread, a fifth of its tiles'
+    /// time on Sponza (two threads' frame went from 1.46× to 1.64× one's).
     pub fn from_radiance(width: u32, height: u32, radiance: Vec<Vec3>) -> Frame {
         Frame {
             width,
             height,
-            pixels: radiance.iter().map(|&c| rgb8(c)).collect(),
-            radiance: radiance.iter().map(|c| c.to_array()).collect(),
+            pixels: radiance.par_iter().map(|&c| rgb8(c)).collect(),
+            radiance: radiance.par_iter().map(|c| c.to_array()).collect(),
         }
     }
 }
@@ -247,7 +249,7 @@ fn render_with<I: Intersector>(
     })?;
     bar.finish_and_clear();
     let (radiance, totals) = assemble((0, 0, w, h), &tiles, done);
-    Ok((Frame::from_radiance(w, h, radiance), totals))
+    Ok((in_pool(opts.threads, || Frame::from_radiance(w, h, radiance))?, totals))
 }
 
 /// The colours of the rectangle `area`, row-major, from its `tiles` and their rendered
