@@ -242,6 +242,14 @@ impl PacketCounters {
         self.active_lanes += o.active_lanes;
         self.tri_tests += o.tri_tests;
     }
+
+    /// Adds the work of rays traced one by one: each node or leaf visit counts one lane.
+    pub fn add_rays(&mut self, c: &crate::counters::RayCounters) {
+        let visits = u64::from(c.nodes) + u64::from(c.leaves);
+        self.visits += visits;
+        self.active_lanes += visits;
+        self.tri_tests += u64::from(c.tri_tests);
+    }
 }
 
 /// A packet traced ray by ray with the single-ray kernel `trace`: what the packet kernels
@@ -258,10 +266,7 @@ pub fn ray_by_ray<const N: usize>(
     for (i, hit) in hits.iter_mut().enumerate() {
         *hit = if packet.live() & (1 << i) != 0 { trace(&packet.ray(i), &mut c) } else { None };
     }
-    let visits = u64::from(c.nodes) + u64::from(c.leaves);
-    counters.visits += visits;
-    counters.active_lanes += visits;
-    counters.tri_tests += u64::from(c.tri_tests);
+    counters.add_rays(&c);
 }
 
 /// The any-hit query of a packet asked ray by ray with the single-ray query `blocked`
@@ -277,10 +282,7 @@ pub fn occluded_ray_by_ray<const N: usize>(
     for i in LanesOf::<N>(packet.live()) {
         mask |= (blocked(&packet.ray(i), &mut c) as u64) << i;
     }
-    let visits = u64::from(c.nodes) + u64::from(c.leaves);
-    counters.visits += visits;
-    counters.active_lanes += visits;
-    counters.tri_tests += u64::from(c.tri_tests);
+    counters.add_rays(&c);
     mask
 }
 
