@@ -1,6 +1,7 @@
-//! Worker threads. Pools, one per thread count, started once and kept for the process: a caller
-//! tracing batch after batch (`trace --runs`, an animation's frames, a sweep of renders)
-//! does not start threads for every batch, and its workers keep their caches warm.
+//! Worker threads. Pools, one per thread count, started once and kept for the process:
+//! a caller tracing batch after batch (`trace --runs`, an animation's frames, a sweep of
+//! renders) does not start threads for every batch, and its workers keep their caches
+//! warm.
 //! (On Sponza's 8×8 packets, two threads, 20 runs per call: a median of 35.6 against
 //! 33.6 Mrays/s with a fresh pool per batch, within this machine's spread.)
 

@@ -32,6 +32,8 @@ use raypipe_core::shade::shader::Shader;
 use raypipe_core::shade::whitted::WhittedOptions;
 
 use crate::output::progress;
+use crate::platform::thread_pools::map_claimed;
+pub use crate::platform::thread_pools::thread_pool;
 use crate::render::tracer::IntersectorKind;
 use crate::with_intersector;
 
@@ -159,9 +161,6 @@ pub fn eye_rays(camera: &CameraRecord, what: &str) -> Result<EyeRays> {
 pub fn in_pool<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Send) -> Result<T> {
     Ok(thread_pool(threads)?.install(f))
 }
-
-use crate::platform::thread_pools::map_claimed;
-pub use crate::platform::thread_pools::thread_pool;
 
 /// The tiles of a `w × h` image as `(x0, y0, x1, y1)`.
 pub fn tiles(w: u32, h: u32) -> Vec<(u32, u32, u32, u32)> {

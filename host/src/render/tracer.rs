@@ -14,8 +14,8 @@ use raypipe_core::traverse::bvh::trace_bvh;
 use raypipe_core::traverse::grid::trace_grid;
 use raypipe_core::traverse::kdtree::trace_kdtree;
 use raypipe_core::traverse::occlusion::occluded;
-use raypipe_core::traverse::wide_bvh::node4::{occluded_bvh4, trace_bvh4};
-use raypipe_core::traverse::wide_bvh::node8::{occluded_bvh8, trace_bvh8};
+use raypipe_core::traverse::wide_bvh::node4::trace_bvh4;
+use raypipe_core::traverse::wide_bvh::node8::trace_bvh8;
 use raypipe_core::{
     traverse::brute_force::trace_brute_force, Hit, Intersector, MemoryProbe, Ray, RayCounters, SceneView,
 };
@@ -125,8 +125,8 @@ pub fn trace_each<I: Intersector, P: MemoryProbe, R: Borrow<Ray>>(
 }
 
 /// The any-hit query of rays `0 .. n` (`ray(i)`, `None` for a row that is no ray), each
-/// answer to `blocked(i, answer)`: [`trace_each`]'s loop, one per structure, compiled
-/// for AVX2 where the CPU has it.
+/// answer to `blocked(i, answer)`: core's [`occluded`], which picks the structure's
+/// walk, in one loop compiled for AVX2 where the CPU has it.
 #[inline(always)]
 pub fn occluded_each<'r, I: Intersector, P: MemoryProbe>(
     scene: &SceneView<'_>,
@@ -136,26 +136,15 @@ pub fn occluded_each<'r, I: Intersector, P: MemoryProbe>(
     counters: &mut RayCounters,
     mut blocked: impl FnMut(usize, bool),
 ) {
-    macro_rules! each_ray {
-        ($kernel:expr) => {
-            with_avx2(
-                #[inline(always)]
-                || {
-                    for i in 0..n {
-                        let b = ray(i).is_some_and(|r| $kernel(r));
-                        blocked(i, b)
-                    }
-                },
-            )
-        };
-    }
-    if let Some(bvh) = scene.bvh8() {
-        each_ray!(|r: &Ray| occluded_bvh8::<I, P>(scene, bvh, r, probe, counters))
-    } else if let Some(bvh) = scene.bvh4() {
-        each_ray!(|r: &Ray| occluded_bvh4::<I, P>(scene, bvh, r, probe, counters))
-    } else {
-        each_ray!(|r: &Ray| occluded::<I, P>(scene, r, probe, counters))
-    }
+    with_avx2(
+        #[inline(always)]
+        || {
+            for i in 0..n {
+                let b = ray(i).is_some_and(|r| occluded::<I, P>(scene, r, probe, counters));
+                blocked(i, b)
+            }
+        },
+    )
 }
 
 /// Calls `$body` with `$I` bound to the intersector type chosen by `$kind`.
