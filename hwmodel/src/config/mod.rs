@@ -405,7 +405,8 @@ impl Default for MemoryConfig {
 
 impl Default for DramConfig {
     /// DDR3-1600 11-11-11 (JEDEC JESD79-3F speed bin DDR3-1600K; e.g. Micron
-    /// MT41K512M8 datasheet): 800 MHz, tRCD = tRP = CL = 13.75 ns, tRAS = 35 ns,
+    /// MT41K512M8 datasheet): 800 MHz, tRCD = tRP = CL = 13.75 ns, CWL = 8 clocks,
+    /// tWTR = 7.5 ns (6 clocks), tRAS = 35 ns,
     /// tWR = 15 ns, tREFI = 7.8 µs, tRFC = 260 ns (4 Gb), tRRD = 6 ns and tFAW = 30 ns
     /// (1 KB pages); one 64-bit channel of eight x8 devices: 8 banks with 8 KiB rows, BL8.
     /// DRAMsim3's `DDR3_4Gb_x8_1600.ini` describes the same memory.

@@ -184,8 +184,9 @@ pub fn replay_dramsim3(
 
 /// raypipe's DRAM model set to DRAMsim3's `DDR4_8Gb_x8_2400` file (JEDEC DDR4-2400,
 /// 17-17-17 at tCK = 0.83 ns, CWL 12; 16 banks in 4 groups, which the model does not
-/// tell apart, so tRRD, tCCD and tWTR are the same-group (long) ones for every pair; 8 KiB rows;
-/// tRFC 350 ns for 8 Gb; tREFI 7.8 µs; tFAW 21 ns), with no controller latency.
+/// tell apart, so tRRD, tCCD and tWTR are the same-group (long) ones for every pair;
+/// 8 KiB rows; tRFC 350 ns for 8 Gb; tREFI 7.8 µs; tFAW 21 ns), with no controller
+/// latency.
 pub fn ddr4_2400() -> DramConfig {
     DramConfig {
         clock_mhz: 1200.0,
