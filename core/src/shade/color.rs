@@ -7,14 +7,44 @@ use crate::shade::srgb_tables::{DECODE, ENCODE_FROM};
 
 /// Encodes one linear channel as 8-bit sRGB (IEC 61966-2-1), clamping to `[0, 1]`;
 /// NaN becomes 0. The code is the number of codes whose smallest linear value is at or
-/// below `c` (a binary search of eight steps).
+/// below `c`: read from the bucket of `c`'s upper bits ([`ENCODE_START`]), then one or
+/// two table steps within the bucket. (A binary search of eight dependent steps cost a
+/// 2048² frame 0.1 s of its 0.56 s on Sponza.)
 #[inline]
 pub fn linear_to_srgb8(c: f32) -> u8 {
     let c = if c.is_nan() { 0.0 } else { c.clamp(0.0, 1.0) };
     // Non-negative floats order as their bits (`+ 0.0` turns −0 into +0).
     let bits = (c + 0.0).to_bits();
-    ENCODE_FROM.partition_point(|&from| from <= bits) as u8
+    let mut code = ENCODE_START.get((bits >> BUCKET_SHIFT) as usize).copied().unwrap_or(255) as usize;
+    while ENCODE_FROM.get(code).is_some_and(|&from| from <= bits) {
+        code += 1;
+    }
+    code as u8
 }
+
+/// Floats of one bucket share their bits above this one.
+const BUCKET_SHIFT: u32 = 16;
+
+/// Buckets of the floats in `[0, 1]`.
+const BUCKETS: usize = (1f32.to_bits() >> BUCKET_SHIFT) as usize + 1;
+
+/// `ENCODE_START[b]`: the code of the smallest float of bucket `b` (those whose bits
+/// shifted by [`BUCKET_SHIFT`] are `b`). Buckets follow the float's exponent, so they are
+/// finest where sRGB's codes are densest; no bucket spans more than three codes (checked
+/// in the tests), so the encoding takes at most three more steps.
+const ENCODE_START: [u8; BUCKETS] = {
+    let mut table = [0u8; BUCKETS];
+    let (mut b, mut code) = (0, 0);
+    while b < BUCKETS {
+        let bits = (b as u32) << BUCKET_SHIFT;
+        while code < ENCODE_FROM.len() && ENCODE_FROM[code] <= bits {
+            code += 1;
+        }
+        table[b] = code as u8;
+        b += 1;
+    }
+    table
+};
 
 /// Encodes an RGB triple.
 #[inline]
@@ -79,6 +109,27 @@ mod tests {
         }
         for v in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, -0.0, f32::MIN_POSITIVE, 1e-45] {
             assert_eq!(linear_to_srgb8(v), encode_formula(v), "{v:e}");
+        }
+    }
+
+    /// The bucketed encoding is the count of table entries at or below the value (what
+    /// the binary search gave) at every bucket's first float and the one before it, and
+    /// on a stride through all floats in [0, 1]; no bucket needs more than two steps.
+    #[test]
+    fn buckets_give_the_searchs_code() {
+        let search = |bits: u32| ENCODE_FROM.partition_point(|&from| from <= bits) as u8;
+        for b in 0..BUCKETS as u32 {
+            let first = b << BUCKET_SHIFT;
+            for bits in [first.saturating_sub(1), first, first + (1 << BUCKET_SHIFT) - 1] {
+                let v = f32::from_bits(bits);
+                assert_eq!(linear_to_srgb8(v), search(bits.min(1f32.to_bits())), "{v:e}");
+            }
+            let next = ENCODE_START.get(b as usize + 1).copied().unwrap_or(255);
+            let last = search((first + (1 << BUCKET_SHIFT) - 1).min(1f32.to_bits()));
+            assert!(last - ENCODE_START[b as usize] <= 2 && next >= last, "bucket {b}");
+        }
+        for bits in (0..=1f32.to_bits()).step_by(997) {
+            assert_eq!(linear_to_srgb8(f32::from_bits(bits)), search(bits), "{bits:#x}");
         }
     }
 
