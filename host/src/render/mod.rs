@@ -4,6 +4,7 @@
 
 pub mod batch;
 pub mod bricked;
+pub mod canvas;
 pub mod gbuffer;
 pub mod instanced;
 pub mod packets;
@@ -22,6 +23,7 @@ use raypipe_core::shade::escaped::eye_escaped;
 use raypipe_core::shade::lambert::shade;
 use raypipe_core::{Intersector, NoProbe, Ray, RayCounters, SceneView};
 
+use crate::render::canvas::Canvas;
 use crate::render::gbuffer::{gbuffer_hit, rasterize, GBuffer};
 use crate::render::packets::{trace_tile, PacketSize, TileRays};
 use crate::render::shading::{shade_tile, StreamCounts, TileGeometry, TileShading};
@@ -240,15 +242,21 @@ fn render_with<I: Intersector>(
     let tiles = tiles(w, h);
     let frame = FrameJob::new(scene, eye, background, opts);
     let bar = progress::bar(tiles.len() as u64, "render", opts.progress);
-    let done: Vec<(Vec<Vec3>, RayTotals)> = map_claimed(opts.threads, &tiles, |&tile| {
-        let out = frame.tile::<I>(tile);
+    let mut canvas = Canvas::new(w, h);
+    let bands = canvas.bands();
+    // Each worker encodes and places its own tiles (see `Canvas`).
+    let done: Vec<RayTotals> = map_claimed(opts.threads, &tiles, |&tile| {
+        let (colours, rays) = frame.tile::<I>(tile);
+        bands.put(tile, &colours);
         bar.inc(1);
         first.get_or_init(|| start.elapsed().as_secs_f64());
-        out
+        rays
     })?;
+    drop(bands);
     bar.finish_and_clear();
-    let (radiance, totals) = assemble((0, 0, w, h), &tiles, done);
-    Ok((in_pool(opts.threads, || Frame::from_radiance(w, h, radiance))?, totals))
+    let mut totals = RayTotals::default();
+    done.iter().for_each(|t| totals.add(t));
+    Ok((canvas.into_frame(), totals))
 }
 
 /// The colours of the rectangle `area`, row-major, from its `tiles` and their rendered
