@@ -8,6 +8,7 @@
 mod frustum;
 pub(crate) mod groups;
 mod leaf;
+mod many_origins;
 mod prepared;
 mod walk;
 
