@@ -12,7 +12,8 @@ raypipe runs its single-ray and packet paths on the 4- and 8-wide BVHs. Rounds a
 interleaved (every path once per round); the medians are reported, one core pinned
 (taskset) and then two. Hits are checked: a ray agrees when both miss, both hit the same
 triangle, or both hit at the same distance within a relative 1e-5; shadow rays agree
-when both say occluded or both say free.
+when both say occluded or both say free. `--generate forest:trees=6400@inside` adds a
+scene raypipe generates (5.2 M triangles, seen from inside the forest).
 
     apt-get install libembree-dev gcc
     cargo build --release -p raypipe
@@ -121,7 +122,10 @@ def time_builds(rp, harness, mesh, name, tris_p, rays_p, tmp, a):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("scenes", nargs="+", help="MESH or MESH:CAMERA (a raypipe camera file)")
+    ap.add_argument("scenes", nargs="*", help="MESH or MESH:CAMERA (a raypipe camera file)")
+    ap.add_argument("--generate", action="append", default=[], metavar="SPEC[@VIEW]",
+                    help="also a scene raypipe generates (`raypipe build --generate SPEC --view VIEW`), e.g. "
+                         "forest:trees=6400@inside (5.2 M triangles); its builds are not timed")
     ap.add_argument("--size", default="1024x1024")
     ap.add_argument("--rounds", type=int, default=5)
     ap.add_argument("--threads", default="1,2", help="thread counts; 1 is pinned to one core")
@@ -137,22 +141,31 @@ def main():
         harness = os.path.join(tmp, "rays")
         subprocess.run(["gcc", "-O2", "-o", harness, os.path.join(HERE, "embree", "rays.c"), "-lembree3",
                         "-lpthread"], check=True)
-        for spec in a.scenes:
-            mesh, _, camera = spec.partition(":")
-            name = os.path.basename(mesh).split(".")[0]
-            cam = ["--camera", camera] if camera else []
+        for spec in [("mesh", s) for s in a.scenes] + [("generate", g) for g in a.generate]:
             rays_p, tris_p = os.path.join(tmp, "primary.npy"), os.path.join(tmp, "tris.npy")
-            run([rp, "rays", mesh, "-o", rays_p, "--triangles", tris_p, "--size", a.size, "--block", "8", *cam])
-            images = {}
-            for accel in ("bvh4", "bvh8"):
-                images[accel] = os.path.join(tmp, f"{accel}.rpsi")
-                run([rp, "build", mesh, "-o", images[accel], "--accel", accel, "--triangles", "blocks"])
+            images = {accel: os.path.join(tmp, f"{accel}.rpsi") for accel in ("bvh4", "bvh8")}
+            if spec[0] == "mesh":
+                mesh, _, camera = spec[1].partition(":")
+                name = os.path.basename(mesh).split(".")[0]
+                cam = ["--camera", camera] if camera else []
+                run([rp, "rays", mesh, "-o", rays_p, "--triangles", tris_p, "--size", a.size, "--block", "8", *cam])
+                for accel, image in images.items():
+                    run([rp, "build", mesh, "-o", image, "--accel", accel, "--triangles", "blocks"])
+            else:
+                # A generated scene, seen from its view's camera (the images' default).
+                gen, _, view = spec[1].partition("@")
+                mesh, name = None, gen.replace(":", "-").replace(",", "-").replace("=", "")
+                for accel, image in images.items():
+                    run([rp, "build", "--generate", gen, *(["--view", view] if view else []), "-o", image,
+                         "--accel", accel, "--triangles", "blocks"])
+                run([rp, "rays", images["bvh4"], "-o", rays_p, "--triangles", tris_p, "--size", a.size,
+                     "--block", "8"])
             hits_p = os.path.join(tmp, "primary-hits.npy")
             run([rp, "trace", images["bvh4"], "--rays", rays_p, "--hits", hits_p, "--fields", "t,u,v,prim,ng"])
             rays, tris = np.load(rays_p), np.load(tris_p)
             primary_hits = np.load(hits_p)
             secondary_rays(tmp, rays, primary_hits, tris)
-            if a.builds:
+            if a.builds and mesh is not None:
                 builds.extend(time_builds(rp, harness, mesh, name, tris_p, rays_p, tmp, a))
             kinds = [("primary", "closest", ["intersect1", "intersect16", "intersect1M"]),
                      ("shadow", "any", ["occluded1", "occluded16"]),
