@@ -53,8 +53,7 @@ impl RayGroups {
             t1: [Vec4::NEG_INFINITY; MAX_GROUPS],
             octant: None,
         };
-        let (mut exact, mut signs, mut first) = (0u64, [false; 3], true);
-        let mut agree = true;
+        let (mut exact, mut signs, mut agree) = (0u64, None, true);
         for i in LanesOf::<N>(mask) {
             let ray = packet.ray(i);
             let rb = RayBox::new(&ray);
@@ -63,8 +62,7 @@ impl RayGroups {
                 continue;
             }
             let neg = [rb.inv.x < 0.0, rb.inv.y < 0.0, rb.inv.z < 0.0];
-            agree &= first || neg == signs;
-            (signs, first) = (neg, false);
+            agree &= *signs.get_or_insert(neg) == neg;
             let (g, l) = ((i / 4) % MAX_GROUPS, i % 4);
             for a in 0..3 {
                 q.org[g][a][l] = rb.origin[a];
@@ -74,7 +72,8 @@ impl RayGroups {
             q.t0[g][l] = ray.t_min;
             q.t1[g][l] = ray.t_max;
         }
-        q.octant = agree.then_some(signs);
+        // No ray walked here: any octant (no lane enters a box).
+        q.octant = agree.then_some(signs.unwrap_or_default());
         (q, exact)
     }
 

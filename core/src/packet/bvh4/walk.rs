@@ -83,10 +83,10 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
 /// closest-hit packet walk, but a ray leaves the packet at the first leaf where it hits
 /// something, its end no longer widens the packet's reach, and the packet stops as soon
 /// as all its rays are blocked. Rays of many origins (shadow rays from a block of
-/// pixels' hits) take their own walk, SIMD across rays with no frustum:
-/// their frustum spans the distance between the hits and the light, and a packet of 64
-/// such rays culled by it ran at a third of the single rays' rate on Sponza (1.9 against
-/// 5.7 Mrays/s; across rays, 9.4 in packets of 16).
+/// pixels' hits) take their own walk, SIMD across rays with no frustum: their frustum
+/// spans the distance between the hits and the light, and a packet of 64 such rays
+/// culled by it ran at a third of the single rays' rate on Sponza (1.9 against 5.7
+/// Mrays/s; across rays, 9.4 in packets of 16).
 pub fn occluded_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
     scene: &SceneView<'_>,
     bvh: &Bvh4View<'_>,
