@@ -14,13 +14,12 @@ use glam::Vec4;
 
 use crate::hit::Hit;
 use crate::image::{Bvh4Node, Bvh4View, SceneView};
-use crate::intersect::leaf_blocks::test_leaf_blocks;
 use crate::intersect::triangle::Intersector;
 use crate::packet::{Lanes, LanesOf, PacketCounters, RayPacket};
 use crate::probe::MemoryProbe;
 use crate::traverse::boxes::slab::RayBox;
-use crate::traverse::tree_step::test_leaf;
 use crate::traverse::wide_bvh::node4::occluded_bvh4;
+use crate::traverse::wide_bvh::test_wide_leaf;
 
 use super::groups::groups_of;
 use super::walk::STACK;
@@ -135,7 +134,7 @@ pub(super) fn occluded_many_origins<I: Intersector, P: MemoryProbe, const N: usi
         blocked |= (occluded_bvh4::<I, P>(scene, bvh, &packet.ray(i), probe, &mut rc) as u64) << i;
         c.add_rays(&rc);
     }
-    let blocks = I::BLOCKS && scene.has_tri_blocks();
+    let blocks = scene.has_tri_blocks();
     let mut todo = live & !exact;
     // Each ray's intersection constants, made at its first leaf (most rays reach few).
     let mut preps = [None::<I::Prepared>; N];
@@ -178,11 +177,7 @@ pub(super) fn occluded_many_origins<I: Intersector, P: MemoryProbe, const N: usi
                     let Some(slot) = preps.get_mut(i) else { continue };
                     let prep = *slot.get_or_insert_with(|| I::prepare(&ray));
                     let mut best: Option<Hit> = None;
-                    if blocks {
-                        test_leaf_blocks::<I, P, _>(scene, bvh, &prep, &ray, (index, count), &mut best, probe);
-                    } else {
-                        test_leaf::<I, P, _>(scene, bvh, &prep, &ray, (index, count), &mut best, probe);
-                    }
+                    test_wide_leaf::<I, P, _>(scene, bvh, &prep, &ray, (index, count), &mut best, blocks, probe);
                     c.tri_tests += u64::from(count);
                     if best.is_some() {
                         blocked |= 1 << i;
