@@ -48,6 +48,7 @@ ddr3="--set memory.dram.clock_mhz=800 --set memory.dram.t_rcd=11 --set memory.dr
  --set memory.dram.t_cwl=8 --set memory.dram.t_wtr=6
  --set memory.dram.t_ras=28 --set memory.dram.t_wr=12 --set memory.dram.t_refi=6240 --set memory.dram.t_rfc=208
  --set memory.dram.t_rrd=5 --set memory.dram.t_faw=24 --set memory.dram.controller_latency=0
+ --set memory.dram.ranks=2 --set memory.dram.t_rtrs=1
  --set memory.dramsim3.config=DDR3_4Gb_x8_1600"
 for name in conference bunny sponza; do
     [ -f "$out/$name.json" ] || continue

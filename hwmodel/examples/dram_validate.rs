@@ -32,11 +32,12 @@ fn run() -> Result<(), String> {
         _ => return Err(format!("{memory}: not ddr3 or ddr4 ({usage})")),
     };
     let third = args.get(2).map(|v| v.parse::<f64>().map_err(|_| format!("{v}: not a number")));
-    let (stream, mhz) = match replay::synthetic(source, 20_000, 1, own.row_bytes as u64, own.banks as u64) {
+    let (stream, mhz) = match replay::synthetic(source, 20_000, 1, own.row_bytes as u64, (own.banks * own.ranks) as u64)
+    {
         Some(_) => {
             // Synthetic streams run at the memory's own clock, one request per INTERVAL.
             let interval = third.transpose()?.unwrap_or(4.0).max(1.0) as u64;
-            let s = replay::synthetic(source, 20_000, interval, own.row_bytes as u64, own.banks as u64);
+            let s = replay::synthetic(source, 20_000, interval, own.row_bytes as u64, (own.banks * own.ranks) as u64);
             (s.unwrap_or_default(), own.clock_mhz)
         }
         None => {

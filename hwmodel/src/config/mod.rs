@@ -253,7 +253,10 @@ pub struct DramConfig {
     pub clock_mhz: f64,
     /// Independent channels (addresses interleaved by burst).
     pub channels: u32,
-    /// Banks per channel.
+    /// Ranks per channel: sets of devices that share the channel's buses, each with its
+    /// own banks, ACTIVATE window and refresh.
+    pub ranks: u32,
+    /// Banks per rank.
     pub banks: u32,
     /// Bytes of one row (page) of one bank across the channel's width.
     pub row_bytes: u32,
@@ -267,6 +270,9 @@ pub struct DramConfig {
     /// `"fr-fcfs"`: queued requests are issued row hits first, oldest first (Rixner et
     /// al. 2000); `"fcfs"`: in the order the memory accepted them.
     pub scheduler: DramScheduling,
+    /// FR-FCFS: row hits a bank serves over an older waiting conflict before the conflict
+    /// goes (a guard against starvation); 0: no cap.
+    pub row_hit_cap: u32,
     /// ACTIVATE to READ/WRITE.
     pub t_rcd: u32,
     /// PRECHARGE to ACTIVATE.
@@ -285,10 +291,12 @@ pub struct DramConfig {
     pub t_refi: u32,
     /// Refresh cycle time (every bank of the channel is busy).
     pub t_rfc: u32,
-    /// ACTIVATE to ACTIVATE of another bank of the channel, at least.
+    /// ACTIVATE to ACTIVATE of another bank of the rank, at least.
     pub t_rrd: u32,
-    /// Four-activate window: at most four ACTIVATEs of a channel in any `t_faw` cycles.
+    /// Four-activate window: at most four ACTIVATEs of a rank in any `t_faw` cycles.
     pub t_faw: u32,
+    /// Rank-to-rank switch: idle data-bus cycles between bursts of two ranks.
+    pub t_rtrs: u32,
     /// Chip cycles through the memory controller, each way together.
     pub controller_latency: u32,
 }
@@ -408,18 +416,26 @@ impl Default for DramConfig {
     /// MT41K512M8 datasheet): 800 MHz, tRCD = tRP = CL = 13.75 ns, CWL = 8 clocks,
     /// tWTR = 7.5 ns (6 clocks), tRAS = 35 ns,
     /// tWR = 15 ns, tREFI = 7.8 µs, tRFC = 260 ns (4 Gb), tRRD = 6 ns and tFAW = 30 ns
-    /// (1 KB pages); one 64-bit channel of eight x8 devices: 8 banks with 8 KiB rows, BL8.
-    /// DRAMsim3's `DDR3_4Gb_x8_1600.ini` describes the same memory.
+    /// (1 KB pages); one 64-bit channel of two ranks of eight x8 devices (8 GB): 8 banks
+    /// per rank with 8 KiB rows, BL8; a rank switch idles the bus tRTRS = 1 clock (JEDEC
+    /// leaves it to the controller; DRAMsim3's value). DRAMsim3's `DDR3_4Gb_x8_1600.ini`
+    /// describes the same memory (its `channel_size` of 8192 MB is two 4 GB ranks).
+    /// Row hits are not capped: DRAMsim3 caps them at 4 over a waiting conflict, but
+    /// only once the conflict's PRECHARGE is ready, which back-to-back hits (tRTP 6 >
+    /// the burst's 4 clocks) keep it from; this model has no per-command readiness, and
+    /// a cap of 4 cut its row hits below DRAMsim3's (docs/hw-model.md).
     fn default() -> Self {
         DramConfig {
             clock_mhz: 800.0,
             channels: 1,
+            ranks: 2,
             banks: 8,
             row_bytes: 8192,
             bus_bytes: 8,
             burst_length: 8,
             page_policy: PagePolicy::Open,
             scheduler: DramScheduling::FrFcfs,
+            row_hit_cap: 0,
             t_rcd: 11,
             t_rp: 11,
             t_cl: 11,
@@ -431,6 +447,7 @@ impl Default for DramConfig {
             t_rfc: 208,
             t_rrd: 5,
             t_faw: 24,
+            t_rtrs: 1,
             controller_latency: 10,
         }
     }

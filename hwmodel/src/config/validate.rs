@@ -226,6 +226,7 @@ impl DramConfig {
         }
         for (key, v, max) in [
             ("channels", d.channels, 64),
+            ("ranks", d.ranks, 16),
             ("banks", d.banks, 256),
             ("bus_bytes", d.bus_bytes, 1024),
             ("burst_length", d.burst_length, 64),
@@ -259,6 +260,8 @@ impl DramConfig {
             ("t_rfc", d.t_rfc),
             ("t_rrd", d.t_rrd),
             ("t_faw", d.t_faw),
+            ("t_rtrs", d.t_rtrs),
+            ("row_hit_cap", d.row_hit_cap),
             ("controller_latency", d.controller_latency),
         ] {
             if v > 100_000 {

@@ -1,14 +1,16 @@
-//! A DRAM timing model: channels of banks with one open row each, a shared data bus per
-//! channel, the main JEDEC timings (tRCD, tRP, CL, CWL, tRAS, tWR, tRRD, tFAW, the
-//! write-to-read and read-to-write turnarounds), periodic refresh (tREFI, tRFC) and an
-//! open or closed page policy. Requests are timed burst by burst in the
+//! A DRAM timing model: channels of ranks of banks with one open row each, a shared data
+//! bus per channel, the main JEDEC timings (tRCD, tRP, CL, CWL, tRAS, tWR, tRRD and tFAW
+//! per rank, the write-to-read and read-to-write turnarounds, the rank-to-rank switch
+//! tRTRS), periodic refresh (tREFI, tRFC; ranks refresh in turn, tREFI ÷ ranks apart, as
+//! DRAMsim3's rank-staggered policy does) and an open or closed page policy. Requests are timed burst by burst in the
 //! order the controller issues them ([`crate::memory::dram_scheduler`]: FR-FCFS, or
 //! first come, first served); a request's data is there when its last burst has crossed
 //! the bus.
 //!
-//! Address mapping (row : bank : column : channel, low to high bits reversed): bursts are
-//! interleaved over channels, a channel's bytes fill a row of one bank before moving to
-//! the next bank, so a stream of sequential reads hits open rows. The model is checked in
+//! Address mapping (row : rank : bank : column : channel, high to low bits; DRAMsim3's
+//! `rochrababgco` also puts the rank above the bank): bursts are interleaved over
+//! channels, a channel's bytes fill a row of one bank before moving to the next bank, then
+//! to the next rank, so a stream of sequential reads hits open rows. The model is checked in
 //! its tests against what the DDR3-1600 datasheet timings give for a streaming and a
 //! random-access micro-benchmark (docs/hw-model.md, "DRAM").
 
@@ -26,6 +28,38 @@ struct Bank {
     precharge_ok: u64,
     /// Refresh epoch the row was opened in (a refresh closes every row).
     epoch: u64,
+    /// Row hits since the row opened (the scheduler's row-hit cap).
+    hits: u32,
+}
+
+/// A column command: its cycle and its rank.
+#[derive(Clone, Copy, Debug)]
+struct Column {
+    at: u64,
+    rank: u32,
+}
+
+/// Where a burst lives.
+#[derive(Clone, Copy, Debug)]
+struct Place {
+    channel: usize,
+    rank: u32,
+    /// The bank's index over all channels and ranks.
+    bank: usize,
+    row: u64,
+}
+
+/// What the scheduler sees of a request's bank.
+#[derive(Clone, Copy, Debug)]
+pub struct BankView {
+    /// The bank's index over all channels and ranks.
+    pub bank: usize,
+    /// The request's row is open (and no refresh has closed it).
+    pub open: bool,
+    /// The chip cycle from which the bank takes its next command.
+    pub free: u64,
+    /// Row hits the bank has served since its row opened.
+    pub hits: u32,
 }
 
 /// Per-bank counters.
@@ -50,12 +84,15 @@ pub struct Dram {
     banks: Vec<Bank>,
     /// Per channel: the data bus is free from this DRAM cycle.
     bus_free: Vec<u64>,
-    /// Per channel: its recent ACTIVATEs, in time order (tRRD, tFAW).
+    /// Per rank, channel-major: its recent ACTIVATEs, in time order (tRRD, tFAW).
     acts: Vec<Vec<u64>>,
-    /// Per channel: the last READ and WRITE column commands (bus turnaround).
-    last_read: Vec<Option<u64>>,
-    last_write: Vec<Option<u64>>,
-    /// Per bank, channel-major.
+    /// Per channel: the last READ and WRITE column commands and their ranks (bus
+    /// turnaround).
+    last_read: Vec<Option<Column>>,
+    last_write: Vec<Option<Column>>,
+    /// Per channel: the rank whose burst the data bus carried last (tRTRS).
+    bus_rank: Vec<Option<u32>>,
+    /// Per bank, channel-major, then rank-major.
     pub stats: Vec<BankStats>,
     /// DRAM cycles the data buses carried data, all channels.
     pub bus_busy: u64,
@@ -70,15 +107,17 @@ impl Dram {
 
     /// An idle DRAM behind a chip clocked at `chip_mhz`.
     pub fn new(cfg: &DramConfig, chip_mhz: f64) -> Dram {
-        let n = (cfg.channels * cfg.banks) as usize;
+        let n = (cfg.channels * cfg.ranks * cfg.banks) as usize;
+        let channels = cfg.channels as usize;
         Dram {
             cfg: *cfg,
             ratio: chip_mhz / cfg.clock_mhz,
             banks: vec![Bank::default(); n],
-            bus_free: vec![0; cfg.channels as usize],
-            acts: vec![Vec::new(); cfg.channels as usize],
-            last_read: vec![None; cfg.channels as usize],
-            last_write: vec![None; cfg.channels as usize],
+            bus_free: vec![0; channels],
+            acts: vec![Vec::new(); channels * cfg.ranks as usize],
+            last_read: vec![None; channels],
+            last_write: vec![None; channels],
+            bus_rank: vec![None; channels],
             stats: vec![BankStats::default(); n],
             bus_busy: 0,
         }
@@ -120,13 +159,14 @@ impl Dram {
         (dram as f64 * self.ratio).ceil() as u64
     }
 
-    /// An ACTIVATE wanted at `t` on `channel`: the earliest cycle from `t` that keeps it
-    /// tRRD from every other ACTIVATE of the channel and leaves at most four in any tFAW
-    /// window. Banks are served in parallel, so ACTIVATEs need not come in request
-    /// order. Returns when it issues, and records it.
-    fn activate(&mut self, channel: usize, t: u64) -> u64 {
+    /// An ACTIVATE wanted at `t` on the rank `rank` (channel-major index): the earliest
+    /// cycle from `t` that keeps it tRRD from every other ACTIVATE of the rank and leaves
+    /// at most four in any tFAW window (JEDEC sets both per rank). Banks are served in
+    /// parallel, so ACTIVATEs need not come in request order. Returns when it issues, and
+    /// records it.
+    fn activate(&mut self, rank: usize, t: u64) -> u64 {
         let (rrd, faw) = (self.cfg.t_rrd as u64, self.cfg.t_faw as u64);
-        let acts = &mut self.acts[channel];
+        let acts = &mut self.acts[rank];
         let mut at = t;
         // `acts` is in time order: only the ACTIVATEs within tRRD or tFAW of `at` can
         // constrain it. Each pass moves `at` past one conflict, forward, so it ends.
@@ -167,45 +207,53 @@ impl Dram {
         at
     }
 
-    /// Moves `t` out of any refresh window of its channel (every `t_refi` cycles all banks
+    /// Moves `t` out of any refresh window of `rank` (every `t_refi` cycles all its banks
     /// refresh for `t_rfc`); returns the time and its refresh epoch.
-    fn after_refresh(&self, t: u64) -> (u64, u64) {
+    fn after_refresh(&self, rank: u32, t: u64) -> (u64, u64) {
         let (refi, rfc) = (self.cfg.t_refi as u64, self.cfg.t_rfc as u64);
         if refi == 0 {
             return (t, 0);
         }
-        let epoch = t / refi;
-        let into = t % refi;
-        // The refresh of epoch e occupies [e·tREFI, e·tREFI + tRFC) (none at time 0).
+        // Ranks refresh in turn, one every tREFI ÷ ranks: rank r first at (r + 1) of those
+        // intervals, then every tREFI. Shifted so that its refreshes fall on multiples of
+        // tREFI, the refresh of epoch e occupies [e·tREFI, e·tREFI + tRFC) (none at 0).
+        let shift = refi - (rank as u64 + 1) * (refi / self.cfg.ranks as u64);
+        let s = t + shift;
+        let (epoch, into) = (s / refi, s % refi);
         if epoch > 0 && into < rfc {
-            (epoch * refi + rfc, epoch)
+            (t - into + rfc, epoch)
         } else {
             (t, epoch)
         }
     }
 
-    /// Where byte `addr` lives: its channel, its bank (channel-major index) and its row
-    /// (row : bank : column : channel, the module comment's mapping).
-    fn locate(&self, addr: u64) -> (u64, usize, u64) {
+    /// Where byte `addr` lives (row : rank : bank : column : channel, the module
+    /// comment's mapping).
+    fn locate(&self, addr: u64) -> Place {
         let c = &self.cfg;
-        let (channels, banks, burst) = (c.channels as u64, c.banks as u64, self.burst_bytes());
+        let (channels, ranks, banks, burst) = (c.channels as u64, c.ranks as u64, c.banks as u64, self.burst_bytes());
         let b = addr / burst;
         let channel = b % channels;
         let local = (b / channels) * burst;
-        let bank_in = (local / c.row_bytes as u64) % banks;
-        let row = local / (c.row_bytes as u64 * banks);
-        (channel, (channel * banks + bank_in) as usize, row)
+        let bank_row = local / c.row_bytes as u64;
+        let bank_in = bank_row % banks;
+        let rank = bank_row / banks % ranks;
+        let row = bank_row / (banks * ranks);
+        Place {
+            channel: channel as usize,
+            rank: rank as u32,
+            bank: ((channel * ranks + rank) * banks + bank_in) as usize,
+            row,
+        }
     }
 
-    /// What a scheduler sees of the bank holding byte `addr` at chip cycle `t`: its
-    /// index, whether the row is open (and no refresh has closed it by `t`), and the
-    /// chip cycle from which the bank takes its next command.
-    pub fn bank_view(&self, addr: u64, t: u64) -> (usize, bool, u64) {
-        let (_, k, row) = self.locate(addr);
-        let bank = &self.banks[k];
-        let (_, epoch) = self.after_refresh(self.to_dram(t).max(bank.ready));
-        let open = bank.open_row == Some(row) && bank.epoch == epoch;
-        (k, open, self.to_chip(bank.ready))
+    /// What a scheduler sees of the bank holding byte `addr` at chip cycle `t`.
+    pub fn bank_view(&self, addr: u64, t: u64) -> BankView {
+        let p = self.locate(addr);
+        let bank = &self.banks[p.bank];
+        let (_, epoch) = self.after_refresh(p.rank, self.to_dram(t).max(bank.ready));
+        let open = bank.open_row == Some(p.row) && bank.epoch == epoch;
+        BankView { bank: p.bank, open, free: self.to_chip(bank.ready), hits: bank.hits }
     }
 
     /// Serves a request of `bytes` at byte `addr` that reaches the DRAM at chip cycle
@@ -220,8 +268,8 @@ impl Dram {
         let mut done = 0;
         let t0 = self.to_dram(arrive);
         for b in first..=last {
-            let (channel, k, row) = self.locate(b * burst);
-            let (mut t, epoch) = self.after_refresh(t0.max(self.banks[k].ready));
+            let Place { channel, rank, bank: k, row } = self.locate(b * burst);
+            let (mut t, epoch) = self.after_refresh(rank, t0.max(self.banks[k].ready));
             let mut bank = self.banks[k];
             if bank.epoch != epoch {
                 // A refresh closed every row since this bank was last used.
@@ -234,6 +282,7 @@ impl Dram {
             let column_at = match bank.open_row {
                 Some(r) if r == row => {
                     stats.row_hits += 1;
+                    bank.hits += 1;
                     None
                 }
                 Some(_) => {
@@ -249,37 +298,29 @@ impl Dram {
                     Some(t)
                 }
             };
-            let (t_rcd, channel_k) = (c.t_rcd as u64, channel as usize);
             let column_at = match column_at {
                 Some(wanted) => {
-                    let act = self.activate(channel_k, wanted);
+                    let act = self.activate(channel * c.ranks as usize + rank as usize, wanted);
                     bank.activated = act;
-                    act + t_rcd
+                    bank.hits = 0;
+                    act + c.t_rcd as u64
                 }
                 None => t,
             };
-            // Bus turnaround, as JEDEC (and DRAMsim3's timing table) give it: a READ
-            // waits CWL + the burst + tWTR after the channel's last WRITE; a WRITE
-            // waits CL + the burst − CWL + 1 after its last READ.
             let burst_clocks = self.burst_cycles();
-            let column_at = if write {
-                self.last_read[channel_k].map_or(column_at, |r| {
-                    column_at.max((r + c.t_cl as u64 + burst_clocks + 1).saturating_sub(c.t_cwl as u64))
-                })
-            } else {
-                self.last_write[channel_k]
-                    .map_or(column_at, |w| column_at.max(w + c.t_cwl as u64 + burst_clocks + c.t_wtr as u64))
-            };
-            let last = if write { &mut self.last_write[channel_k] } else { &mut self.last_read[channel_k] };
-            *last = Some(last.map_or(column_at, |l| l.max(column_at)));
+            let column_at = self.turnaround(channel, rank, column_at, write);
+            let last = if write { &mut self.last_write[channel] } else { &mut self.last_read[channel] };
+            let at = last.map_or(column_at, |l| l.at.max(column_at));
+            *last = Some(Column { at, rank });
             start = start.min(t);
             // Data follows the column command by CL (CWL for a write); the bus carries
-            // one burst at a time.
-            let bus = self.bus_free[channel as usize];
+            // one burst at a time, and idles tRTRS when the next comes from another rank.
+            let switch = if self.bus_rank[channel].is_some_and(|r| r != rank) { c.t_rtrs as u64 } else { 0 };
             let latency = if write { c.t_cwl } else { c.t_cl } as u64;
-            let data = (column_at + latency).max(bus);
+            let data = (column_at + latency).max(self.bus_free[channel] + switch);
             let end = data + burst_clocks;
-            self.bus_free[channel as usize] = end;
+            self.bus_free[channel] = end;
+            self.bus_rank[channel] = Some(rank);
             self.bus_busy += burst_clocks;
             // The next column command to this bank: one burst later. A write's data must
             // recover (tWR) before the row may close, not before the next column command.
@@ -301,6 +342,26 @@ impl Dram {
         (self.to_chip(start), self.to_chip(done) + ctrl)
     }
 
+    /// The earliest cycle from `column_at` a column command of `rank` may issue after the
+    /// channel's last command of the other direction: the bus turnarounds as JEDEC and
+    /// DRAMsim3's timing table give them. Same rank: a READ waits CWL + the burst + tWTR
+    /// after a WRITE; a WRITE waits CL + the burst − CWL + tRTRS after a READ. Another
+    /// rank has its own write-to-read path, so a READ waits only until the write's data
+    /// has left the bus (CWL + the burst + tRTRS − CL after it).
+    fn turnaround(&self, channel: usize, rank: u32, column_at: u64, write: bool) -> u64 {
+        let c = &self.cfg;
+        let (cl, cwl, burst, rtrs) = (c.t_cl as u64, c.t_cwl as u64, self.burst_cycles(), c.t_rtrs as u64);
+        if write {
+            self.last_read[channel].map_or(column_at, |r| column_at.max((r.at + cl + burst + rtrs).saturating_sub(cwl)))
+        } else {
+            self.last_write[channel].map_or(column_at, |w| {
+                let wait =
+                    if w.rank == rank { cwl + burst + c.t_wtr as u64 } else { (cwl + burst + rtrs).saturating_sub(cl) };
+                column_at.max(w.at + wait)
+            })
+        }
+    }
+
     /// Row-buffer hit rate over all bursts.
     pub fn row_hit_rate(&self) -> f64 {
         let (hits, all) = self.stats.iter().fold((0, 0), |(h, a), s| (h + s.row_hits, a + s.accesses));
@@ -317,9 +378,9 @@ mod tests {
     use super::*;
 
     /// DDR3-1600K (11-11-11) from the Micron MT41K256M16 datasheet, at the DRAM's own
-    /// clock (ratio 1), no controller latency.
+    /// clock (ratio 1), no controller latency, one rank.
     fn ddr3() -> DramConfig {
-        DramConfig { controller_latency: 0, ..DramConfig::default() }
+        DramConfig { controller_latency: 0, ranks: 1, ..DramConfig::default() }
     }
 
     #[test]
@@ -419,5 +480,50 @@ mod tests {
         let (start, done) = d.access(6250, 64, 64, false);
         assert_eq!(start, 6240 + 208);
         assert_eq!(done, 6240 + 208 + 11 + 11 + 4);
+    }
+
+    #[test]
+    fn two_ranks_keep_their_own_activate_windows_and_refreshes() {
+        let two = DramConfig { ranks: 2, ..ddr3() };
+        // Rank 1 begins one rank's banks (8 × 8 KiB) up. Eight reads to four banks of
+        // each rank at once: each rank keeps tRRD and its own tFAW window, so the eight
+        // ACTIVATEs issue at 0, 5, 10, 15 in both ranks where one rank needs 39 cycles.
+        let mut d = Dram::new(&two, 800.0);
+        let row = 8192u64;
+        for b in (0..4).chain(8..12) {
+            d.access(0, b * row, 64, false);
+        }
+        let acts: Vec<u64> = d.banks.iter().map(|b| b.activated).collect();
+        assert_eq!(acts, vec![0, 5, 10, 15, 0, 0, 0, 0, 0, 5, 10, 15, 0, 0, 0, 0]);
+        assert!(d.stats[8..12].iter().all(|b| b.accesses == 1), "the second four went to rank 1");
+        // Ranks refresh in turn, tREFI ÷ 2 = 3120 apart: rank 0 at 3120, rank 1 at 6240.
+        let mut d = Dram::new(&two, 800.0);
+        assert_eq!(d.access(3125, 0, 64, false).0, 3120 + 208, "rank 0 refreshes at 3120");
+        assert_eq!(d.access(3125, 8 * row, 64, false).0, 3125, "rank 1 does not");
+        assert_eq!(d.access(6245, 8 * row + 64, 64, false).0, 6240 + 208, "rank 1 refreshes at 6240");
+    }
+
+    #[test]
+    fn a_rank_switch_idles_the_bus_trtrs() {
+        let two = DramConfig { ranks: 2, ..ddr3() };
+        let mut d = Dram::new(&two, 800.0);
+        // Two reads to the open rows of bank 0 in each rank: the second burst follows the
+        // first with tRTRS = 1 idle clock; within one rank they are back to back.
+        let rank1 = 8 * 8192u64;
+        d.access(0, 0, 64, false);
+        d.access(0, rank1, 64, false);
+        let (_, a) = d.access(100, 64, 64, false);
+        let (_, b) = d.access(100, rank1 + 64, 64, false);
+        assert_eq!((a, b), (100 + 11 + 4, 100 + 11 + 4 + 1 + 4));
+        let (_, c) = d.access(100, rank1 + 128, 64, false);
+        assert_eq!(c, b + 4, "same rank: back to back");
+        // A read of another rank after a write waits for the write's data to leave the
+        // bus, not for tWTR: WRITE at 200, data 208–212, READ at 200 + 8 + 4 + 1 − 11.
+        let mut e = Dram::new(&two, 800.0);
+        e.access(0, 0, 64, false);
+        e.access(0, rank1, 64, false);
+        e.access(200, 64, 64, true);
+        let (_, r) = e.access(200, rank1 + 64, 64, false);
+        assert_eq!(r, 213 + 4, "data after the write's burst and one idle clock");
     }
 }

@@ -8,8 +8,10 @@
 //! else the oldest ready request, until none is ready — so row hits overtake an older
 //! request that would close their row, and banks work in parallel. Each issued request
 //! is timed by [`Dram::access`], which owns the banks, the bus, tRRD/tFAW and refresh.
-//! There is no starvation cap: an old row conflict waits while hits to its bank keep
-//! coming (Rixner's policy as published; DRAMsim3 has none either).
+//! A row hit overtakes an older conflict of its bank only while the bank has served
+//! fewer than `row_hit_cap` hits since the row opened; then the conflict goes (DRAMsim3's
+//! command queue caps them at 4 the same way, against starvation; 0: no cap, Rixner's
+//! policy as published).
 
 use crate::memory::dram::Dram;
 
@@ -27,9 +29,17 @@ struct Queued {
 #[derive(Clone, Debug, Default)]
 pub struct DramScheduler {
     queue: Vec<Queued>,
+    /// Row hits a bank may serve over an older conflict (0: no cap).
+    row_hit_cap: u32,
 }
 
 impl DramScheduler {
+    /// An empty queue whose row hits overtake an older conflict of their bank at most
+    /// `row_hit_cap` times per opened row (0: always).
+    pub fn new(row_hit_cap: u32) -> DramScheduler {
+        DramScheduler { queue: Vec::new(), row_hit_cap }
+    }
+
     /// Requests waiting.
     pub fn queued(&self) -> usize {
         self.queue.len()
@@ -48,14 +58,21 @@ impl DramScheduler {
         let mut done = Vec::new();
         loop {
             let mut pick: Option<(usize, bool)> = None;
+            // Banks with an older ready conflict waiting: their hits are capped.
+            let mut conflicted: Vec<usize> = Vec::new();
             for (i, q) in self.queue.iter().enumerate() {
                 if q.arrive > t {
                     continue;
                 }
-                let (_, open, free) = dram.bank_view(q.addr, t);
-                if free > t {
+                let v = dram.bank_view(q.addr, t);
+                if v.free > t {
                     continue;
                 }
+                if !v.open {
+                    conflicted.push(v.bank);
+                }
+                let capped = self.row_hit_cap > 0 && v.hits >= self.row_hit_cap && conflicted.contains(&v.bank);
+                let open = v.open && !capped;
                 // The queue is oldest first: the first hit, else the first ready one.
                 match pick {
                     None => pick = Some((i, open)),
@@ -77,7 +94,7 @@ impl DramScheduler {
     /// The first chip cycle after `now` at which a queued request may become ready (its
     /// arrival or its bank's next free cycle, whichever is later), if any waits.
     pub fn next_ready(&self, dram: &Dram, now: u64) -> Option<u64> {
-        self.queue.iter().map(|q| q.arrive.max(dram.bank_view(q.addr, q.arrive).2)).min().map(|t| t.max(now + 1))
+        self.queue.iter().map(|q| q.arrive.max(dram.bank_view(q.addr, q.arrive).free)).min().map(|t| t.max(now + 1))
     }
 }
 
@@ -87,8 +104,9 @@ mod tests {
     use crate::config::DramConfig;
 
     fn dram() -> Dram {
-        // DDR3-1600 behind a chip at the DRAM's clock: chip cycles are DRAM cycles.
-        Dram::new(&DramConfig { controller_latency: 0, t_refi: 0, ..DramConfig::default() }, 800.0)
+        // DDR3-1600, one rank, behind a chip at the DRAM's clock: chip cycles are DRAM
+        // cycles.
+        Dram::new(&DramConfig { controller_latency: 0, t_refi: 0, ranks: 1, ..DramConfig::default() }, 800.0)
     }
 
     /// Runs the scheduler to empty, issuing every cycle from `t`; returns each token's
@@ -151,5 +169,19 @@ mod tests {
         let mut f = dram();
         let fcfs = (0..16u64).map(|k| f.access(0, (k % 2) * row + (k / 2) * 64, 64, false).1).max().unwrap();
         assert!(fr * 3 < fcfs, "FR-FCFS {fr} against FCFS {fcfs}");
+    }
+
+    #[test]
+    fn a_row_hit_cap_lets_a_waiting_conflict_go() {
+        // The same 16 requests with a cap of 4: row 0 opens and serves its first request
+        // and 4 hits, row 1 then does the same, and so on: every fifth access opens a row.
+        let row = 8192 * 8;
+        let (mut d, mut s) = (dram(), DramScheduler::new(4));
+        for k in 0..16u64 {
+            s.submit(k as u32, 0, (k % 2) * row + (k / 2) * 64, 64, false);
+        }
+        drain(&mut s, &mut d, 0, 16);
+        let (hits, conflicts) = d.stats.iter().fold((0, 0), |(h, c), b| (h + b.row_hits, c + b.row_conflicts));
+        assert_eq!((hits, conflicts), (12, 3), "rows served 5, 5, 3 and 3 requests");
     }
 }

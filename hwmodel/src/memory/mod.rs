@@ -149,7 +149,7 @@ impl Memory {
             busy_slot: 0,
             dram: (m.model == MemoryModel::Dram).then(|| Dram::new(&m.dram, cfg.clock_mhz)),
             dram_queue: (m.model == MemoryModel::Dram && m.dram.scheduler == DramScheduling::FrFcfs)
-                .then(DramScheduler::default),
+                .then(|| DramScheduler::new(m.dram.row_hit_cap)),
             l2: Cache::new(&cfg.cache.l2).map(|cache| L2 {
                 cache,
                 ports: cfg.cache.l2.ports.max(1),
