@@ -45,48 +45,60 @@ fn accel() -> impl Strategy<Value = Accel> {
 }
 
 /// A random but valid chip, with the datapath widths, jobs in flight, cache ports and
-/// MSHRs, odd line sizes, an L2, the memory models and the DRAM's scheduler drawn too.
+/// MSHRs, odd line sizes, an L2, the memory models and the DRAM's ranks, scheduler and
+/// row-hit cap drawn too.
 fn config() -> impl Strategy<Value = HwConfig> {
     (
         base_config(),
         (1u32..9, 1u32..5, 1u32..5, 1u32..3),
         (1u32..3, 1u32..5, any::<bool>(), memory_model()),
         (1u32..6, prop_oneof![Just(4u32), Just(32), Just(64)], any::<bool>(), any::<bool>(), any::<bool>()),
+        (1u32..4, prop_oneof![Just(0u32), 1u32..5]),
     )
-        .prop_map(|(mut c, (tl, il, jobs, sj), (ports, mshrs, l2, model), (queue, burst, odd, closed, fcfs))| {
-            c.traversal.lanes_per_cycle = tl;
-            c.intersection.lanes_per_cycle = il;
-            c.intersection.jobs = jobs;
-            c.rgs.shade_jobs = sj;
-            for cache in [&mut c.cache.nodes, &mut c.cache.triangles, &mut c.cache.lists, &mut c.cache.shading] {
-                cache.ports = ports;
-                cache.mshrs = mshrs;
-            }
-            if odd && c.cache.triangles.size_bytes > 0 {
-                // Purcell's 48-byte texture-cache lines, three sets.
-                c.cache.triangles.line_bytes = 48;
-                c.cache.triangles.size_bytes = 48 * 3 * c.cache.triangles.ways;
-            }
-            if l2 {
-                c.cache.l2.size_bytes = 4096;
-            }
-            c.memory.model = model.0;
-            if let Some(name) = model.1 {
-                c.memory.dramsim3.config = name.to_string();
-            }
-            c.memory.queue_depth = queue;
-            c.memory.min_burst_bytes = burst;
-            if closed {
-                c.memory.dram.page_policy = PagePolicy::Closed;
-            }
-            if fcfs {
-                c.memory.dram.scheduler = DramScheduling::Fcfs;
-            }
-            c.memory.dram.t_refi = 400;
-            c.memory.dram.t_rfc = 30;
-            ordered_hierarchy(&mut c);
-            c
-        })
+        .prop_map(
+            |(
+                mut c,
+                (tl, il, jobs, sj),
+                (ports, mshrs, l2, model),
+                (queue, burst, odd, closed, fcfs),
+                (ranks, cap),
+            )| {
+                c.traversal.lanes_per_cycle = tl;
+                c.intersection.lanes_per_cycle = il;
+                c.intersection.jobs = jobs;
+                c.rgs.shade_jobs = sj;
+                for cache in [&mut c.cache.nodes, &mut c.cache.triangles, &mut c.cache.lists, &mut c.cache.shading] {
+                    cache.ports = ports;
+                    cache.mshrs = mshrs;
+                }
+                if odd && c.cache.triangles.size_bytes > 0 {
+                    // Purcell's 48-byte texture-cache lines, three sets.
+                    c.cache.triangles.line_bytes = 48;
+                    c.cache.triangles.size_bytes = 48 * 3 * c.cache.triangles.ways;
+                }
+                if l2 {
+                    c.cache.l2.size_bytes = 4096;
+                }
+                c.memory.model = model.0;
+                if let Some(name) = model.1 {
+                    c.memory.dramsim3.config = name.to_string();
+                }
+                c.memory.queue_depth = queue;
+                c.memory.min_burst_bytes = burst;
+                if closed {
+                    c.memory.dram.page_policy = PagePolicy::Closed;
+                }
+                if fcfs {
+                    c.memory.dram.scheduler = DramScheduling::Fcfs;
+                }
+                c.memory.dram.ranks = ranks;
+                c.memory.dram.row_hit_cap = cap;
+                c.memory.dram.t_refi = 400;
+                c.memory.dram.t_rfc = 30;
+                ordered_hierarchy(&mut c);
+                c
+            },
+        )
 }
 
 /// The memory models this build has: DRAMsim3 too with the `dramsim3` feature, on one
