@@ -15,6 +15,16 @@ pub fn filled_vec<T: Clone>(n: usize, value: T) -> Vec<T> {
     v
 }
 
+/// A vector of `n` copies of `zero`, a value whose bits are all zero, its memory advised
+/// to use huge pages. The standard library allocates such a vector zeroed, which for a
+/// large one is fresh pages nobody has written: they are faulted in, 2 MiB at a time,
+/// by the threads that first write them, not here.
+pub fn zeroed_vec<T: Clone>(n: usize, zero: T) -> Vec<T> {
+    let mut v = vec![zero; n];
+    advise(v.as_mut_ptr() as usize, n.saturating_mul(std::mem::size_of::<T>()));
+    v
+}
+
 /// An empty vector with room for `n` elements, its memory advised to use huge pages.
 pub fn empty_vec<T>(n: usize) -> Vec<T> {
     let mut v: Vec<T> = Vec::with_capacity(n);
@@ -54,6 +64,8 @@ mod tests {
             let v = filled_vec(n, 7u32);
             assert_eq!(v.len(), n);
             assert!(v.iter().all(|&x| x == 7));
+            let z = zeroed_vec(n, [0.0f32; 3]);
+            assert!(z.len() == n && z.iter().all(|p| *p == [0.0; 3]));
             let e: Vec<u64> = empty_vec(n);
             assert!(e.is_empty() && e.capacity() >= n);
         }

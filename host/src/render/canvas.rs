@@ -1,20 +1,51 @@
-//! A frame filled tile by tile from many threads: each worker encodes and places its own
-//! tile, so nothing of the frame is left for one thread after the last tile.
+//! A frame filled tile by tile from many threads: each worker encodes its own tiles, and
+//! the worker that finishes a band's last tile places the whole band, so nothing of the
+//! frame is left for one thread after the last tile and no two workers wait on a band.
 //!
-//! The frame's bands of [`TILE`] rows each sit behind a lock; a tile locks only its band,
-//! for the time of a copy. Assembling the tiles and encoding the frame on one thread
-//! afterwards held two threads' 2048² Sponza frame to 1.64× one thread's, though the
-//! tiles alone ran 1.94× (the assembly 31 ms, the encoding's allocations more).
+//! Assembling the tiles and encoding the frame on one thread afterwards held two threads'
+//! 2048² Sponza frame to 1.64× one thread's, though the tiles alone ran 1.94× (the
+//! assembly 31 ms, the encoding's allocations more). Placing each tile under its band's
+//! lock then gave 1.72×: the two workers take neighbouring tiles, so they put into the
+//! same band at once, and the first copy into a band faults its fresh pages in while
+//! holding the lock (perf: some 700 futex waits a frame, all in the band lock).
 
+use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::Mutex;
 
 use glam::Vec3;
 use raypipe_core::shade::color::rgb8;
 
 use super::{Frame, TILE};
+use crate::platform::huge_pages::zeroed_vec;
 
 /// A band of [`TILE`] rows of the frame: its sRGB pixels and its linear radiance.
 type Band<'f> = (&'f mut [[u8; 3]], &'f mut [[f32; 3]]);
+
+/// Pixels of a whole tile.
+const PX: usize = (TILE * TILE) as usize;
+
+/// A tile encoded and waiting for the rest of its band: its columns, its sRGB pixels and
+/// linear radiance, row-major within the tile.
+struct Encoded {
+    x0: u32,
+    x1: u32,
+    srgb: [[u8; 3]; PX],
+    linear: [[f32; 3]; PX],
+    /// Pixels of the tile (a partial tile at the frame's edge has fewer).
+    len: usize,
+}
+
+/// One band while its tiles come in.
+struct BandSlot<'f> {
+    /// The band's rows: taken by the worker that puts its last tile.
+    rows: Mutex<Option<Band<'f>>>,
+    /// Its tiles encoded so far, in place: one allocation per band, not one per tile
+    /// freed by another thread (glibc's arena locks then made workers wait).
+    pending: Mutex<Vec<Encoded>>,
+    /// Tiles still to come (and all the band has).
+    left: AtomicU32,
+    tiles: u32,
+}
 
 /// The frame's pixels and radiance, being filled tile by tile.
 pub struct Canvas {
@@ -24,25 +55,37 @@ pub struct Canvas {
     radiance: Vec<[f32; 3]>,
 }
 
-/// Tiles are put through this: the canvas's bands, each behind its own lock.
+/// Tiles are put through this: the canvas's bands, each filled by one worker.
 pub struct CanvasBands<'f> {
     width: usize,
-    bands: Vec<Mutex<Band<'f>>>,
+    bands: Vec<BandSlot<'f>>,
 }
 
 impl Canvas {
     /// A black `width × height` frame (zeroed memory: its pages are touched by the
-    /// workers that fill them).
+    /// workers that fill them, huge pages where the kernel gives them: a 2048² frame's
+    /// 63 MB in 4 KiB pages took 15 k page faults, which two workers took in turn).
     pub fn new(width: u32, height: u32) -> Canvas {
         let n = width as usize * height as usize;
-        Canvas { width, height, pixels: vec![[0; 3]; n], radiance: vec![[0.0; 3]; n] }
+        Canvas { width, height, pixels: zeroed_vec(n, [0; 3]), radiance: zeroed_vec(n, [0.0; 3]) }
     }
 
-    /// The frame's bands, for workers to put their tiles into.
+    /// The frame's bands, for workers to put their tiles into (the frame's own grid of
+    /// [`TILE`]-pixel tiles, each put once).
     pub fn bands(&mut self) -> CanvasBands<'_> {
         let band = (self.width * TILE) as usize;
-        let bands =
-            self.pixels.chunks_mut(band.max(1)).zip(self.radiance.chunks_mut(band.max(1))).map(Mutex::new).collect();
+        let per_band = self.width.div_ceil(TILE);
+        let bands = self
+            .pixels
+            .chunks_mut(band.max(1))
+            .zip(self.radiance.chunks_mut(band.max(1)))
+            .map(|rows| BandSlot {
+                rows: Mutex::new(Some(rows)),
+                pending: Mutex::new(Vec::new()),
+                left: AtomicU32::new(per_band),
+                tiles: per_band,
+            })
+            .collect();
         CanvasBands { width: self.width as usize, bands }
     }
 
@@ -53,25 +96,43 @@ impl Canvas {
 }
 
 impl CanvasBands<'_> {
-    /// Encodes and places the tile `(x0, y0, x1, y1)` (a tile of the frame's own grid,
-    /// within one band) from its colours, row-major within the tile.
+    /// Encodes the tile `(x0, y0, x1, y1)` (a tile of the frame's own grid, within one
+    /// band) from its colours, row-major within the tile; the band's last tile places
+    /// the band.
     pub fn put(&self, (x0, y0, x1, _): (u32, u32, u32, u32), colours: &[Vec3]) {
-        // Encoded before the band is locked: the lock is held for copies only.
-        const PX: usize = (TILE * TILE) as usize;
-        let (mut srgb, mut linear) = ([[0u8; 3]; PX], [[0f32; 3]; PX]);
-        for ((p, r), &c) in srgb.iter_mut().zip(linear.iter_mut()).zip(colours) {
+        let Some(slot) = self.bands.get((y0 / TILE) as usize) else { return };
+        let mut tile = Encoded { x0, x1, srgb: [[0; 3]; PX], linear: [[0.0; 3]; PX], len: colours.len() };
+        for ((p, r), &c) in tile.srgb.iter_mut().zip(tile.linear.iter_mut()).zip(colours) {
             *p = rgb8(c);
             *r = c.to_array();
         }
-        let Some(band) = self.bands.get((y0 / TILE) as usize) else { return };
-        // A poisoned band only means another tile's worker panicked mid-copy; the frame is
-        // then discarded with that panic, whatever this tile writes.
-        let mut band = band.lock().unwrap_or_else(|e| e.into_inner());
-        let (pixels, radiance) = &mut *band;
-        let tw = ((x1 - x0) as usize).max(1);
-        let rows = srgb.chunks(tw).zip(linear.chunks(tw)).take(colours.len() / tw);
+        {
+            // A poisoned lock only means another tile's worker panicked; the frame is
+            // then discarded with that panic, whatever this tile writes.
+            let mut pending = slot.pending.lock().unwrap_or_else(|e| e.into_inner());
+            if pending.capacity() == 0 {
+                pending.reserve_exact(slot.tiles as usize);
+            }
+            pending.push(tile);
+        }
+        // The pushes happen before the count falls (release); the last tile's worker
+        // sees them all (acquire).
+        if slot.left.fetch_sub(1, Ordering::AcqRel) != 1 {
+            return;
+        }
+        let tiles = std::mem::take(&mut *slot.pending.lock().unwrap_or_else(|e| e.into_inner()));
+        let Some((pixels, radiance)) = slot.rows.lock().unwrap_or_else(|e| e.into_inner()).take() else { return };
+        for t in &tiles {
+            self.place(pixels, radiance, t);
+        }
+    }
+
+    /// Copies an encoded tile into its band's rows.
+    fn place(&self, pixels: &mut [[u8; 3]], radiance: &mut [[f32; 3]], t: &Encoded) {
+        let tw = ((t.x1 - t.x0) as usize).max(1);
+        let rows = t.srgb[..t.len].chunks(tw).zip(t.linear[..t.len].chunks(tw));
         for (row, (p, r)) in rows.enumerate() {
-            let start = ((y0 % TILE) as usize + row) * self.width + x0 as usize;
+            let start = row * self.width + t.x0 as usize;
             let (Some(pd), Some(rd)) = (pixels.get_mut(start..start + tw), radiance.get_mut(start..start + tw)) else {
                 return;
             };
