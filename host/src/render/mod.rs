@@ -243,16 +243,17 @@ fn render_with<I: Intersector>(
     let frame = FrameJob::new(scene, eye, background, opts);
     let bar = progress::bar(tiles.len() as u64, "render", opts.progress);
     let mut canvas = Canvas::new(w, h);
-    let bands = canvas.bands();
+    let canvas_tiles = canvas.tiles();
     // Each worker encodes and places its own tiles (see `Canvas`).
     let done: Vec<RayTotals> = map_claimed(opts.threads, &tiles, |&tile| {
         let (colours, rays) = frame.tile::<I>(tile);
-        bands.put(tile, &colours);
+        let placed = canvas_tiles.put(tile, &colours);
+        debug_assert!(placed, "{tile:?} is a tile of the frame's grid, put once");
         bar.inc(1);
         first.get_or_init(|| start.elapsed().as_secs_f64());
         rays
     })?;
-    drop(bands);
+    drop(canvas_tiles);
     bar.finish_and_clear();
     let mut totals = RayTotals::default();
     done.iter().for_each(|t| totals.add(t));
