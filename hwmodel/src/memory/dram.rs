@@ -2,16 +2,16 @@
 //! bus per channel, the main JEDEC timings (tRCD, tRP, CL, CWL, tRAS, tWR, tRRD and tFAW
 //! per rank, the write-to-read and read-to-write turnarounds, the rank-to-rank switch
 //! tRTRS), periodic refresh (tREFI, tRFC; ranks refresh in turn, tREFI ÷ ranks apart, as
-//! DRAMsim3's rank-staggered policy does) and an open or closed page policy. Requests are timed burst by burst in the
-//! order the controller issues them ([`crate::memory::dram_scheduler`]: FR-FCFS, or
-//! first come, first served); a request's data is there when its last burst has crossed
-//! the bus.
+//! DRAMsim3's rank-staggered policy does) and an open or closed page policy. Requests are
+//! timed burst by burst in the order the controller issues them
+//! ([`crate::memory::dram_scheduler`]: FR-FCFS, or first come, first served); a request's
+//! data is there when its last burst has crossed the bus.
 //!
 //! Address mapping (row : rank : bank : column : channel, high to low bits; DRAMsim3's
 //! `rochrababgco` also puts the rank above the bank): bursts are interleaved over
 //! channels, a channel's bytes fill a row of one bank before moving to the next bank, then
-//! to the next rank, so a stream of sequential reads hits open rows. The model is checked in
-//! its tests against what the DDR3-1600 datasheet timings give for a streaming and a
+//! to the next rank, so a stream of sequential reads hits open rows. The model is checked
+//! in its tests against what the DDR3-1600 datasheet timings give for a streaming and a
 //! random-access micro-benchmark (docs/hw-model.md, "DRAM").
 
 use crate::config::{DramConfig, PagePolicy};
