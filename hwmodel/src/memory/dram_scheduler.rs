@@ -68,7 +68,8 @@ impl DramScheduler {
                 if v.free > t {
                     continue;
                 }
-                if !v.open {
+                // Only a cap needs them: no list is kept on the default path.
+                if !v.open && self.row_hit_cap > 0 {
                     conflicted.push(v.bank);
                 }
                 let capped = self.row_hit_cap > 0 && v.hits >= self.row_hit_cap && conflicted.contains(&v.bank);
