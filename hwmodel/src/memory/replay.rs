@@ -11,7 +11,7 @@
 
 use serde::Serialize;
 
-use crate::config::{DramConfig, DramScheduling, PagePolicy};
+use crate::config::{DramConfig, DramScheduling};
 use crate::memory::dram::Dram;
 use crate::memory::dram_scheduler::DramScheduler;
 
@@ -186,20 +186,14 @@ pub fn replay_dramsim3(
 /// raypipe's DRAM model set to DRAMsim3's `DDR4_8Gb_x8_2400` file (JEDEC DDR4-2400,
 /// 17-17-17 at tCK = 0.83 ns, CWL 12; 16 banks in 4 groups, which the model does not
 /// tell apart, so tRRD, tCCD and tWTR are the same-group (long) ones for every pair;
-/// 8 KiB rows; tRFC 350 ns for 8 Gb; tREFI 7.8 µs; tFAW 21 ns; two ranks of 8 GB, as
-/// its `channel_size` of 16384 MB holds; tRTRS 1 clock), with no controller latency.
+/// tRFC 350 ns for 8 Gb; tREFI 7.8 µs; tFAW 21 ns), with no controller latency. The rest
+/// is the default DDR3-1600's, which the file shares: one 64-bit channel of two ranks
+/// (its `channel_size` of 16384 MB holds two of 8 GB), 8 KiB rows, BL8, tRTRS 1 clock,
+/// open pages, FR-FCFS.
 pub fn ddr4_2400() -> DramConfig {
     DramConfig {
         clock_mhz: 1200.0,
-        channels: 1,
-        ranks: 2,
         banks: 16,
-        row_bytes: 8192,
-        bus_bytes: 8,
-        burst_length: 8,
-        page_policy: PagePolicy::Open,
-        scheduler: DramScheduling::FrFcfs,
-        row_hit_cap: 0,
         t_rcd: 17,
         t_rp: 17,
         t_cl: 17,
@@ -211,8 +205,8 @@ pub fn ddr4_2400() -> DramConfig {
         t_rfc: 420,
         t_rrd: 6,
         t_faw: 26,
-        t_rtrs: 1,
         controller_latency: 0,
+        ..DramConfig::default()
     }
 }
 
