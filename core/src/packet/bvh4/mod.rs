@@ -5,6 +5,7 @@
 //! of one origin (a camera's) meet each triangle made ready once for it, eight lanes at a
 //! time where the CPU has AVX (`simd::watertight8`).
 
+mod apex;
 mod frustum;
 pub(crate) mod groups;
 mod leaf;
@@ -14,4 +15,4 @@ mod walk;
 
 #[cfg(target_arch = "x86_64")]
 pub(crate) use groups::{Groups, GROUPS};
-pub use walk::{occluded_bvh4_packet, trace_bvh4_packet};
+pub use walk::{occluded_bvh4_packet, takes_shadow_pyramid, trace_bvh4_packet};
