@@ -68,20 +68,21 @@ fn check_blocks<const N: usize>(view: &SceneView<'_>, cam: &Camera, light: Vec3)
 proptest! {
     #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
 
-    /// Narrow views of the floor under a cloud of occluders, lit from above: most
-    /// blocks of 4×4 and 8×8 pixels take the pyramid, and every shadow ray answers as it
-    /// does alone, on both triangle layouts, at scales from 1e-3 to 1e3.
+    /// Narrow views of the floor under a cloud of occluders, lit from above: blocks of
+    /// 8×8 pixels take the pyramid (those of 4×4 the many-origin walk), and every shadow
+    /// ray answers as it does alone, on both triangle layouts, at scales from 1e-3 to
+    /// 1e3.
     #[test]
     fn shadow_packets_to_one_light_answer_as_single_rays(
         seed in 1u64..1_000_000,
-        size in 0.2f32..1.5,
+        size in 0.02f32..0.2,
         light in [-3.0f32..3.0, 8.0f32..14.0, -3.0f32..3.0],
         target in [-4.0f32..4.0, -4.0f32..4.0],
         scale_exp in -3i32..=3,
         blocks in any::<bool>(),
     ) {
         let scale = 10f32.powi(scale_exp);
-        let (mut positions, triangles) = floor_and_cloud(seed, 300, size);
+        let (mut positions, triangles) = floor_and_cloud(seed, 2000, size);
         for p in &mut positions {
             *p = p.map(|c| c * scale);
         }
@@ -95,13 +96,14 @@ proptest! {
             eye: Vec3::new(target[0] * 0.5, 9.0, target[1] - 14.0) * scale,
             look_at: Vec3::new(target[0], 0.0, target[1]) * scale,
             up: Vec3::Y,
-            vfov_deg: 8.0,
+            vfov_deg: 4.0,
             width: 64,
             height: 64,
         };
         let light = Vec3::from(light) * scale;
         let p16 = check_blocks::<16>(&view, &cam, light)?;
         let p64 = check_blocks::<64>(&view, &cam, light)?;
-        prop_assert!(p16 > 64 && p64 > 8, "few packets took the pyramid: {} of 256, {} of 64", p16, p64);
+        prop_assert_eq!(p16, 0, "packets of 16 take the many-origin walk");
+        prop_assert!(p64 > 8, "few packets took the pyramid: {} of 64", p64);
     }
 }

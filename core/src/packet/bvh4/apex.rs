@@ -34,8 +34,9 @@ const NARROW: f32 = 16.0;
 /// The widest pyramid used, as the largest difference of its rays' slopes seen from the
 /// apex: a block of pixels whose hits lie metres apart (an edge in front of a far wall)
 /// makes a pyramid far wider than its rays, and the many-origin walk, ray by ray, then
-/// visits fewer nodes.
-pub(super) const WIDE: f32 = 0.1;
+/// visits fewer nodes. (Sponza's shadow rays in packets of 64 at 0.1: 1.0× the
+/// many-origin walk; all pyramids: 0.5×. Lost Empire at 0.1: 0.8×, at 0.04: 0.9×.)
+pub(super) const WIDE: f32 = 0.04;
 
 /// The pyramid: per plane, a normal and a limit; a box whose least `normal · x` exceeds
 /// the limit holds no point of the segments it bounds. It keeps each ray's place seen
@@ -341,7 +342,7 @@ mod tests {
             Apex::new(&packet, packet.live(), (Vec3::splat(-10.0), Vec3::splat(10.0))).is_none(),
             "wider than WIDE"
         );
-        let ok = [seg(Vec3::new(-0.1, 0.0, 0.0), 1.0), seg(Vec3::new(0.1, 0.0, 0.05), 1.0)];
+        let ok = [seg(Vec3::new(-0.05, 0.0, 0.0), 1.0), seg(Vec3::new(0.05, 0.0, 0.025), 1.0)];
         let mut packet = RayPacket::<4>::new();
         packet.fill(&ok);
         assert!(Apex::new(&packet, packet.live(), (Vec3::splat(-10.0), Vec3::splat(10.0))).is_some());
