@@ -89,7 +89,7 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
 /// something, its end no longer widens the packet's reach, and the packet stops as soon
 /// as all its rays are blocked. Rays of many origins that end at one point (shadow rays
 /// from a block of pixels' hits to a point light) take the packet walk culled by the
-/// pyramid from that point ([`Apex`]), and shrink it as they leave. Other rays of many
+/// pyramid from that point (`Apex`), and shrink it as they leave. Other rays of many
 /// origins take their own walk, SIMD across rays with no frustum: their frustum spans the
 /// distance between the hits and the light, and a packet of 64 such rays culled by it
 /// ran at a third of the single rays' rate on Sponza (1.9 against 5.7 Mrays/s; across
