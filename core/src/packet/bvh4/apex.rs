@@ -53,8 +53,8 @@ pub(super) struct Apex {
     clip: [(Vec4, Vec4); 3],
     /// The rays the planes bound.
     bounds: u64,
-    /// The pyramid's width: the largest difference of the bound rays' slopes.
-    spread: f32,
+    /// The planes have been shrunk since the pyramid was made.
+    shrunk: bool,
     /// The apex `c`, the axis `w` from it towards the starts, `a` and `b` across it, and
     /// the ends' half box grown by the slack, `h`.
     c: Vec3,
@@ -139,7 +139,7 @@ impl Apex {
             limit: [Vec4::ZERO; PLANES],
             clip: [0, 1, 2].map(|k| (Vec4::splat(bounds.0[k]), Vec4::splat(bounds.1[k]))),
             bounds: 0,
-            spread: 0.0,
+            shrunk: false,
             c,
             w,
             a,
@@ -163,7 +163,7 @@ impl Apex {
                 (*x, *y, *sl) = (dot(&p, a) / s, dot(&p, b) / s, s);
             }
         }
-        (apex.bound(mask) && apex.spread <= WIDE).then_some(apex)
+        apex.bound(mask).is_some_and(|spread| spread <= WIDE).then_some(apex)
     }
 
     /// Shrinks the pyramid to the rays of `mask` (a subset of those it bounds) once they
@@ -171,12 +171,26 @@ impl Apex {
     #[inline(always)]
     pub(super) fn shrink(&mut self, mask: u64) -> bool {
         let (now, was) = (mask.count_ones(), self.bounds.count_ones());
-        mask != 0 && (4 * now > 3 * was || self.bound(mask))
+        if mask == 0 {
+            return false;
+        }
+        if 4 * now <= 3 * was && self.bound(mask).is_some() {
+            self.shrunk = true;
+        }
+        true
     }
 
-    /// The planes around the rays of `mask`; `false`, and the planes kept, if a limit is
-    /// not finite (the old planes bound a superset of the rays: still conservative).
-    fn bound(&mut self, mask: u64) -> bool {
+    /// The planes have been shrunk since the pyramid was made: children pushed before
+    /// may lie outside them now (before, every pushed child passed these very planes).
+    #[inline(always)]
+    pub(super) fn shrunk(&self) -> bool {
+        self.shrunk
+    }
+
+    /// The planes around the rays of `mask`, and the pyramid's width (the largest
+    /// difference of their slopes); `None`, and the planes kept, if a limit is not finite
+    /// (the old planes bound a superset of the rays: still conservative).
+    fn bound(&mut self, mask: u64) -> Option<f32> {
         let (inf, ninf) = (Vec4::INFINITY, Vec4::NEG_INFINITY);
         let (mut x0, mut x1, mut y0, mut y1, mut far) = (inf, ninf, inf, ninf, ninf);
         for g in Lanes(groups_of(mask)) {
@@ -194,7 +208,7 @@ impl Apex {
         let planes = [(a - w * x1, 0.0), (w * x0 - a, 0.0), (b - w * y1, 0.0), (w * y0 - b, 0.0), (w, far)];
         let limits = planes.map(|(n, reach)| reach + n.abs().dot(self.h) + n.dot(self.c));
         if !limits.iter().all(|l| l.is_finite()) {
-            return false;
+            return None;
         }
         for (k, ((n, _), limit)) in planes.into_iter().zip(limits).enumerate() {
             self.normal[k] = [Vec4::splat(n.x), Vec4::splat(n.y), Vec4::splat(n.z)];
@@ -202,8 +216,7 @@ impl Apex {
             self.limit[k] = Vec4::splat(limit);
         }
         self.bounds = mask;
-        self.spread = (x1 - x0).max(y1 - y0);
-        true
+        Some((x1 - x0).max(y1 - y0))
     }
 
     /// Whether the box `b` (min xyz, max xyz) may hold a point of some segment: one

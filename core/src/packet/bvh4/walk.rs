@@ -192,7 +192,7 @@ fn walk_packet<I: Intersector, P: MemoryProbe, const N: usize, const ANY: bool>(
             }
             // A pyramid that shrank since the child was pushed may exclude it now.
             if let Cull::Apex(p) = &walk.cull {
-                if !p.holds(&b) {
+                if p.shrunk() && !p.holds(&b) {
                     continue;
                 }
             }
