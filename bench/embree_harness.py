@@ -13,7 +13,9 @@ interleaved (every path once per round); the medians are reported, one core pinn
 (taskset) and then two. Hits are checked: a ray agrees when both miss, both hit the same
 triangle, or both hit at the same distance within a relative 1e-5; shadow rays agree
 when both say occluded or both say free. `--generate forest:trees=6400@inside` adds a
-scene raypipe generates (5.2 M triangles, seen from inside the forest).
+scene raypipe generates (5.2 M triangles, seen from inside the forest). `--kinds path`
+times a path-traced frame's own rays (`raypipe render --algo path --ray-log`): each side's
+tracing time for the frame beside raypipe's whole frame.
 
     apt-get install libembree-dev gcc
     cargo build --release -p raypipe
@@ -120,6 +122,78 @@ def time_builds(rp, harness, mesh, name, tris_p, rays_p, tmp, a):
     return out
 
 
+def time_batch(rp, harness, tris_p, images, rays_k, query, embree_modes, threads, rounds, tmp, coherent=True):
+    """Medians (Mrays/s) of raypipe's paths and Embree's `embree_modes` on one batch of
+    rays, rounds interleaved, one core pinned if `threads` is 1; the best of each side;
+    how many rays' answers differ. Returns (rays, medians, raypipe best, Embree best,
+    rays that differ)."""
+    n = len(np.load(rays_k, mmap_mode="r"))
+    raypipe_modes = [(f"{acc} single", images[acc], "1") for acc in ("bvh4", "bvh8")]
+    if coherent:
+        # The frustum packets are for coherent rays: on the bounce they run at 0.1
+        # Mrays/s (the bunny), and would take the run's whole time.
+        raypipe_modes += [(f"bvh4 packets of {p}", images["bvh4"], p) for p in ("16", "64")]
+    pin = "1" if threads == 1 else None
+    times = {m[0]: [] for m in raypipe_modes}
+    times.update({f"embree {m}": [] for m in embree_modes})
+    for _ in range(rounds):
+        for label, image, packet in raypipe_modes:
+            out = run([rp, "trace", image, "--rays", rays_k, "--hits", os.path.join(tmp, "h.npy"), "--query", query,
+                       "--threads", str(threads), "--runs", "3", "--packet", packet], pin)
+            times[label].append(float(re.search(r"\(([0-9.]+) Mrays/s\)", out).group(1)))
+        for m in embree_modes:
+            out = run([harness, tris_p, rays_k, m, str(threads), "3", "medium"], pin)
+            times[f"embree {m}"].append(float(re.search(r"mrays=([0-9.]+)", out).group(1)))
+    med = {k: statistics.median(v) for k, v in times.items()}
+    # Agreement: raypipe's hits against Embree's first path.
+    ours = os.path.join(tmp, "ours.npy")
+    fields = ["--fields", "t,u,v,prim"] if query == "closest" else []
+    run([rp, "trace", images["bvh4"], "--rays", rays_k, "--hits", ours, "--query", query, *fields])
+    theirs = os.path.join(tmp, "theirs.bin")
+    run([harness, tris_p, rays_k, embree_modes[0], "1", "1", "medium", theirs])
+    differ = (agree_closest if query == "closest" else agree_any)(np.load(ours), theirs)
+    best_r = max((k for k in med if not k.startswith("embree")), key=med.get)
+    best_e = max((k for k in med if k.startswith("embree")), key=med.get)
+    print(f"{os.path.basename(rays_k)} {threads}T: " + ", ".join(f"{k} {v:.1f}" for k, v in med.items()),
+          file=sys.stderr)
+    return n, med, best_r, best_e, differ
+
+
+def time_path(rp, harness, tris_p, images, cam, name, rows, tmp, a):
+    """A path-traced frame (`raypipe render --algo path`, --path-size, --path-samples,
+    the image's default bounces and light) and Embree on the very rays it traced: the
+    frame logs its rays (`--ray-log`), each batch — eye rays, closest-hit secondaries,
+    shadow rays — is timed on both sides' paths (rows added to `rows`), and each side's
+    tracing time for the frame is the sum over the batches of rays / best rate. The
+    frame's own time (median of the rounds) includes what tracing does not: eye rays,
+    shading, sampling, the ray stream."""
+    log = os.path.join(tmp, "path")
+    render = [rp, "render", images["bvh4"], *cam, "--algo", "path", "--size", a.path_size, "--samples",
+              str(a.path_samples), "-o", os.path.join(tmp, "path.png")]
+    run([*render, "--ray-log", log])
+    batches = [("eye", "closest", ["intersect1", "intersect16", "intersect1M"], True),
+               ("secondary", "closest", ["intersect1", "intersect16", "intersect1Mi"], False),
+               ("shadow", "any", ["occluded1", "occluded16"], True)]
+    out = []
+    for threads in [int(t) for t in a.threads.split(",")]:
+        pin = "1" if threads == 1 else None
+        frame = statistics.median(
+            float(re.search(r"render ([0-9.]+) s", run([*render, "--threads", str(threads)], pin)).group(1))
+            for _ in range(a.rounds))
+        ours = theirs = 0.0
+        n_all = 0
+        for batch, query, modes, coherent in batches:
+            rays_k = os.path.join(log, f"{batch}.npy")
+            n, med, br, be, differ = time_batch(rp, harness, tris_p, images, rays_k, query, modes, threads, a.rounds,
+                                                tmp, coherent)
+            rows.append((name, f"path {batch}", threads, n, med, br, be, differ))
+            ours, theirs, n_all = ours + n / med[br] / 1e6, theirs + n / med[be] / 1e6, n_all + n
+        out.append((name, threads, n_all, frame, ours, theirs))
+        print(f"{name} path frame {threads}T: render {frame:.3f} s, raypipe tracing {ours:.3f} s, "
+              f"Embree tracing {theirs:.3f} s", file=sys.stderr)
+    return out
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("scenes", nargs="*", help="MESH or MESH:CAMERA (a raypipe camera file)")
@@ -129,14 +203,17 @@ def main():
     ap.add_argument("--size", default="1024x1024")
     ap.add_argument("--rounds", type=int, default=5)
     ap.add_argument("--threads", default="1,2", help="thread counts; 1 is pinned to one core")
-    ap.add_argument("--kinds", default="primary,shadow,bounce", help="ray kinds to time")
+    ap.add_argument("--kinds", default="primary,shadow,bounce",
+                    help="ray kinds to time: primary, shadow, bounce, and path (a path-traced frame's rays)")
+    ap.add_argument("--path-size", default="512x512", help="the path-traced frame's size")
+    ap.add_argument("--path-samples", type=int, default=4, help="the path-traced frame's samples per pixel")
     ap.add_argument("--builds", action="store_true", help="also time every structure's build beside Embree's")
     ap.add_argument("--raypipe", default=os.path.join(HERE, "..", "target", "release", "raypipe"))
     a = ap.parse_args()
     if not shutil.which("gcc") or not os.path.exists("/usr/include/embree3/rtcore.h"):
         sys.exit("error: needs gcc and Embree 3's headers: apt-get install gcc libembree-dev")
     rp = a.raypipe
-    rows, builds = [], []
+    rows, builds, frames = [], [], []
     with tempfile.TemporaryDirectory() as tmp:
         harness = os.path.join(tmp, "rays")
         subprocess.run(["gcc", "-O2", "-o", harness, os.path.join(HERE, "embree", "rays.c"), "-lembree3",
@@ -155,6 +232,7 @@ def main():
                 # A generated scene, seen from its view's camera (the images' default).
                 gen, _, view = spec[1].partition("@")
                 mesh, name = None, gen.replace(":", "-").replace(",", "-").replace("=", "")
+                camera, cam = None, []
                 for accel, image in images.items():
                     run([rp, "build", "--generate", gen, *(["--view", view] if view else []), "-o", image,
                          "--accel", accel, "--triangles", "blocks"])
@@ -172,42 +250,14 @@ def main():
                      ("bounce", "closest", ["intersect1", "intersect16", "intersect1Mi"])]
             for kind, query, embree_modes in [k for k in kinds if k[0] in a.kinds.split(",")]:
                 rays_k = os.path.join(tmp, f"{kind}.npy")
-                n = len(np.load(rays_k, mmap_mode="r"))
-                raypipe_modes = [(f"{acc} single", images[acc], "1") for acc in ("bvh4", "bvh8")]
-                if kind != "bounce":
-                    # The frustum packets are for coherent rays: on the bounce they run at
-                    # 0.1 Mrays/s (the bunny), and would take the run's whole time.
-                    raypipe_modes += [(f"bvh4 packets of {p}", images["bvh4"], p) for p in ("16", "64")]
                 for threads in [int(t) for t in a.threads.split(",")]:
-                    pin = "1" if threads == 1 else None
-                    times = {m[0]: [] for m in raypipe_modes}
-                    times.update({f"embree {m}": [] for m in embree_modes})
-                    for _ in range(a.rounds):
-                        for label, image, packet in raypipe_modes:
-                            out = run([rp, "trace", image, "--rays", rays_k, "--hits", os.path.join(tmp, "h.npy"),
-                                       "--query", query, "--threads", str(threads), "--runs", "3",
-                                       "--packet", packet], pin)
-                            times[label].append(float(re.search(r"\(([0-9.]+) Mrays/s\)", out).group(1)))
-                        for m in embree_modes:
-                            out = run([harness, tris_p, rays_k, m, str(threads), "3", "medium"], pin)
-                            times[f"embree {m}"].append(float(re.search(r"mrays=([0-9.]+)", out).group(1)))
-                    med = {k: statistics.median(v) for k, v in times.items()}
-                    # Agreement, once per kind: raypipe's hits against Embree's first path.
-                    ours = os.path.join(tmp, "ours.npy")
-                    fields = ["--fields", "t,u,v,prim"] if query == "closest" else []
-                    run([rp, "trace", images["bvh4"], "--rays", rays_k, "--hits", ours, "--query", query, *fields])
-                    theirs = os.path.join(tmp, "theirs.bin")
-                    run([harness, tris_p, rays_k, embree_modes[0], "1", "1", "medium", theirs])
-                    check = agree_closest if query == "closest" else agree_any
-                    differ = check(np.load(ours), theirs)
-                    best_r = max((k for k in med if not k.startswith("embree")), key=med.get)
-                    best_e = max((k for k in med if k.startswith("embree")), key=med.get)
-                    rows.append((name, kind, n, threads, med, best_r, best_e, differ))
-                    print(f"{name} {kind} {threads}T: " + ", ".join(f"{k} {v:.1f}" for k, v in med.items()),
-                          file=sys.stderr)
+                    rows.append((name, kind, threads, *time_batch(rp, harness, tris_p, images, rays_k, query,
+                                                                  embree_modes, threads, a.rounds, tmp)))
+            if "path" in a.kinds.split(","):
+                frames.extend(time_path(rp, harness, tris_p, images, cam, name, rows, tmp, a))
     print("| scene | rays | threads | raypipe best (Mrays/s) | Embree best (Mrays/s) | ratio | rays that differ |")
     print("|---|---|---|---|---|---|---|")
-    for name, kind, n, threads, med, br, be, differ in rows:
+    for name, kind, threads, n, med, br, be, differ in rows:
         print(f"| {name} | {kind} ({n}) | {threads} | {br}: {med[br]:.1f} | {be[7:]}: {med[be]:.1f} | "
               f"{med[br] / med[be]:.2f} | {differ} ({100 * differ / max(n, 1):.3f}%) |")
     if builds:
@@ -216,8 +266,15 @@ def main():
         print("|---|---|" + "---|" * len(builds[0][2]))
         for name, threads, cells in builds:
             print(f"| {name} | {threads} | " + " | ".join(f"{sec:.3f} s, {bpt:.0f} B" for _, sec, bpt in cells) + " |")
+    if frames:
+        print("\nPath tracing: the frame's rays traced by each side's best path per batch, beside "
+              "raypipe's whole frame (eye rays, shading, sampling; seconds):\n")
+        print("| scene | threads | rays | raypipe frame | raypipe tracing | Embree tracing | tracing ratio |")
+        print("|---|---|---|---|---|---|---|")
+        for name, threads, n, frame, ours, theirs in frames:
+            print(f"| {name} | {threads} | {n} | {frame:.3f} | {ours:.3f} | {theirs:.3f} | {theirs / ours:.2f} |")
     print("\nEvery path, medians in Mrays/s:\n")
-    for name, kind, n, threads, med, _, _, _ in rows:
+    for name, kind, threads, n, med, _, _, _ in rows:
         print(f"- {name} {kind}, {threads} thread(s): " + ", ".join(f"{k} {v:.1f}" for k, v in med.items()))
 
 

@@ -33,6 +33,12 @@ pub struct RenderArgs {
     /// or .pfm, both linear radiance.
     #[arg(short, long, value_name = "IMAGE", default_value = "raypipe.png")]
     pub output: PathBuf,
+    /// Also write every ray the frame traces into this folder, by query, in tile order:
+    /// eye.npy and secondary.npy (closest hit), shadow.npy (any hit), each an (N, 8)
+    /// float32 array that `raypipe trace --rays` reads (bench/embree_harness.py times
+    /// Embree on them).
+    #[arg(long, value_name = "DIR")]
+    pub ray_log: Option<PathBuf>,
     #[command(flatten)]
     pub display: DisplayArgs,
     #[command(flatten)]
@@ -113,6 +119,19 @@ pub(crate) fn prepare(a: &RenderArgs) -> Result<Prepared> {
 pub(crate) fn cmd_render(a: RenderArgs) -> Result<()> {
     a.run.check()?;
     check_image_path(&a.output)?;
+    if let Some(dir) = &a.ray_log {
+        let scene = a.scene.as_deref();
+        let walk = a.walk.camera_path.is_some() || a.walk.orbit.is_some();
+        let not = [
+            (a.mpi.mpi, "--mpi"),
+            (walk, "a walkthrough"),
+            (scene.is_some_and(crate::input::bricked::is_bricked), "a bricked scene"),
+            (scene.is_some_and(crate::input::instanced::is_instanced), "an instanced scene"),
+        ];
+        if let Some((_, what)) = not.iter().find(|(on, _)| *on) {
+            anyhow::bail!("--ray-log {}: logs one frame of a flat scene on this machine, not {what}", dir.display());
+        }
+    }
     if a.mpi.mpi {
         return crate::distributed::cmd_render_mpi(&a);
     }
@@ -122,16 +141,24 @@ pub(crate) fn cmd_render(a: RenderArgs) -> Result<()> {
     if let Some(path) = a.scene.as_deref().filter(|p| crate::input::instanced::is_instanced(p)) {
         return super::render_instanced::cmd_render_instanced(&a, path);
     }
-    let Prepared { scene, camera: cam, opts, display, load_secs } = prepare(&a)?;
+    let Prepared { scene, camera: cam, mut opts, display, load_secs } = prepare(&a)?;
+    opts.log_rays = a.ray_log.is_some();
     warn(&scene);
     let view = scene.view()?;
     if let Some(cams) = a.walk.cameras(&cam)? {
         return walkthrough(&a, &scene, &view, &cams, &opts, &display);
     }
     let start = Instant::now();
-    let (frame, rays, first_tile) = render::render_timed(&view, &cam, &opts)?;
+    let (frame, rays, first_tile, logs) = render::render_logged(&view, &cam, &opts)?;
     let secs = start.elapsed().as_secs_f64();
+    // The image and the log together, or neither.
+    let outputs = output::batch::Batch::begin();
     let auto = output::write_frame(&a.output, &frame, &display)?;
+    let logged = match &a.ray_log {
+        Some(dir) => Some(render::ray_log::write_ray_log(dir, &logs)?),
+        None => None,
+    };
+    outputs.commit()?;
     // Building the structure is part of loading an OBJ; the report says how long it took.
     let build_secs = scene.report.as_ref().map_or(0.0, |r| r.grid_seconds);
     println!(
@@ -169,6 +196,9 @@ pub(crate) fn cmd_render(a: RenderArgs) -> Result<()> {
         rays.secondary,
         rays.total() as f64 / secs.max(1e-9) / 1e6
     );
+    if let (Some(dir), Some([eye, secondary, shadow])) = (&a.ray_log, logged) {
+        println!("ray log  {eye} eye, {secondary} secondary, {shadow} shadow rays -> {}", dir.display());
+    }
     Ok(())
 }
 

@@ -8,6 +8,7 @@ pub mod canvas;
 pub mod gbuffer;
 pub mod instanced;
 pub mod packets;
+pub mod ray_log;
 pub mod shading;
 pub mod tracer;
 pub mod view_check;
@@ -26,6 +27,7 @@ use raypipe_core::{Intersector, NoProbe, Ray, RayCounters, SceneView};
 use crate::render::canvas::Canvas;
 use crate::render::gbuffer::{gbuffer_hit, rasterize, GBuffer};
 use crate::render::packets::{trace_tile, PacketSize, TileRays};
+use crate::render::ray_log::TileRayLog;
 use crate::render::shading::{shade_tile, StreamCounts, TileGeometry, TileShading};
 use raypipe_core::pixel_filter::{Filter, PixelSampler};
 use raypipe_core::shade::path::PathOptions;
@@ -68,6 +70,8 @@ pub struct RenderOptions {
     /// Path tracing: largest radiance one path vertex may add to one sample (`None`:
     /// no clamp).
     pub clamp: Option<f32>,
+    /// Keep every ray the frame traces ([`render_logged`]).
+    pub log_rays: bool,
 }
 
 /// The rendering algorithm (Purcell 2002 Fig. 3).
@@ -121,6 +125,7 @@ impl Default for RenderOptions {
             filter: Filter::Box,
             roulette: false,
             clamp: None,
+            log_rays: false,
         }
     }
 }
@@ -224,11 +229,21 @@ pub fn render_timed(
     camera: &CameraRecord,
     opts: &RenderOptions,
 ) -> Result<(Frame, RayTotals, f64)> {
+    render_logged(scene, camera, opts).map(|(f, r, first, _)| (f, r, first))
+}
+
+/// [`render_timed`], and with [`RenderOptions::log_rays`] every ray the frame traced,
+/// tile by tile in the frame's tile order (empty without).
+pub fn render_logged(
+    scene: &SceneView<'_>,
+    camera: &CameraRecord,
+    opts: &RenderOptions,
+) -> Result<(Frame, RayTotals, f64, Vec<TileRayLog>)> {
     let eye = eye_rays(camera, "camera")?.with_sampler(opts.sampler());
     let first = std::sync::OnceLock::new();
     let start = std::time::Instant::now();
-    let (frame, rays) = with_intersector!(opts.intersector, I => render_with::<I>(scene, &eye, Vec3::from(camera.background), opts, (start, &first)))?;
-    Ok((frame, rays, first.get().copied().unwrap_or(0.0)))
+    let (frame, rays, logs) = with_intersector!(opts.intersector, I => render_with::<I>(scene, &eye, Vec3::from(camera.background), opts, (start, &first)))?;
+    Ok((frame, rays, first.get().copied().unwrap_or(0.0), logs))
 }
 
 fn render_with<I: Intersector>(
@@ -237,7 +252,7 @@ fn render_with<I: Intersector>(
     background: Vec3,
     opts: &RenderOptions,
     (start, first): (std::time::Instant, &std::sync::OnceLock<f64>),
-) -> Result<(Frame, RayTotals)> {
+) -> Result<(Frame, RayTotals, Vec<TileRayLog>)> {
     let (w, h) = (eye.width, eye.height);
     let tiles = tiles(w, h);
     let frame = FrameJob::new(scene, eye, background, opts);
@@ -245,19 +260,20 @@ fn render_with<I: Intersector>(
     let mut canvas = Canvas::new(w, h);
     let canvas_tiles = canvas.tiles();
     // Each worker encodes and places its own tiles (see `Canvas`).
-    let done: Vec<RayTotals> = map_claimed(opts.threads, &tiles, |&tile| {
-        let (colours, rays) = frame.tile::<I>(tile);
+    let done: Vec<(RayTotals, Option<TileRayLog>)> = map_claimed(opts.threads, &tiles, |&tile| {
+        let mut log = opts.log_rays.then(TileRayLog::default);
+        let (colours, rays) = frame.tile_logged::<I>(tile, log.as_mut());
         let placed = canvas_tiles.put(tile, &colours);
         debug_assert!(placed, "{tile:?} is a tile of the frame's grid, put once");
         bar.inc(1);
         first.get_or_init(|| start.elapsed().as_secs_f64());
-        rays
+        (rays, log)
     })?;
     drop(canvas_tiles);
     bar.finish_and_clear();
     let mut totals = RayTotals::default();
-    done.iter().for_each(|t| totals.add(t));
-    Ok((canvas.into_frame(), totals))
+    done.iter().for_each(|(t, _)| totals.add(t));
+    Ok((canvas.into_frame(), totals, done.into_iter().filter_map(|(_, log)| log).collect()))
 }
 
 /// The colours of the rectangle `area`, row-major, from its `tiles` and their rendered
@@ -328,7 +344,16 @@ impl<'a, 's> FrameJob<'a, 's> {
     }
 
     /// The colours of the tile `(x0, y0, x1, y1)`, row-major, and the rays it traced.
-    pub fn tile<I: Intersector>(&self, (x0, y0, x1, y1): (u32, u32, u32, u32)) -> (Vec<Vec3>, RayTotals) {
+    pub fn tile<I: Intersector>(&self, tile: (u32, u32, u32, u32)) -> (Vec<Vec3>, RayTotals) {
+        self.tile_logged::<I>(tile, None)
+    }
+
+    /// [`FrameJob::tile`], its rays kept in `log` if given.
+    pub fn tile_logged<I: Intersector>(
+        &self,
+        (x0, y0, x1, y1): (u32, u32, u32, u32),
+        mut log: Option<&mut TileRayLog>,
+    ) -> (Vec<Vec3>, RayTotals) {
         let (scene, eye, opts) = (self.scene, self.eye, self.opts);
         let samples = eye.samples();
         let tw = (x1 - x0) as usize;
@@ -358,13 +383,18 @@ impl<'a, 's> FrameJob<'a, 's> {
                 }
             }
         }
+        // (The shadow caster's eye rays come from its G-buffer: none is traced.)
+        if let Some(log) = log.as_deref_mut().filter(|_| self.gbuffers.is_none()) {
+            log.eye.extend(primaries.iter().filter_map(|(ray, _)| *ray));
+        }
         let geometry = TileGeometry { x0, y0, width: tw as u32, image_width: eye.width };
         let radiance = match opts.shader(self.background) {
             None => cast_tile(scene, (eye, self.background), samples, geometry, &primaries),
             Some(shader) => {
                 let mut counts = StreamCounts::default();
                 let shading = TileShading { shader: &shader, background: self.background, samples, eye };
-                let radiance = shade_tile::<I, _>(scene, &shading, geometry, &primaries, &mut NoProbe, &mut counts);
+                let radiance =
+                    shade_tile::<I, _>(scene, &shading, geometry, &primaries, &mut NoProbe, &mut counts, log);
                 totals.secondary = counts.rays.iter().sum();
                 radiance
             }

@@ -16,6 +16,7 @@ use raypipe_core::shade::shader::Shader;
 use raypipe_core::traverse::occlusion::occluded;
 use raypipe_core::{Hit, Intersector, MemoryProbe, Ray, RayCounters, SceneView, Vec3};
 
+use crate::render::ray_log::TileRayLog;
 use crate::render::tracer::trace;
 
 /// What a tile's ray stream cost.
@@ -91,7 +92,8 @@ pub struct TileShading<'s> {
 
 /// Radiance of a tile's pixels (row-major in the tile) from their eye rays and hits:
 /// `samples` per pixel, sample-major (`primaries[s * pixels + p]`); a `None` ray missed
-/// the scene's bounds and brings the background.
+/// the scene's bounds and brings the background. `log`, if given, receives every emitted
+/// ray as it is traced.
 pub fn shade_tile<I: Intersector, P: MemoryProbe>(
     scene: &SceneView<'_>,
     shading: &TileShading<'_>,
@@ -99,6 +101,7 @@ pub fn shade_tile<I: Intersector, P: MemoryProbe>(
     primaries: &[(Option<Ray>, Option<Hit>)],
     probe: &mut P,
     counts: &mut StreamCounts,
+    mut log: Option<&mut TileRayLog>,
 ) -> Vec<Vec3> {
     let TileShading { shader, background, samples, eye } = *shading;
     let cone = eye.cone();
@@ -129,6 +132,9 @@ pub fn shade_tile<I: Intersector, P: MemoryProbe>(
     }
     while let Some(rec) = stream.pop_front() {
         counts.rays[rec.kind as usize] += 1;
+        if let Some(log) = log.as_deref_mut() {
+            log.push(rec.kind, rec.ray);
+        }
         let Some(slot) = radiance.get_mut(tile.local(rec.pixel)) else { continue };
         let mut c = RayCounters::default();
         if rec.kind == RayKind::Shadow {

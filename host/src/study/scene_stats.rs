@@ -296,7 +296,7 @@ fn costs_with<I: Intersector>(
                         let mut s = StreamCounts::default();
                         let shading = TileShading { shader, background, samples, eye };
                         std::hint::black_box(shade_tile::<I, _>(
-                            scene, &shading, geometry, &primaries, &mut probe, &mut s,
+                            scene, &shading, geometry, &primaries, &mut probe, &mut s, None,
                         ));
                         for (a, b) in c.rays.iter_mut().zip(s.rays) {
                             *a += b;

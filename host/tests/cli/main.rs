@@ -15,6 +15,7 @@ mod instanced;
 #[cfg(feature = "mpi")]
 mod mpi;
 mod outputs;
+mod ray_log;
 mod render;
 mod report;
 mod simulate;
