@@ -33,28 +33,78 @@ pub fn grow_by_margin((lo, hi): ([f32; 3], [f32; 3]), margin: f64) -> ([f32; 3],
     (lo.map(|c| ((f64::from(c) - margin) as f32).next_down()), hi.map(|c| ((f64::from(c) + margin) as f32).next_up()))
 }
 
-/// Builds the BVH.
+/// Nodes with at least this many references build their two subtrees as parallel tasks
+/// (rayon's `join`, on the current thread pool). Whether a node forks depends on its size
+/// alone, never on the thread count, so the tree is the same on any number of threads.
+const FORK_REFS: usize = 4096;
+
+/// Builds the BVH, its large subtrees in parallel.
 pub fn build_bvh(mesh: &Mesh, params: &BvhParams) -> BuiltBvh {
     let verts: Vec<[DVec3; 3]> =
         mesh.triangles.iter().map(|t| t.map(|i| DVec3::from(mesh.positions[i as usize].map(f64::from)))).collect();
     let budget = (params.max_refs_per_triangle * verts.len() as f64) as usize;
     let refs = presplit_references(mesh, &verts, params, budget);
-    let mut spare = budget.saturating_sub(refs.len());
+    let spare = budget.saturating_sub(refs.len());
     let mut root = Bounds::EMPTY;
     for r in &refs {
         root.grow(&r.b);
     }
-    // Spatial splits are tried only where the object split's children overlap by more
-    // than this area (Stich et al. 2009, section 4.4: alpha of the root's area).
-    let min_overlap = params.spatial_alpha * root.area();
-    let margin = box_margin(mesh);
-    let mut out =
-        BuiltBvh { nodes: vec![BvhNode { min: [0.0; 3], first: 0, max: [0.0; 3], count: 0 }], ..Default::default() };
-    // (node, its references, depth)
-    let mut todo = vec![(0usize, refs, 1u32)];
-    let max_depth = params.max_depth.clamp(1, MAX_TREE_DEPTH - 4);
-    while let Some((node, refs, depth)) = todo.pop() {
-        out.depth = out.depth.max(depth);
+    let build = Build {
+        verts: &verts,
+        params,
+        // Spatial splits are tried only where the object split's children overlap by
+        // more than this area (Stich et al. 2009, section 4.4: alpha of the root's area).
+        min_overlap: params.spatial_alpha * root.area(),
+        margin: box_margin(mesh),
+        max_depth: params.max_depth.clamp(1, MAX_TREE_DEPTH - 4),
+    };
+    let part = build.task(refs, 1, spare);
+    BuiltBvh { nodes: part.nodes, prims: part.prims, depth: part.depth }
+}
+
+/// What every task of one build reads.
+struct Build<'a> {
+    verts: &'a [[DVec3; 3]],
+    params: &'a BvhParams,
+    min_overlap: f64,
+    margin: f64,
+    max_depth: u32,
+}
+
+/// A subtree built by one task: its nodes (its root first; children and leaf entries
+/// indexed within the part), its leaves' triangle list, its depth, and the reference
+/// budget it left unspent.
+struct Part {
+    nodes: Vec<BvhNode>,
+    prims: Vec<u32>,
+    depth: u32,
+    spare: usize,
+}
+
+impl Build<'_> {
+    /// The subtree of `refs` at `depth`, with `spare` references for splitting. A root
+    /// of [`FORK_REFS`] or more builds its children as two tasks in parallel, the budget
+    /// shared by their references; smaller ones build sequentially, depth first, the left
+    /// child spending the budget first.
+    fn task(&self, refs: Vec<Ref>, depth: u32, mut spare: usize) -> Part {
+        if refs.len() < FORK_REFS {
+            return self.sequential(refs, depth, spare);
+        }
+        let (node, left, right) = self.node(refs, depth, &mut spare);
+        if right.is_empty() {
+            return self.leaf(node, left, depth, spare);
+        }
+        let (nl, nr) = (left.len() as u128, right.len() as u128);
+        let spare_left = (spare as u128 * nl / (nl + nr)) as usize;
+        let (l, r) =
+            rayon::join(|| self.task(left, depth + 1, spare_left), || self.task(right, depth + 1, spare - spare_left));
+        Part::join(node, l, r)
+    }
+
+    /// One node: its box, and its references split in two (the right side empty for a
+    /// leaf).
+    fn node(&self, refs: Vec<Ref>, depth: u32, spare: &mut usize) -> (BvhNode, Vec<Ref>, Vec<Ref>) {
+        let params = self.params;
         let mut bounds = Bounds::EMPTY;
         let mut cbounds = Bounds::EMPTY;
         for r in &refs {
@@ -62,16 +112,16 @@ pub fn build_bvh(mesh: &Mesh, params: &BvhParams) -> BuiltBvh {
             let c = r.centroid();
             cbounds.grow(&Bounds { lo: c, hi: c });
         }
-        out.nodes[node].min = round_down(bounds.lo - DVec3::splat(margin));
-        out.nodes[node].max = round_up(bounds.hi + DVec3::splat(margin));
+        let m = DVec3::splat(self.margin);
+        let node = BvhNode { min: round_down(bounds.lo - m), first: 0, max: round_up(bounds.hi + m), count: 0 };
         let count = refs.len();
-        let split = if count <= 1 || depth >= max_depth {
+        let split = if count <= 1 || depth >= self.max_depth {
             None
         } else {
             let object = find_split(&refs, &bounds, &cbounds, params);
             let spatial = match object {
-                Some(o) if spare > 0 && min_overlap > 0.0 && o.overlap > min_overlap => {
-                    find_spatial_split(&verts, &refs, &bounds, params)
+                Some(o) if *spare > 0 && self.min_overlap > 0.0 && o.overlap > self.min_overlap => {
+                    find_spatial_split(self.verts, &refs, &bounds, params)
                 }
                 _ => None,
             };
@@ -83,37 +133,104 @@ pub fn build_bvh(mesh: &Mesh, params: &BvhParams) -> BuiltBvh {
         };
         let (left, right) = match split {
             Some(Split { axis, pos, spatial: Some(sides), .. }) => {
-                split_references(&verts, refs, axis, pos, &sides, params, &mut spare)
+                split_references(self.verts, refs, axis, pos, &sides, params, spare)
             }
             Some(s) => refs.into_iter().partition(|r| r.centroid()[s.axis] < s.pos),
             // Too many triangles for a leaf and no useful plane (e.g. equal centroids):
             // split the list in half.
-            None if count > params.max_leaf && depth < max_depth => {
+            None if count > params.max_leaf && depth < self.max_depth => {
                 let mut left = refs;
                 let right = left.split_off(count / 2);
                 (left, right)
             }
             None => (refs, Vec::new()),
         };
-        if left.is_empty() || right.is_empty() {
-            // A leaf: each triangle once, however many of its pieces arrived here.
-            let mut tris: Vec<u32> = left.iter().chain(&right).map(|r| r.tri).collect();
-            tris.sort_unstable();
-            tris.dedup();
-            out.nodes[node].first = out.prims.len() as u32;
-            out.nodes[node].count = tris.len() as u32;
-            out.prims.extend_from_slice(&tris);
-        } else {
-            let child = out.nodes.len();
-            out.nodes.push(out.nodes[node]);
-            out.nodes.push(out.nodes[node]);
-            out.nodes[node].first = child as u32;
-            out.nodes[node].count = 0;
-            todo.push((child + 1, right, depth + 1));
-            todo.push((child, left, depth + 1));
+        // A split that leaves one side empty makes a leaf of all of them.
+        if left.is_empty() {
+            return (node, right, Vec::new());
         }
+        if right.is_empty() {
+            return (node, left, Vec::new());
+        }
+        (node, left, right)
     }
-    out
+
+    /// A part of one leaf: each triangle once, however many of its pieces arrived here.
+    fn leaf(&self, mut node: BvhNode, refs: Vec<Ref>, depth: u32, spare: usize) -> Part {
+        let tris = leaf_triangles(&refs);
+        node.count = tris.len() as u32;
+        Part { nodes: vec![node], prims: tris, depth, spare }
+    }
+
+    /// The subtree of `refs` on this thread: nodes in the order they are split (each
+    /// node's two children side by side, the left subtree's before the right's).
+    fn sequential(&self, refs: Vec<Ref>, depth: u32, mut spare: usize) -> Part {
+        let mut out = Part {
+            nodes: vec![BvhNode { min: [0.0; 3], first: 0, max: [0.0; 3], count: 0 }],
+            prims: Vec::new(),
+            depth,
+            spare: 0,
+        };
+        // (node, its references, depth)
+        let mut todo = vec![(0usize, refs, depth)];
+        while let Some((index, refs, depth)) = todo.pop() {
+            out.depth = out.depth.max(depth);
+            let (mut node, left, right) = self.node(refs, depth, &mut spare);
+            if right.is_empty() {
+                let tris = leaf_triangles(&left);
+                node.first = out.prims.len() as u32;
+                node.count = tris.len() as u32;
+                out.prims.extend_from_slice(&tris);
+            } else {
+                let child = out.nodes.len();
+                out.nodes.extend([node, node]);
+                node.first = child as u32;
+                todo.push((child + 1, right, depth + 1));
+                todo.push((child, left, depth + 1));
+            }
+            out.nodes[index] = node;
+        }
+        out.spare = spare;
+        out
+    }
+}
+
+impl Part {
+    /// The part of inner node `node` over the parts of its children: `node`, the two
+    /// children's roots side by side, then the rest of the left part and of the right,
+    /// their indices moved to their new places (the sequential build's order).
+    fn join(mut node: BvhNode, l: Part, r: Part) -> Part {
+        node.first = 1;
+        node.count = 0;
+        let (ln, lp) = (l.nodes.len() as u32, l.prims.len() as u32);
+        let mut nodes = Vec::with_capacity(1 + l.nodes.len() + r.nodes.len());
+        // Left index i (1.. below its root) lands at i + 2; right index i at i + 1 + ln.
+        let moved = |n: &BvhNode, by: u32, prims_by: u32| {
+            let mut n = *n;
+            if n.count == 0 {
+                n.first += by;
+            } else {
+                n.first += prims_by;
+            }
+            n
+        };
+        nodes.push(node);
+        nodes.push(moved(&l.nodes[0], 2, 0));
+        nodes.push(moved(&r.nodes[0], 1 + ln, lp));
+        nodes.extend(l.nodes[1..].iter().map(|n| moved(n, 2, 0)));
+        nodes.extend(r.nodes[1..].iter().map(|n| moved(n, 1 + ln, lp)));
+        let mut prims = l.prims;
+        prims.extend_from_slice(&r.prims);
+        Part { nodes, prims, depth: l.depth.max(r.depth), spare: l.spare + r.spare }
+    }
+}
+
+/// A leaf's triangles: each once, in id order, however many of its pieces arrived.
+fn leaf_triangles(refs: &[Ref]) -> Vec<u32> {
+    let mut tris: Vec<u32> = refs.iter().map(|r| r.tri).collect();
+    tris.sort_unstable();
+    tris.dedup();
+    tris
 }
 
 /// The build references: one box per triangle, or per piece of a large triangle cut by
@@ -304,6 +421,67 @@ mod tests {
         let bvh = build_bvh(&mesh, &params);
         for (_, tris) in binary_leaves(&bvh) {
             assert!(tris.windows(2).all(|w| w[0] < w[1]), "{tris:?}");
+        }
+    }
+
+    /// Large meshes build their big subtrees as parallel tasks: the tree is the same on
+    /// any number of threads (also with a reference budget too small for every split, so
+    /// that how the tasks share it matters), and it is whole — every node reached once
+    /// from the root, children inside their parent's box, and every corner and centroid
+    /// of every triangle inside a leaf that lists it.
+    #[test]
+    fn parallel_builds_are_whole_and_the_same_on_any_number_of_threads() {
+        use crate::build::test_meshes::scatter;
+        let mut mesh = scatter(3 * FORK_REFS as u32, 5);
+        // Long slivers across the cube: presplits and spatial splits spend the budget.
+        let base = mesh.positions.len() as u32;
+        for i in 0..200u32 {
+            let y = i as f32 / 200.0;
+            mesh.positions.extend([[0.0, y, 0.1], [1.0, y + 0.3, 0.9], [1.0, y + 0.3, 0.95]]);
+            mesh.triangles.push([base + 3 * i, base + 3 * i + 1, base + 3 * i + 2]);
+        }
+        for refs in [1.05, 3.0] {
+            let params = BvhParams { max_refs_per_triangle: refs, ..BvhParams::default() };
+            let builds: Vec<BuiltBvh> = [1, 2, 3]
+                .iter()
+                .map(|&t| crate::render::in_pool(Some(t), || build_bvh(&mesh, &params)).unwrap())
+                .collect();
+            for b in &builds[1..] {
+                assert_eq!((&b.nodes, &b.prims, b.depth), (&builds[0].nodes, &builds[0].prims, builds[0].depth));
+            }
+            let bvh = &builds[0];
+            let used = bvh.prims.len() as f64 / mesh.triangles.len() as f64;
+            assert!(used > 1.0 && used <= refs + 1e-9, "{used} references per triangle");
+            // Walk from the root: every node once, children within their parent.
+            let mut seen = vec![false; bvh.nodes.len()];
+            let mut listed_in: Vec<Vec<usize>> = vec![Vec::new(); mesh.triangles.len()];
+            let mut todo = vec![0usize];
+            while let Some(i) = todo.pop() {
+                assert!(!std::mem::replace(&mut seen[i], true), "node {i} reached twice");
+                let n = bvh.nodes[i];
+                if n.count > 0 {
+                    for &t in &bvh.prims[n.first as usize..(n.first + n.count) as usize] {
+                        listed_in[t as usize].push(i);
+                    }
+                    continue;
+                }
+                for c in [n.first as usize, n.first as usize + 1] {
+                    let k = bvh.nodes[c];
+                    assert!((0..3).all(|a| n.min[a] <= k.min[a] && k.max[a] <= n.max[a]), "node {c} outside {i}");
+                    todo.push(c);
+                }
+            }
+            assert!(seen.iter().all(|&s| s), "unreachable nodes");
+            for (t, tri) in mesh.triangles.iter().enumerate() {
+                let v = tri.map(|i| glam::Vec3::from(mesh.positions[i as usize]));
+                for p in [v[0], v[1], v[2], (v[0] + v[1] + v[2]) / 3.0] {
+                    let held = listed_in[t].iter().any(|&i| {
+                        let n = bvh.nodes[i];
+                        (0..3).all(|a| n.min[a] <= p[a] && p[a] <= n.max[a])
+                    });
+                    assert!(held, "triangle {t}: {p} in no leaf listing it");
+                }
+            }
         }
     }
 }

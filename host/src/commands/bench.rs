@@ -145,11 +145,12 @@ fn bench_structure(
         triangles: a.triangles,
         ..Default::default()
     };
-    // Structure build time: median of up to three builds (one for large scenes).
+    // Structure build time: median of up to three builds (one for large scenes), on
+    // the threads the all-threads figure uses.
     let mut builds = Vec::new();
     let mut built = None;
     for _ in 0..3 {
-        let s = source.build(&opts)?;
+        let s = crate::render::in_pool(a.threads, || source.build(&opts))??;
         let big = s.view()?.triangle_count() > 20_000;
         builds.push(s.report.as_ref().map_or(0.0, |r| r.grid_seconds));
         built = Some(s);

@@ -42,6 +42,10 @@ pub struct BuildArgs {
     /// always built this way.
     #[arg(long, conflicts_with_all = ["bricks", "generate"])]
     pub instances: bool,
+    /// Threads the build may use (default: all cores): BVH builds split their large
+    /// subtrees over them. The output is the same for any number.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=4096))]
+    pub threads: Option<u32>,
 }
 
 /// How `build --bricks` stores a scene larger than memory.
@@ -67,6 +71,13 @@ pub struct BrickArgs {
 }
 
 pub(crate) fn cmd_build(a: BuildArgs) -> Result<()> {
+    // Every build's parallel work (the BVH's subtrees, the bricks) on the threads asked for.
+    let threads = a.threads.map(|n| n as usize);
+    crate::render::in_pool(threads, || build_any(a))?
+}
+
+/// [`cmd_build`] on the current thread pool.
+fn build_any(a: BuildArgs) -> Result<()> {
     if a.bricks.bricks {
         return cmd_build_bricked(a);
     }
@@ -74,28 +85,7 @@ pub(crate) fn cmd_build(a: BuildArgs) -> Result<()> {
         return cmd_build_instanced(a);
     }
     let start = Instant::now();
-    let (input, scene) = match (&a.generate, &a.scene) {
-        (Some(spec), _) => {
-            let g = crate::input::generate::generate(spec, a.view.as_deref())?;
-            let scene = scene::build(
-                g.name.clone(),
-                g.mesh,
-                Vec::new(),
-                g.camera.merged(a.camera.spec()?),
-                &a.structure.options(),
-            )?;
-            (format!("generated {}", g.name), scene)
-        }
-        (None, Some(path)) => {
-            let scene::Source::Mesh { name, mesh, warnings, camera } = scene::load_source(Some(path))? else {
-                bail!("{}: is already a scene image; build takes an OBJ file", path.display());
-            };
-            // The camera file and flags, over the OBJ's sidecar camera, become the image's default.
-            let scene = scene::build(name, mesh, warnings, camera.merged(a.camera.spec()?), &a.structure.options())?;
-            (path.display().to_string(), scene)
-        }
-        (None, None) => bail!("build: name an OBJ file or --generate a scene"),
-    };
+    let (input, scene) = build_flat(&a)?;
     warn(&scene);
     let what = a.camera.camera.as_ref().map_or("camera".to_string(), |p| p.display().to_string());
     let view = scene.view()?;
@@ -149,6 +139,32 @@ pub(crate) fn cmd_build(a: BuildArgs) -> Result<()> {
     );
     println!("total        {elapsed:.3} s -> {}", a.output.display());
     Ok(())
+}
+
+/// The flat scene `a` asks for, read or generated and built: what it was, and the scene.
+fn build_flat(a: &BuildArgs) -> Result<(String, scene::Scene)> {
+    Ok(match (&a.generate, &a.scene) {
+        (Some(spec), _) => {
+            let g = crate::input::generate::generate(spec, a.view.as_deref())?;
+            let scene = scene::build(
+                g.name.clone(),
+                g.mesh,
+                Vec::new(),
+                g.camera.merged(a.camera.spec()?),
+                &a.structure.options(),
+            )?;
+            (format!("generated {}", g.name), scene)
+        }
+        (None, Some(path)) => {
+            let scene::Source::Mesh { name, mesh, warnings, camera } = scene::load_source(Some(path))? else {
+                bail!("{}: is already a scene image; build takes an OBJ file", path.display());
+            };
+            // The camera file and flags, over the OBJ's sidecar camera, become the image's default.
+            let scene = scene::build(name, mesh, warnings, camera.merged(a.camera.spec()?), &a.structure.options())?;
+            (path.display().to_string(), scene)
+        }
+        (None, None) => bail!("build: name an OBJ file or --generate a scene"),
+    })
 }
 
 /// `raypipe build --bricks`.

@@ -195,3 +195,23 @@ color = [1.5, 1.5, 1.5]
     }
     assert!(!d.join("x.png").exists());
 }
+
+#[test]
+fn a_build_is_the_same_image_on_any_number_of_threads() {
+    // 14,720 triangles: enough for the BVH builder's subtrees to run as parallel tasks.
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mut images = Vec::new();
+    for (accel, threads) in [("bvh8", "1"), ("bvh8", "3"), ("kd", "1"), ("kd", "2")] {
+        let out = format!("{accel}-{threads}.rpsi");
+        let o =
+            raypipe(d, &["build", "--generate", "forest:trees=8", "--accel", accel, "--threads", threads, "-o", &out]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        images.push(std::fs::read(d.join(out)).unwrap());
+    }
+    assert!(images[0] == images[1], "the 8-wide BVH depends on the thread count");
+    assert!(images[2] == images[3], "the kd-tree depends on the thread count");
+    let o = raypipe(d, &["build", "--generate", "forest:trees=8", "--threads", "0", "-o", "x.rpsi"]);
+    assert!(!o.status.success() && stderr(&o).contains("invalid value '0' for '--threads <N>'"), "{}", stderr(&o));
+    assert!(!d.join("x.rpsi").exists());
+}
