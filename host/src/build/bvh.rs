@@ -8,6 +8,7 @@ use raypipe_core::image::{BvhNode, MAX_TREE_DEPTH};
 
 use crate::build::sah::{leaf_cost, split_cost, Bounds, BvhParams, Ref, Split};
 use crate::build::spatial_split::{find_spatial_split, split_references};
+use crate::build::tree_part::{PartNode, TreePart};
 use crate::input::mesh::Mesh;
 
 /// A built BVH.
@@ -71,14 +72,18 @@ struct Build<'a> {
     max_depth: u32,
 }
 
-/// A subtree built by one task: its nodes (its root first; children and leaf entries
-/// indexed within the part), its leaves' triangle list, its depth, and the reference
-/// budget it left unspent.
-struct Part {
-    nodes: Vec<BvhNode>,
-    prims: Vec<u32>,
-    depth: u32,
-    spare: usize,
+type Part = TreePart<BvhNode>;
+
+impl PartNode for BvhNode {
+    fn moved(mut self, nodes: u32, prims: u32) -> Self {
+        self.first += if self.count == 0 { nodes } else { prims };
+        self
+    }
+
+    fn with_children(mut self, child: u32) -> Self {
+        (self.first, self.count) = (child, 0);
+        self
+    }
 }
 
 impl Build<'_> {
@@ -192,36 +197,6 @@ impl Build<'_> {
         }
         out.spare = spare;
         out
-    }
-}
-
-impl Part {
-    /// The part of inner node `node` over the parts of its children: `node`, the two
-    /// children's roots side by side, then the rest of the left part and of the right,
-    /// their indices moved to their new places (the sequential build's order).
-    fn join(mut node: BvhNode, l: Part, r: Part) -> Part {
-        node.first = 1;
-        node.count = 0;
-        let (ln, lp) = (l.nodes.len() as u32, l.prims.len() as u32);
-        let mut nodes = Vec::with_capacity(1 + l.nodes.len() + r.nodes.len());
-        // Left index i (1.. below its root) lands at i + 2; right index i at i + 1 + ln.
-        let moved = |n: &BvhNode, by: u32, prims_by: u32| {
-            let mut n = *n;
-            if n.count == 0 {
-                n.first += by;
-            } else {
-                n.first += prims_by;
-            }
-            n
-        };
-        nodes.push(node);
-        nodes.push(moved(&l.nodes[0], 2, 0));
-        nodes.push(moved(&r.nodes[0], 1 + ln, lp));
-        nodes.extend(l.nodes[1..].iter().map(|n| moved(n, 2, 0)));
-        nodes.extend(r.nodes[1..].iter().map(|n| moved(n, 1 + ln, lp)));
-        let mut prims = l.prims;
-        prims.extend_from_slice(&r.prims);
-        Part { nodes, prims, depth: l.depth.max(r.depth), spare: l.spare + r.spare }
     }
 }
 

@@ -10,6 +10,7 @@ use glam::DVec3;
 use raypipe_core::image::{KdNode, MAX_TREE_DEPTH};
 
 use crate::build::bvh::box_margin;
+use crate::build::tree_part::{PartNode, TreePart};
 use crate::input::mesh::Mesh;
 
 /// SAH cost constants and limits (defaults from pbrt-v3's `KdTreeAccel`).
@@ -59,7 +60,24 @@ struct Ctx<'a> {
     params: &'a KdParams,
     margin: f64,
     max_depth: u32,
-    out: BuiltKd,
+}
+
+/// Nodes with at least this many triangles build their two subtrees as parallel tasks
+/// (rayon's `join`, on the current thread pool); whether a node forks depends on its
+/// size alone, so the tree is the same on any number of threads.
+const FORK_TRIS: usize = 4096;
+
+impl PartNode for KdNode {
+    fn moved(self, nodes: u32, prims: u32) -> Self {
+        match self.axis() {
+            KdNode::LEAF => KdNode::leaf(self.index() + prims, self.value),
+            axis => KdNode::inner(axis, self.split(), self.index() + nodes),
+        }
+    }
+
+    fn with_children(self, child: u32) -> Self {
+        KdNode::inner(self.axis(), self.split(), child)
+    }
 }
 
 /// Builds the kd-tree over the scene bounds.
@@ -76,11 +94,10 @@ pub fn build_kdtree(mesh: &Mesh, params: &KdParams) -> BuiltKd {
     let max_depth = params.max_depth.unwrap_or(auto_depth).min(MAX_TREE_DEPTH - 4);
     let (lo, hi) = mesh.bounds();
     let root = (DVec3::from(lo.map(f64::from)), DVec3::from(hi.map(f64::from)));
-    let mut ctx = Ctx { tri_lo, tri_hi, params, margin: box_margin(mesh), max_depth, out: BuiltKd::default() };
-    ctx.out.nodes.push(KdNode::leaf(0, 0));
+    let ctx = Ctx { tri_lo, tri_hi, params, margin: box_margin(mesh), max_depth };
     let all: Vec<u32> = (0..mesh.triangles.len() as u32).collect();
-    ctx.build(0, all, root, 1);
-    ctx.out
+    let part = ctx.build(all, root, 1);
+    BuiltKd { nodes: part.nodes, prims: part.prims, depth: part.depth }
 }
 
 fn area(lo: DVec3, hi: DVec3) -> f64 {
@@ -89,34 +106,73 @@ fn area(lo: DVec3, hi: DVec3) -> f64 {
 }
 
 impl Ctx<'_> {
-    fn build(&mut self, node: usize, tris: Vec<u32>, (lo, hi): (DVec3, DVec3), depth: u32) {
-        self.out.depth = self.out.depth.max(depth);
+    /// The subtree of `tris` in the cell `lo..hi` at `depth`. A node of [`FORK_TRIS`]
+    /// triangles or more builds its children as two parallel tasks; smaller subtrees are
+    /// built on this thread, depth first.
+    fn build(&self, tris: Vec<u32>, cell: (DVec3, DVec3), depth: u32) -> TreePart<KdNode> {
+        if tris.len() < FORK_TRIS {
+            let mut part = TreePart { nodes: vec![KdNode::leaf(0, 0)], prims: Vec::new(), depth, spare: 0 };
+            self.sequential(&mut part, 0, tris, cell, depth);
+            return part;
+        }
+        let leaf = tris.len() <= self.params.max_leaf || depth >= self.max_depth;
+        match if leaf { Err(tris) } else { self.split(tris, cell) } {
+            Err(tris) => TreePart { nodes: vec![KdNode::leaf(0, tris.len() as u32)], prims: tris, depth, spare: 0 },
+            Ok((node, (below, cell_below), (above, cell_above))) => {
+                let (l, r) = rayon::join(
+                    || self.build(below, cell_below, depth + 1),
+                    || self.build(above, cell_above, depth + 1),
+                );
+                TreePart::join(node, l, r)
+            }
+        }
+    }
+
+    /// Builds the subtree of `tris` into `out` at node `index` (allocated), its
+    /// children's nodes appended side by side, the left subtree first.
+    fn sequential(&self, out: &mut TreePart<KdNode>, index: usize, tris: Vec<u32>, cell: (DVec3, DVec3), depth: u32) {
+        out.depth = out.depth.max(depth);
         let split = if tris.len() <= self.params.max_leaf || depth >= self.max_depth {
-            None
+            Err(tris)
         } else {
-            self.find_split(&tris, lo, hi)
+            self.split(tris, cell)
         };
-        let Some((axis, pos)) = split else {
-            self.out.nodes[node] = KdNode::leaf(self.out.prims.len() as u32, tris.len() as u32);
-            self.out.prims.extend_from_slice(&tris);
-            return;
+        match split {
+            Err(tris) => {
+                out.nodes[index] = KdNode::leaf(out.prims.len() as u32, tris.len() as u32);
+                out.prims.extend_from_slice(&tris);
+            }
+            Ok((node, (below, cell_below), (above, cell_above))) => {
+                let child = out.nodes.len();
+                out.nodes.extend([KdNode::leaf(0, 0); 2]);
+                out.nodes[index] = node.with_children(child as u32);
+                self.sequential(out, child, below, cell_below, depth + 1);
+                self.sequential(out, child + 1, above, cell_above, depth + 1);
+            }
+        }
+    }
+
+    /// The node's plane (children not yet placed) and the triangles and cells of its two
+    /// sides; the triangles back where a leaf is cheaper.
+    #[allow(clippy::type_complexity)]
+    fn split(
+        &self,
+        tris: Vec<u32>,
+        (lo, hi): (DVec3, DVec3),
+    ) -> Result<(KdNode, (Vec<u32>, (DVec3, DVec3)), (Vec<u32>, (DVec3, DVec3))), Vec<u32>> {
+        let Some((axis, pos)) = self.find_split(&tris, lo, hi) else {
+            return Err(tris);
         };
         let m = self.margin;
         let below: Vec<u32> = tris.iter().copied().filter(|&t| self.tri_lo[t as usize][axis] <= pos + m).collect();
         let above: Vec<u32> = tris.iter().copied().filter(|&t| self.tri_hi[t as usize][axis] >= pos - m).collect();
-        let child = self.out.nodes.len();
-        self.out.nodes.push(KdNode::leaf(0, 0));
-        self.out.nodes.push(KdNode::leaf(0, 0));
-        self.out.nodes[node] = KdNode::inner(axis as u32, pos as f32, child as u32);
-        drop(tris);
         // The plane as stored (f32) bounds the children, so builder and kernel agree.
         let p = pos as f32 as f64;
         let mut hi_below = hi;
         hi_below[axis] = p;
         let mut lo_above = lo;
         lo_above[axis] = p;
-        self.build(child, below, (lo, hi_below), depth + 1);
-        self.build(child + 1, above, (lo_above, hi), depth + 1);
+        Ok((KdNode::inner(axis as u32, pos as f32, 0), (below, (lo, hi_below)), (above, (lo_above, hi))))
     }
 
     /// The cheapest plane by the SAH, if it beats a leaf and actually separates.
@@ -175,5 +231,41 @@ impl Ctx<'_> {
             return None;
         }
         Some((axis, pos))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::build::test_meshes::scatter;
+
+    /// The kd-tree built with parallel tasks is node for node the one built depth first
+    /// on one thread (the kd-tree has no budget to share), on any number of threads.
+    #[test]
+    fn parallel_kd_builds_equal_the_depth_first_build() {
+        let mesh = scatter(3 * FORK_TRIS as u32, 9);
+        let params = KdParams::default();
+        let built: Vec<BuiltKd> = [1, 2, 3]
+            .iter()
+            .map(|&t| crate::render::in_pool(Some(t), || build_kdtree(&mesh, &params)).unwrap())
+            .collect();
+        // The same build with every subtree on this thread, depth first.
+        let mut tri_lo = Vec::new();
+        let mut tri_hi = Vec::new();
+        for t in &mesh.triangles {
+            let v = t.map(|i| DVec3::from(mesh.positions[i as usize].map(f64::from)));
+            tri_lo.push(v[0].min(v[1]).min(v[2]));
+            tri_hi.push(v[0].max(v[1]).max(v[2]));
+        }
+        let max_depth = (8.0 + 1.3 * (mesh.triangles.len() as f64).log2()).round() as u32;
+        let ctx = Ctx { tri_lo, tri_hi, params: &params, margin: box_margin(&mesh), max_depth };
+        let (lo, hi) = mesh.bounds();
+        let cell = (DVec3::from(lo.map(f64::from)), DVec3::from(hi.map(f64::from)));
+        let mut one = TreePart { nodes: vec![KdNode::leaf(0, 0)], prims: Vec::new(), depth: 1, spare: 0 };
+        ctx.sequential(&mut one, 0, (0..mesh.triangles.len() as u32).collect(), cell, 1);
+        assert!(one.nodes.len() > 1000, "{} nodes", one.nodes.len());
+        for b in &built {
+            assert_eq!((&b.nodes, &b.prims, b.depth), (&one.nodes, &one.prims, one.depth));
+        }
     }
 }

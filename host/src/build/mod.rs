@@ -16,6 +16,7 @@ pub mod sah;
 pub mod spatial_split;
 #[cfg(test)]
 mod test_meshes;
+pub(crate) mod tree_part;
 pub mod tri_box;
 pub mod tri_clip;
 pub mod wide_bvh;
