@@ -82,19 +82,7 @@ impl PartNode for KdNode {
 
 /// Builds the kd-tree over the scene bounds.
 pub fn build_kdtree(mesh: &Mesh, params: &KdParams) -> BuiltKd {
-    let mut tri_lo = Vec::with_capacity(mesh.triangles.len());
-    let mut tri_hi = Vec::with_capacity(mesh.triangles.len());
-    for t in &mesh.triangles {
-        let v = t.map(|i| DVec3::from(mesh.positions[i as usize].map(f64::from)));
-        tri_lo.push(v[0].min(v[1]).min(v[2]));
-        tri_hi.push(v[0].max(v[1]).max(v[2]));
-    }
-    let n = mesh.triangles.len().max(1) as f64;
-    let auto_depth = (8.0 + 1.3 * n.log2()).round() as u32;
-    let max_depth = params.max_depth.unwrap_or(auto_depth).min(MAX_TREE_DEPTH - 4);
-    let (lo, hi) = mesh.bounds();
-    let root = (DVec3::from(lo.map(f64::from)), DVec3::from(hi.map(f64::from)));
-    let ctx = Ctx { tri_lo, tri_hi, params, margin: box_margin(mesh), max_depth };
+    let (ctx, root) = Ctx::new(mesh, params);
     let all: Vec<u32> = (0..mesh.triangles.len() as u32).collect();
     let part = ctx.build(all, root, 1);
     BuiltKd { nodes: part.nodes, prims: part.prims, depth: part.depth }
@@ -105,7 +93,25 @@ fn area(lo: DVec3, hi: DVec3) -> f64 {
     2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
 }
 
-impl Ctx<'_> {
+impl<'a> Ctx<'a> {
+    /// The build's triangle boxes, depth limit and margin, and the root cell (the scene's
+    /// bounds).
+    fn new(mesh: &Mesh, params: &'a KdParams) -> (Ctx<'a>, (DVec3, DVec3)) {
+        let mut tri_lo = Vec::with_capacity(mesh.triangles.len());
+        let mut tri_hi = Vec::with_capacity(mesh.triangles.len());
+        for t in &mesh.triangles {
+            let v = t.map(|i| DVec3::from(mesh.positions[i as usize].map(f64::from)));
+            tri_lo.push(v[0].min(v[1]).min(v[2]));
+            tri_hi.push(v[0].max(v[1]).max(v[2]));
+        }
+        let n = mesh.triangles.len().max(1) as f64;
+        let auto_depth = (8.0 + 1.3 * n.log2()).round() as u32;
+        let max_depth = params.max_depth.unwrap_or(auto_depth).min(MAX_TREE_DEPTH - 4);
+        let (lo, hi) = mesh.bounds();
+        let root = (DVec3::from(lo.map(f64::from)), DVec3::from(hi.map(f64::from)));
+        (Ctx { tri_lo, tri_hi, params, margin: box_margin(mesh), max_depth }, root)
+    }
+
     /// The subtree of `tris` in the cell `lo..hi` at `depth`. A node of [`FORK_TRIS`]
     /// triangles or more builds its children as two parallel tasks; smaller subtrees are
     /// built on this thread, depth first.
@@ -250,17 +256,7 @@ mod tests {
             .map(|&t| crate::render::in_pool(Some(t), || build_kdtree(&mesh, &params)).unwrap())
             .collect();
         // The same build with every subtree on this thread, depth first.
-        let mut tri_lo = Vec::new();
-        let mut tri_hi = Vec::new();
-        for t in &mesh.triangles {
-            let v = t.map(|i| DVec3::from(mesh.positions[i as usize].map(f64::from)));
-            tri_lo.push(v[0].min(v[1]).min(v[2]));
-            tri_hi.push(v[0].max(v[1]).max(v[2]));
-        }
-        let max_depth = (8.0 + 1.3 * (mesh.triangles.len() as f64).log2()).round() as u32;
-        let ctx = Ctx { tri_lo, tri_hi, params: &params, margin: box_margin(&mesh), max_depth };
-        let (lo, hi) = mesh.bounds();
-        let cell = (DVec3::from(lo.map(f64::from)), DVec3::from(hi.map(f64::from)));
+        let (ctx, cell) = Ctx::new(&mesh, &params);
         let mut one = TreePart { nodes: vec![KdNode::leaf(0, 0)], prims: Vec::new(), depth: 1, spare: 0 };
         ctx.sequential(&mut one, 0, (0..mesh.triangles.len() as u32).collect(), cell, 1);
         assert!(one.nodes.len() > 1000, "{} nodes", one.nodes.len());
