@@ -121,8 +121,7 @@ impl<'a> Ctx<'a> {
             self.sequential(&mut part, 0, tris, cell, depth);
             return part;
         }
-        let leaf = tris.len() <= self.params.max_leaf || depth >= self.max_depth;
-        match if leaf { Err(tris) } else { self.split(tris, cell) } {
+        match self.split(tris, cell, depth) {
             Err(tris) => TreePart { nodes: vec![KdNode::leaf(0, tris.len() as u32)], prims: tris, depth, spare: 0 },
             Ok((node, (below, cell_below), (above, cell_above))) => {
                 let (l, r) = rayon::join(
@@ -138,12 +137,7 @@ impl<'a> Ctx<'a> {
     /// children's nodes appended side by side, the left subtree first.
     fn sequential(&self, out: &mut TreePart<KdNode>, index: usize, tris: Vec<u32>, cell: (DVec3, DVec3), depth: u32) {
         out.depth = out.depth.max(depth);
-        let split = if tris.len() <= self.params.max_leaf || depth >= self.max_depth {
-            Err(tris)
-        } else {
-            self.split(tris, cell)
-        };
-        match split {
+        match self.split(tris, cell, depth) {
             Err(tris) => {
                 out.nodes[index] = KdNode::leaf(out.prims.len() as u32, tris.len() as u32);
                 out.prims.extend_from_slice(&tris);
@@ -158,14 +152,19 @@ impl<'a> Ctx<'a> {
         }
     }
 
-    /// The node's plane (children not yet placed) and the triangles and cells of its two
-    /// sides; the triangles back where a leaf is cheaper.
+    /// The plane of the node at `depth` (children not yet placed) and the triangles and
+    /// cells of its two sides; the triangles back where the node is a leaf (small enough,
+    /// deep enough, or cheaper so).
     #[allow(clippy::type_complexity)]
     fn split(
         &self,
         tris: Vec<u32>,
         (lo, hi): (DVec3, DVec3),
+        depth: u32,
     ) -> Result<(KdNode, (Vec<u32>, (DVec3, DVec3)), (Vec<u32>, (DVec3, DVec3))), Vec<u32>> {
+        if tris.len() <= self.params.max_leaf || depth >= self.max_depth {
+            return Err(tris);
+        }
         let Some((axis, pos)) = self.find_split(&tris, lo, hi) else {
             return Err(tris);
         };

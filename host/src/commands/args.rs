@@ -31,6 +31,11 @@ pub struct WalkArgs {
 }
 
 impl WalkArgs {
+    /// A walkthrough is asked for (a camera path or an orbit).
+    pub fn is_walk(&self) -> bool {
+        self.camera_path.is_some() || self.orbit.is_some()
+    }
+
     /// The frames' cameras over `base`, or `None` for a single frame.
     pub fn cameras(&self, base: &CameraRecord) -> Result<Option<Vec<CameraRecord>>> {
         let cams = match (&self.camera_path, self.orbit) {

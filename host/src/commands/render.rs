@@ -121,10 +121,9 @@ pub(crate) fn cmd_render(a: RenderArgs) -> Result<()> {
     check_image_path(&a.output)?;
     if let Some(dir) = &a.ray_log {
         let scene = a.scene.as_deref();
-        let walk = a.walk.camera_path.is_some() || a.walk.orbit.is_some();
         let not = [
             (a.mpi.mpi, "--mpi"),
-            (walk, "a walkthrough"),
+            (a.walk.is_walk(), "a walkthrough"),
             (scene.is_some_and(crate::input::bricked::is_bricked), "a bricked scene"),
             (scene.is_some_and(crate::input::instanced::is_instanced), "an instanced scene"),
         ];
