@@ -103,6 +103,10 @@ pub fn main() -> ExitCode {
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
+    // Every command's kernels may take their AVX forms from here on (core cannot ask the
+    // operating system; the batch and render entry points also report it, for library
+    // callers).
+    crate::platform::isa::report_cpu();
     let cli = match <Cli as clap::Parser>::try_parse() {
         Ok(cli) => cli,
         Err(e) => return usage_error(e),

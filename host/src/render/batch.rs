@@ -135,11 +135,15 @@ fn occluded_with<I: Intersector, const N: usize>(
     invalid: &[bool],
     threads: Option<usize>,
 ) -> Result<Vec<bool>> {
+    crate::platform::isa::report_cpu();
     let mut out = vec![false; rays.len()];
     let chunks = out.chunks_mut(CHUNK).zip(rays.chunks(CHUNK)).zip(invalid.chunks(CHUNK));
     for_each_claimed(threads, chunks, |((out, chunk), bad)| {
         if N == 1 {
-            let ray = |i: usize| chunk.get(i).filter(|_| !bad.get(i).copied().unwrap_or(true));
+            let ray = |i: usize| {
+                prefetch(chunk.get(i + SINGLE_PREFETCH_AHEAD));
+                chunk.get(i).filter(|_| !bad.get(i).copied().unwrap_or(true))
+            };
             let blocked = |i: usize, b: bool| {
                 if let Some(o) = out.get_mut(i) {
                     *o = b;
