@@ -153,6 +153,22 @@ fn descend<N: WideSlab, const C: usize>(node: &N, t: &N::Dist, mask: u32, stack:
     (c, n)
 }
 
+/// [`descend`] for the any-hit query, which needs no order: the lowest hit slot next,
+/// the others pushed in slot order (Embree's any-hit traversal does not sort either).
+#[inline(always)]
+fn descend_any<N: WideSlab, const C: usize>(node: &N, t: &N::Dist, mask: u32, stack: &mut Stack<C>) -> (u32, u32) {
+    let first = mask.trailing_zeros() as usize & (N::WIDTH - 1);
+    let mut m = mask & (mask - 1);
+    while m != 0 {
+        let k = m.trailing_zeros() as usize & (N::WIDTH - 1);
+        m &= m - 1;
+        let (c, n) = node.link(k);
+        // Cannot be full: `parse` bounds the depth (see `stack_capacity`).
+        let _ = stack.push((c, n, t[k]));
+    }
+    node.link(first)
+}
+
 /// Pops the next entry whose entry distance is not beyond `t_end`.
 #[inline(always)]
 fn pop_next<const C: usize>(stack: &mut Stack<C>, t_end: f32) -> Option<(u32, u32)> {
@@ -290,7 +306,8 @@ fn walk<N: WideSlab, const C: usize, I: Intersector, P: MemoryProbe, const O: us
                 node.slab(r, ray.t_min, t_end, &mut tn)
             };
             if mask != 0 {
-                (index, count) = descend(node, &tn, mask, &mut stack);
+                (index, count) =
+                    if ANY { descend_any(node, &tn, mask, &mut stack) } else { descend(node, &tn, mask, &mut stack) };
                 continue;
             }
         } else {
