@@ -1,9 +1,9 @@
 //! The walk through a wide BVH (4 or 8 children per node), whatever its width: one node
 //! holds its children's boxes, tested together by one SIMD slab test (the node's
-//! [`WideSlab`]); hit children are visited nearest first, the others pushed on a
-//! fixed-capacity stack (Wald, Benthin & Boulos 2008; Embree's BVH4 and BVH8). Leaves
-//! are stack entries like nodes, so a leaf is intersected only when it is the nearest
-//! thing left to visit.
+//! [`WideSlab`]); hit children are visited nearest first (the any-hit query: in slot
+//! order), the others pushed on a fixed-capacity stack (Wald, Benthin & Boulos 2008;
+//! Embree's BVH4 and BVH8). Leaves are stack entries like nodes, so a leaf is
+//! intersected only when it is the nearest thing left to visit.
 
 pub mod node4;
 pub mod node8;
