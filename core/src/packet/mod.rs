@@ -210,6 +210,20 @@ impl<const N: usize> RayPacket<N> {
         lanes.all(|i| o(i) == first)
     }
 
+    /// True when, on each axis, every active ray's direction has one sign (a negative
+    /// zero counts as negative); true for no active ray.
+    #[inline]
+    pub fn one_octant(&self) -> bool {
+        let mut lanes = LanesOf::<N>(self.live());
+        let Some(first) = lanes.next() else { return true };
+        let signs = |i: usize| {
+            let neg = |a: &[f32; N]| a.get(i).is_some_and(|v| v.is_sign_negative());
+            [neg(&self.dx), neg(&self.dy), neg(&self.dz)]
+        };
+        let first = signs(first);
+        lanes.all(|i| signs(i) == first)
+    }
+
     /// Ray `i`; past the last lane, the last lane's ray.
     #[inline]
     pub fn ray(&self, i: usize) -> Ray {
@@ -416,6 +430,25 @@ mod tests {
         p.set(0, &ray(0.0));
         p.active = 0b11;
         assert!(!p.one_origin());
+    }
+
+    #[test]
+    fn one_octant_looks_at_active_lanes_and_signs_only() {
+        let ray = |d: [f32; 3]| Ray::new(Vec3::ZERO, Vec3::from(d));
+        let mut p = RayPacket::<4>::new();
+        assert!(p.one_octant(), "no active ray");
+        p.set(0, &ray([1.0, -2.0, 3.0]));
+        p.set(1, &ray([0.5, -0.1, 9.0]));
+        assert!(p.one_octant(), "other directions, the same signs");
+        p.set(3, &ray([1.0, 2.0, 3.0]));
+        assert!(!p.one_octant(), "y changes sign");
+        p.active &= !(1 << 3);
+        assert!(p.one_octant(), "an inactive lane's direction does not count");
+        // A negative zero is negative, as its reciprocal is.
+        p.set(2, &ray([1.0, -0.0, 1.0]));
+        assert!(p.one_octant());
+        p.set(2, &ray([1.0, -1.0, -0.0]));
+        assert!(!p.one_octant());
     }
 
     #[test]

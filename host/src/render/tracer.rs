@@ -144,8 +144,8 @@ pub fn trace_each<I: Intersector, P: MemoryProbe, R: Borrow<Ray>>(
 }
 
 /// The any-hit query of rays `0 .. n` (`ray(i)`, `None` for a row that is no ray), each
-/// answer to `blocked(i, answer)`: core's [`occluded`], which picks the structure's
-/// walk, in one loop compiled for AVX2 where the CPU has it.
+/// answer to `blocked(i, answer)`: [`occluded`]'s walks, the structure's chosen once for
+/// the run, in one loop compiled for AVX2 where the CPU has it.
 #[inline(always)]
 pub fn occluded_each<'r, I: Intersector, P: MemoryProbe>(
     scene: &SceneView<'_>,
@@ -156,8 +156,7 @@ pub fn occluded_each<'r, I: Intersector, P: MemoryProbe>(
     mut blocked: impl FnMut(usize, bool),
 ) {
     // As in `trace_each`: each wide BVH's walk in its own loop, inlined into the AVX2
-    // function (core's `occluded`, a call away, ran without AVX2: 1.3x slower on the
-    // conference room's shadow rays).
+    // function (core's `occluded` is a call away, compiled without AVX2).
     macro_rules! each_ray {
         ($kernel:expr) => {
             with_avx2(
