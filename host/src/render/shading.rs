@@ -13,11 +13,11 @@ use raypipe_core::shade::escaped::eye_escaped;
 use raypipe_core::shade::radiance_sum::RadianceSum;
 use raypipe_core::shade::ray_record::{RayKind, RayRecord};
 use raypipe_core::shade::shader::Shader;
+use raypipe_core::traverse::occlusion::occluded;
 use raypipe_core::{Hit, Intersector, MemoryProbe, Ray, RayCounters, SceneView, Vec3};
 
-use crate::platform::isa::with_avx2;
 use crate::render::ray_log::TileRayLog;
-use crate::render::tracer::{occluded, trace};
+use crate::render::tracer::trace;
 
 /// What a tile's ray stream cost.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -130,31 +130,24 @@ pub fn shade_tile<I: Intersector, P: MemoryProbe>(
             }
         }
     }
-    // The secondary and shadow rays' walks compiled for AVX2 where the CPU has it, as
-    // `trace`'s batches are (see `with_avx2`).
-    with_avx2(
-        #[inline(always)]
-        || {
-            while let Some(rec) = stream.pop_front() {
-                counts.rays[rec.kind as usize] += 1;
-                if let Some(log) = log.as_deref_mut() {
-                    log.push(rec.kind, rec.ray);
-                }
-                let Some(slot) = radiance.get_mut(tile.local(rec.pixel)) else { continue };
-                let mut c = RayCounters::default();
-                if rec.kind == RayKind::Shadow {
-                    if !occluded::<I, _>(scene, &rec.ray, probe, &mut c) {
-                        slot.add(rec.weight);
-                    }
-                } else {
-                    let hit = trace::<I, _>(scene, &rec.ray, probe, &mut c);
-                    counts.shades += hit.is_some() as u64;
-                    slot.add(shader.shade(scene, &rec, hit, probe, &mut |r| stream.push_back(r)));
-                }
-                counts.steps += c.nodes as u64;
-                counts.tests += c.tri_tests as u64;
+    while let Some(rec) = stream.pop_front() {
+        counts.rays[rec.kind as usize] += 1;
+        if let Some(log) = log.as_deref_mut() {
+            log.push(rec.kind, rec.ray);
+        }
+        let Some(slot) = radiance.get_mut(tile.local(rec.pixel)) else { continue };
+        let mut c = RayCounters::default();
+        if rec.kind == RayKind::Shadow {
+            if !occluded::<I, _>(scene, &rec.ray, probe, &mut c) {
+                slot.add(rec.weight);
             }
-        },
-    );
+        } else {
+            let hit = trace::<I, _>(scene, &rec.ray, probe, &mut c);
+            counts.shades += hit.is_some() as u64;
+            slot.add(shader.shade(scene, &rec, hit, probe, &mut |r| stream.push_back(r)));
+        }
+        counts.steps += c.nodes as u64;
+        counts.tests += c.tri_tests as u64;
+    }
     radiance.iter().map(RadianceSum::value).collect()
 }

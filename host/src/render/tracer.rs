@@ -76,25 +76,6 @@ pub fn trace<I: Intersector, P: MemoryProbe>(
     }
 }
 
-/// Whether `ray` is blocked within its interval, with the scene's structure: core's
-/// [`occluded_by_walk`], but with the wide BVHs' walks inlined, so that a caller compiled
-/// for AVX2 ([`with_avx2`]) runs them with it.
-#[inline(always)]
-pub fn occluded<I: Intersector, P: MemoryProbe>(
-    scene: &SceneView<'_>,
-    ray: &Ray,
-    probe: &mut P,
-    counters: &mut RayCounters,
-) -> bool {
-    if let Some(bvh) = scene.bvh8() {
-        occluded_bvh8::<I, P>(scene, bvh, ray, probe, counters)
-    } else if let Some(bvh) = scene.bvh4() {
-        occluded_bvh4::<I, P>(scene, bvh, ray, probe, counters)
-    } else {
-        occluded_by_walk::<I, P>(scene, ray, probe, counters)
-    }
-}
-
 /// Traces the rays `ray(i)` for `i` in `0..n` (`None`: no ray, hence no hit) and hands
 /// each ray and its closest hit to `hit(i, …)`, choosing the structure's kernel once for
 /// the whole run rather than per ray, with the CPU's widest SIMD instructions
@@ -144,8 +125,8 @@ pub fn trace_each<I: Intersector, P: MemoryProbe, R: Borrow<Ray>>(
 }
 
 /// The any-hit query of rays `0 .. n` (`ray(i)`, `None` for a row that is no ray), each
-/// answer to `blocked(i, answer)`: [`occluded`]'s walks, the structure's chosen once for
-/// the run, in one loop compiled for AVX2 where the CPU has it.
+/// answer to `blocked(i, answer)`: core's [`occluded_by_walk`], with the wide BVHs'
+/// walks chosen once for the run, in one loop compiled for AVX2 where the CPU has it.
 #[inline(always)]
 pub fn occluded_each<'r, I: Intersector, P: MemoryProbe>(
     scene: &SceneView<'_>,
