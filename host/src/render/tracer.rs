@@ -76,6 +76,21 @@ pub fn trace<I: Intersector, P: MemoryProbe>(
     }
 }
 
+/// `for $i in 0..$n { $body }` in one function compiled for AVX2 where the CPU has it
+/// ([`with_avx2`]), with the body inlined there.
+macro_rules! avx2_loop {
+    ($n:expr, $i:ident => $body:expr) => {
+        with_avx2(
+            #[inline(always)]
+            || {
+                for $i in 0..$n {
+                    $body
+                }
+            },
+        )
+    };
+}
+
 /// Traces the rays `ray(i)` for `i` in `0..n` (`None`: no ray, hence no hit) and hands
 /// each ray and its closest hit to `hit(i, …)`, choosing the structure's kernel once for
 /// the whole run rather than per ray, with the CPU's widest SIMD instructions
@@ -99,20 +114,13 @@ pub fn trace_each<I: Intersector, P: MemoryProbe, R: Borrow<Ray>>(
     // that a change to one walk does not reshuffle the registers of another.
     macro_rules! each_ray {
         ($kernel:expr) => {
-            with_avx2(
-                #[inline(always)]
-                || {
-                    for i in 0..n {
-                        match ray(i) {
-                            Some(r) => {
-                                let h = $kernel(r.borrow());
-                                hit(i, Some(r), h)
-                            }
-                            None => hit(i, None, None),
-                        }
-                    }
-                },
-            )
+            avx2_loop!(n, i => match ray(i) {
+                Some(r) => {
+                    let h = $kernel(r.borrow());
+                    hit(i, Some(r), h)
+                }
+                None => hit(i, None, None),
+            })
         };
     }
     if let Some(bvh) = scene.bvh8() {
@@ -140,15 +148,10 @@ pub fn occluded_each<'r, I: Intersector, P: MemoryProbe>(
     // function (core's `occluded` is a call away, compiled without AVX2).
     macro_rules! each_ray {
         ($kernel:expr) => {
-            with_avx2(
-                #[inline(always)]
-                || {
-                    for i in 0..n {
-                        let b = ray(i).is_some_and(|r| $kernel(r));
-                        blocked(i, b)
-                    }
-                },
-            )
+            avx2_loop!(n, i => {
+                let b = ray(i).is_some_and(|r| $kernel(r));
+                blocked(i, b)
+            })
         };
     }
     if let Some(bvh) = scene.bvh8() {
