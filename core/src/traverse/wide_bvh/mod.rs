@@ -133,14 +133,7 @@ fn descend<N: WideSlab, const C: usize>(node: &N, t: &N::Dist, mask: u32, stack:
     // ties in slot order (insertion sort: at most eight), and the nearest popped. (Sorting
     // 64-bit keys in registers first took fewer instructions but measured slower.)
     let base = stack.len();
-    let mut m = mask;
-    while m != 0 {
-        let k = m.trailing_zeros() as usize & (N::WIDTH - 1);
-        m &= m - 1;
-        let (c, n) = node.link(k);
-        // Cannot be full: `parse` bounds the depth (see `stack_capacity`).
-        let _ = stack.push((c, n, t[k]));
-    }
+    push_slots(node, t, mask, stack);
     let s = stack.get_mut(base..).unwrap_or_default();
     for i in 1..s.len() {
         let mut j = i;
@@ -158,7 +151,14 @@ fn descend<N: WideSlab, const C: usize>(node: &N, t: &N::Dist, mask: u32, stack:
 #[inline(always)]
 fn descend_any<N: WideSlab, const C: usize>(node: &N, t: &N::Dist, mask: u32, stack: &mut Stack<C>) -> (u32, u32) {
     let first = mask.trailing_zeros() as usize & (N::WIDTH - 1);
-    let mut m = mask & (mask - 1);
+    push_slots(node, t, mask & (mask - 1), stack);
+    node.link(first)
+}
+
+/// Pushes the slots set in `mask` of `node` with their entry distances, in slot order.
+#[inline(always)]
+fn push_slots<N: WideSlab, const C: usize>(node: &N, t: &N::Dist, mask: u32, stack: &mut Stack<C>) {
+    let mut m = mask;
     while m != 0 {
         let k = m.trailing_zeros() as usize & (N::WIDTH - 1);
         m &= m - 1;
@@ -166,7 +166,6 @@ fn descend_any<N: WideSlab, const C: usize>(node: &N, t: &N::Dist, mask: u32, st
         // Cannot be full: `parse` bounds the depth (see `stack_capacity`).
         let _ = stack.push((c, n, t[k]));
     }
-    node.link(first)
 }
 
 /// Pops the next entry whose entry distance is not beyond `t_end`.
