@@ -302,6 +302,9 @@ fn packet_matches_single<const N: usize>(view: &SceneView<'_>, rays: &[Ray]) -> 
     use raypipe_core::packet::step::trace_packet_steps;
     use raypipe_core::packet::{PacketCounters, RayPacket};
     use raypipe_core::traverse::occlusion::occluded;
+    use raypipe_core::traverse::wide_bvh::last_occluder::LastOccluder;
+    // One shadow cache across the packets, as the batches keep it.
+    let mut cache = LastOccluder::default();
     for chunk in rays.chunks(N) {
         let mut packet = RayPacket::<N>::new();
         for (i, r) in chunk.iter().enumerate() {
@@ -322,7 +325,7 @@ fn packet_matches_single<const N: usize>(view: &SceneView<'_>, rays: &[Ray]) -> 
         prop_assert!(pc.active_lanes <= pc.visits * N as u64);
         // The any-hit query of the same packet: blocked exactly where the single ray has
         // a hit, and where the single-ray any-hit query says so.
-        let blocked = occluded_packet::<Watertight, _, N>(view, &packet, &mut NoProbe, &mut pc);
+        let blocked = occluded_packet::<Watertight, _, N>(view, &packet, &mut cache, &mut NoProbe, &mut pc);
         prop_assert_eq!(blocked & !packet.live(), 0, "packet of {}: inactive lanes blocked", N);
         for (i, r) in chunk.iter().enumerate() {
             let single = trace::<Watertight, _>(view, r, &mut NoProbe, &mut RayCounters::default());

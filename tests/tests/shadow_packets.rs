@@ -9,6 +9,9 @@ use raypipe_core::camera::{Camera, EyeRays};
 use raypipe_core::packet::bvh4::takes_shadow_pyramid;
 use raypipe_core::packet::{PacketCounters, RayPacket};
 use raypipe_core::traverse::occlusion::occluded;
+use raypipe_core::traverse::wide_bvh::last_occluder::LastOccluder;
+use raypipe_core::traverse::wide_bvh::node4::occluded_bvh4_cached;
+use raypipe_core::traverse::wide_bvh::node8::occluded_bvh8_cached;
 use raypipe_core::{NoProbe, Ray, RayCounters, SceneView, Vec3, Watertight};
 use raypipe_tests::{build_soup, build_soup_layout};
 
@@ -40,6 +43,8 @@ fn check_blocks<const N: usize>(view: &SceneView<'_>, cam: &Camera, light: Vec3)
     let Ok(eye) = EyeRays::new(cam) else { return Ok(0) };
     let side = (N as f64).sqrt() as u32;
     let mut pyramids = 0;
+    // One shadow cache across the frame's packets, as the batches keep it.
+    let mut cache = LastOccluder::default();
     for by in (0..cam.height).step_by(side as usize) {
         for bx in (0..cam.width).step_by(side as usize) {
             let shadow: Vec<Ray> = (0..N as u32)
@@ -54,8 +59,13 @@ fn check_blocks<const N: usize>(view: &SceneView<'_>, cam: &Camera, light: Vec3)
             let mut packet = RayPacket::<N>::new();
             packet.fill(&shadow);
             pyramids += takes_shadow_pyramid(view, &packet) as usize;
-            let blocked =
-                occluded_packet::<Watertight, _, N>(view, &packet, &mut NoProbe, &mut PacketCounters::default());
+            let blocked = occluded_packet::<Watertight, _, N>(
+                view,
+                &packet,
+                &mut cache,
+                &mut NoProbe,
+                &mut PacketCounters::default(),
+            );
             for (i, r) in shadow.iter().enumerate() {
                 let single = occluded::<Watertight, _>(view, r, &mut NoProbe, &mut RayCounters::default());
                 prop_assert_eq!(blocked & (1 << i) != 0, single, "packet of {}, lane {}: {:?}", N, i, r);
@@ -105,5 +115,70 @@ proptest! {
         let p64 = check_blocks::<64>(&view, &cam, light)?;
         prop_assert_eq!(p16, 0, "packets of 16 take the many-origin walk");
         prop_assert!(p64 > 8, "few packets took the pyramid: {} of 64", p64);
+    }
+
+    /// Single shadow rays with the shadow cache, in the 4- and 8-wide BVHs and both
+    /// triangle layouts: each answers as the uncached query, with a cache kept across
+    /// the frame, a cache from the other tree's image, and one from another scene. Under
+    /// a ceiling that blocks every ray, the cache answers most of them without a node
+    /// visited.
+    #[test]
+    fn cached_shadow_rays_answer_as_uncached(
+        seed in 1u64..1_000_000,
+        size in 0.3f32..1.0,
+        light in [-3.0f32..3.0, 8.0f32..14.0, -3.0f32..3.0],
+        blocks in any::<bool>(),
+        ceiling in any::<bool>(),
+    ) {
+        let (mut positions, mut triangles) = floor_and_cloud(seed, 1500, size);
+        if ceiling {
+            // Two large triangles at y = 7, between the cloud and any light.
+            let base = positions.len() as u32;
+            positions.extend([[-40.0, 7.0, -40.0], [40.0, 7.0, -40.0], [40.0, 7.0, 40.0], [-40.0, 7.0, 40.0]]);
+            triangles.extend([[base, base + 1, base + 2], [base, base + 2, base + 3]]);
+        }
+        let layout = if blocks { TriangleLayout::Blocks } else { TriangleLayout::Indexed };
+        let b4 = build_soup_layout(positions.clone(), triangles.clone(), Accel::Bvh4, layout);
+        let b8 = build_soup_layout(positions, triangles, Accel::Bvh8, layout);
+        let (other_p, other_t) = floor_and_cloud(seed + 1, 300, 1.0);
+        let other = build_soup_layout(other_p, other_t, Accel::Bvh8, layout);
+        let (v4, v8, vo) = (b4.view().unwrap(), b8.view().unwrap(), other.view().unwrap());
+        let (t4, t8, to) = (v4.bvh4().unwrap(), v8.bvh8().unwrap(), vo.bvh8().unwrap());
+        let cam = Camera {
+            eye: Vec3::new(0.0, 6.0, -14.0),
+            look_at: Vec3::ZERO,
+            up: Vec3::Y,
+            vfov_deg: 30.0,
+            width: 48,
+            height: 48,
+        };
+        let Ok(eye) = EyeRays::new(&cam) else { return Ok(()) };
+        let light = Vec3::from(light);
+        let (mut c4, mut c8, mut foreign) = (LastOccluder::default(), LastOccluder::default(), LastOccluder::default());
+        let (mut by_cache, mut blocked) = (0, 0);
+        for i in 0..cam.width * cam.height {
+            let r = eye.ray(i % cam.width, i / cam.width);
+            let t = trace::<Watertight, _>(&v4, &r, &mut NoProbe, &mut RayCounters::default()).map_or(30.0, |h| h.t);
+            let p = r.origin + r.dir * (t * 0.999);
+            let shadow = Ray { origin: p, dir: light - p, t_min: 0.0, t_max: 1.0 - 1e-4 };
+            let want = occluded::<Watertight, _>(&v4, &shadow, &mut NoProbe, &mut RayCounters::default());
+            let mut rc = RayCounters::default();
+            let got4 = occluded_bvh4_cached::<Watertight, _>(&v4, t4, &shadow, &mut c4, &mut NoProbe, &mut rc);
+            by_cache += usize::from(got4 && rc.nodes == 0);
+            blocked += usize::from(want);
+            let got8 = occluded_bvh8_cached::<Watertight, _>(&v8, t8, &shadow, &mut c8, &mut NoProbe, &mut rc);
+            // A cache filled in another image: whatever leaf it names, the answer holds.
+            let mut swapped = c4;
+            let got8x = occluded_bvh8_cached::<Watertight, _>(&v8, t8, &shadow, &mut swapped, &mut NoProbe, &mut rc);
+            let _ = occluded_bvh8_cached::<Watertight, _>(&vo, to, &shadow, &mut foreign, &mut NoProbe, &mut rc);
+            let mut stray = foreign;
+            let got8o = occluded_bvh8_cached::<Watertight, _>(&v8, t8, &shadow, &mut stray, &mut NoProbe, &mut rc);
+            prop_assert_eq!((got4, got8, got8x, got8o), (want, want, want, want), "pixel {}: {:?}", i, shadow);
+        }
+        if ceiling {
+            let n = (cam.width * cam.height) as usize;
+            prop_assert_eq!(blocked, n, "the ceiling blocks every ray");
+            prop_assert!(2 * by_cache > n, "the cache answered {} of {} blocked rays", by_cache, n);
+        }
     }
 }

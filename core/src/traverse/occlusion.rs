@@ -12,8 +12,9 @@ use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::traverse::boxes::datapath::NodeTests;
 use crate::traverse::walk::{Walk, WalkEvent};
-use crate::traverse::wide_bvh::node4::occluded_bvh4;
-use crate::traverse::wide_bvh::node8::occluded_bvh8;
+use crate::traverse::wide_bvh::last_occluder::LastOccluder;
+use crate::traverse::wide_bvh::node4::occluded_bvh4_cached;
+use crate::traverse::wide_bvh::node8::occluded_bvh8_cached;
 
 /// True if some triangle is hit by `ray` within its interval. Exactly the closest-hit
 /// query's "is there a hit", found sooner. `counters` receives the steps (nodes or
@@ -24,15 +25,28 @@ pub fn occluded<I: Intersector, P: MemoryProbe>(
     probe: &mut P,
     counters: &mut RayCounters,
 ) -> bool {
+    occluded_cached::<I, P>(scene, ray, &mut LastOccluder::default(), probe, counters)
+}
+
+/// [`occluded`] with the shadow cache `cache` on the wide BVHs (see
+/// [`crate::traverse::wide_bvh::last_occluder`]): the same answer for every ray and
+/// cache. Keep one cache per run of neighbouring rays to one light.
+pub fn occluded_cached<I: Intersector, P: MemoryProbe>(
+    scene: &SceneView<'_>,
+    ray: &Ray,
+    cache: &mut LastOccluder,
+    probe: &mut P,
+    counters: &mut RayCounters,
+) -> bool {
     if !ray.is_valid() {
         return false;
     }
     if <I::Nodes as NodeTests>::FLOAT {
         if let Some(bvh) = scene.bvh8() {
-            return occluded_bvh8::<I, P>(scene, bvh, ray, probe, counters);
+            return occluded_bvh8_cached::<I, P>(scene, bvh, ray, cache, probe, counters);
         }
         if let Some(bvh) = scene.bvh4() {
-            return occluded_bvh4::<I, P>(scene, bvh, ray, probe, counters);
+            return occluded_bvh4_cached::<I, P>(scene, bvh, ray, cache, probe, counters);
         }
     }
     let prep = I::prepare(ray);

@@ -12,6 +12,7 @@ use crate::platform::huge_pages;
 use crate::platform::prefetch::prefetch;
 use crate::platform::thread_pools::for_each_claimed;
 use raypipe_core::packet::{PacketCounters, RayPacket};
+use raypipe_core::traverse::wide_bvh::last_occluder::LastOccluder;
 
 use crate::render::packets::PacketSize;
 use crate::render::tracer::{occluded_each, occluded_packet, trace_each, trace_packet, IntersectorKind};
@@ -154,9 +155,10 @@ fn occluded_with<I: Intersector, const N: usize>(
         }
         let mut pc = PacketCounters::default();
         let mut packet = RayPacket::<N>::new();
+        let mut cache = LastOccluder::default();
         for ((out, group), bad) in out.chunks_mut(N).zip(chunk.chunks(N)).zip(bad.chunks(N)) {
             packet.fill(group);
-            let blocked = occluded_packet::<I, _, N>(scene, &packet, &mut NoProbe, &mut pc);
+            let blocked = occluded_packet::<I, _, N>(scene, &packet, &mut cache, &mut NoProbe, &mut pc);
             for (i, (o, bad)) in out.iter_mut().zip(bad).enumerate() {
                 *o = !bad && blocked & (1 << i) != 0;
             }

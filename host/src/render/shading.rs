@@ -13,7 +13,8 @@ use raypipe_core::shade::escaped::eye_escaped;
 use raypipe_core::shade::radiance_sum::RadianceSum;
 use raypipe_core::shade::ray_record::{RayKind, RayRecord};
 use raypipe_core::shade::shader::Shader;
-use raypipe_core::traverse::occlusion::occluded;
+use raypipe_core::traverse::occlusion::{occluded, occluded_cached};
+use raypipe_core::traverse::wide_bvh::last_occluder::LastOccluder;
 use raypipe_core::{Hit, Intersector, MemoryProbe, Ray, RayCounters, SceneView, Vec3};
 
 use crate::render::ray_log::TileRayLog;
@@ -130,6 +131,10 @@ pub fn shade_tile<I: Intersector, P: MemoryProbe>(
             }
         }
     }
+    // One shadow cache for the tile's shadow rays from its eye rays' hits, which are
+    // neighbours; those from later bounces scatter, and skip it (with it, the conference
+    // room's path-traced frame took 2.51 s against 2.45, one core).
+    let mut cache = LastOccluder::default();
     while let Some(rec) = stream.pop_front() {
         counts.rays[rec.kind as usize] += 1;
         if let Some(log) = log.as_deref_mut() {
@@ -138,7 +143,12 @@ pub fn shade_tile<I: Intersector, P: MemoryProbe>(
         let Some(slot) = radiance.get_mut(tile.local(rec.pixel)) else { continue };
         let mut c = RayCounters::default();
         if rec.kind == RayKind::Shadow {
-            if !occluded::<I, _>(scene, &rec.ray, probe, &mut c) {
+            let blocked = if rec.depth == 0 {
+                occluded_cached::<I, _>(scene, &rec.ray, &mut cache, probe, &mut c)
+            } else {
+                occluded::<I, _>(scene, &rec.ray, probe, &mut c)
+            };
+            if !blocked {
                 slot.add(rec.weight);
             }
         } else {

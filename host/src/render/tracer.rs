@@ -6,7 +6,7 @@ use std::borrow::Borrow;
 use crate::platform::isa::with_avx2;
 
 use raypipe_core::packet::bvh::trace_bvh_packet;
-use raypipe_core::packet::bvh4::{occluded_bvh4_packet, trace_bvh4_packet};
+use raypipe_core::packet::bvh4::{occluded_bvh4_packet_cached, trace_bvh4_packet};
 use raypipe_core::packet::grid::trace_grid_packet;
 use raypipe_core::packet::kdtree::trace_kdtree_packet;
 use raypipe_core::packet::{PacketCounters, PacketHits, RayPacket};
@@ -14,8 +14,9 @@ use raypipe_core::traverse::bvh::trace_bvh;
 use raypipe_core::traverse::grid::trace_grid;
 use raypipe_core::traverse::kdtree::trace_kdtree;
 use raypipe_core::traverse::occlusion::occluded as occluded_by_walk;
-use raypipe_core::traverse::wide_bvh::node4::{occluded_bvh4, trace_bvh4};
-use raypipe_core::traverse::wide_bvh::node8::{occluded_bvh8, trace_bvh8};
+use raypipe_core::traverse::wide_bvh::last_occluder::LastOccluder;
+use raypipe_core::traverse::wide_bvh::node4::{occluded_bvh4_cached, trace_bvh4};
+use raypipe_core::traverse::wide_bvh::node8::{occluded_bvh8_cached, trace_bvh8};
 use raypipe_core::{
     traverse::brute_force::trace_brute_force, Hit, Intersector, MemoryProbe, Ray, RayCounters, SceneView,
 };
@@ -155,10 +156,13 @@ pub fn occluded_each<'r, I: Intersector, P: MemoryProbe>(
             })
         };
     }
+    // One shadow cache for the run of rays: consecutive rays are neighbours (a block of
+    // pixels' shadow rays), mostly blocked in one leaf.
+    let mut cache = LastOccluder::default();
     if let Some(bvh) = scene.bvh8() {
-        each_ray!(|r: &Ray| occluded_bvh8::<I, P>(scene, bvh, r, probe, counters))
+        each_ray!(|r: &Ray| occluded_bvh8_cached::<I, P>(scene, bvh, r, &mut cache, probe, counters))
     } else if let Some(bvh) = scene.bvh4() {
-        each_ray!(|r: &Ray| occluded_bvh4::<I, P>(scene, bvh, r, probe, counters))
+        each_ray!(|r: &Ray| occluded_bvh4_cached::<I, P>(scene, bvh, r, &mut cache, probe, counters))
     } else {
         each_ray!(|r: &Ray| occluded_by_walk::<I, P>(scene, r, probe, counters))
     }
@@ -244,18 +248,20 @@ pub fn has_packet_kernel(scene: &SceneView<'_>) -> bool {
 }
 
 /// The any-hit query for a packet (bit `i` set: ray `i` is blocked): the 4-wide BVH's
-/// packet walk, which drops each ray at its first hit; the other structures ask ray by
-/// ray (their packet walks order leaves for the closest hit, which a shadow ray does not
-/// need).
+/// packet walk, which drops each ray at its first hit, after the leaf of the shadow
+/// cache `cache` (keep one across a run of neighbouring packets); the other structures
+/// ask ray by ray (their packet walks order leaves for the closest hit, which a shadow
+/// ray does not need).
 #[inline]
 pub fn occluded_packet<I: Intersector, P: MemoryProbe, const N: usize>(
     scene: &SceneView<'_>,
     packet: &RayPacket<N>,
+    cache: &mut LastOccluder,
     probe: &mut P,
     counters: &mut PacketCounters,
 ) -> u64 {
     if let Some(bvh) = scene.bvh4() {
-        return occluded_bvh4_packet::<I, P, N>(scene, bvh, packet, probe, counters);
+        return occluded_bvh4_packet_cached::<I, P, N>(scene, bvh, packet, cache, probe, counters);
     }
     let any = |r: &Ray, c: &mut RayCounters| occluded_by_walk::<I, P>(scene, r, probe, c);
     raypipe_core::packet::occluded_ray_by_ray(packet, counters, any)

@@ -121,6 +121,7 @@ pub(super) fn occluded_many_origins<I: Intersector, P: MemoryProbe, const N: usi
     scene: &SceneView<'_>,
     bvh: &Bvh4View<'_>,
     packet: &RayPacket<N>,
+    found: &mut Option<(u32, u32)>,
     probe: &mut P,
     counters: &mut PacketCounters,
 ) -> u64 {
@@ -182,6 +183,7 @@ pub(super) fn occluded_many_origins<I: Intersector, P: MemoryProbe, const N: usi
                     if best.is_some() {
                         blocked |= 1 << i;
                         todo &= !(1 << i);
+                        *found = Some((index, count));
                     }
                 }
                 if todo == 0 {

@@ -6,6 +6,7 @@
 //! time where the CPU has AVX (`simd::watertight8`).
 
 mod apex;
+mod cached;
 mod frustum;
 pub(crate) mod groups;
 mod leaf;
@@ -13,6 +14,7 @@ mod many_origins;
 mod prepared;
 mod walk;
 
+pub use cached::occluded_bvh4_packet_cached;
 #[cfg(target_arch = "x86_64")]
 pub(crate) use groups::{Groups, GROUPS};
 pub use walk::{occluded_bvh4_packet, takes_shadow_pyramid, trace_bvh4_packet};

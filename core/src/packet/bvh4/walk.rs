@@ -85,7 +85,7 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
         let walk = |r: &Ray, c: &mut RayCounters| trace_bvh4::<I, P>(scene, bvh, r, probe, c);
         return ray_by_ray(packet, hits, counters, walk);
     }
-    walk_packet::<I, P, N, false>(scene, bvh, packet, hits, None, probe, counters);
+    walk_packet::<I, P, N, false>(scene, bvh, packet, hits, None, &mut None, probe, counters);
 }
 
 /// The any-hit query for a packet: bit `i` of the result is set when ray `i` is blocked
@@ -107,6 +107,20 @@ pub fn occluded_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
     probe: &mut P,
     counters: &mut PacketCounters,
 ) -> u64 {
+    occluded_packet_walk::<I, P, N>(scene, bvh, packet, &mut None, probe, counters)
+}
+
+/// [`occluded_bvh4_packet`]'s walks, which set `found` to the last leaf where they found
+/// a ray blocked.
+#[inline(always)]
+pub(super) fn occluded_packet_walk<I: Intersector, P: MemoryProbe, const N: usize>(
+    scene: &SceneView<'_>,
+    bvh: &Bvh4View<'_>,
+    packet: &RayPacket<N>,
+    found: &mut Option<(u32, u32)>,
+    probe: &mut P,
+    counters: &mut PacketCounters,
+) -> u64 {
     if !<I::Nodes as NodeTests>::FLOAT {
         let any = |r: &Ray, c: &mut RayCounters| occluded_bvh4::<I, P>(scene, bvh, r, probe, c);
         return occluded_ray_by_ray(packet, counters, any);
@@ -115,11 +129,11 @@ pub fn occluded_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
     if !packet.one_origin() {
         apex = shadow_pyramid(scene, packet);
         if apex.is_none() {
-            return occluded_many_origins::<I, P, N>(scene, bvh, packet, probe, counters);
+            return occluded_many_origins::<I, P, N>(scene, bvh, packet, found, probe, counters);
         }
     }
     let mut hits = [None; N];
-    walk_packet::<I, P, N, true>(scene, bvh, packet, &mut hits, apex.as_mut(), probe, counters);
+    walk_packet::<I, P, N, true>(scene, bvh, packet, &mut hits, apex.as_mut(), found, probe, counters);
     let mut blocked = 0u64;
     for (i, h) in hits.iter().enumerate() {
         blocked |= (h.is_some() as u64) << i;
@@ -149,14 +163,17 @@ pub fn takes_shadow_pyramid<const N: usize>(scene: &SceneView<'_>, packet: &RayP
 
 /// The packet walk; with `ANY`, a ray that hits something in a leaf leaves the packet
 /// (its hit is then some hit, not the closest), and the walk ends when none is left.
-/// `apex`: the pyramid that bounds rays ending at one point, to cull by.
+/// `apex`: the pyramid that bounds rays ending at one point, to cull by; `found`: set to
+/// the last leaf where a ray was found blocked.
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 fn walk_packet<I: Intersector, P: MemoryProbe, const N: usize, const ANY: bool>(
     scene: &SceneView<'_>,
     bvh: &Bvh4View<'_>,
     packet: &RayPacket<N>,
     hits: &mut PacketHits<N>,
     apex: Option<&mut Apex>,
+    found: &mut Option<(u32, u32)>,
     probe: &mut P,
     counters: &mut PacketCounters,
 ) {
@@ -181,7 +198,11 @@ fn walk_packet<I: Intersector, P: MemoryProbe, const N: usize, const ANY: bool>(
             }
         } else {
             let leaf = LeafVisit { scene, bvh, packet, first: index, count };
+            let before = walk.mask;
             walk.leaf::<P, ANY>(leaf, &leaf_box, leaf_t, hits, probe);
+            if ANY && walk.mask != before {
+                *found = Some((index, count));
+            }
             if ANY && walk.mask == 0 {
                 counters.add(&walk.c);
                 return;

@@ -5,6 +5,7 @@
 //! Embree's BVH4 and BVH8). Leaves are stack entries like nodes, so a leaf is
 //! intersected only when it is the nearest thing left to visit.
 
+pub mod last_occluder;
 pub mod node4;
 pub mod node8;
 
@@ -19,6 +20,7 @@ use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::traverse::boxes::datapath::{NodeTests, WideRay};
 use crate::traverse::tree_step::{test_leaf, trace_tree, PrimLists, TreeEvent, TreeWalk};
+use last_occluder::{test_cached_leaf, LastOccluder};
 
 pub use crate::traverse::boxes::wide_slab::{NodeRay, WideSlab};
 
@@ -212,7 +214,7 @@ pub fn trace_wide_bvh<N: WideSlab, const C: usize, I: Intersector, P: MemoryProb
 where
     <I::Nodes as NodeTests>::Wide: WideRay<N>,
 {
-    search_wide_bvh::<N, C, I, P, false>(scene, bvh, ray, probe, counters)
+    search_wide_bvh::<N, C, I, P, false>(scene, bvh, ray, &mut LastOccluder::default(), probe, counters)
 }
 
 /// The any-hit query of `ray` through a wide BVH: the same walk as [`trace_wide_bvh`],
@@ -229,15 +231,17 @@ pub fn occluded_wide_bvh<N: WideSlab, const C: usize, I: Intersector, P: MemoryP
 where
     <I::Nodes as NodeTests>::Wide: WideRay<N>,
 {
-    search_wide_bvh::<N, C, I, P, true>(scene, bvh, ray, probe, counters).is_some()
+    search_wide_bvh::<N, C, I, P, true>(scene, bvh, ray, &mut LastOccluder::default(), probe, counters).is_some()
 }
 
-/// The walk of both queries; with `ANY` it returns the first hit found, not the closest.
+/// The walk of both queries; with `ANY` it returns the first hit found, not the closest,
+/// testing `cache`'s leaf first and keeping in it the leaf where the walk found one.
 #[inline(always)]
-fn search_wide_bvh<N: WideSlab, const C: usize, I: Intersector, P: MemoryProbe, const ANY: bool>(
+pub(crate) fn search_wide_bvh<N: WideSlab, const C: usize, I: Intersector, P: MemoryProbe, const ANY: bool>(
     scene: &SceneView<'_>,
     bvh: &WideBvhView<'_, N>,
     ray: &Ray,
+    cache: &mut LastOccluder,
     probe: &mut P,
     counters: &mut RayCounters,
 ) -> Option<Hit>
@@ -253,13 +257,19 @@ where
     if !ray.is_valid() {
         return None;
     }
+    let tested = ANY && cache.to_test().is_some();
+    if ANY && tested {
+        if let Some(hit) = test_cached_leaf::<I, P, _>(scene, bvh, ray, cache, probe, counters) {
+            return Some(hit);
+        }
+    }
     let r = NodeRay::new(ray);
     // A walk per octant where the node test has forms for one octant: each reads its
     // near and far planes at fixed offsets (reading the ray's six offsets and masking
     // them took 12 of a node's 62 instructions on Sponza). Coherent rays keep to one or
     // two of the eight walks.
-    if N::OCTANT_FORMS && r.avx8.is_some() {
-        return match r.octant() {
+    let (best, leaf) = if N::OCTANT_FORMS && r.avx8.is_some() {
+        match r.octant() {
             0 => walk::<N, C, I, P, 0, ANY>(scene, bvh, ray, &r, probe, counters),
             1 => walk::<N, C, I, P, 1, ANY>(scene, bvh, ray, &r, probe, counters),
             2 => walk::<N, C, I, P, 2, ANY>(scene, bvh, ray, &r, probe, counters),
@@ -268,16 +278,24 @@ where
             5 => walk::<N, C, I, P, 5, ANY>(scene, bvh, ray, &r, probe, counters),
             6 => walk::<N, C, I, P, 6, ANY>(scene, bvh, ray, &r, probe, counters),
             _ => walk::<N, C, I, P, 7, ANY>(scene, bvh, ray, &r, probe, counters),
-        };
+        }
+    } else {
+        walk::<N, C, I, P, ANY_OCTANT, ANY>(scene, bvh, ray, &r, probe, counters)
+    };
+    if ANY {
+        match best {
+            Some(_) => cache.blocked_in(leaf.0, leaf.1, tested),
+            None => cache.free(tested),
+        }
     }
-    walk::<N, C, I, P, ANY_OCTANT, ANY>(scene, bvh, ray, &r, probe, counters)
+    best
 }
 
 /// `walk`'s octant parameter for a walk that takes the ray's octant from the ray.
 const ANY_OCTANT: usize = 8;
 
 /// [`trace_wide_bvh`]'s loop for a ray of octant `O` (`ANY_OCTANT`: any); with `ANY`,
-/// ended by the first leaf that holds a hit.
+/// ended by the first leaf that holds a hit, which it returns beside the hit.
 #[inline(always)]
 fn walk<N: WideSlab, const C: usize, I: Intersector, P: MemoryProbe, const O: usize, const ANY: bool>(
     scene: &SceneView<'_>,
@@ -286,7 +304,7 @@ fn walk<N: WideSlab, const C: usize, I: Intersector, P: MemoryProbe, const O: us
     r: &NodeRay,
     probe: &mut P,
     counters: &mut RayCounters,
-) -> Option<Hit> {
+) -> (Option<Hit>, (u32, u32)) {
     let blocks = scene.has_tri_blocks();
     let mut prep = None;
     let mut best = None;
@@ -330,7 +348,7 @@ fn walk<N: WideSlab, const C: usize, I: Intersector, P: MemoryProbe, const O: us
     counters.nodes = counters.nodes.saturating_add(nodes);
     counters.leaves = counters.leaves.saturating_add(leaves);
     counters.tri_tests = counters.tri_tests.saturating_add(tests);
-    best
+    (best, (index, count))
 }
 
 /// A leaf's triangles against one ray, into `best`: four at a time from the image's leaf

@@ -13,6 +13,7 @@ use crate::intersect::triangle::Intersector;
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::traverse::boxes::slab::RayBox;
+use crate::traverse::wide_bvh::last_occluder::{occluded_wide_bvh_cached, LastOccluder};
 pub use crate::traverse::wide_bvh::NodeRay;
 use crate::traverse::wide_bvh::{occluded_wide_bvh, stack_capacity, trace_wide_bvh, WideBvhTraversal, WideSlab};
 
@@ -114,4 +115,18 @@ pub fn occluded_bvh4<I: Intersector, P: MemoryProbe>(
     counters: &mut RayCounters,
 ) -> bool {
     occluded_wide_bvh::<Bvh4Node, { stack_capacity(4) }, I, P>(scene, bvh, ray, probe, counters)
+}
+
+/// [`occluded_bvh4`] with the shadow cache `cache` (see [`occluded_wide_bvh_cached`]):
+/// the same answer, for every ray and every cache.
+#[inline(always)]
+pub fn occluded_bvh4_cached<I: Intersector, P: MemoryProbe>(
+    scene: &SceneView<'_>,
+    bvh: &Bvh4View<'_>,
+    ray: &Ray,
+    cache: &mut LastOccluder,
+    probe: &mut P,
+    counters: &mut RayCounters,
+) -> bool {
+    occluded_wide_bvh_cached::<Bvh4Node, { stack_capacity(4) }, I, P>(scene, bvh, ray, cache, probe, counters)
 }

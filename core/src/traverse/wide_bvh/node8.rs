@@ -11,6 +11,7 @@ use crate::intersect::triangle::Intersector;
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::traverse::boxes::slab::RayBox;
+use crate::traverse::wide_bvh::last_occluder::{occluded_wide_bvh_cached, LastOccluder};
 use crate::traverse::wide_bvh::{
     occluded_wide_bvh, stack_capacity, trace_wide_bvh, NodeRay, WideBvhTraversal, WideSlab,
 };
@@ -168,6 +169,20 @@ pub fn occluded_bvh8<I: Intersector, P: MemoryProbe>(
     counters: &mut RayCounters,
 ) -> bool {
     occluded_wide_bvh::<Bvh8Node, { stack_capacity(8) }, I, P>(scene, bvh, ray, probe, counters)
+}
+
+/// [`occluded_bvh8`] with the shadow cache `cache` (see [`occluded_wide_bvh_cached`]):
+/// the same answer, for every ray and every cache.
+#[inline(always)]
+pub fn occluded_bvh8_cached<I: Intersector, P: MemoryProbe>(
+    scene: &SceneView<'_>,
+    bvh: &Bvh8View<'_>,
+    ray: &Ray,
+    cache: &mut LastOccluder,
+    probe: &mut P,
+    counters: &mut RayCounters,
+) -> bool {
+    occluded_wide_bvh_cached::<Bvh8Node, { stack_capacity(8) }, I, P>(scene, bvh, ray, cache, probe, counters)
 }
 
 #[cfg(test)]

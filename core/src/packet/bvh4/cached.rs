@@ -1,0 +1,68 @@
+//! The packet's any-hit query with the shadow cache
+//! ([`crate::traverse::wide_bvh::last_occluder`]): every ray first tests the leaf where
+//! the last packet found a ray blocked, and only the rays it does not block take the
+//! packet walk, which keeps in the cache a leaf where it found one.
+
+use crate::counters::RayCounters;
+use crate::hit::Hit;
+use crate::image::{Bvh4View, SceneView};
+use crate::intersect::triangle::Intersector;
+use crate::packet::{LanesOf, PacketCounters, RayPacket};
+use crate::probe::MemoryProbe;
+use crate::traverse::boxes::datapath::NodeTests;
+use crate::traverse::wide_bvh::last_occluder::LastOccluder;
+use crate::traverse::wide_bvh::test_wide_leaf;
+
+use super::walk::occluded_packet_walk;
+
+/// [`super::occluded_bvh4_packet`] with the shadow cache `cache`: bit `i` set when ray
+/// `i` is blocked within its interval — the same bits for every packet and every cache.
+pub fn occluded_bvh4_packet_cached<I: Intersector, P: MemoryProbe, const N: usize>(
+    scene: &SceneView<'_>,
+    bvh: &Bvh4View<'_>,
+    packet: &RayPacket<N>,
+    cache: &mut LastOccluder,
+    probe: &mut P,
+    counters: &mut PacketCounters,
+) -> u64 {
+    let live = packet.live();
+    let mut blocked = 0u64;
+    let test = cache.to_test().filter(|_| <I::Nodes as NodeTests>::FLOAT);
+    if let Some(leaf) = test {
+        let blocks = scene.has_tri_blocks();
+        let mut c = RayCounters::default();
+        // The single ray's leaf test, ray by ray: the one the walks end with, so a hit
+        // here is a hit they would find (the structure is conservative).
+        for i in LanesOf::<N>(live) {
+            let ray = packet.ray(i);
+            if !ray.is_valid() {
+                continue;
+            }
+            let prep = I::prepare(&ray);
+            let mut best: Option<Hit> = None;
+            test_wide_leaf::<I, P, _>(scene, bvh, &prep, &ray, leaf, &mut best, blocks, probe);
+            c.leaves = c.leaves.saturating_add(1);
+            c.tri_tests = c.tri_tests.saturating_add(leaf.1);
+            blocked |= u64::from(best.is_some()) << i;
+        }
+        counters.add_rays(&c);
+    }
+    // The packet votes once: for the leaf if it blocked half its rays or more.
+    let good = 2 * blocked.count_ones() >= live.count_ones().max(1);
+    if test.is_some() {
+        cache.tested(good);
+    }
+    let mut found = None;
+    if live & !blocked != 0 {
+        let mut rest = *packet;
+        rest.active = live & !blocked;
+        blocked |= occluded_packet_walk::<I, P, N>(scene, bvh, &rest, &mut found, probe, counters);
+    }
+    match found {
+        // A leaf that blocked half the packet stays.
+        _ if test.is_some() && good => {}
+        Some((first, count)) => cache.blocked_in(first, count, test.is_some()),
+        None => cache.free(test.is_some()),
+    }
+    blocked
+}
