@@ -78,7 +78,9 @@ impl LastOccluder {
     /// (and missed) the cached leaf first, and has voted already.
     #[inline(always)]
     pub(crate) fn blocked_in(&mut self, first: u32, count: u32, tested: bool) {
-        if !tested {
+        // (An empty cache could not have answered: no vote, so that it is trusted from
+        // the first leaf it holds.)
+        if !tested && self.leaf.is_some() {
             self.vote(self.leaf == Some((first, count)));
         }
         self.leaf = Some((first, count));
@@ -132,4 +134,43 @@ pub(super) fn test_cached_leaf<I: Intersector, P: MemoryProbe, V: PrimLists>(
     counters.tri_tests = counters.tri_tests.saturating_add(leaf.1);
     cache.tested(best.is_some());
     best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::LastOccluder;
+
+    /// The counter trusts a leaf that keeps answering and drops one that does not, each
+    /// ray voting once, whether it tested the leaf or the walk told.
+    #[test]
+    fn trusts_a_leaf_while_it_would_answer() {
+        let mut c = LastOccluder::default();
+        assert_eq!(c.to_test(), None, "empty");
+        c.blocked_in(8, 4, false);
+        assert_eq!(c.to_test(), Some((8, 4)), "trusted from its first leaf");
+        c.tested(false);
+        assert_eq!(c.to_test(), None, "one miss from the threshold");
+        c.blocked_in(8, 4, false);
+        assert_eq!(c.to_test(), Some((8, 4)), "the walk says the leaf would have answered");
+        c.tested(true);
+        c.tested(true);
+        c.free(false);
+        assert_eq!(c.to_test(), Some((8, 4)), "saturated at three, one free ray leaves two");
+        for _ in 0..5 {
+            c.free(false);
+        }
+        assert_eq!(c.to_test(), None, "free rays vote it down");
+        c.blocked_in(12, 4, false);
+        assert_eq!((c.leaf(), c.to_test()), (Some((12, 4)), None), "replaced, still distrusted");
+        c.blocked_in(12, 4, false);
+        c.blocked_in(12, 4, false);
+        assert_eq!(c.to_test(), Some((12, 4)));
+        // A ray that tested and missed has voted: its walk's outcome does not vote again.
+        c.tested(false);
+        c.blocked_in(16, 4, true);
+        c.free(true);
+        assert_eq!((c.leaf(), c.to_test()), (Some((16, 4)), None));
+        c.tested(true);
+        assert_eq!(c.to_test(), Some((16, 4)));
+    }
 }
