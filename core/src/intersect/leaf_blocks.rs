@@ -14,9 +14,11 @@ use crate::traverse::tree_step::{test_leaf, PrimLists};
 
 /// PRIM_LISTS entries `first .. first + count` of `view` tested against `ray` from the
 /// scene's TRI_BLOCKS (which the caller has checked are present), keeping the closest
-/// hit in `best`. The triangle id is read from the list only for a lane that hits.
+/// hit in `best`. The triangle id is read from the list only for a lane that hits. With
+/// `ANY` (the any-hit query, which needs some hit, not the closest) the test ends after
+/// the first block that yields one.
 #[inline(always)]
-pub fn test_leaf_blocks<I: Intersector, P: MemoryProbe, V: PrimLists>(
+pub fn test_leaf_blocks<I: Intersector, P: MemoryProbe, V: PrimLists, const ANY: bool>(
     scene: &SceneView<'_>,
     view: &V,
     prep: &I::Prepared,
@@ -58,6 +60,9 @@ pub fn test_leaf_blocks<I: Intersector, P: MemoryProbe, V: PrimLists>(
             let prim = view.prim(base + k, probe);
             let tri = I::fetch(scene, prim, probe);
             test_triangle::<I>(prep, ray, &tri, prim, best);
+        }
+        if ANY && best.is_some() {
+            return;
         }
         base = base.saturating_add(4);
     }

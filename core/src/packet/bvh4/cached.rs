@@ -40,7 +40,7 @@ pub fn occluded_bvh4_packet_cached<I: Intersector, P: MemoryProbe, const N: usiz
             }
             let prep = I::prepare(&ray);
             let mut best: Option<Hit> = None;
-            test_wide_leaf::<I, P, _>(scene, bvh, &prep, &ray, leaf, &mut best, blocks, probe);
+            test_wide_leaf::<I, P, _, true>(scene, bvh, &prep, &ray, leaf, &mut best, blocks, probe);
             c.leaves = c.leaves.saturating_add(1);
             c.tri_tests = c.tri_tests.saturating_add(leaf.1);
             blocked |= u64::from(best.is_some()) << i;

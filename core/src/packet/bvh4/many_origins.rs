@@ -178,7 +178,7 @@ pub(super) fn occluded_many_origins<I: Intersector, P: MemoryProbe, const N: usi
                     let Some(slot) = preps.get_mut(i) else { continue };
                     let prep = *slot.get_or_insert_with(|| I::prepare(&ray));
                     let mut best: Option<Hit> = None;
-                    test_wide_leaf::<I, P, _>(scene, bvh, &prep, &ray, (index, count), &mut best, blocks, probe);
+                    test_wide_leaf::<I, P, _, true>(scene, bvh, &prep, &ray, (index, count), &mut best, blocks, probe);
                     c.tri_tests += u64::from(count);
                     if best.is_some() {
                         blocked |= 1 << i;

@@ -129,7 +129,7 @@ pub(super) fn test_cached_leaf<I: Intersector, P: MemoryProbe, V: PrimLists>(
     let leaf = cache.to_test()?;
     let mut best = None;
     let prep = I::prepare(ray);
-    test_wide_leaf::<I, P, _>(scene, view, &prep, ray, leaf, &mut best, scene.has_tri_blocks(), probe);
+    test_wide_leaf::<I, P, _, true>(scene, view, &prep, ray, leaf, &mut best, scene.has_tri_blocks(), probe);
     counters.leaves = counters.leaves.saturating_add(1);
     counters.tri_tests = counters.tri_tests.saturating_add(leaf.1);
     cache.tested(best.is_some());

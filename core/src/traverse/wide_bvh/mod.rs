@@ -332,7 +332,7 @@ fn walk<N: WideSlab, const C: usize, I: Intersector, P: MemoryProbe, const O: us
             // The watertight constants wait for the first leaf: many rays never reach one.
             // (Inline: a call here measured 11% slower on Sponza, though fewer instructions.)
             let prep = prep.get_or_insert_with(|| I::prepare(ray));
-            test_wide_leaf::<I, P, _>(scene, bvh, prep, ray, (index, count), &mut best, blocks, probe);
+            test_wide_leaf::<I, P, _, ANY>(scene, bvh, prep, ray, (index, count), &mut best, blocks, probe);
             // Cannot overflow: a ray tests at most PRIM_LISTS' length (the parse bounds it).
             tests += count;
             t_end = best.map_or(t_end, |h: Hit| h.t);
@@ -355,7 +355,7 @@ fn walk<N: WideSlab, const C: usize, I: Intersector, P: MemoryProbe, const O: us
 /// blocks when it has them (`blocks`) and the test has a block form, else one by one.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-pub(crate) fn test_wide_leaf<I: Intersector, P: MemoryProbe, V: PrimLists>(
+pub(crate) fn test_wide_leaf<I: Intersector, P: MemoryProbe, V: PrimLists, const ANY: bool>(
     scene: &SceneView<'_>,
     view: &V,
     prep: &I::Prepared,
@@ -366,7 +366,7 @@ pub(crate) fn test_wide_leaf<I: Intersector, P: MemoryProbe, V: PrimLists>(
     probe: &mut P,
 ) {
     if I::BLOCKS && blocks {
-        test_leaf_blocks::<I, P, _>(scene, view, prep, ray, leaf, best, probe);
+        test_leaf_blocks::<I, P, _, ANY>(scene, view, prep, ray, leaf, best, probe);
     } else {
         test_leaf::<I, P, _>(scene, view, prep, ray, leaf, best, probe);
     }
