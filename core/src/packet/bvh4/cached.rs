@@ -4,14 +4,12 @@
 //! packet walk, which keeps in the cache a leaf where it found one.
 
 use crate::counters::RayCounters;
-use crate::hit::Hit;
 use crate::image::{Bvh4View, SceneView};
 use crate::intersect::triangle::Intersector;
 use crate::packet::{LanesOf, PacketCounters, RayPacket};
 use crate::probe::MemoryProbe;
 use crate::traverse::boxes::datapath::NodeTests;
-use crate::traverse::wide_bvh::last_occluder::LastOccluder;
-use crate::traverse::wide_bvh::test_wide_leaf;
+use crate::traverse::wide_bvh::last_occluder::{test_leaf_alone, LastOccluder};
 
 use super::walk::occluded_packet_walk;
 
@@ -29,21 +27,15 @@ pub fn occluded_bvh4_packet_cached<I: Intersector, P: MemoryProbe, const N: usiz
     let mut blocked = 0u64;
     let test = cache.to_test().filter(|_| <I::Nodes as NodeTests>::FLOAT);
     if let Some(leaf) = test {
-        let blocks = scene.has_tri_blocks();
         let mut c = RayCounters::default();
         // The single ray's leaf test, ray by ray: the one the walks end with, so a hit
         // here is a hit they would find (the structure is conservative).
         for i in LanesOf::<N>(live) {
             let ray = packet.ray(i);
-            if !ray.is_valid() {
-                continue;
+            if ray.is_valid() {
+                let hit = test_leaf_alone::<I, P, _>(scene, bvh, &ray, leaf, probe, &mut c);
+                blocked |= u64::from(hit.is_some()) << i;
             }
-            let prep = I::prepare(&ray);
-            let mut best: Option<Hit> = None;
-            test_wide_leaf::<I, P, _, true>(scene, bvh, &prep, &ray, leaf, &mut best, blocks, probe);
-            c.leaves = c.leaves.saturating_add(1);
-            c.tri_tests = c.tri_tests.saturating_add(leaf.1);
-            blocked |= u64::from(best.is_some()) << i;
         }
         counters.add_rays(&c);
     }

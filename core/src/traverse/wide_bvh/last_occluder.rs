@@ -127,12 +127,28 @@ pub(super) fn test_cached_leaf<I: Intersector, P: MemoryProbe, V: PrimLists>(
     counters: &mut RayCounters,
 ) -> Option<Hit> {
     let leaf = cache.to_test()?;
+    let best = test_leaf_alone::<I, P, V>(scene, view, ray, leaf, probe, counters);
+    cache.tested(best.is_some());
+    best
+}
+
+/// Some hit of `ray` in `leaf` (PRIM_LISTS entries `first .. first + count` of `view`),
+/// by the walks' own any-hit leaf test, with the ray's own intersection constants: a
+/// leaf tested with no walk around it (the cache's), counted as one leaf.
+#[inline(always)]
+pub(crate) fn test_leaf_alone<I: Intersector, P: MemoryProbe, V: PrimLists>(
+    scene: &SceneView<'_>,
+    view: &V,
+    ray: &Ray,
+    leaf: (u32, u32),
+    probe: &mut P,
+    counters: &mut RayCounters,
+) -> Option<Hit> {
     let mut best = None;
     let prep = I::prepare(ray);
     test_wide_leaf::<I, P, _, true>(scene, view, &prep, ray, leaf, &mut best, scene.has_tri_blocks(), probe);
     counters.leaves = counters.leaves.saturating_add(1);
     counters.tri_tests = counters.tri_tests.saturating_add(leaf.1);
-    cache.tested(best.is_some());
     best
 }
 

@@ -258,7 +258,7 @@ where
         return None;
     }
     let tested = ANY && cache.to_test().is_some();
-    if ANY && tested {
+    if tested {
         if let Some(hit) = test_cached_leaf::<I, P, _>(scene, bvh, ray, cache, probe, counters) {
             return Some(hit);
         }
