@@ -39,9 +39,11 @@ pub fn occluded_bvh4_packet_cached<I: Intersector, P: MemoryProbe, const N: usiz
         }
         counters.add_rays(&c);
     }
-    // The packet votes once: for the leaf if it blocked half its rays or more.
-    let good = 2 * blocked.count_ones() >= live.count_ones().max(1);
-    if test.is_some() {
+    // The packet votes once: for the leaf if it blocked half its rays or more, and such
+    // a leaf stays whatever the walk finds.
+    let tested = test.is_some();
+    let good = tested && 2 * blocked.count_ones() >= live.count_ones().max(1);
+    if tested {
         cache.tested(good);
     }
     let mut found = None;
@@ -50,11 +52,11 @@ pub fn occluded_bvh4_packet_cached<I: Intersector, P: MemoryProbe, const N: usiz
         rest.active = live & !blocked;
         blocked |= occluded_packet_walk::<I, P, N>(scene, bvh, &rest, &mut found, probe, counters);
     }
-    match found {
-        // A leaf that blocked half the packet stays.
-        _ if test.is_some() && good => {}
-        Some((first, count)) => cache.blocked_in(first, count, test.is_some()),
-        None => cache.free(test.is_some()),
+    if !good {
+        match found {
+            Some((first, count)) => cache.blocked_in(first, count, tested),
+            None => cache.free(tested),
+        }
     }
     blocked
 }

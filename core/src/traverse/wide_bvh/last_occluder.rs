@@ -11,14 +11,13 @@
 
 use crate::counters::RayCounters;
 use crate::hit::Hit;
-use crate::image::{SceneView, WideBvhView};
+use crate::image::SceneView;
 use crate::intersect::triangle::Intersector;
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
-use crate::traverse::boxes::datapath::{NodeTests, WideRay};
 use crate::traverse::tree_step::PrimLists;
 
-use super::{search_wide_bvh, test_wide_leaf, WideSlab};
+use super::test_wide_leaf;
 
 /// The leaf (its PRIM_LISTS entries `first .. first + count`) where an any-hit walk last
 /// found its ray blocked, and how far it is trusted; empty at first. Only a walk fills
@@ -93,24 +92,6 @@ impl LastOccluder {
             self.vote(false);
         }
     }
-}
-
-/// The any-hit query of `ray` through a wide BVH, the leaf of `cache` tested before the
-/// root and the leaf that blocks the ray kept in it: the same answer as
-/// [`super::occluded_wide_bvh`], for every ray and every cache.
-#[inline(always)]
-pub fn occluded_wide_bvh_cached<N: WideSlab, const C: usize, I: Intersector, P: MemoryProbe>(
-    scene: &SceneView<'_>,
-    bvh: &WideBvhView<'_, N>,
-    ray: &Ray,
-    cache: &mut LastOccluder,
-    probe: &mut P,
-    counters: &mut RayCounters,
-) -> bool
-where
-    <I::Nodes as NodeTests>::Wide: WideRay<N>,
-{
-    search_wide_bvh::<N, C, I, P, true>(scene, bvh, ray, cache, probe, counters).is_some()
 }
 
 /// `ray` against the leaf `cache` trusts (by the walks' own leaf test), its outcome

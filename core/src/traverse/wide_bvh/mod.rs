@@ -231,13 +231,31 @@ pub fn occluded_wide_bvh<N: WideSlab, const C: usize, I: Intersector, P: MemoryP
 where
     <I::Nodes as NodeTests>::Wide: WideRay<N>,
 {
-    search_wide_bvh::<N, C, I, P, true>(scene, bvh, ray, &mut LastOccluder::default(), probe, counters).is_some()
+    occluded_wide_bvh_cached::<N, C, I, P>(scene, bvh, ray, &mut LastOccluder::default(), probe, counters)
+}
+
+/// The any-hit query of `ray` through a wide BVH, the leaf of `cache` ([`last_occluder`])
+/// tested before the root and the leaf that blocks the ray kept in it: the same answer as
+/// [`occluded_wide_bvh`], for every ray and every cache.
+#[inline(always)]
+pub fn occluded_wide_bvh_cached<N: WideSlab, const C: usize, I: Intersector, P: MemoryProbe>(
+    scene: &SceneView<'_>,
+    bvh: &WideBvhView<'_, N>,
+    ray: &Ray,
+    cache: &mut LastOccluder,
+    probe: &mut P,
+    counters: &mut RayCounters,
+) -> bool
+where
+    <I::Nodes as NodeTests>::Wide: WideRay<N>,
+{
+    search_wide_bvh::<N, C, I, P, true>(scene, bvh, ray, cache, probe, counters).is_some()
 }
 
 /// The walk of both queries; with `ANY` it returns the first hit found, not the closest,
 /// testing `cache`'s leaf first and keeping in it the leaf where the walk found one.
 #[inline(always)]
-pub(crate) fn search_wide_bvh<N: WideSlab, const C: usize, I: Intersector, P: MemoryProbe, const ANY: bool>(
+fn search_wide_bvh<N: WideSlab, const C: usize, I: Intersector, P: MemoryProbe, const ANY: bool>(
     scene: &SceneView<'_>,
     bvh: &WideBvhView<'_, N>,
     ray: &Ray,

@@ -13,9 +13,11 @@ use crate::intersect::triangle::Intersector;
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::traverse::boxes::slab::RayBox;
-use crate::traverse::wide_bvh::last_occluder::{occluded_wide_bvh_cached, LastOccluder};
+use crate::traverse::wide_bvh::last_occluder::LastOccluder;
 pub use crate::traverse::wide_bvh::NodeRay;
-use crate::traverse::wide_bvh::{occluded_wide_bvh, stack_capacity, trace_wide_bvh, WideBvhTraversal, WideSlab};
+use crate::traverse::wide_bvh::{
+    occluded_wide_bvh, occluded_wide_bvh_cached, stack_capacity, trace_wide_bvh, WideBvhTraversal, WideSlab,
+};
 
 /// Entry distances of the ray into the four child boxes of `n`, within `[t0, t1]`, and
 /// the bit mask of those it hits (empty slots, whose boxes are inverted, never).

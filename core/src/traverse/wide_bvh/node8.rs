@@ -11,9 +11,9 @@ use crate::intersect::triangle::Intersector;
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::traverse::boxes::slab::RayBox;
-use crate::traverse::wide_bvh::last_occluder::{occluded_wide_bvh_cached, LastOccluder};
+use crate::traverse::wide_bvh::last_occluder::LastOccluder;
 use crate::traverse::wide_bvh::{
-    occluded_wide_bvh, stack_capacity, trace_wide_bvh, NodeRay, WideBvhTraversal, WideSlab,
+    occluded_wide_bvh, occluded_wide_bvh_cached, stack_capacity, trace_wide_bvh, NodeRay, WideBvhTraversal, WideSlab,
 };
 
 /// `max` as the SIMD instruction computes it (the second operand when either is NaN),
