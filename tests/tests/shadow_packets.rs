@@ -10,8 +10,8 @@ use raypipe_core::packet::bvh4::takes_shadow_pyramid;
 use raypipe_core::packet::{PacketCounters, RayPacket};
 use raypipe_core::traverse::occlusion::occluded;
 use raypipe_core::traverse::wide_bvh::last_occluder::LastOccluder;
-use raypipe_core::traverse::wide_bvh::node4::occluded_bvh4_cached;
-use raypipe_core::traverse::wide_bvh::node8::occluded_bvh8_cached;
+use raypipe_core::traverse::wide_bvh::node4::{occluded_bvh4_cached, occluded_bvh4_cached4};
+use raypipe_core::traverse::wide_bvh::node8::{occluded_bvh8_cached, occluded_bvh8_cached4};
 use raypipe_core::{NoProbe, Ray, RayCounters, SceneView, Vec3, Watertight};
 use raypipe_tests::{build_soup, build_soup_layout};
 
@@ -130,9 +130,107 @@ proptest! {
         blocks in any::<bool>(),
         ceiling in any::<bool>(),
     ) {
+        let s = CacheScenes::new(seed, size, blocks, ceiling);
+        let (v4, v8, vo) = (s.b4.view().unwrap(), s.b8.view().unwrap(), s.other.view().unwrap());
+        let (t4, t8, to) = (v4.bvh4().unwrap(), v8.bvh8().unwrap(), vo.bvh8().unwrap());
+        let (mut c4, mut c8, mut foreign) = (LastOccluder::default(), LastOccluder::default(), LastOccluder::default());
+        let (mut by_cache, mut blocked) = (0, 0);
+        let rays = shadow_rays(&v4, &[Vec3::from(light)]);
+        for (i, shadow) in rays.iter().enumerate() {
+            let want = occluded::<Watertight, _>(&v4, shadow, &mut NoProbe, &mut RayCounters::default());
+            let mut rc = RayCounters::default();
+            let got4 = occluded_bvh4_cached::<Watertight, _>(&v4, t4, shadow, &mut c4, &mut NoProbe, &mut rc);
+            by_cache += usize::from(got4 && rc.nodes == 0);
+            blocked += usize::from(want);
+            let got8 = occluded_bvh8_cached::<Watertight, _>(&v8, t8, shadow, &mut c8, &mut NoProbe, &mut rc);
+            // A cache filled in another image: whatever leaf it names, the answer holds.
+            let mut swapped = c4;
+            let got8x = occluded_bvh8_cached::<Watertight, _>(&v8, t8, shadow, &mut swapped, &mut NoProbe, &mut rc);
+            let _ = occluded_bvh8_cached::<Watertight, _>(&vo, to, shadow, &mut foreign, &mut NoProbe, &mut rc);
+            let mut stray = foreign;
+            let got8o = occluded_bvh8_cached::<Watertight, _>(&v8, t8, shadow, &mut stray, &mut NoProbe, &mut rc);
+            prop_assert_eq!((got4, got8, got8x, got8o), (want, want, want, want), "pixel {}: {:?}", i, shadow);
+        }
+        if ceiling {
+            prop_assert_eq!(blocked, rays.len(), "the ceiling blocks every ray");
+            prop_assert!(2 * by_cache > rays.len(), "the cache answered {} of {} blocked rays", by_cache, rays.len());
+        }
+    }
+
+    /// Shadow rays four at a time with the shadow cache (the cached leaf tested by the
+    /// four at once), in both wide BVHs and layouts: each ray answers as it does alone,
+    /// with lanes left empty or holding no ray, rays of two lights mixed in one group (so
+    /// that some groups cannot share one frame), a cache kept across the frame and one
+    /// from another scene. Under a ceiling, most groups are answered with no node visited.
+    #[test]
+    fn four_cached_shadow_rays_answer_as_alone(
+        seed in 1u64..1_000_000,
+        size in 0.3f32..1.0,
+        lights in [-3.0f32..3.0, 8.0f32..14.0, -3.0f32..3.0, -30.0f32..30.0, 1.0f32..14.0, -30.0f32..30.0],
+        mixed in any::<bool>(),
+        mix in 1u32..16,
+        holes in 0u32..16,
+        blocks in any::<bool>(),
+        ceiling in any::<bool>(),
+    ) {
+        let s = CacheScenes::new(seed, size, blocks, ceiling);
+        let (v4, v8, vo) = (s.b4.view().unwrap(), s.b8.view().unwrap(), s.other.view().unwrap());
+        let (t4, t8, to) = (v4.bvh4().unwrap(), v8.bvh8().unwrap(), vo.bvh8().unwrap());
+        let (above, side) = (Vec3::new(lights[0], lights[1], lights[2]), Vec3::new(lights[3], lights[4], lights[5]));
+        let mut rays = shadow_rays(&v4, &[above, side]);
+        // With `mixed`, lanes of `mix` take the second light's rays; in every third group
+        // `holes` marks lanes with no ray, and one lane in eight groups holds an invalid ray.
+        let mix = if mixed { mix } else { 0 };
+        let mut keep = Vec::with_capacity(rays.len() / 2);
+        for (i, pair) in rays.chunks(2).enumerate() {
+            keep.push(pair[usize::from(mix & (1 << (i % 4)) != 0 && pair.len() > 1)]);
+        }
+        rays = keep;
+        let (mut c4, mut c8, mut foreign) = (LastOccluder::default(), LastOccluder::default(), LastOccluder::default());
+        let (mut by_cache, mut whole) = (0, 0);
+        for (g, group) in rays.chunks(4).enumerate() {
+            let mut lanes: [Option<Ray>; 4] = [None; 4];
+            for (k, r) in group.iter().enumerate() {
+                if holes & (1 << k) == 0 || g % 3 != 0 {
+                    lanes[k] = Some(if g % 8 == 5 && k == 1 { Ray { t_min: 2.0, t_max: 1.0, ..*r } } else { *r });
+                }
+            }
+            let refs = [0, 1, 2, 3].map(|k| lanes[k].as_ref());
+            let want = lanes.iter().enumerate().fold(0u32, |m, (k, r)| {
+                let b = r.is_some_and(|r| occluded::<Watertight, _>(&v4, &r, &mut NoProbe, &mut RayCounters::default()));
+                m | (u32::from(b) << k)
+            });
+            let mut rc = RayCounters::default();
+            let got4 = occluded_bvh4_cached4::<Watertight, _>(&v4, t4, refs, &mut c4, &mut NoProbe, &mut rc);
+            if lanes.iter().all(|r| r.is_some_and(|r| r.is_valid())) {
+                whole += 1;
+                by_cache += usize::from(rc.nodes == 0 && got4 == 0xF);
+            }
+            let got8 = occluded_bvh8_cached4::<Watertight, _>(&v8, t8, refs, &mut c8, &mut NoProbe, &mut rc);
+            let _ = occluded_bvh8_cached4::<Watertight, _>(&vo, to, refs, &mut foreign, &mut NoProbe, &mut rc);
+            let mut stray = foreign;
+            let got8o = occluded_bvh8_cached4::<Watertight, _>(&v8, t8, refs, &mut stray, &mut NoProbe, &mut rc);
+            prop_assert_eq!((got4, got8, got8o), (want, want, want), "group {}: {:?}", g, lanes);
+        }
+        if ceiling && !mixed {
+            prop_assert!(2 * by_cache > whole, "the cache answered {} of {} whole groups", by_cache, whole);
+        }
+    }
+}
+
+/// The scenes of the cache tests: the floor and cloud of `seed` (with a ceiling above the
+/// cloud if asked) in the 4- and 8-wide BVHs, and another scene's 8-wide BVH.
+struct CacheScenes {
+    b4: raypipe::scene::Scene,
+    b8: raypipe::scene::Scene,
+    other: raypipe::scene::Scene,
+}
+
+impl CacheScenes {
+    fn new(seed: u64, size: f32, blocks: bool, ceiling: bool) -> CacheScenes {
         let (mut positions, mut triangles) = floor_and_cloud(seed, 1500, size);
         if ceiling {
-            // Two large triangles at y = 7, between the cloud and any light.
+            // Two large triangles at y = 7, between the cloud and any light above.
             let base = positions.len() as u32;
             positions.extend([[-40.0, 7.0, -40.0], [40.0, 7.0, -40.0], [40.0, 7.0, 40.0], [-40.0, 7.0, 40.0]]);
             triangles.extend([[base, base + 1, base + 2], [base, base + 2, base + 3]]);
@@ -141,44 +239,28 @@ proptest! {
         let b4 = build_soup_layout(positions.clone(), triangles.clone(), Accel::Bvh4, layout);
         let b8 = build_soup_layout(positions, triangles, Accel::Bvh8, layout);
         let (other_p, other_t) = floor_and_cloud(seed + 1, 300, 1.0);
-        let other = build_soup_layout(other_p, other_t, Accel::Bvh8, layout);
-        let (v4, v8, vo) = (b4.view().unwrap(), b8.view().unwrap(), other.view().unwrap());
-        let (t4, t8, to) = (v4.bvh4().unwrap(), v8.bvh8().unwrap(), vo.bvh8().unwrap());
-        let cam = Camera {
-            eye: Vec3::new(0.0, 6.0, -14.0),
-            look_at: Vec3::ZERO,
-            up: Vec3::Y,
-            vfov_deg: 30.0,
-            width: 48,
-            height: 48,
-        };
-        let Ok(eye) = EyeRays::new(&cam) else { return Ok(()) };
-        let light = Vec3::from(light);
-        let (mut c4, mut c8, mut foreign) = (LastOccluder::default(), LastOccluder::default(), LastOccluder::default());
-        let (mut by_cache, mut blocked) = (0, 0);
-        for i in 0..cam.width * cam.height {
-            let r = eye.ray(i % cam.width, i / cam.width);
-            let t = trace::<Watertight, _>(&v4, &r, &mut NoProbe, &mut RayCounters::default()).map_or(30.0, |h| h.t);
-            let p = r.origin + r.dir * (t * 0.999);
-            let shadow = Ray { origin: p, dir: light - p, t_min: 0.0, t_max: 1.0 - 1e-4 };
-            let want = occluded::<Watertight, _>(&v4, &shadow, &mut NoProbe, &mut RayCounters::default());
-            let mut rc = RayCounters::default();
-            let got4 = occluded_bvh4_cached::<Watertight, _>(&v4, t4, &shadow, &mut c4, &mut NoProbe, &mut rc);
-            by_cache += usize::from(got4 && rc.nodes == 0);
-            blocked += usize::from(want);
-            let got8 = occluded_bvh8_cached::<Watertight, _>(&v8, t8, &shadow, &mut c8, &mut NoProbe, &mut rc);
-            // A cache filled in another image: whatever leaf it names, the answer holds.
-            let mut swapped = c4;
-            let got8x = occluded_bvh8_cached::<Watertight, _>(&v8, t8, &shadow, &mut swapped, &mut NoProbe, &mut rc);
-            let _ = occluded_bvh8_cached::<Watertight, _>(&vo, to, &shadow, &mut foreign, &mut NoProbe, &mut rc);
-            let mut stray = foreign;
-            let got8o = occluded_bvh8_cached::<Watertight, _>(&v8, t8, &shadow, &mut stray, &mut NoProbe, &mut rc);
-            prop_assert_eq!((got4, got8, got8x, got8o), (want, want, want, want), "pixel {}: {:?}", i, shadow);
-        }
-        if ceiling {
-            let n = (cam.width * cam.height) as usize;
-            prop_assert_eq!(blocked, n, "the ceiling blocks every ray");
-            prop_assert!(2 * by_cache > n, "the cache answered {} of {} blocked rays", by_cache, n);
-        }
+        CacheScenes { b4, b8, other: build_soup_layout(other_p, other_t, Accel::Bvh8, layout) }
     }
+}
+
+/// A 48×48 view's shadow rays, pixel by pixel, to each of `lights` in turn: from each
+/// eye ray's hit (or a point 30 along a ray that misses) in `view`.
+fn shadow_rays(view: &SceneView<'_>, lights: &[Vec3]) -> Vec<Ray> {
+    let cam = Camera {
+        eye: Vec3::new(0.0, 6.0, -14.0),
+        look_at: Vec3::ZERO,
+        up: Vec3::Y,
+        vfov_deg: 30.0,
+        width: 48,
+        height: 48,
+    };
+    let Ok(eye) = EyeRays::new(&cam) else { return Vec::new() };
+    let mut rays = Vec::new();
+    for i in 0..cam.width * cam.height {
+        let r = eye.ray(i % cam.width, i / cam.width);
+        let t = trace::<Watertight, _>(view, &r, &mut NoProbe, &mut RayCounters::default()).map_or(30.0, |h| h.t);
+        let p = r.origin + r.dir * (t * 0.999);
+        rays.extend(lights.iter().map(|&l| Ray { origin: p, dir: l - p, t_min: 0.0, t_max: 1.0 - 1e-4 }));
+    }
+    rays
 }

@@ -92,6 +92,12 @@ pub trait Intersector {
     fn intersect_block4(_prep: &Self::Prepared, _block: &TriBlock4) -> Rays4Result {
         Rays4Result { redo: 0xF, ..Rays4Result::default() }
     }
+    /// Triangle `lane` of a leaf block in this test's form, where the test reads plain
+    /// vertices (a block's are the image's, bit for bit); `None` by default.
+    #[inline(always)]
+    fn block_triangle(_block: &TriBlock4, _lane: usize) -> Option<Self::Triangle> {
+        None
+    }
 }
 
 /// Up to [`SharedTris::SLOTS`] triangles' vertices relative to the origin of rays that

@@ -145,6 +145,11 @@ impl Intersector for Watertight {
     /// [`Watertight::intersect`] with four triangles in SIMD lanes and the ray in all
     /// four: per lane the same operations in the same order as the one-triangle test.
     #[inline(always)]
+    fn block_triangle(block: &TriBlock4, lane: usize) -> Option<[Vec3; 3]> {
+        Some(block.v.map(|[x, y, z]| Vec3::new(x[lane & 3], y[lane & 3], z[lane & 3])))
+    }
+
+    #[inline(always)]
     fn intersect_block4(s: &ShearedRay, block: &TriBlock4) -> Rays4Result {
         let org = s.org.to_array();
         let k = [s.kx, s.ky, s.kz];

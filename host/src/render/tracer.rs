@@ -15,8 +15,8 @@ use raypipe_core::traverse::grid::trace_grid;
 use raypipe_core::traverse::kdtree::trace_kdtree;
 use raypipe_core::traverse::occlusion::occluded as occluded_by_walk;
 use raypipe_core::traverse::wide_bvh::last_occluder::LastOccluder;
-use raypipe_core::traverse::wide_bvh::node4::{occluded_bvh4_cached, trace_bvh4};
-use raypipe_core::traverse::wide_bvh::node8::{occluded_bvh8_cached, trace_bvh8};
+use raypipe_core::traverse::wide_bvh::node4::{occluded_bvh4_cached4, trace_bvh4};
+use raypipe_core::traverse::wide_bvh::node8::{occluded_bvh8_cached4, trace_bvh8};
 use raypipe_core::{
     traverse::brute_force::trace_brute_force, Hit, Intersector, MemoryProbe, Ray, RayCounters, SceneView,
 };
@@ -159,10 +159,26 @@ pub fn occluded_each<'r, I: Intersector, P: MemoryProbe>(
     // One shadow cache for the run of rays: consecutive rays are neighbours (a block of
     // pixels' shadow rays), mostly blocked in one leaf.
     let mut cache = LastOccluder::default();
+    // The wide BVHs take the rays four at a time: the cached leaf is tested by the four
+    // at once.
+    macro_rules! each_four {
+        ($kernel:expr) => {
+            avx2_loop!(n.div_ceil(4), g => {
+                let rays: [Option<&Ray>; 4] = core::array::from_fn(|k| {
+                    let i = 4 * g + k;
+                    if i < n { ray(i) } else { None }
+                });
+                let b = $kernel(rays);
+                for k in 0..4usize.min(n - 4 * g) {
+                    blocked(4 * g + k, b & (1 << k) != 0);
+                }
+            })
+        };
+    }
     if let Some(bvh) = scene.bvh8() {
-        each_ray!(|r: &Ray| occluded_bvh8_cached::<I, P>(scene, bvh, r, &mut cache, probe, counters))
+        each_four!(|r| occluded_bvh8_cached4::<I, P>(scene, bvh, r, &mut cache, probe, counters))
     } else if let Some(bvh) = scene.bvh4() {
-        each_ray!(|r: &Ray| occluded_bvh4_cached::<I, P>(scene, bvh, r, &mut cache, probe, counters))
+        each_four!(|r| occluded_bvh4_cached4::<I, P>(scene, bvh, r, &mut cache, probe, counters))
     } else {
         each_ray!(|r: &Ray| occluded_by_walk::<I, P>(scene, r, probe, counters))
     }

@@ -12,10 +12,11 @@
 use crate::counters::RayCounters;
 use crate::hit::Hit;
 use crate::image::SceneView;
-use crate::intersect::triangle::Intersector;
+use crate::intersect::triangle::{in_range, test_triangle, Intersector};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::traverse::tree_step::PrimLists;
+use glam::{Vec3, Vec4};
 
 use super::test_wide_leaf;
 
@@ -131,6 +132,76 @@ pub(crate) fn test_leaf_alone<I: Intersector, P: MemoryProbe, V: PrimLists>(
     counters.leaves = counters.leaves.saturating_add(1);
     counters.tri_tests = counters.tri_tests.saturating_add(leaf.1);
     best
+}
+
+/// Four rays against the leaf `cache` trusts, four lanes at a time: each of the leaf's
+/// triangles read once and tested against the rays of `lanes` by the four-ray test
+/// ([`Intersector::intersect_rays4`]: lane by lane the one-ray test's bits; a lane it
+/// leaves undecided gets the one-ray test), until every such ray is blocked. Returns the
+/// rays tested (none where the cache is not trusted, or the rays cannot share one frame)
+/// and those blocked; each tested ray votes, as a ray alone does. Out of line, as
+/// [`test_cached_leaf`].
+#[inline(never)]
+pub(super) fn test_cached_leaf4<I: Intersector, P: MemoryProbe, V: PrimLists>(
+    scene: &SceneView<'_>,
+    view: &V,
+    rays: &[&Ray; 4],
+    lanes: u32,
+    cache: &mut LastOccluder,
+    probe: &mut P,
+    counters: &mut RayCounters,
+) -> (u32, u32) {
+    let Some((first, count)) = cache.to_test() else {
+        return (0, 0);
+    };
+    let [a, b, c, d] = rays;
+    let axis = |f: fn(&Ray) -> Vec3| -> [Vec4; 3] {
+        let (a, b, c, d) = (f(a), f(b), f(c), f(d));
+        [Vec4::new(a.x, b.x, c.x, d.x), Vec4::new(a.y, b.y, c.y, d.y), Vec4::new(a.z, b.z, c.z, d.z)]
+    };
+    let Some(four) = I::prepare_rays4(axis(|r| r.origin), axis(|r| r.dir)) else {
+        return (0, 0);
+    };
+    let mut blocked = 0u32;
+    let blocks = I::BLOCKS && scene.has_tri_blocks();
+    let mut block = None;
+    for e in first..first.saturating_add(count) {
+        // From the leaf's blocks where the image has them (no index to follow), each
+        // block read once.
+        if blocks && (e == first || e % 4 == 0) {
+            block = scene.tri_block(e / 4, probe);
+        }
+        let tri = match block.and_then(|b| I::block_triangle(b, e as usize % 4)) {
+            Some(tri) => tri,
+            None => I::fetch(scene, view.prim(e, probe), probe),
+        };
+        let r = I::intersect_rays4(&four, &tri);
+        let mut decide = lanes & !blocked & (r.hit | r.redo);
+        while decide != 0 {
+            let k = decide.trailing_zeros() as usize & 3;
+            decide &= decide - 1;
+            let prim = view.prim(e, probe);
+            let ray = rays[k];
+            let hit = if r.redo & (1 << k) != 0 {
+                test_triangle::<I>(&I::prepare(ray), ray, &tri, prim, &mut None)
+            } else {
+                in_range(ray, Some((r.t[k], r.u[k], r.v[k])), prim).is_some()
+            };
+            blocked |= (hit as u32) << k;
+        }
+        if blocked == lanes {
+            break;
+        }
+    }
+    let mut tested = lanes;
+    while tested != 0 {
+        let k = tested.trailing_zeros();
+        tested &= tested - 1;
+        cache.tested(blocked & (1 << k) != 0);
+        counters.leaves = counters.leaves.saturating_add(1);
+        counters.tri_tests = counters.tri_tests.saturating_add(count);
+    }
+    (lanes, blocked)
 }
 
 #[cfg(test)]

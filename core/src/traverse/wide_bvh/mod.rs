@@ -20,7 +20,7 @@ use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::traverse::boxes::datapath::{NodeTests, WideRay};
 use crate::traverse::tree_step::{test_leaf, trace_tree, PrimLists, TreeEvent, TreeWalk};
-use last_occluder::{test_cached_leaf, LastOccluder};
+use last_occluder::{test_cached_leaf, test_cached_leaf4, LastOccluder};
 
 pub use crate::traverse::boxes::wide_slab::{NodeRay, WideSlab};
 
@@ -275,12 +275,99 @@ where
     if !ray.is_valid() {
         return None;
     }
-    let tested = ANY && cache.to_test().is_some();
-    if tested {
+    search_valid::<N, C, I, P, ANY>(scene, bvh, ray, cache, false, probe, counters)
+}
+
+/// [`search_wide_bvh`] for a valid ray with the `f32` node tests; `voted`: the ray has
+/// tested the cached leaf already (and missed), so it walks at once.
+#[inline(always)]
+fn search_valid<N: WideSlab, const C: usize, I: Intersector, P: MemoryProbe, const ANY: bool>(
+    scene: &SceneView<'_>,
+    bvh: &WideBvhView<'_, N>,
+    ray: &Ray,
+    cache: &mut LastOccluder,
+    voted: bool,
+    probe: &mut P,
+    counters: &mut RayCounters,
+) -> Option<Hit> {
+    let mut tested = voted;
+    if ANY && !voted && cache.to_test().is_some() {
+        tested = true;
         if let Some(hit) = test_cached_leaf::<I, P, _>(scene, bvh, ray, cache, probe, counters) {
             return Some(hit);
         }
     }
+    walk_octant::<N, C, I, P, ANY>(scene, bvh, ray, cache, tested, probe, counters)
+}
+
+/// The any-hit query of up to four rays (`rays`; `None` and invalid rays are free)
+/// through a wide BVH, with the shadow cache: the cached leaf tested by the four rays at
+/// once ([`last_occluder`]), the rays it does not block walking one by one. Bit `k` of
+/// the result: ray `k` is blocked. The same answers as [`occluded_wide_bvh`].
+#[inline(always)]
+pub fn occluded_wide_bvh_cached4<N: WideSlab, const C: usize, I: Intersector, P: MemoryProbe>(
+    scene: &SceneView<'_>,
+    bvh: &WideBvhView<'_, N>,
+    rays: [Option<&Ray>; 4],
+    cache: &mut LastOccluder,
+    probe: &mut P,
+    counters: &mut RayCounters,
+) -> u32
+where
+    <I::Nodes as NodeTests>::Wide: WideRay<N>,
+{
+    let mut lanes = 0u32;
+    for (k, r) in rays.iter().enumerate() {
+        lanes |= (r.is_some_and(Ray::is_valid) as u32) << k;
+    }
+    let Some(&Some(any)) = rays.get(lanes.trailing_zeros() as usize) else {
+        return 0;
+    };
+    let mut blocked = 0u32;
+    if !<I::Nodes as NodeTests>::FLOAT {
+        // Another datapath's box test: ray by ray.
+        for (k, ray) in rays.iter().enumerate() {
+            let hit = ray.and_then(|r| search_wide_bvh::<N, C, I, P, true>(scene, bvh, r, cache, probe, counters));
+            blocked |= (hit.is_some() as u32) << k;
+        }
+        return blocked;
+    }
+    let (mut tested, mut found) = (0u32, 0u32);
+    let group_leaf = cache.leaf();
+    if lanes.count_ones() > 1 {
+        // Lanes without a ray take one that has one, for the shared constants.
+        let ray = |k: usize| if lanes & (1 << k) != 0 { rays[k].unwrap_or(any) } else { any };
+        let four = [ray(0), ray(1), ray(2), ray(3)];
+        (tested, found) = test_cached_leaf4::<I, P, _>(scene, bvh, &four, lanes, cache, probe, counters);
+        blocked = found;
+    }
+    let mut rest = lanes & !found;
+    while rest != 0 {
+        let k = rest.trailing_zeros() as usize & 3;
+        rest &= rest - 1;
+        let ray = rays[k].unwrap_or(any);
+        // A ray that missed the group's leaf still tests the one a neighbour's walk has
+        // put in its place: neighbours are blocked by neighbouring leaves.
+        let voted = tested & (1 << k) != 0 && cache.leaf() == group_leaf;
+        let hit = search_valid::<N, C, I, P, true>(scene, bvh, ray, cache, voted, probe, counters);
+        blocked |= (hit.is_some() as u32) << k;
+    }
+    blocked
+}
+
+/// The walk of a valid ray with the `f32` node tests, in the form for its octant; with
+/// `ANY`, `cache` keeps the leaf that blocks it (`tested`: the ray has tested the cached
+/// leaf already, and voted).
+#[inline(always)]
+fn walk_octant<N: WideSlab, const C: usize, I: Intersector, P: MemoryProbe, const ANY: bool>(
+    scene: &SceneView<'_>,
+    bvh: &WideBvhView<'_, N>,
+    ray: &Ray,
+    cache: &mut LastOccluder,
+    tested: bool,
+    probe: &mut P,
+    counters: &mut RayCounters,
+) -> Option<Hit> {
     let r = NodeRay::new(ray);
     // A walk per octant where the node test has forms for one octant: each reads its
     // near and far planes at fixed offsets (reading the ray's six offsets and masking

@@ -16,7 +16,8 @@ use crate::traverse::boxes::slab::RayBox;
 use crate::traverse::wide_bvh::last_occluder::LastOccluder;
 pub use crate::traverse::wide_bvh::NodeRay;
 use crate::traverse::wide_bvh::{
-    occluded_wide_bvh, occluded_wide_bvh_cached, stack_capacity, trace_wide_bvh, WideBvhTraversal, WideSlab,
+    occluded_wide_bvh, occluded_wide_bvh_cached, occluded_wide_bvh_cached4, stack_capacity, trace_wide_bvh,
+    WideBvhTraversal, WideSlab,
 };
 
 /// Entry distances of the ray into the four child boxes of `n`, within `[t0, t1]`, and
@@ -131,4 +132,18 @@ pub fn occluded_bvh4_cached<I: Intersector, P: MemoryProbe>(
     counters: &mut RayCounters,
 ) -> bool {
     occluded_wide_bvh_cached::<Bvh4Node, { stack_capacity(4) }, I, P>(scene, bvh, ray, cache, probe, counters)
+}
+
+/// [`occluded_bvh4_cached`] for up to four rays at once (see
+/// [`occluded_wide_bvh_cached4`]): bit `k` of the result says ray `k` is blocked.
+#[inline(always)]
+pub fn occluded_bvh4_cached4<I: Intersector, P: MemoryProbe>(
+    scene: &SceneView<'_>,
+    bvh: &Bvh4View<'_>,
+    rays: [Option<&Ray>; 4],
+    cache: &mut LastOccluder,
+    probe: &mut P,
+    counters: &mut RayCounters,
+) -> u32 {
+    occluded_wide_bvh_cached4::<Bvh4Node, { stack_capacity(4) }, I, P>(scene, bvh, rays, cache, probe, counters)
 }

@@ -13,7 +13,8 @@ use crate::ray::Ray;
 use crate::traverse::boxes::slab::RayBox;
 use crate::traverse::wide_bvh::last_occluder::LastOccluder;
 use crate::traverse::wide_bvh::{
-    occluded_wide_bvh, occluded_wide_bvh_cached, stack_capacity, trace_wide_bvh, NodeRay, WideBvhTraversal, WideSlab,
+    occluded_wide_bvh, occluded_wide_bvh_cached, occluded_wide_bvh_cached4, stack_capacity, trace_wide_bvh, NodeRay,
+    WideBvhTraversal, WideSlab,
 };
 
 /// `max` as the SIMD instruction computes it (the second operand when either is NaN),
@@ -183,6 +184,20 @@ pub fn occluded_bvh8_cached<I: Intersector, P: MemoryProbe>(
     counters: &mut RayCounters,
 ) -> bool {
     occluded_wide_bvh_cached::<Bvh8Node, { stack_capacity(8) }, I, P>(scene, bvh, ray, cache, probe, counters)
+}
+
+/// [`occluded_bvh8_cached`] for up to four rays at once (see
+/// [`occluded_wide_bvh_cached4`]): bit `k` of the result says ray `k` is blocked.
+#[inline(always)]
+pub fn occluded_bvh8_cached4<I: Intersector, P: MemoryProbe>(
+    scene: &SceneView<'_>,
+    bvh: &Bvh8View<'_>,
+    rays: [Option<&Ray>; 4],
+    cache: &mut LastOccluder,
+    probe: &mut P,
+    counters: &mut RayCounters,
+) -> u32 {
+    occluded_wide_bvh_cached4::<Bvh8Node, { stack_capacity(8) }, I, P>(scene, bvh, rays, cache, probe, counters)
 }
 
 #[cfg(test)]
