@@ -177,10 +177,13 @@ pub(super) fn test_cached_leaf4<I: Intersector, P: MemoryProbe, V: PrimLists>(
         };
         let r = I::intersect_rays4(&four, &tri);
         let mut decide = lanes & !blocked & (r.hit | r.redo);
+        if decide == 0 {
+            continue;
+        }
+        let prim = view.prim(e, probe);
         while decide != 0 {
             let k = decide.trailing_zeros() as usize & 3;
             decide &= decide - 1;
-            let prim = view.prim(e, probe);
             let ray = rays[k];
             let hit = if r.redo & (1 << k) != 0 {
                 test_triangle::<I>(&I::prepare(ray), ray, &tri, prim, &mut None)
@@ -193,14 +196,14 @@ pub(super) fn test_cached_leaf4<I: Intersector, P: MemoryProbe, V: PrimLists>(
             break;
         }
     }
-    let mut tested = lanes;
-    while tested != 0 {
-        let k = tested.trailing_zeros();
-        tested &= tested - 1;
-        cache.tested(blocked & (1 << k) != 0);
-        counters.leaves = counters.leaves.saturating_add(1);
-        counters.tri_tests = counters.tri_tests.saturating_add(count);
+    for k in 0..4 {
+        if lanes & (1 << k) != 0 {
+            cache.tested(blocked & (1 << k) != 0);
+        }
     }
+    let n = lanes.count_ones();
+    counters.leaves = counters.leaves.saturating_add(n);
+    counters.tri_tests = counters.tri_tests.saturating_add(count.saturating_mul(n));
     (lanes, blocked)
 }
 
