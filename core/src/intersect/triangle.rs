@@ -151,6 +151,28 @@ impl<const L: usize> Default for LaneHits<L> {
     }
 }
 
+impl<const L: usize> LaneHits<L> {
+    /// Lane `k`'s outcome on triangle `prim` as a hit of `ray` in its interval: the lane's
+    /// own result, or, where the multi-lane form left it undecided, the one-ray test's
+    /// with the ray's constants `prep()` on the triangle `tri()` (fetched only then).
+    #[inline(always)]
+    pub fn lane_hit<I: Intersector>(
+        &self,
+        k: usize,
+        ray: &Ray,
+        prim: u32,
+        prep: impl FnOnce() -> I::Prepared,
+        tri: impl FnOnce() -> I::Triangle,
+    ) -> Option<Hit> {
+        let k = k % L;
+        if self.redo & (1 << k) != 0 {
+            in_range(ray, I::intersect(&prep(), &tri()), prim)
+        } else {
+            in_range(ray, Some((self.t[k], self.u[k], self.v[k])), prim)
+        }
+    }
+}
+
 /// The outcome of [`Intersector::intersect_rays4`] and [`Intersector::intersect_block4`].
 pub type Rays4Result = LaneHits<4>;
 

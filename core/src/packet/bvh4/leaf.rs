@@ -4,7 +4,7 @@
 
 use crate::hit::keep_closest;
 use crate::image::{Bvh4View, SceneView};
-use crate::intersect::triangle::{in_range, test_triangle, Intersector, LaneHits, RayPair, SharedTris};
+use crate::intersect::triangle::{test_triangle, Intersector, LaneHits, RayPair, SharedTris};
 use crate::packet::{Lanes, PacketHits, RayPacket};
 use crate::probe::MemoryProbe;
 use crate::traverse::boxes::clip::SLAB_GROWTH;
@@ -146,9 +146,7 @@ pub(super) fn keep_lane<I: Intersector, const N: usize, const L: usize>(
 ) {
     let LaneOutcome { hits: r, lane: k, ray: i } = outcome;
     let ray = packet.ray(i);
-    if r.redo & (1 << k) != 0 {
-        test_triangle::<I>(&ones.get(packet, i), &ray, &tri(), prim, &mut hits[i]);
-    } else if let Some(hit) = in_range(&ray, Some((r.t[k], r.u[k], r.v[k])), prim) {
+    if let Some(hit) = r.lane_hit::<I>(k, &ray, prim, || ones.get(packet, i), tri) {
         keep_closest(&mut hits[i], hit);
     }
 }

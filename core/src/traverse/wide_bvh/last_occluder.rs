@@ -12,7 +12,7 @@
 use crate::counters::RayCounters;
 use crate::hit::Hit;
 use crate::image::SceneView;
-use crate::intersect::triangle::{in_range, test_triangle, Intersector};
+use crate::intersect::triangle::Intersector;
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::traverse::tree_step::PrimLists;
@@ -185,12 +185,8 @@ pub(super) fn test_cached_leaf4<I: Intersector, P: MemoryProbe, V: PrimLists>(
             let k = decide.trailing_zeros() as usize & 3;
             decide &= decide - 1;
             let ray = rays[k];
-            let hit = if r.redo & (1 << k) != 0 {
-                test_triangle::<I>(&I::prepare(ray), ray, &tri, prim, &mut None)
-            } else {
-                in_range(ray, Some((r.t[k], r.u[k], r.v[k])), prim).is_some()
-            };
-            blocked |= (hit as u32) << k;
+            let hit = r.lane_hit::<I>(k, ray, prim, || I::prepare(ray), || tri);
+            blocked |= (hit.is_some() as u32) << k;
         }
         if blocked == lanes {
             break;
