@@ -67,6 +67,7 @@ pub fn load_ply_file(path: &Path) -> Result<(Mesh, LoadNotes)> {
 
 /// Parses the bytes of a PLY file; `name` is the input named in errors.
 pub fn parse_ply(name: &str, bytes: &[u8]) -> Result<(Mesh, LoadNotes)> {
+    crate::input::ply_stream::check_counts_fit(name, bytes)?;
     let parser = Parser::<DefaultElement>::new();
     let ply = parser.read_ply(&mut &bytes[..]).map_err(|e| {
         // The parser's messages run over several lines; the user gets one.
@@ -137,6 +138,8 @@ mod tests {
             ("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 nan\n0 1 0\n3 0 1 2\n", "malformed PLY"),
             ("not a ply", "malformed PLY"),
             ("ply\nformat ascii 1.0\nelement vertex 4000000000\nproperty float x\nend_header\n0\n", "malformed PLY"),
+            // A count with no properties behind it would have the parser build empty elements.
+            ("ply\nformat binary_little_endian 1.0\nelement vertex 477777777\nend_header\nproperty list\n", "element counts need"),
         ] {
             let e = parse_ply("b.ply", text.as_bytes()).unwrap_err().to_string();
             assert!(e.contains(want) && e.starts_with("b.ply") && !e.contains('\n'), "{want}: {e}");

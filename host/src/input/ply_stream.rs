@@ -233,6 +233,10 @@ impl PlyStream {
 
     fn skip_element(&mut self, k: usize) -> Result<()> {
         let el = self.elements[k].clone();
+        if el.props.is_empty() {
+            // Nothing to read, however large the count: no loop over it.
+            return Ok(());
+        }
         for _ in 0..el.count {
             for p in &el.props {
                 match p.list {
@@ -294,6 +298,32 @@ impl PlyStream {
     }
 }
 
+/// Checks, before a parser reads a whole file's `bytes`, that the header's element
+/// counts fit in the bytes after it: every element takes at least a byte (a line in
+/// ASCII, its properties in binary), so a count larger than the file is a lie that
+/// would otherwise have the parser build millions of empty elements.
+pub(crate) fn check_counts_fit(name: &str, bytes: &[u8]) -> Result<()> {
+    let mut r = bytes;
+    let (format, elements) = read_header(name, &mut r)?;
+    let mut need: u64 = 0;
+    for el in &elements {
+        let per = match format {
+            Format::Ascii => el.props.len().max(1),
+            Format::Little | Format::Big => {
+                el.props.iter().map(|p| p.list.unwrap_or(p.kind).size()).sum::<usize>().max(1)
+            }
+        };
+        need = need.saturating_add(el.count.saturating_mul(per as u64));
+    }
+    if need > r.len() as u64 {
+        bail!(
+            "{name}: malformed PLY: the header's element counts need at least {need} bytes, the file has {} after it",
+            r.len()
+        );
+    }
+    Ok(())
+}
+
 /// Reads the header: the format and the elements with their properties.
 fn read_header(name: &str, r: &mut dyn BufRead) -> Result<(Format, Vec<Element>)> {
     let bad = |why: &str| anyhow!("{name}: malformed PLY: {why}");
@@ -347,4 +377,44 @@ fn read_header(name: &str, r: &mut dyn BufRead) -> Result<(Format, Vec<Element>)
         }
     }
     Err(bad("the header does not end"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A one-triangle binary PLY after an element `junk` of `junk` entries with no properties.
+    fn one_triangle(junk: u64) -> Vec<u8> {
+        let mut file = format!(
+            "ply\nformat binary_little_endian 1.0\nelement junk {junk}\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+        )
+        .into_bytes();
+        for c in [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0] {
+            file.extend(c.to_le_bytes());
+        }
+        file.push(3);
+        [0i32, 1, 2].iter().for_each(|i| file.extend(i.to_le_bytes()));
+        file
+    }
+
+    #[test]
+    fn element_counts_bounded_by_the_data() {
+        let lying = one_triangle(18_000_000_000_000_000_000);
+        // Read whole, the lying count is refused before a parser sees it.
+        let e = check_counts_fit("j.ply", &lying).unwrap_err().to_string();
+        assert!(e.starts_with("j.ply: malformed PLY: the header's element counts"), "{e}");
+        check_counts_fit("h.ply", &one_triangle(0)).unwrap();
+        // Streamed, an element with nothing to read is skipped at once, however large its count.
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("j.ply");
+        std::fs::write(&path, &lying).unwrap();
+        let mut s = PlyStream::open(&path, u64::MAX).unwrap();
+        let mut tris = Vec::new();
+        s.faces(&mut |t| {
+            tris.push(t);
+            Ok(())
+        })
+        .unwrap();
+        assert_eq!((s.positions.len(), tris), (3, vec![[0, 1, 2]]));
+    }
 }
