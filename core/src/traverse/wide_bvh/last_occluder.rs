@@ -134,12 +134,9 @@ pub(crate) fn test_leaf_alone<I: Intersector, P: MemoryProbe, V: PrimLists>(
     best
 }
 
-/// Four rays against the leaf `cache` trusts, four lanes at a time: each of the leaf's
-/// triangles read once and tested against the rays of `lanes` by the four-ray test
-/// ([`Intersector::intersect_rays4`]: lane by lane the one-ray test's bits; a lane it
-/// leaves undecided gets the one-ray test), until every such ray is blocked. Returns the
-/// rays tested (none where the cache is not trusted, or the rays cannot share one frame)
-/// and those blocked; each tested ray votes, as a ray alone does. Out of line, as
+/// Four rays against the leaf `cache` trusts (see [`leaf_blocks4`]). Returns the rays
+/// tested (none where the cache is not trusted, or the rays cannot share one frame) and
+/// those blocked; each tested ray votes, as a ray alone does. Out of line, as
 /// [`test_cached_leaf`].
 #[inline(never)]
 pub(super) fn test_cached_leaf4<I: Intersector, P: MemoryProbe, V: PrimLists>(
@@ -151,17 +148,42 @@ pub(super) fn test_cached_leaf4<I: Intersector, P: MemoryProbe, V: PrimLists>(
     probe: &mut P,
     counters: &mut RayCounters,
 ) -> (u32, u32) {
-    let Some((first, count)) = cache.to_test() else {
+    let Some(leaf) = cache.to_test() else {
         return (0, 0);
     };
+    let Some(blocked) = leaf_blocks4::<I, P, V>(scene, view, rays, lanes, leaf, probe, counters) else {
+        return (0, 0);
+    };
+    for k in 0..4 {
+        if lanes & (1 << k) != 0 {
+            cache.tested(blocked & (1 << k) != 0);
+        }
+    }
+    (lanes, blocked)
+}
+
+/// The rays of `lanes` among four against `leaf` (PRIM_LISTS entries `first .. first +
+/// count` of `view`), four lanes at a time: each of the leaf's triangles read once and
+/// tested against them by the four-ray test ([`Intersector::intersect_rays4`]: lane by
+/// lane the one-ray test's bits; a lane it leaves undecided gets the one-ray test), until
+/// every such ray is blocked. The rays blocked, or `None` where the four cannot share
+/// one frame (nothing tested). Counted as one leaf a ray.
+#[inline(always)]
+pub(crate) fn leaf_blocks4<I: Intersector, P: MemoryProbe, V: PrimLists>(
+    scene: &SceneView<'_>,
+    view: &V,
+    rays: &[&Ray; 4],
+    lanes: u32,
+    (first, count): (u32, u32),
+    probe: &mut P,
+    counters: &mut RayCounters,
+) -> Option<u32> {
     let [a, b, c, d] = rays;
     let axis = |f: fn(&Ray) -> Vec3| -> [Vec4; 3] {
         let (a, b, c, d) = (f(a), f(b), f(c), f(d));
         [Vec4::new(a.x, b.x, c.x, d.x), Vec4::new(a.y, b.y, c.y, d.y), Vec4::new(a.z, b.z, c.z, d.z)]
     };
-    let Some(four) = I::prepare_rays4(axis(|r| r.origin), axis(|r| r.dir)) else {
-        return (0, 0);
-    };
+    let four = I::prepare_rays4(axis(|r| r.origin), axis(|r| r.dir))?;
     let mut blocked = 0u32;
     let blocks = I::BLOCKS && scene.has_tri_blocks();
     let mut block = None;
@@ -192,15 +214,10 @@ pub(super) fn test_cached_leaf4<I: Intersector, P: MemoryProbe, V: PrimLists>(
             break;
         }
     }
-    for k in 0..4 {
-        if lanes & (1 << k) != 0 {
-            cache.tested(blocked & (1 << k) != 0);
-        }
-    }
     let n = lanes.count_ones();
     counters.leaves = counters.leaves.saturating_add(n);
     counters.tri_tests = counters.tri_tests.saturating_add(count.saturating_mul(n));
-    (lanes, blocked)
+    Some(blocked)
 }
 
 #[cfg(test)]
