@@ -89,9 +89,9 @@ fn leaf_blocks_in_group<I: Intersector, P: MemoryProbe>(
         }
     }
     let mut blocked = 0u32;
-    for k in 0..4 {
+    for (k, ray) in four.iter().enumerate() {
         if lanes & (1 << k) != 0 {
-            let hit = test_leaf_alone::<I, P, _>(scene, bvh, four[k], leaf, probe, counters);
+            let hit = test_leaf_alone::<I, P, _>(scene, bvh, ray, leaf, probe, counters);
             blocked |= u32::from(hit.is_some()) << k;
         }
     }
