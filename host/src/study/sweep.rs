@@ -80,7 +80,14 @@ impl Point {
     /// The point's identity: every parameter, `key=value` in spec order (what a resumed
     /// sweep matches finished rows by).
     pub fn id(&self) -> String {
-        self.params.iter().map(|(k, v)| format!("{k}={}", value_text(v))).collect::<Vec<_>>().join(", ")
+        // Control characters (a multi-line string's newlines) escaped: the id is one
+        // line of a message or a table.
+        let one_line = |t: String| {
+            t.chars()
+                .map(|c| if c.is_control() { c.escape_default().to_string() } else { c.into() })
+                .collect::<String>()
+        };
+        self.params.iter().map(|(k, v)| format!("{k}={}", one_line(value_text(v)))).collect::<Vec<_>>().join(", ")
     }
 
     /// The `raypipe simulate` arguments of this point (without outputs), paths resolved
@@ -251,5 +258,18 @@ impl Spec {
     /// The points of `shard` (all without one).
     pub fn shard(&self, shard: Option<Shard>) -> Vec<&Point> {
         self.points.iter().filter(|p| shard.is_none_or(|s| p.index % s.count == s.index)).collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_multi_line_value_makes_a_one_line_error() {
+        // The fuzzer's spec: `size` a multi-line string that is no size.
+        let text = "[fixed]\nsize ='''oinetits\" = [, 2, 4]\npa[f\t\t\t\t\tcket_size = [4,'''";
+        let e = format!("{:#}", Spec::parse(text, PathBuf::from("/nonexistent")).unwrap_err());
+        assert!(!e.contains('\n') && e.contains("sweep point 0 (size=oinetits") && e.contains("\\n"), "{e}");
     }
 }
