@@ -3,6 +3,7 @@
 //! still its single-ray any-hit answer.
 
 use proptest::prelude::*;
+use raypipe::platform::isa::set_avx512;
 use raypipe::render::tracer::{occluded_packet, trace};
 use raypipe::scene::{Accel, TriangleLayout};
 use raypipe_core::camera::{Camera, EyeRays};
@@ -59,16 +60,21 @@ fn check_blocks<const N: usize>(view: &SceneView<'_>, cam: &Camera, light: Vec3)
             let mut packet = RayPacket::<N>::new();
             packet.fill(&shadow);
             pyramids += takes_shadow_pyramid(view, &packet) as usize;
-            let blocked = occluded_packet::<Watertight, _, N>(
-                view,
-                &packet,
-                &mut cache,
-                &mut NoProbe,
-                &mut PacketCounters::default(),
-            );
-            for (i, r) in shadow.iter().enumerate() {
-                let single = occluded::<Watertight, _>(view, r, &mut NoProbe, &mut RayCounters::default());
-                prop_assert_eq!(blocked & (1 << i) != 0, single, "packet of {}, lane {}: {:?}", N, i, r);
+            // With the AVX-512 forms where the CPU has them, and without.
+            for wide in [true, false] {
+                let wide = set_avx512(wide);
+                let blocked = occluded_packet::<Watertight, _, N>(
+                    view,
+                    &packet,
+                    &mut cache,
+                    &mut NoProbe,
+                    &mut PacketCounters::default(),
+                );
+                for (i, r) in shadow.iter().enumerate() {
+                    let single = occluded::<Watertight, _>(view, r, &mut NoProbe, &mut RayCounters::default());
+                    let got = blocked & (1 << i) != 0;
+                    prop_assert_eq!(got, single, "packet of {}, lane {}, AVX-512 {}: {:?}", N, i, wide, r);
+                }
             }
         }
     }

@@ -91,6 +91,7 @@ impl<const BITS: u32, const FRAC: u32> Intersector for FixedWatertight<BITS, FRA
     const NAME: &'static str = "fixed-watertight";
     type Nodes = FixedNodes<BITS, FRAC>;
     type Prepared4 = ();
+    type Prepared16 = ();
 
     #[inline]
     fn prepare(ray: &Ray) -> FixedRay<BITS, FRAC> {

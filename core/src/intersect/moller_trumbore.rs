@@ -30,6 +30,7 @@ impl Intersector for MollerTrumbore {
     type Nodes = crate::traverse::boxes::datapath::FloatNodes;
     // No four-ray form: packets test ray by ray.
     type Prepared4 = ();
+    type Prepared16 = ();
 
     #[inline(always)]
     fn fetch<P: MemoryProbe>(scene: &SceneView<'_>, prim: u32, probe: &mut P) -> [Vec3; 3] {

@@ -46,6 +46,23 @@ pub trait Intersector {
     fn intersect_rays4(_rays: &Self::Prepared4, _tri: &Self::Triangle) -> Rays4Result {
         Rays4Result { redo: 0xF, ..Rays4Result::default() }
     }
+    /// Sixteen rays' constants as SIMD lanes, for [`Intersector::intersect_rays16`].
+    type Prepared16: Copy;
+    /// The constants of the rays of `lanes` among sixteen (origins `org` and directions
+    /// `dir`, one row per axis) that share the first one's frame, as the lanes of the
+    /// sixteen-ray form, with the lanes they cover: lane by lane the bits
+    /// [`Intersector::prepare`] gives. `None` where the test has no such form (the
+    /// default) or this CPU lacks it (it needs AVX-512).
+    #[inline(always)]
+    fn prepare_rays16(_org: &[[f32; 16]; 3], _dir: &[[f32; 16]; 3], _lanes: u32) -> Option<(Self::Prepared16, u32)> {
+        None
+    }
+    /// One triangle against sixteen rays of many origins at once: lane by lane the bits
+    /// of [`Intersector::intersect`], except for the lanes in `redo` (by default all).
+    #[inline(always)]
+    fn intersect_rays16(_rays: &Self::Prepared16, _tri: &Self::Triangle) -> LaneHits<16> {
+        LaneHits { redo: 0xFFFF, ..LaneHits::default() }
+    }
     /// True if this test has an eight-ray form on triangles made ready once for rays of
     /// one origin ([`Intersector::share`], [`Intersector::intersect_shared8`]).
     const SHARED8: bool = false;

@@ -97,6 +97,7 @@ impl Intersector for WaldProjection {
     type Nodes = crate::traverse::boxes::datapath::FloatNodes;
     // No four-ray form: packets test ray by ray.
     type Prepared4 = ();
+    type Prepared16 = ();
 
     #[inline]
     fn prepare(ray: &Ray) -> WaldRay {

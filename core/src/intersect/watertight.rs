@@ -9,7 +9,7 @@ use core::ops::{Add, Mul, Sub};
 use glam::{Vec3, Vec4};
 
 use crate::image::{SceneView, TriBlock4};
-use crate::intersect::triangle::{Hits8, Intersector, RayPair, Rays4Result, SharedTris};
+use crate::intersect::triangle::{Hits8, Intersector, LaneHits, RayPair, Rays4Result, SharedTris};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 #[cfg(target_arch = "x86_64")]
@@ -38,6 +38,61 @@ impl Intersector for Watertight {
     const NAME: &'static str = "watertight";
     type Nodes = crate::traverse::boxes::datapath::FloatNodes;
     type Prepared4 = ShearedRays4;
+    type Prepared16 = ShearedRays16;
+
+    /// The lanes whose axis order is the first lane's, their constants gathered into
+    /// sixteen lanes (the others hold zeros and ones; their outcomes are not read). The
+    /// axis order by [`Watertight::prepare`]'s rule; the divisions sixteen lanes at once
+    /// (exact, so the same bits as one by one).
+    #[inline(always)]
+    fn prepare_rays16(org: &[[f32; 16]; 3], dir: &[[f32; 16]; 3], lanes: u32) -> Option<(ShearedRays16, u32)> {
+        let avx512 = crate::simd::Avx512::reported()?;
+        let lead = lanes.trailing_zeros() as usize;
+        let lane_dir = |i: usize| Vec3::new(dir[0][i % 16], dir[1][i % 16], dir[2][i % 16]);
+        let k = axis_order(lane_dir(lead));
+        // Frames compared as one number (three words compared as arrays stalled on
+        // their stores).
+        let frame = frame_of(k);
+        let mut out = ShearedRays16 { org: [[0.0; 16]; 3], s: [[0.0; 16]; 3], k, avx512 };
+        // Per axis of the frame, the covered lanes' direction components (1 elsewhere).
+        let mut d = [[1.0f32; 16]; 3];
+        let mut covered = 0u32;
+        for i in 0..16 {
+            if lanes & (1 << i) == 0 || frame_of(axis_order(lane_dir(i))) != frame {
+                continue;
+            }
+            covered |= 1 << i;
+            for j in 0..3 {
+                out.org[j][i] = org[k[j].min(2)][i];
+                d[j][i] = dir[k[j].min(2)][i];
+            }
+        }
+        out.s = [
+            core::array::from_fn(|i| d[0][i] / d[2][i]),
+            core::array::from_fn(|i| d[1][i] / d[2][i]),
+            core::array::from_fn(|i| 1.0 / d[2][i]),
+        ];
+        Some((out, covered))
+    }
+
+    #[inline(always)]
+    fn intersect_rays16(r: &ShearedRays16, v: &[Vec3; 3]) -> LaneHits<16> {
+        #[cfg(target_arch = "x86_64")]
+        {
+            let [k0, k1, k2] = r.k;
+            let frame = |p: &Vec3| {
+                let p = [p.x, p.y, p.z, 0.0];
+                [p[k0 & 3], p[k1 & 3], p[k2 & 3]]
+            };
+            let v = [frame(&v[0]), frame(&v[1]), frame(&v[2])];
+            crate::simd::rays16::watertight16(r.avx512, &r.org, &r.s, &v)
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            let _ = (r, v);
+            LaneHits { redo: 0xFFFF, ..LaneHits::default() }
+        }
+    }
 
     /// [`Watertight::prepare`] for four rays at once: the same axis choice (the largest
     /// direction component, ties to the lower axis) and the same divisions, per lane.
@@ -174,21 +229,7 @@ impl Intersector for Watertight {
     #[inline]
     fn prepare(ray: &Ray) -> ShearedRay {
         let d = ray.dir;
-        let a = d.abs();
-        // kz: the dimension where the direction is largest in magnitude.
-        let kz = if a.x >= a.y && a.x >= a.z {
-            0
-        } else if a.y >= a.z {
-            1
-        } else {
-            2
-        };
-        let mut kx = (kz + 1) % 3;
-        let mut ky = (kx + 1) % 3;
-        // Swap to preserve the winding of the triangle.
-        if d[kz] < 0.0 {
-            core::mem::swap(&mut kx, &mut ky);
-        }
+        let [kx, ky, kz] = axis_order(d);
         ShearedRay {
             org: ray.origin,
             kx: kx as u8,
@@ -291,6 +332,27 @@ fn lanes(a: [Vec4; 3], b: [Vec4; 3], c: [Vec4; 3], [sx, sy, sz]: [Vec4; 3]) -> R
     Rays4Result { t: (t_scaled * inv).to_array(), u: (ev * inv).to_array(), v: (ew * inv).to_array(), hit, redo }
 }
 
+/// The sheared frame's axes `[kx, ky, kz]` for direction `d` (paper, Fig. 1 lines 1–6):
+/// `kz` where the direction is largest in magnitude (ties to the lower axis), `kx` and
+/// `ky` the others, swapped where `d[kz]` is negative to keep the triangles' winding.
+#[inline(always)]
+fn axis_order(d: Vec3) -> [usize; 3] {
+    let a = d.abs();
+    let kz = if a.x >= a.y && a.x >= a.z {
+        0
+    } else if a.y >= a.z {
+        1
+    } else {
+        2
+    };
+    let mut kx = (kz + 1) % 3;
+    let mut ky = (kx + 1) % 3;
+    if d[kz] < 0.0 {
+        core::mem::swap(&mut kx, &mut ky);
+    }
+    [kx, ky, kz]
+}
+
 /// An axis order as one number, to compare frames.
 #[inline(always)]
 fn frame_of([kx, ky, kz]: [usize; 3]) -> u32 {
@@ -306,6 +368,27 @@ pub struct ShearedRays4 {
     pub(crate) sy: Vec4,
     pub(crate) sz: Vec4,
     k: [usize; 3],
+}
+
+impl ShearedRay {
+    /// The ray's frame: its axis order `[kx, ky, kz]` (for tests).
+    #[cfg(test)]
+    pub(crate) fn kx_ky_kz(&self) -> [u8; 3] {
+        [self.kx, self.ky, self.kz]
+    }
+}
+
+/// Sixteen rays' shear constants as AVX-512 lanes (rays with one axis permutation), with
+/// the token that lets the sixteen-lane test run.
+#[derive(Clone, Copy, Debug)]
+// Off x86-64 no constants are made (no AVX-512), and the test never reads them.
+#[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
+pub struct ShearedRays16 {
+    // The origins in the rays' axis order `k`; the shear `sx`, `sy`, `sz`.
+    org: [[f32; 16]; 3],
+    s: [[f32; 16]; 3],
+    k: [usize; 3],
+    avx512: crate::simd::Avx512,
 }
 
 /// The shear constants of two groups of four rays as the eight lanes of the AVX test.

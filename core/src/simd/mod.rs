@@ -1,5 +1,5 @@
 //! The one module of raypipe-core with `unsafe` code: the x86-64 AVX forms of four
-//! kernels, and the switch that lets them run. Every other module is
+//! kernels and the AVX-512 forms of two, and the switches that let them run. Every other module is
 //! `#[forbid(unsafe_code)]` (see `lib.rs`).
 //!
 //! A `no_std` library cannot ask the operating system which instruction sets the CPU
@@ -17,10 +17,16 @@
 //! * `leaf_entries`: which rays of a packet enter a leaf's box, eight lanes at a time;
 //! * `transpose`: eight rays into a packet's lanes by one 8×8 transpose;
 //! * `watertight8`: the watertight test on eight rays against a leaf's shared
-//!   triangles.
+//!   triangles;
+//!
+//! and, with an [`Avx512`] token (AVX-512 F), `rays16`: sixteen rays of many origins
+//! against a 4-wide node's boxes and against one triangle (shadow packets of 16, as
+//! Embree's `rtcOccluded16` tests sixteen rays per instruction).
 
 #[cfg(target_arch = "x86_64")]
 pub(crate) mod leaf_entries;
+#[cfg(target_arch = "x86_64")]
+pub(crate) mod rays16;
 #[cfg(target_arch = "x86_64")]
 pub(crate) mod slab8;
 #[cfg(target_arch = "x86_64")]
@@ -33,6 +39,9 @@ use core::sync::atomic::{AtomicBool, Ordering};
 
 #[cfg(target_arch = "x86_64")]
 static AVX: AtomicBool = AtomicBool::new(false);
+
+#[cfg(target_arch = "x86_64")]
+static AVX512: AtomicBool = AtomicBool::new(false);
 
 /// Proof that the CPU has AVX: made only by [`Avx::reported`] once the host has called
 /// [`assume_avx`] (or, in the unit tests, by asking the operating system). The AVX
@@ -80,4 +89,52 @@ pub unsafe fn assume_avx() {
 #[inline(always)]
 pub fn has_avx() -> bool {
     Avx::reported().is_some()
+}
+
+/// Proof that the CPU has AVX-512 F: made only by [`Avx512::reported`] once the host has
+/// called [`assume_avx512`] (or, in the unit tests, by asking the operating system).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Avx512(());
+
+impl Avx512 {
+    /// The token, if the host has reported AVX-512 F; `None` until then and on every
+    /// other architecture.
+    #[inline(always)]
+    pub fn reported() -> Option<Avx512> {
+        #[cfg(target_arch = "x86_64")]
+        if AVX512.load(Ordering::Relaxed) {
+            return Some(Avx512(()));
+        }
+        None
+    }
+
+    /// The token, if the operating system says this CPU has AVX-512 F (unit tests).
+    #[cfg(test)]
+    pub(crate) fn detected() -> Option<Avx512> {
+        extern crate std;
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx512f") {
+            return Some(Avx512(()));
+        }
+        None
+    }
+}
+
+/// Records that the CPU has AVX-512 F, so that the kernels may take their AVX-512 forms;
+/// `false` takes them back (the portable and AVX forms run again), for comparisons.
+///
+/// # Safety
+///
+/// With `on`, the CPU this process runs on must support AVX-512 F
+/// (`is_x86_feature_detected!("avx512f")`).
+#[cfg(target_arch = "x86_64")]
+#[allow(unsafe_code)]
+pub unsafe fn assume_avx512(on: bool) {
+    AVX512.store(on, Ordering::Relaxed);
+}
+
+/// True once [`assume_avx512`] has been called (and not taken back).
+#[inline(always)]
+pub fn has_avx512() -> bool {
+    Avx512::reported().is_some()
 }

@@ -33,12 +33,40 @@ fn has_avx2_set() -> bool {
 
 /// Tells core which optional instruction sets the CPU has (a `no_std` library cannot
 /// ask): with AVX, the 8-wide BVH's node test and the packets' leaf entry test run as
-/// AVX intrinsics. Cheap (the detection is cached); the tracing drivers call it first.
+/// AVX intrinsics; with AVX-512 F, shadow packets of 16 test their rays sixteen lanes at
+/// a time (`RAYPIPE_AVX512=0` in the environment keeps them on the AVX and portable
+/// forms, for comparisons). Cheap (the detection is cached); the tracing drivers call it
+/// first.
 pub fn report_cpu() {
     #[cfg(target_arch = "x86_64")]
-    if std::is_x86_feature_detected!("avx") {
-        // SAFETY: the CPU has AVX (checked above), as `assume_avx` requires.
-        unsafe { raypipe_core::simd::assume_avx() }
+    {
+        if std::is_x86_feature_detected!("avx") {
+            // SAFETY: the CPU has AVX (checked above), as `assume_avx` requires.
+            unsafe { raypipe_core::simd::assume_avx() }
+        }
+        let wanted = std::env::var_os("RAYPIPE_AVX512").is_none_or(|v| v != "0");
+        if wanted && std::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the CPU has AVX-512 F (checked above), as `assume_avx512` requires.
+            unsafe { raypipe_core::simd::assume_avx512(true) }
+        }
+    }
+}
+
+/// Lets the kernels take their AVX-512 forms (`on`, where the CPU has AVX-512 F) or
+/// keeps them on the AVX and portable forms; returns whether they now take them. For the
+/// equivalence suites, which hold both forms to the single-ray answers.
+pub fn set_avx512(on: bool) -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        let on = on && std::is_x86_feature_detected!("avx512f");
+        // SAFETY: with `on`, the CPU has AVX-512 F (checked above).
+        unsafe { raypipe_core::simd::assume_avx512(on) }
+        on
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let _ = on;
+        false
     }
 }
 

@@ -1,0 +1,254 @@
+//! Sixteen rays of many origins in AVX-512 registers, one register per quantity: a
+//! 4-wide node's boxes and one triangle tested for all sixteen at once, as Embree's
+//! `rtcOccluded16` does. Lane by lane the four-lane forms' operations in the same order
+//! (`packet::bvh4::many_origins`, `intersect::watertight`), hence the same bits, with
+//! four times the lanes per instruction.
+
+use super::Avx512;
+use crate::image::Bvh4Node;
+use crate::intersect::triangle::LaneHits;
+use glam::Vec4;
+
+/// Sixteen rays as the box test reads them: per axis their origins and reciprocal
+/// directions (near and far planes, see `RayBox`), and their intervals; lanes `4g ..
+/// 4g + 4` in entry `g` of each array (the first four entries are read).
+#[derive(Clone, Copy)]
+pub(crate) struct BoxLanes<'a> {
+    pub(crate) org: &'a [[Vec4; 16]; 3],
+    pub(crate) inv: &'a [[Vec4; 16]; 3],
+    pub(crate) inv_far: &'a [[Vec4; 16]; 3],
+    pub(crate) t0: &'a [Vec4; 16],
+    pub(crate) t1: &'a [Vec4; 16],
+    /// Per axis, all directions negative (`Some`), when the rays share one octant.
+    pub(crate) octant: Option<[bool; 3]>,
+}
+
+/// The rays that enter each of `node`'s four boxes: box `k`'s in bits `16k .. 16k + 16`
+/// (one register returned: an array written lane by lane and read whole stalled the
+/// caller on the store).
+#[inline(always)]
+pub(crate) fn boxes16(avx512: Avx512, rays: &BoxLanes<'_>, node: &Bvh4Node) -> u64 {
+    let Avx512(()) = avx512;
+    // SAFETY: an `Avx512` token exists only where the CPU has AVX-512 F.
+    #[allow(unsafe_code)]
+    unsafe {
+        boxes16_avx512(rays, node)
+    }
+}
+
+/// [`boxes16`] with AVX-512 F enabled.
+///
+/// # Safety
+///
+/// The CPU must support AVX-512 F.
+#[allow(unsafe_code)]
+#[target_feature(enable = "avx512f")]
+unsafe fn boxes16_avx512(rays: &BoxLanes<'_>, node: &Bvh4Node) -> u64 {
+    use core::arch::x86_64::*;
+    // SAFETY: each array holds sixteen `Vec4`s in a row; the first four are 16 floats.
+    let load = |v: &[Vec4; 16]| unsafe { _mm512_loadu_ps(v.as_ptr() as *const f32) };
+    let o = [load(&rays.org[0]), load(&rays.org[1]), load(&rays.org[2])];
+    let inv = [load(&rays.inv[0]), load(&rays.inv[1]), load(&rays.inv[2])];
+    let inv_far = [load(&rays.inv_far[0]), load(&rays.inv_far[1]), load(&rays.inv_far[2])];
+    let (t0, t1) = (load(rays.t0), load(rays.t1));
+    let lo = [&node.min_x, &node.min_y, &node.min_z];
+    let hi = [&node.max_x, &node.max_y, &node.max_z];
+    let mut out = 0u64;
+    for k in 0..4 {
+        // Empty slots hold inverted boxes: never entered.
+        if node.min_x[k] > node.max_x[k] {
+            continue;
+        }
+        let mut near = [_mm512_setzero_ps(); 3];
+        let mut far = [_mm512_setzero_ps(); 3];
+        for a in 0..3 {
+            let plane = |p: &[f32; 4]| _mm512_sub_ps(_mm512_set1_ps(p[k]), o[a]);
+            match rays.octant {
+                Some(neg) => {
+                    let (n, f) = if neg[a] { (hi[a], lo[a]) } else { (lo[a], hi[a]) };
+                    near[a] = _mm512_mul_ps(plane(n), inv[a]);
+                    far[a] = _mm512_mul_ps(plane(f), inv_far[a]);
+                }
+                None => {
+                    let (l, h) = (plane(lo[a]), plane(hi[a]));
+                    near[a] = _mm512_min_ps(_mm512_mul_ps(l, inv[a]), _mm512_mul_ps(h, inv[a]));
+                    far[a] = _mm512_max_ps(_mm512_mul_ps(l, inv_far[a]), _mm512_mul_ps(h, inv_far[a]));
+                }
+            }
+        }
+        let tn = _mm512_max_ps(_mm512_max_ps(near[0], near[1]), _mm512_max_ps(near[2], t0));
+        let tf = _mm512_min_ps(_mm512_min_ps(far[0], far[1]), _mm512_min_ps(far[2], t1));
+        out |= u64::from(_mm512_cmp_ps_mask::<_CMP_LE_OQ>(tn, tf)) << (16 * k);
+    }
+    out
+}
+
+/// The watertight test of sixteen rays of one frame (per axis of the frame their origins
+/// `org` and the shear `s`: `sx`, `sy`, `sz`) against the triangle whose vertices `v` are
+/// given in the frame's axis order: lane by lane the four-lane test's verdicts and bits
+/// (lanes with an edge function of exactly zero are left in `redo`).
+#[inline(always)]
+pub(crate) fn watertight16(
+    avx512: Avx512,
+    org: &[[f32; 16]; 3],
+    s: &[[f32; 16]; 3],
+    v: &[[f32; 3]; 3],
+) -> LaneHits<16> {
+    let Avx512(()) = avx512;
+    // SAFETY: an `Avx512` token exists only where the CPU has AVX-512 F.
+    #[allow(unsafe_code)]
+    unsafe {
+        watertight16_avx512(org, s, v)
+    }
+}
+
+/// [`watertight16`] with AVX-512 F enabled.
+///
+/// # Safety
+///
+/// The CPU must support AVX-512 F.
+#[allow(unsafe_code)]
+#[target_feature(enable = "avx512f")]
+unsafe fn watertight16_avx512(org: &[[f32; 16]; 3], s: &[[f32; 16]; 3], v: &[[f32; 3]; 3]) -> LaneHits<16> {
+    use core::arch::x86_64::*;
+    // SAFETY: each row holds sixteen floats; `loadu` needs no alignment.
+    let load = |a: &[f32; 16]| unsafe { _mm512_loadu_ps(a.as_ptr()) };
+    let o = [load(&org[0]), load(&org[1]), load(&org[2])];
+    let (sx, sy, sz) = (load(&s[0]), load(&s[1]), load(&s[2]));
+    // Vertices relative to each ray's origin (`intersect_rays4`'s `rel`).
+    let rel = |p: &[f32; 3]| {
+        [
+            _mm512_sub_ps(_mm512_set1_ps(p[0]), o[0]),
+            _mm512_sub_ps(_mm512_set1_ps(p[1]), o[1]),
+            _mm512_sub_ps(_mm512_set1_ps(p[2]), o[2]),
+        ]
+    };
+    let (a, b, c) = (rel(&v[0]), rel(&v[1]), rel(&v[2]));
+    // `shear_edges` with the frame's axes 0, 1, 2.
+    let ax = _mm512_sub_ps(a[0], _mm512_mul_ps(sx, a[2]));
+    let ay = _mm512_sub_ps(a[1], _mm512_mul_ps(sy, a[2]));
+    let bx = _mm512_sub_ps(b[0], _mm512_mul_ps(sx, b[2]));
+    let by = _mm512_sub_ps(b[1], _mm512_mul_ps(sy, b[2]));
+    let cx = _mm512_sub_ps(c[0], _mm512_mul_ps(sx, c[2]));
+    let cy = _mm512_sub_ps(c[1], _mm512_mul_ps(sy, c[2]));
+    // `edges`.
+    let eu = _mm512_sub_ps(_mm512_mul_ps(cx, by), _mm512_mul_ps(cy, bx));
+    let ev = _mm512_sub_ps(_mm512_mul_ps(ax, cy), _mm512_mul_ps(ay, cx));
+    let ew = _mm512_sub_ps(_mm512_mul_ps(bx, ay), _mm512_mul_ps(by, ax));
+    // `lanes`: glam's cmpeq, cmplt, cmpgt and cmpne give the results of EQ_OQ, LT_OQ,
+    // GT_OQ and NEQ_UQ (the signalling forms differ in exceptions only).
+    let zero = _mm512_setzero_ps();
+    macro_rules! any {
+        ($p:ident) => {
+            _mm512_cmp_ps_mask::<$p>(eu, zero) | _mm512_cmp_ps_mask::<$p>(ev, zero) | _mm512_cmp_ps_mask::<$p>(ew, zero)
+        };
+    }
+    let redo = u32::from(any!(_CMP_EQ_OQ));
+    let (neg, pos) = (any!(_CMP_LT_OQ), any!(_CMP_GT_OQ));
+    let det = _mm512_add_ps(_mm512_add_ps(eu, ev), ew);
+    let nonzero = _mm512_cmp_ps_mask::<_CMP_NEQ_UQ>(det, zero);
+    let hit = u32::from(!(neg & pos) & nonzero) & !redo;
+    let mut out = LaneHits::<16> { hit, redo, ..LaneHits::default() };
+    if hit == 0 {
+        return out;
+    }
+    // `scaled_distance`, then the division.
+    let t_scaled = _mm512_add_ps(
+        _mm512_add_ps(_mm512_mul_ps(eu, _mm512_mul_ps(sz, a[2])), _mm512_mul_ps(ev, _mm512_mul_ps(sz, b[2]))),
+        _mm512_mul_ps(ew, _mm512_mul_ps(sz, c[2])),
+    );
+    let inv = _mm512_div_ps(_mm512_set1_ps(1.0), det);
+    // SAFETY: each array holds sixteen floats; `storeu` needs no alignment.
+    unsafe {
+        _mm512_storeu_ps(out.t.as_mut_ptr(), _mm512_mul_ps(t_scaled, inv));
+        _mm512_storeu_ps(out.u.as_mut_ptr(), _mm512_mul_ps(ev, inv));
+        _mm512_storeu_ps(out.v.as_mut_ptr(), _mm512_mul_ps(ew, inv));
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::intersect::triangle::Intersector;
+    use crate::intersect::watertight::Watertight;
+    use crate::ray::Ray;
+    use crate::test_lcg::Lcg;
+    use glam::Vec3;
+
+    /// Small lattice values, so that edge functions are often exactly zero (lanes left to
+    /// the one-ray test), direction components tie, and triangles are often hit.
+    fn lattice(g: &mut Lcg) -> f32 {
+        ((g.next() >> 33) % 9) as f32 * 0.25 - 1.0
+    }
+
+    /// Where this CPU has AVX-512: sixteen rays of many origins made ready at once take,
+    /// lane by lane, the frame and constants of [`Watertight::prepare`], cover exactly
+    /// the lanes of the first lane's frame, and against a triangle give the one-ray
+    /// test's verdicts and bits (lanes left undecided where an edge function is zero).
+    #[test]
+    fn sixteen_rays_of_many_origins_match_the_one_ray_test() {
+        if super::Avx512::detected().is_none() {
+            return;
+        }
+        // SAFETY: the CPU has AVX-512 F (detected above).
+        #[allow(unsafe_code)]
+        unsafe {
+            super::super::assume_avx512(true)
+        };
+        let mut g = Lcg(29);
+        let (mut checked, mut hit, mut redo, mut left_out) = (0, 0, 0, 0);
+        for case in 0..4000 {
+            // Shadow rays: many origins towards one point, or any directions.
+            let light = Vec3::new(lattice(&mut g), 4.0, lattice(&mut g)) * 2.0;
+            let rays: [Ray; 16] = core::array::from_fn(|_| {
+                let o = Vec3::new(lattice(&mut g), lattice(&mut g), lattice(&mut g)) * 2.0;
+                let d = if case % 3 == 0 {
+                    Vec3::new(lattice(&mut g), lattice(&mut g), lattice(&mut g)) + Vec3::splat(0.01)
+                } else {
+                    light - o
+                };
+                Ray::new(o, d)
+            });
+            let org = core::array::from_fn(|a| core::array::from_fn(|i| rays[i].origin[a]));
+            let dir = core::array::from_fn(|a| core::array::from_fn(|i| rays[i].dir[a]));
+            let lanes = [0xFFFF, 0x0F0F, 0x8001, 0x0040][case % 4];
+            let Some((prep, covered)) = Watertight::prepare_rays16(&org, &dir, lanes) else {
+                panic!("case {case}: no sixteen-lane form on a CPU with AVX-512");
+            };
+            let own = rays.map(|r| Watertight::prepare(&r));
+            let lead = &own[lanes.trailing_zeros() as usize];
+            assert_ne!(covered & (1 << lanes.trailing_zeros()), 0, "case {case}: the first lane left out");
+            assert_eq!(covered & !lanes, 0, "case {case}: a lane not asked for covered");
+            for (i, o) in own.iter().enumerate() {
+                if lanes & (1 << i) != 0 {
+                    let same = o.kx_ky_kz() == lead.kx_ky_kz();
+                    assert_eq!(covered & (1 << i) != 0, same, "case {case} lane {i}: covered by frame");
+                    left_out += u32::from(!same);
+                }
+            }
+            let v: [Vec3; 3] = core::array::from_fn(|_| Vec3::new(lattice(&mut g), lattice(&mut g), lattice(&mut g)));
+            let r = Watertight::intersect_rays16(&prep, &v);
+            for i in (0..16).filter(|i| covered & (1 << i) != 0) {
+                let one = Watertight::intersect(&own[i], &v);
+                if r.redo & (1 << i) != 0 {
+                    redo += 1;
+                    continue;
+                }
+                match one {
+                    Some((t, u, w)) => {
+                        assert_ne!(r.hit & (1 << i), 0, "case {case} lane {i}: a hit missed");
+                        let got = [r.t[i], r.u[i], r.v[i]].map(f32::to_bits);
+                        assert_eq!(got, [t, u, w].map(f32::to_bits), "case {case} lane {i}");
+                        hit += 1;
+                    }
+                    None => assert_eq!(r.hit & (1 << i), 0, "case {case} lane {i}: a miss hit"),
+                }
+                checked += 1;
+            }
+        }
+        assert!(
+            checked > 20_000 && hit > 300 && redo > 100 && left_out > 500,
+            "{checked} lanes, {hit} hits, {redo} undecided, {left_out} lanes of another frame"
+        );
+    }
+}
