@@ -58,10 +58,12 @@ pub trait Intersector {
         None
     }
     /// One triangle against sixteen rays of many origins at once: lane by lane the bits
-    /// of [`Intersector::intersect`], except for the lanes in `redo` (by default all).
+    /// of [`Intersector::intersect`], except for the lanes in `redo` (by default all),
+    /// into `out` (its `hit` and `redo` always; the distances and barycentrics where a
+    /// lane hits).
     #[inline(always)]
-    fn intersect_rays16(_rays: &Self::Prepared16, _tri: &Self::Triangle) -> LaneHits<16> {
-        LaneHits { redo: 0xFFFF, ..LaneHits::default() }
+    fn intersect_rays16(_rays: &Self::Prepared16, _tri: &Self::Triangle, out: &mut LaneHits<16>) {
+        (out.hit, out.redo) = (0, 0xFFFF);
     }
     /// True if this test has an eight-ray form on triangles made ready once for rays of
     /// one origin ([`Intersector::share`], [`Intersector::intersect_shared8`]).

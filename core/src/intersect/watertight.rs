@@ -40,43 +40,43 @@ impl Intersector for Watertight {
     type Prepared4 = ShearedRays4;
     type Prepared16 = ShearedRays16;
 
-    /// The lanes whose axis order is the first lane's, their constants gathered into
-    /// sixteen lanes (the others hold zeros and ones; their outcomes are not read). The
-    /// axis order by [`Watertight::prepare`]'s rule; the divisions sixteen lanes at once
-    /// (exact, so the same bits as one by one).
+    /// The lanes whose axis order is the first lane's: every lane's constants computed
+    /// in that order, row by row (the other lanes' are not read). The axis order by
+    /// [`Watertight::prepare`]'s rule; the divisions sixteen lanes at once (exact, so the
+    /// same bits as one by one).
     #[inline(always)]
     fn prepare_rays16(org: &[[f32; 16]; 3], dir: &[[f32; 16]; 3], lanes: u32) -> Option<(ShearedRays16, u32)> {
         let avx512 = crate::simd::Avx512::reported()?;
-        let lead = lanes.trailing_zeros() as usize;
-        let lane_dir = |i: usize| Vec3::new(dir[0][i % 16], dir[1][i % 16], dir[2][i % 16]);
-        let k = axis_order(lane_dir(lead));
-        // Frames compared as one number (three words compared as arrays stalled on
-        // their stores).
-        let frame = frame_of(k);
-        let mut out = ShearedRays16 { org: [[0.0; 16]; 3], s: [[0.0; 16]; 3], k, avx512 };
-        // Per axis of the frame, the covered lanes' direction components (1 elsewhere).
-        let mut d = [[1.0f32; 16]; 3];
+        let lead = lanes.trailing_zeros() as usize % 16;
+        let k = axis_order(Vec3::new(dir[0][lead], dir[1][lead], dir[2][lead]));
+        let [kx, ky, kz] = k.map(|a| a.min(2));
+        // The lanes whose largest component is on `kz` (ties to the lower axis, as
+        // `axis_order`) with the lead's sign there: lane by lane, over the rows.
+        let (x, y, z) = (&dir[0], &dir[1], &dir[2]);
         let mut covered = 0u32;
         for i in 0..16 {
-            if lanes & (1 << i) == 0 || frame_of(axis_order(lane_dir(i))) != frame {
-                continue;
-            }
-            covered |= 1 << i;
-            for j in 0..3 {
-                out.org[j][i] = org[k[j].min(2)][i];
-                d[j][i] = dir[k[j].min(2)][i];
-            }
+            let (ax, ay, az) = (x[i].abs(), y[i].abs(), z[i].abs());
+            let x_major = ax >= ay && ax >= az;
+            let major = [x_major, !x_major && ay >= az, !x_major && ay < az];
+            let negative = dir[kz][i] < 0.0;
+            covered |= u32::from(major[kz] & (negative == (dir[kz][lead] < 0.0))) << i;
         }
-        out.s = [
-            core::array::from_fn(|i| d[0][i] / d[2][i]),
-            core::array::from_fn(|i| d[1][i] / d[2][i]),
-            core::array::from_fn(|i| 1.0 / d[2][i]),
-        ];
-        Some((out, covered))
+        let (dx, dy, dz) = (&dir[kx], &dir[ky], &dir[kz]);
+        let out = ShearedRays16 {
+            org: [org[kx], org[ky], org[kz]],
+            s: [
+                core::array::from_fn(|i| dx[i] / dz[i]),
+                core::array::from_fn(|i| dy[i] / dz[i]),
+                core::array::from_fn(|i| 1.0 / dz[i]),
+            ],
+            k,
+            avx512,
+        };
+        Some((out, covered & lanes))
     }
 
     #[inline(always)]
-    fn intersect_rays16(r: &ShearedRays16, v: &[Vec3; 3]) -> LaneHits<16> {
+    fn intersect_rays16(r: &ShearedRays16, v: &[Vec3; 3], out: &mut LaneHits<16>) {
         #[cfg(target_arch = "x86_64")]
         {
             let [k0, k1, k2] = r.k;
@@ -85,12 +85,12 @@ impl Intersector for Watertight {
                 [p[k0 & 3], p[k1 & 3], p[k2 & 3]]
             };
             let v = [frame(&v[0]), frame(&v[1]), frame(&v[2])];
-            crate::simd::rays16::watertight16(r.avx512, &r.org, &r.s, &v)
+            crate::simd::rays16::watertight16(r.avx512, &r.org, &r.s, &v, out);
         }
         #[cfg(not(target_arch = "x86_64"))]
         {
             let _ = (r, v);
-            LaneHits { redo: 0xFFFF, ..LaneHits::default() }
+            (out.hit, out.redo) = (0, 0xFFFF);
         }
     }
 

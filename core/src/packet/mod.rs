@@ -76,6 +76,24 @@ impl<const N: usize> RayPacket<N> {
         self.active & step::lane_mask(N)
     }
 
+    /// The live lanes whose rays are valid ([`Ray::is_valid`], lane by lane over the
+    /// packet's arrays: building each lane's `Ray` to ask it stalled on the stores).
+    #[inline(always)]
+    pub fn valid_lanes(&self) -> u64 {
+        let mut valid = 0u64;
+        for i in 0..N.min(64) {
+            let o = [self.ox[i], self.oy[i], self.oz[i]];
+            let d = [self.dx[i], self.dy[i], self.dz[i]];
+            // `x − x` is 0 for a finite `x`, NaN otherwise (as `Ray::is_valid` tests).
+            #[allow(clippy::eq_op)]
+            let finite = (0..3).all(|a| (o[a] - o[a]) + (d[a] - d[a]) == 0.0);
+            let moving = d.iter().any(|&c| c != 0.0);
+            let interval = (self.t_min[i] >= 0.0) & (self.t_min[i] <= self.t_max[i]);
+            valid |= u64::from(finite & moving & interval) << i;
+        }
+        valid & self.live()
+    }
+
     /// Stores ray `i` and marks it active; invalid rays stay inactive (they miss).
     #[inline]
     pub fn set(&mut self, i: usize, r: &Ray) {
@@ -411,6 +429,37 @@ mod tests {
                 assert_eq!(bits(a), bits(b), "N = {N}, lane {i}");
             }
         }
+    }
+
+    /// `valid_lanes` over the packet's arrays gives each live lane's `Ray::is_valid`, on
+    /// rays with zero, infinite and NaN components and every kind of interval.
+    #[test]
+    fn valid_lanes_are_the_lanes_whose_rays_are_valid() {
+        let mut g = Lcg(23);
+        let (mut valid, mut invalid) = (0, 0);
+        for _ in 0..3000 {
+            let mut p = RayPacket::<16>::new();
+            let rays: [Ray; 16] = core::array::from_fn(|_| {
+                let rare = g.next() >> 62 == 0;
+                let c = |g: &mut Lcg| if rare { component(g) } else { g.range(-3.0, 3.0) };
+                let (t_min, t_max) = if g.next() >> 62 == 0 { (c(&mut g), c(&mut g)) } else { (0.0, 2.0) };
+                Ray {
+                    origin: Vec3::new(c(&mut g), c(&mut g), c(&mut g)),
+                    dir: Vec3::new(c(&mut g), c(&mut g), c(&mut g)),
+                    t_min,
+                    t_max,
+                }
+            });
+            for (i, r) in rays.iter().enumerate() {
+                p.store(i, r);
+            }
+            p.active = g.next() | (1 << 40);
+            let want = (0..16).fold(0u64, |m, i| m | (u64::from(rays[i].is_valid() && p.active & (1 << i) != 0) << i));
+            assert_eq!(p.valid_lanes(), want);
+            valid += want.count_ones();
+            invalid += (p.live() & !want).count_ones();
+        }
+        assert!(valid > 10_000 && invalid > 2_000, "{valid} valid, {invalid} invalid lanes");
     }
 
     #[test]

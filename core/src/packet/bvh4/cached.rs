@@ -12,7 +12,9 @@ use crate::ray::Ray;
 use crate::traverse::boxes::datapath::NodeTests;
 use crate::traverse::wide_bvh::last_occluder::{leaf_blocks4, test_leaf_alone, LastOccluder};
 
+use super::rays16::{leaf_blocks16, shear16};
 use super::walk::occluded_packet_walk;
+use crate::simd::Avx512;
 
 /// [`super::occluded_bvh4_packet`] with the shadow cache `cache`: bit `i` set when ray
 /// `i` is blocked within its interval — the same bits for every packet and every cache.
@@ -29,14 +31,26 @@ pub fn occluded_bvh4_packet_cached<I: Intersector, P: MemoryProbe, const N: usiz
     let test = cache.to_test().filter(|_| <I::Nodes as NodeTests>::FLOAT);
     if let Some(leaf) = test {
         let mut c = RayCounters::default();
-        // The single ray's leaf test, four rays at once: the one the walks end with, so
-        // a hit here is a hit they would find (the structure is conservative).
-        for g in (0..N).step_by(4) {
-            let rays: [Ray; 4] = core::array::from_fn(|k| packet.ray(g + k));
-            let mut lanes = 0u32;
-            for (k, ray) in rays.iter().enumerate() {
-                lanes |= u32::from(g + k < N && live & (1 << (g + k)) != 0 && ray.is_valid()) << k;
+        // The single ray's leaf test, sixteen or four rays at once: the one the walks end
+        // with, so a hit here is a hit they would find (the structure is conservative).
+        let valid = packet.valid_lanes();
+        let mut rest = valid;
+        if N <= 16 && Avx512::reported().is_some() {
+            if let Some((shear, covered)) = shear16::<I, N>(packet, valid as u32) {
+                let lanes = valid as u32 & covered;
+                let hit = leaf_blocks16::<I, P, N>(scene, bvh, packet, &shear, lanes, leaf, None, probe);
+                blocked |= u64::from(hit);
+                rest &= !u64::from(lanes);
+                c.leaves = c.leaves.saturating_add(lanes.count_ones());
+                c.tri_tests = c.tri_tests.saturating_add(leaf.1.saturating_mul(lanes.count_ones()));
             }
+        }
+        for g in (0..N).step_by(4) {
+            let lanes = ((rest >> g) & 0xF) as u32;
+            if lanes == 0 {
+                continue;
+            }
+            let rays: [Ray; 4] = core::array::from_fn(|k| packet.ray(g + k));
             blocked |= u64::from(leaf_blocks_in_group::<I, P>(scene, bvh, &rays, lanes, leaf, probe, &mut c)) << g;
         }
         counters.add_rays(&c);

@@ -22,6 +22,7 @@ use crate::traverse::wide_bvh::node4::occluded_bvh4;
 use crate::traverse::wide_bvh::test_wide_leaf;
 
 use super::groups::groups_of;
+use super::rays16::{leaf_blocks16, shear16};
 use super::walk::STACK;
 #[cfg(target_arch = "x86_64")]
 use crate::simd::rays16::{boxes16, BoxLanes};
@@ -216,18 +217,13 @@ pub(super) fn occluded_many_origins<I: Intersector, P: MemoryProbe, const N: usi
                 // read once for them.
                 let mut rays = rays;
                 if wide.is_some() && rays.count_ones() >= WIDE_LEAF_RAYS {
-                    let shear = wide16.get_or_insert_with(|| {
-                        let row =
-                            |a: &[f32; N]| -> [f32; 16] { core::array::from_fn(|i| a.get(i).copied().unwrap_or(0.0)) };
-                        let org = [row(&packet.ox), row(&packet.oy), row(&packet.oz)];
-                        let dir = [row(&packet.dx), row(&packet.dy), row(&packet.dz)];
-                        I::prepare_rays16(&org, &dir, todo as u32)
-                    });
+                    let shear = wide16.get_or_insert_with(|| shear16::<I, N>(packet, todo as u32));
                     if let Some((shear, covered)) = shear {
                         let lanes = rays as u32 & *covered;
                         if lanes.count_ones() >= WIDE_LEAF_RAYS {
                             let leaf = (index, count);
-                            let b = leaf_blocks16::<I, P, N>(scene, bvh, packet, shear, lanes, leaf, &preps, probe);
+                            let b =
+                                leaf_blocks16::<I, P, N>(scene, bvh, packet, shear, lanes, leaf, Some(&preps), probe);
                             c.tri_tests += u64::from(count) * u64::from(lanes.count_ones());
                             if b != 0 {
                                 blocked |= u64::from(b);
@@ -263,53 +259,6 @@ pub(super) fn occluded_many_origins<I: Intersector, P: MemoryProbe, const N: usi
     }
     counters.add(&c);
     blocked & live
-}
-
-/// The rays of `lanes` (bits 0–15, all covered by `shear`) that `leaf` blocks: each of
-/// its triangles read once and tested against the sixteen lanes
-/// ([`Intersector::intersect_rays16`]; a lane it leaves undecided gets the one-ray test
-/// with the ray's constants from `preps`), until every such ray is blocked.
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-fn leaf_blocks16<I: Intersector, P: MemoryProbe, const N: usize>(
-    scene: &SceneView<'_>,
-    bvh: &Bvh4View<'_>,
-    packet: &RayPacket<N>,
-    shear: &I::Prepared16,
-    lanes: u32,
-    (first, count): (u32, u32),
-    preps: &[Option<I::Prepared>; N],
-    probe: &mut P,
-) -> u32 {
-    let mut blocked = 0u32;
-    let blocks = I::BLOCKS && scene.has_tri_blocks();
-    let mut block = None;
-    for e in first..first.saturating_add(count) {
-        // From the leaf's blocks where the image has them, each block read once.
-        if blocks && (e == first || e % 4 == 0) {
-            block = scene.tri_block(e / 4, probe);
-        }
-        let tri = match block.and_then(|b| I::block_triangle(b, e as usize % 4)) {
-            Some(tri) => tri,
-            None => I::fetch(scene, bvh.prim(e, probe), probe),
-        };
-        let r = I::intersect_rays16(shear, &tri);
-        let decide = lanes & !blocked & (r.hit | r.redo);
-        if decide == 0 {
-            continue;
-        }
-        let prim = bvh.prim(e, probe);
-        for k in Lanes(u64::from(decide)) {
-            let ray = packet.ray(k.min(N - 1));
-            let prep = || preps.get(k).copied().flatten().unwrap_or_else(|| I::prepare(&ray));
-            let hit = r.lane_hit::<I>(k, &ray, prim, prep, || tri);
-            blocked |= u32::from(hit.is_some()) << k;
-        }
-        if blocked == lanes {
-            break;
-        }
-    }
-    blocked
 }
 
 #[cfg(test)]

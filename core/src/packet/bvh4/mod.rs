@@ -12,6 +12,7 @@ pub(crate) mod groups;
 mod leaf;
 mod many_origins;
 mod prepared;
+mod rays16;
 mod walk;
 
 pub use cached::occluded_bvh4_packet_cached;

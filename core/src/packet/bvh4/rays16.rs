@@ -1,0 +1,69 @@
+//! A packet of up to sixteen rays in one AVX-512 register per quantity: their watertight
+//! constants made at once, and a leaf's triangles each read once and tested against all
+//! of them (as Embree's `rtcOccluded16` does), lane by lane the one-ray test's bits.
+
+use crate::image::{Bvh4View, SceneView};
+use crate::intersect::triangle::{Intersector, LaneHits};
+use crate::packet::{Lanes, RayPacket};
+use crate::probe::MemoryProbe;
+
+/// The sixteen-lane constants of the rays of `lanes` that share the first one's frame,
+/// and the lanes they cover; `None` where the test or this CPU has no sixteen-lane form.
+#[inline(always)]
+pub(super) fn shear16<I: Intersector, const N: usize>(
+    packet: &RayPacket<N>,
+    lanes: u32,
+) -> Option<(I::Prepared16, u32)> {
+    let row = |a: &[f32; N]| -> [f32; 16] { core::array::from_fn(|i| a.get(i).copied().unwrap_or(0.0)) };
+    let org = [row(&packet.ox), row(&packet.oy), row(&packet.oz)];
+    let dir = [row(&packet.dx), row(&packet.dy), row(&packet.dz)];
+    I::prepare_rays16(&org, &dir, lanes & 0xFFFF)
+}
+
+/// The rays of `lanes` (bits 0–15, all covered by `shear`) that `leaf` blocks: each of
+/// its triangles read once and tested against the sixteen lanes
+/// ([`Intersector::intersect_rays16`]; a lane it leaves undecided gets the one-ray test
+/// with the ray's constants from `preps`, if given), until every such ray is blocked.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(super) fn leaf_blocks16<I: Intersector, P: MemoryProbe, const N: usize>(
+    scene: &SceneView<'_>,
+    bvh: &Bvh4View<'_>,
+    packet: &RayPacket<N>,
+    shear: &I::Prepared16,
+    lanes: u32,
+    (first, count): (u32, u32),
+    preps: Option<&[Option<I::Prepared>; N]>,
+    probe: &mut P,
+) -> u32 {
+    let mut blocked = 0u32;
+    let blocks = I::BLOCKS && scene.has_tri_blocks();
+    let mut block = None;
+    let mut r = LaneHits::<16>::default();
+    for e in first..first.saturating_add(count) {
+        // From the leaf's blocks where the image has them, each block read once.
+        if blocks && (e == first || e % 4 == 0) {
+            block = scene.tri_block(e / 4, probe);
+        }
+        let tri = match block.and_then(|b| I::block_triangle(b, e as usize % 4)) {
+            Some(tri) => tri,
+            None => I::fetch(scene, bvh.prim(e, probe), probe),
+        };
+        I::intersect_rays16(shear, &tri, &mut r);
+        let decide = lanes & !blocked & (r.hit | r.redo);
+        if decide == 0 {
+            continue;
+        }
+        let prim = bvh.prim(e, probe);
+        for k in Lanes(u64::from(decide)) {
+            let ray = packet.ray(k.min(N - 1));
+            let prep = || preps.and_then(|p| p.get(k).copied().flatten()).unwrap_or_else(|| I::prepare(&ray));
+            let hit = r.lane_hit::<I>(k, &ray, prim, prep, || tri);
+            blocked |= u32::from(hit.is_some()) << k;
+        }
+        if blocked == lanes {
+            break;
+        }
+    }
+    blocked
+}
