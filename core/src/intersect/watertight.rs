@@ -51,15 +51,21 @@ impl Intersector for Watertight {
         let k = axis_order(Vec3::new(dir[0][lead], dir[1][lead], dir[2][lead]));
         let [kx, ky, kz] = k.map(|a| a.min(2));
         // The lanes whose largest component is on `kz` (ties to the lower axis, as
-        // `axis_order`) with the lead's sign there: lane by lane, over the rows.
-        let (x, y, z) = (&dir[0], &dir[1], &dir[2]);
+        // `axis_order`) with the lead's sign there: lane by lane over the rows, with no
+        // branch (so that the loop runs in SIMD lanes).
+        let (x, y, z, dk) = (&dir[0], &dir[1], &dir[2], &dir[kz]);
+        let lead_negative = dk[lead] < 0.0;
         let mut covered = 0u32;
         for i in 0..16 {
             let (ax, ay, az) = (x[i].abs(), y[i].abs(), z[i].abs());
-            let x_major = ax >= ay && ax >= az;
-            let major = [x_major, !x_major && ay >= az, !x_major && ay < az];
-            let negative = dir[kz][i] < 0.0;
-            covered |= u32::from(major[kz] & (negative == (dir[kz][lead] < 0.0))) << i;
+            let x_major = (ax >= ay) & (ax >= az);
+            let y_major = !x_major & (ay >= az);
+            let major = match kz {
+                0 => x_major,
+                1 => y_major,
+                _ => !x_major & !y_major,
+            };
+            covered |= u32::from(major & ((dk[i] < 0.0) == lead_negative)) << i;
         }
         let (dx, dy, dz) = (&dir[kx], &dir[ky], &dir[kz]);
         let out = ShearedRays16 {

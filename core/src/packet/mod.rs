@@ -84,10 +84,12 @@ impl<const N: usize> RayPacket<N> {
         for i in 0..N.min(64) {
             let o = [self.ox[i], self.oy[i], self.oz[i]];
             let d = [self.dx[i], self.dy[i], self.dz[i]];
-            // `x − x` is 0 for a finite `x`, NaN otherwise (as `Ray::is_valid` tests).
+            // `x − x` is 0 for a finite `x`, NaN otherwise (as `Ray::is_valid` tests); `&`
+            // and `|`, not `&&` and `||`: no branch, so that the loop runs in SIMD lanes.
             #[allow(clippy::eq_op)]
-            let finite = (0..3).all(|a| (o[a] - o[a]) + (d[a] - d[a]) == 0.0);
-            let moving = d.iter().any(|&c| c != 0.0);
+            let fin = |a: usize| (o[a] - o[a]) + (d[a] - d[a]) == 0.0;
+            let finite = fin(0) & fin(1) & fin(2);
+            let moving = (d[0] != 0.0) | (d[1] != 0.0) | (d[2] != 0.0);
             let interval = (self.t_min[i] >= 0.0) & (self.t_min[i] <= self.t_max[i]);
             valid |= u64::from(finite & moving & interval) << i;
         }
