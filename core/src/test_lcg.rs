@@ -20,6 +20,13 @@ impl Lcg {
     pub fn range(&mut self, lo: f32, hi: f32) -> f32 {
         lo + (hi - lo) * self.unit()
     }
+
+    /// One of nine lattice values in `[-1, 1]` (steps of 0.25): the intersection tests'
+    /// inputs, so that edge functions are often exactly zero (the lanes a SIMD form
+    /// leaves to the one-ray test), components tie, and triangles are often hit.
+    pub fn lattice(&mut self) -> f32 {
+        ((self.next() >> 33) % 9) as f32 * 0.25 - 1.0
+    }
 }
 
 /// The distance in ulps between an f32 and the true value (f64), for the tests of the

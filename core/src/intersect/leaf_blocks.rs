@@ -6,7 +6,7 @@
 //! bits, and the closest hit is chosen under the same `(t, prim)` order.
 
 use crate::hit::{keep_closest, Hit};
-use crate::image::SceneView;
+use crate::image::{SceneView, TriBlock4};
 use crate::intersect::triangle::{in_range, test_triangle, Intersector};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
@@ -65,5 +65,27 @@ pub fn test_leaf_blocks<I: Intersector, P: MemoryProbe, V: PrimLists, const ANY:
             return;
         }
         base = base.saturating_add(4);
+    }
+}
+
+/// List entry `e`'s triangle in the test's form, for a loop over a leaf's entries in
+/// order from `first`: from its block where the image has blocks and the test reads them
+/// (`blocks`; each block read once, kept in `block`), else through the list and the
+/// vertex indices.
+#[inline(always)]
+pub(crate) fn entry_triangle<'s, I: Intersector, P: MemoryProbe, V: PrimLists>(
+    scene: &SceneView<'s>,
+    view: &V,
+    (e, first): (u32, u32),
+    blocks: bool,
+    block: &mut Option<&'s TriBlock4>,
+    probe: &mut P,
+) -> I::Triangle {
+    if blocks && (e == first || e % 4 == 0) {
+        *block = scene.tri_block(e / 4, probe);
+    }
+    match block.and_then(|b| I::block_triangle(b, e as usize % 4)) {
+        Some(tri) => tri,
+        None => I::fetch(scene, view.prim(e, probe), probe),
     }
 }

@@ -178,12 +178,6 @@ mod tests {
     use crate::test_lcg::Lcg;
     use glam::Vec3;
 
-    /// Small lattice values, so that edge functions are often exactly zero (lanes left to
-    /// the one-ray test), direction components tie, and triangles are often hit.
-    fn lattice(g: &mut Lcg) -> f32 {
-        ((g.next() >> 33) % 9) as f32 * 0.25 - 1.0
-    }
-
     /// Where this CPU has AVX-512: sixteen rays of many origins made ready at once take,
     /// lane by lane, the frame and constants of [`Watertight::prepare`], cover exactly
     /// the lanes of the first lane's frame, and against a triangle give the one-ray
@@ -202,11 +196,11 @@ mod tests {
         let (mut checked, mut hit, mut redo, mut left_out) = (0, 0, 0, 0);
         for case in 0..4000 {
             // Shadow rays: many origins towards one point, or any directions.
-            let light = Vec3::new(lattice(&mut g), 4.0, lattice(&mut g)) * 2.0;
+            let light = Vec3::new(g.lattice(), 4.0, g.lattice()) * 2.0;
             let rays: [Ray; 16] = core::array::from_fn(|_| {
-                let o = Vec3::new(lattice(&mut g), lattice(&mut g), lattice(&mut g)) * 2.0;
+                let o = Vec3::new(g.lattice(), g.lattice(), g.lattice()) * 2.0;
                 let d = if case % 3 == 0 {
-                    Vec3::new(lattice(&mut g), lattice(&mut g), lattice(&mut g)) + Vec3::splat(0.01)
+                    Vec3::new(g.lattice(), g.lattice(), g.lattice()) + Vec3::splat(0.01)
                 } else {
                     light - o
                 };
@@ -229,7 +223,7 @@ mod tests {
                     left_out += u32::from(!same);
                 }
             }
-            let v: [Vec3; 3] = core::array::from_fn(|_| Vec3::new(lattice(&mut g), lattice(&mut g), lattice(&mut g)));
+            let v: [Vec3; 3] = core::array::from_fn(|_| Vec3::new(g.lattice(), g.lattice(), g.lattice()));
             let mut r = crate::intersect::triangle::LaneHits::default();
             Watertight::intersect_rays16(&prep, &v, &mut r);
             for i in (0..16).filter(|i| covered & (1 << i) != 0) {

@@ -118,12 +118,6 @@ mod tests {
     use crate::test_lcg::Lcg;
     use glam::{Vec3, Vec4};
 
-    /// Small lattice values, so that edge functions are often exactly zero (lanes the
-    /// test leaves to the scalar form) and triangles are often hit.
-    fn lattice(g: &mut Lcg) -> f32 {
-        ((g.next() >> 33) % 9) as f32 * 0.25 - 1.0
-    }
-
     /// Where this CPU has AVX: the eight-ray form on triangles made ready for the rays'
     /// one origin gives, lane by lane, the four-ray form's verdicts (hit and undecided
     /// lanes) and its distances and barycentrics bit for bit, for rays of every frame,
@@ -135,11 +129,11 @@ mod tests {
         let mut g = Lcg(17);
         let (mut checked, mut hit, mut redo, mut quiet) = (0, 0, 0, 0);
         for case in 0..3000 {
-            let origin = Vec3::new(lattice(&mut g), lattice(&mut g), lattice(&mut g)) * 3.0;
+            let origin = Vec3::new(g.lattice(), g.lattice(), g.lattice()) * 3.0;
             // A coherent bundle around one direction (as a camera's 8×8 block), or any.
-            let base = Vec3::new(lattice(&mut g), lattice(&mut g), lattice(&mut g)) + Vec3::splat(0.01);
+            let base = Vec3::new(g.lattice(), g.lattice(), g.lattice()) + Vec3::splat(0.01);
             let dirs: [Vec3; 16] = core::array::from_fn(|_| {
-                let jitter = Vec3::new(lattice(&mut g), lattice(&mut g), lattice(&mut g));
+                let jitter = Vec3::new(g.lattice(), g.lattice(), g.lattice());
                 if case % 2 == 0 {
                     base + jitter * 0.05
                 } else {
@@ -156,9 +150,7 @@ mod tests {
                 continue;
             }
             let verts: [[Vec3; 3]; SharedTris::SLOTS] = core::array::from_fn(|_| {
-                core::array::from_fn(|_| {
-                    origin + base * 2.0 + Vec3::new(lattice(&mut g), lattice(&mut g), lattice(&mut g))
-                })
+                core::array::from_fn(|_| origin + base * 2.0 + Vec3::new(g.lattice(), g.lattice(), g.lattice()))
             });
             let mut tris = SharedTris::default();
             for (slot, v) in verts.iter().enumerate() {

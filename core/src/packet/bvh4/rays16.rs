@@ -3,6 +3,7 @@
 //! of them (as Embree's `rtcOccluded16` does), lane by lane the one-ray test's bits.
 
 use crate::image::{Bvh4View, SceneView};
+use crate::intersect::leaf_blocks::entry_triangle;
 use crate::intersect::triangle::{Intersector, LaneHits};
 use crate::packet::{Lanes, RayPacket};
 use crate::probe::MemoryProbe;
@@ -41,14 +42,7 @@ pub(super) fn leaf_blocks16<I: Intersector, P: MemoryProbe, const N: usize>(
     let mut block = None;
     let mut r = LaneHits::<16>::default();
     for e in first..first.saturating_add(count) {
-        // From the leaf's blocks where the image has them, each block read once.
-        if blocks && (e == first || e % 4 == 0) {
-            block = scene.tri_block(e / 4, probe);
-        }
-        let tri = match block.and_then(|b| I::block_triangle(b, e as usize % 4)) {
-            Some(tri) => tri,
-            None => I::fetch(scene, bvh.prim(e, probe), probe),
-        };
+        let tri = entry_triangle::<I, P, _>(scene, bvh, (e, first), blocks, &mut block, probe);
         I::intersect_rays16(shear, &tri, &mut r);
         let decide = lanes & !blocked & (r.hit | r.redo);
         if decide == 0 {

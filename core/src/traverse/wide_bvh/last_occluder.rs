@@ -12,6 +12,7 @@
 use crate::counters::RayCounters;
 use crate::hit::Hit;
 use crate::image::SceneView;
+use crate::intersect::leaf_blocks::entry_triangle;
 use crate::intersect::triangle::Intersector;
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
@@ -188,15 +189,8 @@ pub(crate) fn leaf_blocks4<I: Intersector, P: MemoryProbe, V: PrimLists>(
     let blocks = I::BLOCKS && scene.has_tri_blocks();
     let mut block = None;
     for e in first..first.saturating_add(count) {
-        // From the leaf's blocks where the image has them (no index to follow), each
-        // block read once.
-        if blocks && (e == first || e % 4 == 0) {
-            block = scene.tri_block(e / 4, probe);
-        }
-        let tri = match block.and_then(|b| I::block_triangle(b, e as usize % 4)) {
-            Some(tri) => tri,
-            None => I::fetch(scene, view.prim(e, probe), probe),
-        };
+        // From the leaf's blocks where the image has them (no index to follow).
+        let tri = entry_triangle::<I, P, V>(scene, view, (e, first), blocks, &mut block, probe);
         let r = I::intersect_rays4(&four, &tri);
         let mut decide = lanes & !blocked & (r.hit | r.redo);
         if decide == 0 {
