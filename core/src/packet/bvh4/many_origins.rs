@@ -17,16 +17,17 @@ use crate::image::{Bvh4Node, Bvh4View, SceneView};
 use crate::intersect::triangle::Intersector;
 use crate::packet::{Lanes, LanesOf, PacketCounters, RayPacket};
 use crate::probe::MemoryProbe;
-use crate::traverse::boxes::slab::RayBox;
 use crate::traverse::wide_bvh::node4::occluded_bvh4;
 use crate::traverse::wide_bvh::test_wide_leaf;
 
-use super::groups::groups_of;
+use super::groups::{groups_of, GROUP_LANES};
 use super::rays16::{leaf_blocks16, shear16};
 use super::walk::STACK;
 #[cfg(target_arch = "x86_64")]
 use crate::simd::rays16::{boxes16, BoxLanes};
 use crate::simd::Avx512;
+use crate::traverse::boxes::clip::SLAB_GROWTH;
+use crate::traverse::boxes::slab::recip4;
 
 /// Rays of one frame entering a leaf from which the sixteen-lane test pays: it costs
 /// about what one ray's test of a leaf costs (four triangles per instruction).
@@ -37,6 +38,8 @@ const MAX_GROUPS: usize = 16;
 
 /// The packet's rays as groups of four SIMD lanes: origins, reciprocal directions (near
 /// and far, see [`RayBox`]) and intervals. Lanes not walked here hold an empty interval.
+///
+/// [`RayBox`]: crate::traverse::boxes::slab::RayBox
 struct RayGroups {
     // Per axis, per group: the lanes of one axis lie in a row (sixteen rays in one
     // AVX-512 register, `simd::rays16`).
@@ -51,7 +54,7 @@ struct RayGroups {
 
 impl RayGroups {
     /// The groups of the rays of `mask`, and the rays of `mask` left out: those with a
-    /// zero direction component, whose axis needs [`RayBox`]'s exact rule.
+    /// zero direction component, whose axis needs `RayBox`'s exact rule.
     fn new<const N: usize>(packet: &RayPacket<N>, mask: u64) -> (RayGroups, u64) {
         let empty = [[Vec4::ZERO; MAX_GROUPS]; 3];
         let mut q = RayGroups {
@@ -62,27 +65,42 @@ impl RayGroups {
             t1: [Vec4::NEG_INFINITY; MAX_GROUPS],
             octant: None,
         };
-        let (mut exact, mut signs, mut agree) = (0u64, None, true);
-        for i in LanesOf::<N>(mask) {
-            let ray = packet.ray(i);
-            let rb = RayBox::new(&ray);
-            if rb.zero_axes != 0 {
-                exact |= 1 << i;
+        // Group by group from the packet's arrays, as `RayBox::new` makes each ray's
+        // (lane by lane the same reciprocals): building each lane's `Ray` stalled on
+        // its stores.
+        let lanes = |a: &[f32; N], g: usize| match a.get(4 * g..4 * g + 4) {
+            Some(l) => Vec4::from_slice(l),
+            None => Vec4::from_array(core::array::from_fn(|k| a.get(4 * g + k).copied().unwrap_or(0.0))),
+        };
+        let mut exact = 0u64;
+        // Per axis: every walked ray's direction negative, every one positive.
+        let (mut all_neg, mut all_pos) = ([true; 3], [true; 3]);
+        for g in 0..N.div_ceil(4).min(MAX_GROUPS) {
+            let m4 = ((mask >> (4 * g)) & 0xF) as usize;
+            if m4 == 0 {
                 continue;
             }
-            let neg = [rb.inv.x < 0.0, rb.inv.y < 0.0, rb.inv.z < 0.0];
-            agree &= *signs.get_or_insert(neg) == neg;
-            let (g, l) = ((i / 4) % MAX_GROUPS, i % 4);
+            let d = [lanes(&packet.dx, g), lanes(&packet.dy, g), lanes(&packet.dz, g)];
+            let zero = (d[0].cmpeq(Vec4::ZERO) | d[1].cmpeq(Vec4::ZERO) | d[2].cmpeq(Vec4::ZERO)).bitmask() as usize;
+            exact |= ((zero & m4) as u64) << (4 * g);
+            let walked = m4 & !zero;
+            let act = GROUP_LANES[walked];
+            let o = [lanes(&packet.ox, g), lanes(&packet.oy, g), lanes(&packet.oz, g)];
             for a in 0..3 {
-                q.org[a][g][l] = rb.origin[a];
-                q.inv[a][g][l] = rb.inv[a];
-                q.inv_far[a][g][l] = rb.inv_far[a];
+                let inv = recip4(d[a]);
+                q.org[a][g] = Vec4::select(act, o[a], Vec4::ZERO);
+                q.inv[a][g] = Vec4::select(act, inv, Vec4::ZERO);
+                q.inv_far[a][g] = Vec4::select(act, inv * SLAB_GROWTH, Vec4::ZERO);
+                let neg = inv.cmplt(Vec4::ZERO).bitmask() as usize & walked;
+                all_neg[a] &= neg == walked;
+                all_pos[a] &= neg == 0;
             }
-            q.t0[g][l] = ray.t_min;
-            q.t1[g][l] = ray.t_max;
+            q.t0[g] = Vec4::select(act, lanes(&packet.t_min, g), Vec4::INFINITY);
+            q.t1[g] = Vec4::select(act, lanes(&packet.t_max, g), Vec4::NEG_INFINITY);
         }
         // No ray walked here: any octant (no lane enters a box).
-        q.octant = agree.then_some(signs.unwrap_or_default());
+        let agree = (0..3).fold(true, |ok, a| ok & (all_neg[a] | all_pos[a]));
+        q.octant = agree.then(|| core::array::from_fn(|a| all_neg[a] & !all_pos[a]));
         (q, exact)
     }
 
@@ -265,10 +283,68 @@ pub(super) fn occluded_many_origins<I: Intersector, P: MemoryProbe, const N: usi
 mod tests {
     use super::*;
 
+    use crate::traverse::boxes::slab::RayBox;
+
     use crate::image::WideNode;
     use crate::ray::Ray;
     use crate::test_lcg::Lcg;
     use glam::Vec3;
+
+    /// The groups made from the packet's arrays hold, lane by lane, each walked ray's
+    /// `RayBox` bit for bit and its interval; rays with a zero direction component are
+    /// left out, and the octant is the walked rays' common one.
+    #[test]
+    fn ray_groups_hold_each_rays_box() {
+        let mut g = Lcg(43);
+        let (mut walked, mut left_out, mut octants) = (0, 0, 0);
+        for case in 0..3000 {
+            let light = Vec3::new(g.range(-9.0, 9.0), 9.0, g.range(-9.0, 9.0));
+            let rays: [Ray; 64] = core::array::from_fn(|i| {
+                let o = Vec3::new(g.range(-1.0, 1.0), g.range(-1.0, 1.0), g.range(-1.0, 1.0));
+                let mut d =
+                    if case % 2 == 0 { light - o } else { Vec3::new(g.range(-1.0, 1.0), 1.0, g.range(-1.0, 1.0)) };
+                if (i + case) % 13 == 0 {
+                    d.x = 0.0;
+                }
+                Ray { origin: o, dir: d, t_min: g.range(0.0, 0.1), t_max: g.range(1.0, 9.0) }
+            });
+            let n: usize = [16, 64, 4][case % 3];
+            let mut packet = RayPacket::<64>::new();
+            packet.fill(&rays[..n]);
+            let mask = packet.live() & if case % 4 == 0 { g.next() } else { u64::MAX };
+            let (q, exact) = RayGroups::new(&packet, mask);
+            let mut signs = None;
+            let mut agree = true;
+            for i in 0..64 {
+                let (gr, l) = (i / 4, i % 4);
+                let rb = RayBox::new(&rays[i.min(n - 1)]);
+                let walk = mask & (1 << i) != 0 && rb.zero_axes == 0;
+                assert_eq!(exact & (1 << i) != 0, mask & (1 << i) != 0 && rb.zero_axes != 0, "case {case} lane {i}");
+                if !walk {
+                    assert_eq!((q.t0[gr][l], q.t1[gr][l]), (f32::INFINITY, f32::NEG_INFINITY), "case {case} lane {i}");
+                    left_out += 1;
+                    continue;
+                }
+                for a in 0..3 {
+                    let bits = |v: f32| v.to_bits();
+                    assert_eq!(bits(q.org[a][gr][l]), bits(rb.origin[a]), "case {case} lane {i}");
+                    assert_eq!(bits(q.inv[a][gr][l]), bits(rb.inv[a]), "case {case} lane {i}");
+                    assert_eq!(bits(q.inv_far[a][gr][l]), bits(rb.inv_far[a]), "case {case} lane {i}");
+                }
+                assert_eq!((q.t0[gr][l], q.t1[gr][l]), (rays[i].t_min, rays[i].t_max), "case {case} lane {i}");
+                let neg = [rb.inv.x < 0.0, rb.inv.y < 0.0, rb.inv.z < 0.0];
+                agree &= *signs.get_or_insert(neg) == neg;
+                walked += 1;
+            }
+            let want = agree.then(|| signs.unwrap_or_default());
+            assert_eq!(q.octant, want, "case {case}");
+            octants += u32::from(want.is_some());
+        }
+        assert!(
+            walked > 50_000 && left_out > 5_000 && octants > 500,
+            "{walked} walked, {left_out} left out, {octants}"
+        );
+    }
 
     /// Where this CPU has AVX-512: the sixteen-lane node test lets exactly the rays of
     /// the four-lane groups' test into each box, for packets of one octant and of many,
