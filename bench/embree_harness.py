@@ -7,7 +7,8 @@ them; from its hits this script makes shadow rays to a point light above the sce
 one cosine-distributed diffuse bounce (the same rays for both sides). The C harness
 bench/embree/rays.c (built here against Debian's libembree-dev) traces every set with
 Embree's paths: rtcIntersect1, rtcIntersect16 (coherent), rtcIntersect1M (stream mode;
-coherent for primary rays, incoherent for bounces), rtcOccluded1 and rtcOccluded16.
+coherent for primary rays, incoherent for bounces), rtcOccluded1, rtcOccluded16 and
+rtcOccluded1M (stream mode, coherent).
 raypipe runs its single-ray and packet paths on the 4- and 8-wide BVHs. Rounds are
 interleaved (every path once per round); the medians are reported, one core pinned
 (taskset) and then two. Hits are checked: a ray agrees when both miss, both hit the same
@@ -173,7 +174,7 @@ def time_path(rp, harness, tris_p, images, cam, name, rows, tmp, a):
     run([*render, "--ray-log", log])
     batches = [("eye", "closest", ["intersect1", "intersect16", "intersect1M"], True),
                ("secondary", "closest", ["intersect1", "intersect16", "intersect1Mi"], False),
-               ("shadow", "any", ["occluded1", "occluded16"], True)]
+               ("shadow", "any", ["occluded1", "occluded16", "occluded1M"], True)]
     out = []
     for threads in [int(t) for t in a.threads.split(",")]:
         pin = "1" if threads == 1 else None
@@ -246,7 +247,7 @@ def main():
             if a.builds and mesh is not None:
                 builds.extend(time_builds(rp, harness, mesh, name, tris_p, rays_p, tmp, a))
             kinds = [("primary", "closest", ["intersect1", "intersect16", "intersect1M"]),
-                     ("shadow", "any", ["occluded1", "occluded16"]),
+                     ("shadow", "any", ["occluded1", "occluded16", "occluded1M"]),
                      ("bounce", "closest", ["intersect1", "intersect16", "intersect1Mi"])]
             for kind, query, embree_modes in [k for k in kinds if k[0] in a.kinds.split(",")]:
                 rays_k = os.path.join(tmp, f"{kind}.npy")

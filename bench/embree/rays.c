@@ -11,6 +11,7 @@
  *   intersect1Mi  the same with the incoherent flag (secondary rays)
  *   occluded1     rtcOccluded1
  *   occluded16    rtcOccluded16, coherent
+ *   occluded1M    rtcOccluded1M (stream mode) on runs of 256, coherent flag
  * on THREADS threads, ROUNDS times. The threads take chunks of 4096 rays from a shared
  * counter as they finish the last (as raypipe's workers do): a fixed share per thread
  * left one thread idle while the other finished the costlier half of the image.
@@ -94,8 +95,9 @@ static bool monitor(void *ptr, ssize_t bytes, bool post) {
   return true;
 }
 
-enum { I1, I16, I1M, I1MI, O1, O16 };
-static const char *MODES[] = {"intersect1", "intersect16", "intersect1M", "intersect1Mi", "occluded1", "occluded16"};
+enum { I1, I16, I1M, I1MI, O1, O16, O1M, MODE_COUNT };
+static const char *MODES[] = {"intersect1",   "intersect16", "intersect1M", "intersect1Mi",
+                              "occluded1",    "occluded16",  "occluded1M"};
 
 static void ray_of(const Job *j, size_t i, struct RTCRay *r) {
   const float *p = j->rays + i * j->cols;
@@ -117,7 +119,7 @@ static void note_hit(const Job *j, size_t i, const struct RTCRay *r, const struc
 static void trace_chunk(Job *j) {
   struct RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
-  if (j->mode == I16 || j->mode == I1M || j->mode == O16) ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  if (j->mode == I16 || j->mode == I1M || j->mode == O16 || j->mode == O1M) ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
   if (j->mode == I1MI) ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
   if (j->mode == I1 || j->mode == O1) {
     for (size_t i = j->first; i < j->last; i++) {
@@ -171,8 +173,15 @@ static void trace_chunk(Job *j) {
         ray_of(j, b + k, &rh[k].ray);
         rh[k].hit.geomID = RTC_INVALID_GEOMETRY_ID;
       }
-      rtcIntersect1M(j->scene, &ctx, rh, (unsigned)n, sizeof(struct RTCRayHit));
-      for (size_t k = 0; k < n; k++) note_hit(j, b + k, &rh[k].ray, &rh[k].hit);
+      if (j->mode == O1M) {
+        // The rays of a RTCRayHit array, one RTCRayHit apart: tfar < 0 marks a blocked one.
+        rtcOccluded1M(j->scene, &ctx, &rh[0].ray, (unsigned)n, sizeof(struct RTCRayHit));
+        if (j->occluded)
+          for (size_t k = 0; k < n; k++) j->occluded[b + k] = rh[k].ray.tfar < 0.0f;
+      } else {
+        rtcIntersect1M(j->scene, &ctx, rh, (unsigned)n, sizeof(struct RTCRayHit));
+        for (size_t k = 0; k < n; k++) note_hit(j, b + k, &rh[k].ray, &rh[k].hit);
+      }
     }
     free(rh);
   }
@@ -197,9 +206,9 @@ int main(int argc, char **argv) {
   if (tc != 9) die(argv[1], "expected (T, 9) triangles");
   if (rc != 6 && rc != 8) die(argv[2], "expected (N, 6) or (N, 8) rays");
   int mode = -1;
-  for (int m = 0; m < 6; m++)
+  for (int m = 0; m < MODE_COUNT; m++)
     if (!strcmp(argv[3], MODES[m])) mode = m;
-  if (mode < 0) die(argv[3], "not a mode (intersect1, intersect16, intersect1M, intersect1Mi, occluded1, occluded16)");
+  if (mode < 0) die(argv[3], "not a mode (intersect1, intersect16, intersect1M, intersect1Mi, occluded1, occluded16, occluded1M)");
   int threads = atoi(argv[4]), rounds = atoi(argv[5]);
   if (threads < 1 || threads > 256 || rounds < 1 || rounds > 1000) die("threads/rounds", "out of range");
   enum RTCBuildQuality quality = RTC_BUILD_QUALITY_MEDIUM;
@@ -227,7 +236,7 @@ int main(int argc, char **argv) {
   double build_ms = (now() - t0) * 1e3;
 
   const char *hits_path = argc > 7 ? argv[7] : NULL;
-  int occl = mode == O1 || mode == O16;
+  int occl = mode == O1 || mode == O16 || mode == O1M;
   int32_t *prim = NULL;
   float *t = NULL;
   uint8_t *occluded = NULL;
