@@ -1,6 +1,6 @@
 //! The one module of raypipe-core with `unsafe` code: the x86-64 AVX forms of four
-//! kernels and the AVX-512 forms of two, and the switches that let them run. Every other module is
-//! `#[forbid(unsafe_code)]` (see `lib.rs`).
+//! kernels and the AVX-512 forms of two, and the switches that let them run. Every other
+//! module is `#[forbid(unsafe_code)]` (see `lib.rs`).
 //!
 //! A `no_std` library cannot ask the operating system which instruction sets the CPU
 //! has, so the host detects them and says so once ([`assume_avx`], `raypipe`'s

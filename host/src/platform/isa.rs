@@ -44,12 +44,8 @@ pub fn report_cpu() {
             // SAFETY: the CPU has AVX (checked above), as `assume_avx` requires.
             unsafe { raypipe_core::simd::assume_avx() }
         }
-        let wanted = std::env::var_os("RAYPIPE_AVX512").is_none_or(|v| v != "0");
-        if wanted && std::is_x86_feature_detected!("avx512f") {
-            // SAFETY: the CPU has AVX-512 F (checked above), as `assume_avx512` requires.
-            unsafe { raypipe_core::simd::assume_avx512(true) }
-        }
     }
+    set_avx512(std::env::var_os("RAYPIPE_AVX512").is_none_or(|v| v != "0"));
 }
 
 /// Lets the kernels take their AVX-512 forms (`on`, where the CPU has AVX-512 F) or

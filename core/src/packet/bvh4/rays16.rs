@@ -7,14 +7,19 @@ use crate::intersect::leaf_blocks::entry_triangle;
 use crate::intersect::triangle::{Intersector, LaneHits};
 use crate::packet::{Lanes, RayPacket};
 use crate::probe::MemoryProbe;
+use crate::simd::has_avx512;
 
 /// The sixteen-lane constants of the rays of `lanes` that share the first one's frame,
-/// and the lanes they cover; `None` where the test or this CPU has no sixteen-lane form.
+/// and the lanes they cover; `None` for packets of more than 16 rays, and where the test
+/// or this CPU has no sixteen-lane form (nothing is gathered then).
 #[inline(always)]
 pub(super) fn shear16<I: Intersector, const N: usize>(
     packet: &RayPacket<N>,
     lanes: u32,
 ) -> Option<(I::Prepared16, u32)> {
+    if N > 16 || !has_avx512() {
+        return None;
+    }
     let row = |a: &[f32; N]| -> [f32; 16] { core::array::from_fn(|i| a.get(i).copied().unwrap_or(0.0)) };
     let org = [row(&packet.ox), row(&packet.oy), row(&packet.oz)];
     let dir = [row(&packet.dx), row(&packet.dy), row(&packet.dz)];
