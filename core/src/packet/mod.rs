@@ -6,6 +6,7 @@
 
 pub mod bvh;
 pub mod bvh4;
+pub mod bvh8;
 pub mod grid;
 pub mod instanced;
 pub mod kdtree;

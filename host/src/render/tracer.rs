@@ -7,6 +7,7 @@ use crate::platform::isa::with_avx2;
 
 use raypipe_core::packet::bvh::trace_bvh_packet;
 use raypipe_core::packet::bvh4::{occluded_bvh4_packet_cached, trace_bvh4_packet};
+use raypipe_core::packet::bvh8::trace_bvh8_packet;
 use raypipe_core::packet::grid::trace_grid_packet;
 use raypipe_core::packet::kdtree::trace_kdtree_packet;
 use raypipe_core::packet::{PacketCounters, PacketHits, RayPacket};
@@ -258,9 +259,13 @@ pub fn fixed_point_unsupported(scene: &SceneView<'_>) -> Option<&'static str> {
 }
 
 /// Whether the scene's structure has a packet kernel; packets of the others (no
-/// structure, the 8-wide BVH) are traced ray by ray.
+/// structure) are traced ray by ray.
 pub fn has_packet_kernel(scene: &SceneView<'_>) -> bool {
-    scene.grid().is_some() || scene.bvh4().is_some() || scene.bvh().is_some() || scene.kdtree().is_some()
+    scene.grid().is_some()
+        || scene.bvh4().is_some()
+        || scene.bvh8().is_some()
+        || scene.bvh().is_some()
+        || scene.kdtree().is_some()
 }
 
 /// The any-hit query for a packet (bit `i` set: ray `i` is blocked): the 4-wide BVH's
@@ -296,13 +301,14 @@ pub fn trace_packet<I: Intersector, P: MemoryProbe, const N: usize>(
         trace_grid_packet::<I, P, N>(scene, grid, packet, hits, probe, counters)
     } else if let Some(bvh) = scene.bvh4() {
         trace_bvh4_packet::<I, P, N>(scene, bvh, packet, hits, probe, counters)
+    } else if let Some(bvh) = scene.bvh8() {
+        trace_bvh8_packet::<I, P, N>(scene, bvh, packet, hits, probe, counters)
     } else if let Some(bvh) = scene.bvh() {
         trace_bvh_packet::<I, P, N>(scene, bvh, packet, hits, probe, counters)
     } else if let Some(kd) = scene.kdtree() {
         trace_kdtree_packet::<I, P, N>(scene, kd, packet, hits, probe, counters)
     } else {
-        // No packet kernel (no structure, a hierarchical grid, or the 8-wide BVH, whose
-        // single-ray kernel is its fast path): each ray by itself.
+        // No packet kernel (no structure, or a hierarchical grid): each ray by itself.
         raypipe_core::packet::ray_by_ray(packet, hits, counters, |r, c| trace::<I, P>(scene, r, probe, c));
     }
 }

@@ -2,7 +2,7 @@
 //! origins and reciprocal directions culls a node's four boxes for all rays at once
 //! (Reshetov et al. 2005; Wald et al. 2007).
 
-use crate::image::{Bvh4Node, NULL_INDEX};
+use crate::image::{Bvh4Node, Bvh8Node, NULL_INDEX};
 use crate::packet::RayPacket;
 use crate::traverse::boxes::clip::SLAB_GROWTH;
 use crate::traverse::boxes::slab::recip;
@@ -16,7 +16,7 @@ use super::groups::{Groups, GROUPS, GROUP_LANES};
 /// so the bounds are attained at the corners), hence a box rejected for the packet is
 /// rejected by every ray (Reshetov et al. 2005; Wald et al. 2007).
 #[derive(Clone, Copy, Debug)]
-pub(super) struct Frustum {
+pub(in crate::packet) struct Frustum {
     // Per axis, splatted over four lanes (one per child box).
     olo: [Vec4; 3],
     ohi: [Vec4; 3],
@@ -31,7 +31,7 @@ pub(super) struct Frustum {
 impl Frustum {
     /// The frustum of the packet's active lanes; `None` if a direction has a zero
     /// component (the exact per-ray rule of `RayBox` is needed then).
-    pub(super) fn new(q: &Groups, groups: usize, mask: u64) -> Option<Frustum> {
+    pub(in crate::packet) fn new(q: &Groups, groups: usize, mask: u64) -> Option<Frustum> {
         if q.zero_dir {
             return None;
         }
@@ -78,7 +78,7 @@ impl Frustum {
     /// bit, as [`Frustum::new`] takes from every lane's reciprocal. With the largest end
     /// of the packet's rays. Packets whose rays all miss the scene then never compute the
     /// per-lane reciprocals (most of them, for an object in the middle of the view).
-    pub(super) fn from_full_packet<const N: usize>(p: &RayPacket<N>) -> Option<(Frustum, f32)> {
+    pub(in crate::packet) fn from_full_packet<const N: usize>(p: &RayPacket<N>) -> Option<(Frustum, f32)> {
         let o = [extremes(&p.ox), extremes(&p.oy), extremes(&p.oz)];
         let (t_min, _) = extremes(&p.t_min);
         let (_, t_end) = extremes(&p.t_max);
@@ -100,17 +100,43 @@ impl Frustum {
 
     /// The packet's one origin, if all its rays start at one point.
     #[inline(always)]
-    pub(super) fn origin(&self) -> Option<[f32; 3]> {
+    pub(in crate::packet) fn origin(&self) -> Option<[f32; 3]> {
         self.one_origin.then(|| [self.olo[0].x, self.olo[1].x, self.olo[2].x])
     }
 
     /// Lower bound of the entry distance into each child box, and which boxes some ray
     /// may hit before `t_end` (the largest best-hit distance of the packet).
     #[inline(always)]
-    pub(super) fn slab4(&self, n: &Bvh4Node, t_end: f32) -> (Vec4, u32) {
+    pub(in crate::packet) fn slab4(&self, n: &Bvh4Node, t_end: f32) -> (Vec4, u32) {
+        let (near, hit) = self.slab_quad([(n.min_x, n.max_x), (n.min_y, n.max_y), (n.min_z, n.max_z)], t_end);
+        let valid = (0..4).fold(0u32, |m, k| m | (((n.child[k] != NULL_INDEX) as u32) << k));
+        (near, hit & valid)
+    }
+
+    /// [`Frustum::slab4`] for the eight child boxes of an 8-wide node, as two quads of
+    /// lanes: the same interval arithmetic per box.
+    #[inline(always)]
+    pub(in crate::packet) fn slab8(&self, n: &Bvh8Node, t_end: f32) -> ([f32; 8], u32) {
+        let mut near = [0f32; 8];
+        let mut hit = 0u32;
+        for h in 0..2 {
+            let half = |a: &[f32; 8]| -> [f32; 4] { [a[4 * h], a[4 * h + 1], a[4 * h + 2], a[4 * h + 3]] };
+            let planes =
+                [(half(&n.min_x), half(&n.max_x)), (half(&n.min_y), half(&n.max_y)), (half(&n.min_z), half(&n.max_z))];
+            let (t, m) = self.slab_quad(planes, t_end);
+            near[4 * h..4 * h + 4].copy_from_slice(&t.to_array());
+            hit |= m << (4 * h);
+        }
+        let valid = (0..8).fold(0u32, |m, k| m | (((n.child[k] != NULL_INDEX) as u32) << k));
+        (near, hit & valid)
+    }
+
+    /// The interval test of four boxes given by their planes per axis `(lower, upper)`:
+    /// entry bounds, and the boxes whose bounds leave an interval before `t_end`.
+    #[inline(always)]
+    fn slab_quad(&self, planes: [([f32; 4], [f32; 4]); 3], t_end: f32) -> (Vec4, u32) {
         let mut near = Vec4::splat(self.t_min);
         let mut far = Vec4::splat(f32::INFINITY);
-        let planes = [(n.min_x, n.max_x), (n.min_y, n.max_y), (n.min_z, n.max_z)];
         for (a, (lo, hi)) in planes.into_iter().enumerate() {
             let (il, ih, ol, oh) = (self.ilo[a], self.ihi[a], self.olo[a], self.ohi[a]);
             let (lo, hi) = (Vec4::from_array(lo), Vec4::from_array(hi));
@@ -134,14 +160,13 @@ impl Frustum {
             far = far.min(mx * SLAB_GROWTH);
         }
         far = far.min(Vec4::splat(t_end));
-        let valid = (0..4).fold(0u32, |m, k| m | (((n.child[k] != NULL_INDEX) as u32) << k));
-        (near, near.cmple(far).bitmask() & valid)
+        (near, near.cmple(far).bitmask())
     }
 }
 
 /// The smallest and largest of `N` lanes, four at a time.
 #[inline(always)]
-pub(super) fn extremes<const N: usize>(a: &[f32; N]) -> (f32, f32) {
+pub(in crate::packet) fn extremes<const N: usize>(a: &[f32; N]) -> (f32, f32) {
     let mut quads = a.chunks_exact(4);
     let (mut lo, mut hi) = (Vec4::INFINITY, Vec4::NEG_INFINITY);
     for q in &mut quads {

@@ -6,7 +6,7 @@ use crate::traverse::boxes::slab::recip4;
 use glam::{BVec4A, Vec4};
 
 /// Lanes of a group of four as a SIMD mask, by the group's 4 bits of the active mask.
-pub(super) const GROUP_LANES: [BVec4A; 16] = {
+pub(in crate::packet) const GROUP_LANES: [BVec4A; 16] = {
     let mut t = [BVec4A::new(false, false, false, false); 16];
     let mut m = 0;
     while m < 16 {
@@ -28,14 +28,14 @@ pub(crate) struct Groups {
     /// Each lane's best-hit distance so far (or its ray's end).
     pub(crate) ends: [Vec4; GROUPS],
     /// Per group, the largest end of its active lanes (−∞ without any).
-    pub(super) group_end: [f32; GROUPS],
+    pub(in crate::packet) group_end: [f32; GROUPS],
     /// Some active lane has a zero direction component.
-    pub(super) zero_dir: bool,
+    pub(in crate::packet) zero_dir: bool,
 }
 
 impl Groups {
     /// No lanes yet: every group's end −∞.
-    pub(super) const EMPTY: Groups = Groups {
+    pub(in crate::packet) const EMPTY: Groups = Groups {
         org: [[Vec4::ZERO; GROUPS]; 3],
         inv: [[Vec4::ZERO; GROUPS]; 3],
         t_min: [Vec4::ZERO; GROUPS],
@@ -46,7 +46,7 @@ impl Groups {
 
     /// The packet's lanes, by value (for tests).
     #[cfg(test)]
-    pub(super) fn new<const N: usize>(p: &RayPacket<N>, groups: usize, mask: u64) -> Groups {
+    pub(in crate::packet) fn new<const N: usize>(p: &RayPacket<N>, groups: usize, mask: u64) -> Groups {
         let mut slot = None;
         Groups::fill(&mut slot, p, groups, mask);
         slot.unwrap_or(Groups::EMPTY)
@@ -55,7 +55,7 @@ impl Groups {
     /// The packet's lanes written into `slot` in place (built elsewhere and moved in,
     /// the two kilobytes were copied once more per packet: 1% of the bunny's packet time).
     #[inline(always)]
-    pub(super) fn fill<'s, const N: usize>(
+    pub(in crate::packet) fn fill<'s, const N: usize>(
         slot: &'s mut Option<Groups>,
         p: &RayPacket<N>,
         groups: usize,
@@ -83,12 +83,12 @@ impl Groups {
     }
 
     // `largest_end` reads the ends as four registers.
-    pub(super) const _FOUR_QUADS: () = assert!(GROUPS == 16);
+    pub(in crate::packet) const _FOUR_QUADS: () = assert!(GROUPS == 16);
 
     /// The largest end of the groups' active lanes: how far any ray of the packet still
     /// looks. (Groups past the packet's have no active lane: their end stays −∞.)
     #[inline(always)]
-    pub(super) fn largest_end(&self) -> f32 {
+    pub(in crate::packet) fn largest_end(&self) -> f32 {
         let e = &self.group_end;
         let quad = |k: usize| Vec4::new(e[4 * k], e[4 * k + 1], e[4 * k + 2], e[4 * k + 3]);
         quad(0).max(quad(1)).max(quad(2).max(quad(3))).max_element()
@@ -96,7 +96,7 @@ impl Groups {
 
     /// Recomputes group `g`'s largest end.
     #[inline(always)]
-    pub(super) fn update_end(&mut self, g: usize, mask: u64) {
+    pub(in crate::packet) fn update_end(&mut self, g: usize, mask: u64) {
         let act = GROUP_LANES[((mask >> (4 * g)) & 0xF) as usize];
         self.group_end[g] = Vec4::select(act, self.ends[g], Vec4::NEG_INFINITY).max_element();
     }
@@ -104,7 +104,7 @@ impl Groups {
 
 /// Bit `g` set when some lane of group `g` (lanes `4g .. 4g + 4`) is in `lanes`.
 #[inline(always)]
-pub(super) fn groups_of(lanes: u64) -> u64 {
+pub(in crate::packet) fn groups_of(lanes: u64) -> u64 {
     // Each group's four bits folded into its lowest (bit 4g), then those gathered to bit
     // g in halving steps: a dozen operations instead of a loop of sixteen tests.
     let x = lanes | (lanes >> 1);

@@ -3,7 +3,7 @@
 //! two or more, one origin's triangle set-up shared where the rays have one.
 
 use crate::hit::keep_closest;
-use crate::image::{Bvh4View, SceneView};
+use crate::image::{SceneView, WideBvhView, WideNode};
 use crate::intersect::triangle::{test_triangle, Intersector, LaneHits, RayPair, SharedTris};
 use crate::packet::{Lanes, PacketHits, RayPacket};
 use crate::probe::MemoryProbe;
@@ -19,7 +19,7 @@ use super::prepared::{Ones, Preps};
 /// (every active lane of `q.org` holds it), so that `lo − o` and `hi − o` are computed
 /// once per leaf rather than once per group: the same values, hence the same lanes.
 #[inline(always)]
-pub(super) fn leaf_entries(
+pub(in crate::packet) fn leaf_entries(
     q: &Groups,
     groups: usize,
     mask: u64,
@@ -36,7 +36,7 @@ pub(super) fn leaf_entries(
 
 /// [`leaf_entries`] over glam's four-lane registers, group by group.
 #[inline(always)]
-pub(super) fn leaf_entries_portable(
+pub(in crate::packet) fn leaf_entries_portable(
     q: &Groups,
     groups: usize,
     mask: u64,
@@ -75,20 +75,20 @@ pub(super) fn leaf_entries_portable(
 /// A leaf the packet reached: the scene and tree it is in, the packet, and its list
 /// entries `first .. first + count`.
 #[derive(Clone, Copy)]
-pub(super) struct LeafVisit<'v, 's, const N: usize> {
-    pub(super) scene: &'v SceneView<'s>,
-    pub(super) bvh: &'v Bvh4View<'s>,
-    pub(super) packet: &'v RayPacket<N>,
-    pub(super) first: u32,
-    pub(super) count: u32,
+pub(in crate::packet) struct LeafVisit<'v, 's, W: WideNode, const N: usize> {
+    pub(in crate::packet) scene: &'v SceneView<'s>,
+    pub(in crate::packet) bvh: &'v WideBvhView<'s, W>,
+    pub(in crate::packet) packet: &'v RayPacket<N>,
+    pub(in crate::packet) first: u32,
+    pub(in crate::packet) count: u32,
 }
 
 /// Tests the leaf's triangles (list entries `first .. first + count`) with the rays of
 /// `enter`, each triangle read once: four rays at a time where two or more of a group
 /// enter and the intersector has a four-ray form, one by one otherwise.
 #[inline(always)]
-pub(super) fn test_leaf<I: Intersector, P: MemoryProbe, const N: usize>(
-    leaf: &LeafVisit<'_, '_, N>,
+pub(in crate::packet) fn test_leaf<I: Intersector, P: MemoryProbe, W: WideNode, const N: usize>(
+    leaf: &LeafVisit<'_, '_, W, N>,
     enter: u64,
     preps: &mut Preps<I, N>,
     hits: &mut PacketHits<N>,
@@ -123,20 +123,20 @@ pub(super) fn test_leaf<I: Intersector, P: MemoryProbe, const N: usize>(
 
 /// One lane of a multi-lane test's outcome, and the packet ray it belongs to.
 #[derive(Clone, Copy)]
-pub(super) struct LaneOutcome<'r, const L: usize> {
+pub(in crate::packet) struct LaneOutcome<'r, const L: usize> {
     /// The test's outcome for all its lanes.
-    pub(super) hits: &'r LaneHits<L>,
+    pub(in crate::packet) hits: &'r LaneHits<L>,
     /// The lane.
-    pub(super) lane: usize,
+    pub(in crate::packet) lane: usize,
     /// The packet ray the lane tested.
-    pub(super) ray: usize,
+    pub(in crate::packet) ray: usize,
 }
 
 /// Keeps lane `k` of a multi-lane test's outcome `r` on triangle `prim` for packet ray
 /// `i` (`outcome`): its hit if in the ray's range, or, where the lane was left undecided,
 /// the one-ray test's verdict on the triangle `tri()`.
 #[inline(always)]
-pub(super) fn keep_lane<I: Intersector, const N: usize, const L: usize>(
+pub(in crate::packet) fn keep_lane<I: Intersector, const N: usize, const L: usize>(
     packet: &RayPacket<N>,
     ones: &mut Ones<I, N>,
     hits: &mut PacketHits<N>,
@@ -159,8 +159,8 @@ pub(super) fn keep_lane<I: Intersector, const N: usize, const L: usize>(
 /// triangles are tested in. Returns false, having tested nothing, where it does not apply
 /// (the test has no such form, this CPU lacks it, or the groups do not share one frame).
 #[inline(always)]
-pub(super) fn test_leaf_shared<I: Intersector, P: MemoryProbe, const N: usize>(
-    leaf: &LeafVisit<'_, '_, N>,
+pub(in crate::packet) fn test_leaf_shared<I: Intersector, P: MemoryProbe, W: WideNode, const N: usize>(
+    leaf: &LeafVisit<'_, '_, W, N>,
     enter: u64,
     origin: Vec3,
     preps: &mut Preps<I, N>,

@@ -7,13 +7,13 @@
 
 mod apex;
 mod cached;
-mod frustum;
+pub(in crate::packet) mod frustum;
 pub(crate) mod groups;
-mod leaf;
+pub(in crate::packet) mod leaf;
 mod many_origins;
-mod prepared;
+pub(in crate::packet) mod prepared;
 mod rays16;
-mod walk;
+pub(in crate::packet) mod walk;
 
 pub use cached::occluded_bvh4_packet_cached;
 #[cfg(target_arch = "x86_64")]

@@ -10,17 +10,17 @@ use super::groups::{groups_of, Groups, GROUPS, GROUP_LANES};
 /// The rays' intersection constants, computed for a group of four lanes the first time
 /// one of its rays enters a leaf (most rays of a frame never do), as four SIMD lanes for
 /// the intersector's four-ray form; one ray's own constants only when it is tested alone.
-pub(super) struct Preps<I: Intersector, const N: usize> {
+pub(in crate::packet) struct Preps<I: Intersector, const N: usize> {
     // Per group of four lanes.
-    pub(super) fours: Fours<I>,
+    pub(in crate::packet) fours: Fours<I>,
     // Per lane: only lanes tested one by one (redone lanes, lone rays, groups without a
     // four-ray form) need them.
-    pub(super) ones: Ones<I, N>,
+    pub(in crate::packet) ones: Ones<I, N>,
 }
 
 impl<I: Intersector, const N: usize> Preps<I, N> {
     #[inline(always)]
-    pub(super) fn new() -> Self {
+    pub(in crate::packet) fn new() -> Self {
         Preps {
             fours: Fours { four: heapless::Vec::new(), four_slot: [0; GROUPS], ready: 0 },
             ones: Ones { one: heapless::Vec::new(), one_slot: [0; N], one_ready: 0 },
@@ -32,17 +32,17 @@ impl<I: Intersector, const N: usize> Preps<I, N> {
 /// kept in the order they were asked for, and per group the index of its entry: nothing
 /// is written for groups that never need constants; the arrays of every lane's record,
 /// initialised per packet, cost packets that miss the scene a tenth of their time.)
-pub(super) struct Fours<I: Intersector> {
-    pub(super) four: heapless::Vec<Option<I::Prepared4>, GROUPS>,
-    pub(super) four_slot: [u8; GROUPS],
+pub(in crate::packet) struct Fours<I: Intersector> {
+    pub(in crate::packet) four: heapless::Vec<Option<I::Prepared4>, GROUPS>,
+    pub(in crate::packet) four_slot: [u8; GROUPS],
     // Groups whose constants are computed.
-    pub(super) ready: u32,
+    pub(in crate::packet) ready: u32,
 }
 
 impl<I: Intersector> Fours<I> {
     /// Group `g`'s four-ray constants, if ready and the intersector has them.
     #[inline(always)]
-    pub(super) fn get(&self, g: usize) -> Option<&I::Prepared4> {
+    pub(in crate::packet) fn get(&self, g: usize) -> Option<&I::Prepared4> {
         if self.ready & (1 << (g % GROUPS)) == 0 {
             return None;
         }
@@ -51,7 +51,13 @@ impl<I: Intersector> Fours<I> {
 
     /// Makes the constants of every group with a lane in `enter` ready.
     #[inline(always)]
-    pub(super) fn prepare<const N: usize>(&mut self, packet: &RayPacket<N>, q: &Groups, mask: u64, enter: u64) {
+    pub(in crate::packet) fn prepare<const N: usize>(
+        &mut self,
+        packet: &RayPacket<N>,
+        q: &Groups,
+        mask: u64,
+        enter: u64,
+    ) {
         for g in Lanes(groups_of(enter) & !(self.ready as u64)) {
             let m4 = (mask >> (4 * g)) & 0xF;
             self.ready |= 1 << g;
@@ -83,17 +89,17 @@ impl<I: Intersector> Fours<I> {
 }
 
 /// The one-ray constants of the lanes that have needed them (as [`Fours`] keeps them).
-pub(super) struct Ones<I: Intersector, const N: usize> {
-    pub(super) one: heapless::Vec<I::Prepared, N>,
+pub(in crate::packet) struct Ones<I: Intersector, const N: usize> {
+    pub(in crate::packet) one: heapless::Vec<I::Prepared, N>,
     one_slot: [u8; N],
     // Lanes whose constants are computed.
-    pub(super) one_ready: u64,
+    pub(in crate::packet) one_ready: u64,
 }
 
 impl<I: Intersector, const N: usize> Ones<I, N> {
     /// Ray `i`'s one-ray constants, computed the first time they are asked for.
     #[inline(always)]
-    pub(super) fn get(&mut self, packet: &RayPacket<N>, i: usize) -> I::Prepared {
+    pub(in crate::packet) fn get(&mut self, packet: &RayPacket<N>, i: usize) -> I::Prepared {
         let i = i.min(N - 1);
         if self.one_ready & (1 << i) == 0 {
             self.one_slot[i] = self.one.len() as u8;

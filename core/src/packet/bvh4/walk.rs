@@ -24,7 +24,7 @@ use super::leaf::{leaf_entries, test_leaf, test_leaf_shared, LeafVisit};
 use super::many_origins::occluded_many_origins;
 use super::prepared::Preps;
 
-pub(super) const STACK: usize = 3 * MAX_WIDE_DEPTH as usize + 4;
+pub(in crate::packet) const STACK: usize = 3 * MAX_WIDE_DEPTH as usize + 4;
 
 /// How the packet culls boxes: by its frustum, or ray by ray with each ray's exact box
 /// test when some ray has a zero direction component (see [`RayBox`]).
@@ -38,21 +38,22 @@ pub(super) enum Cull<'b, const N: usize> {
     Exact(&'b [RayBox; N]),
 }
 
-/// The slots set in `mask`, ordered by entry distance `t` (insertion sort: at most four),
-/// and how many there are.
+/// The slots set in `mask`, ordered by entry distance `t` (insertion sort: at most `W`,
+/// four or eight), and how many there are.
 #[inline(always)]
-pub(super) fn nearest_first(mask: u32, t: &[f32; 4]) -> ([usize; 4], usize) {
-    let mut order = [0usize; 4];
+pub(in crate::packet) fn nearest_first<const W: usize>(mask: u32, t: &[f32; W]) -> ([usize; W], usize) {
+    let mut order = [0usize; W];
     let mut m = 0;
-    for k in 0..4 {
+    for k in 0..W {
         if mask & (1 << k) != 0 {
             let mut j = m;
-            // Indices masked below 4: the compiler sees them in range (no panic path).
-            while j > 0 && t[order[(j - 1) & 3] & 3] > t[k] {
-                order[j & 3] = order[(j - 1) & 3];
+            // Indices reduced modulo `W` (a power of two: a mask): the compiler sees them
+            // in range (no panic path).
+            while j > 0 && t[order[(j - 1) % W] % W] > t[k] {
+                order[j % W] = order[(j - 1) % W];
                 j -= 1;
             }
-            order[j & 3] = k;
+            order[j % W] = k;
             m += 1;
         }
     }
@@ -340,7 +341,7 @@ impl<'b, I: Intersector, const N: usize> PacketWalk<'b, I, N> {
     #[inline(always)]
     fn leaf<P: MemoryProbe, const ANY: bool>(
         &mut self,
-        leaf: LeafVisit<'_, '_, N>,
+        leaf: LeafVisit<'_, '_, Bvh4Node, N>,
         leaf_box: &[f32; 6],
         leaf_t: f32,
         hits: &mut PacketHits<N>,
@@ -376,11 +377,11 @@ impl<'b, I: Intersector, const N: usize> PacketWalk<'b, I, N> {
             Cull::Frustum(f) => f
                 .origin()
                 .map(Vec3::from)
-                .is_some_and(|o| test_leaf_shared::<I, P, N>(&leaf, enter, o, &mut self.preps, hits, probe)),
+                .is_some_and(|o| test_leaf_shared::<I, P, Bvh4Node, N>(&leaf, enter, o, &mut self.preps, hits, probe)),
             Cull::Apex(_) | Cull::Exact(_) => false,
         };
         if !shared {
-            test_leaf::<I, P, N>(&leaf, enter, &mut self.preps, hits, probe);
+            test_leaf::<I, P, Bvh4Node, N>(&leaf, enter, &mut self.preps, hits, probe);
         }
         self.c.tri_tests += leaf.count as u64 * enter.count_ones() as u64;
         if ANY {

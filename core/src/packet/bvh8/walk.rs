@@ -1,0 +1,179 @@
+//! The packet's closest-hit walk through the 8-wide BVH: one node per step for the whole
+//! packet, culled by its frustum, needed children nearest first, a leaf's triangles
+//! tested by the rays that enter its box.
+
+use crate::counters::RayCounters;
+use crate::hit::Hit;
+use crate::image::{Bvh8Node, Bvh8View, SceneView};
+use crate::intersect::triangle::Intersector;
+use crate::packet::bvh4::frustum::Frustum;
+use crate::packet::bvh4::groups::{groups_of, Groups};
+use crate::packet::bvh4::leaf::{leaf_entries, test_leaf, test_leaf_shared, LeafVisit};
+use crate::packet::bvh4::prepared::Preps;
+use crate::packet::bvh4::walk::nearest_first;
+use crate::packet::{ray_by_ray, Lanes, PacketCounters, PacketHits, RayPacket};
+use crate::probe::MemoryProbe;
+use crate::ray::Ray;
+use crate::traverse::boxes::datapath::NodeTests;
+use crate::traverse::wide_bvh::node8::trace_bvh8;
+use glam::{Vec3, Vec4};
+
+/// Stack entries: up to seven pushed per level of the tree.
+const STACK: usize = 7 * crate::image::MAX_WIDE_DEPTH as usize + 8;
+
+/// (child or first entry, leaf count or 0, entry bound, child box as min xyz, max xyz)
+type Entry = (u32, u32, f32, [f32; 6]);
+
+/// Traces all active rays of `packet` through the 8-wide BVH; `hits[i]` receives ray
+/// `i`'s closest hit, bit for bit the single-ray walk's.
+///
+/// Inner nodes are tested once for the whole packet with its interval-arithmetic
+/// frustum (conservative: a box it rejects, every ray rejects); at a leaf each ray tests
+/// the leaf's box up to its own best hit and only the rays that enter it test the
+/// triangles, as in the 4-wide packet walk. Packets without a frustum (a zero direction
+/// component, rays of many origins in several octants) and trees of fixed-point nodes
+/// are traced ray by ray.
+pub fn trace_bvh8_packet<I: Intersector, P: MemoryProbe, const N: usize>(
+    scene: &SceneView<'_>,
+    bvh: &Bvh8View<'_>,
+    packet: &RayPacket<N>,
+    hits: &mut PacketHits<N>,
+    probe: &mut P,
+    counters: &mut PacketCounters,
+) {
+    *hits = [None; N];
+    let mask = packet.live();
+    if mask == 0 {
+        return;
+    }
+    let culls = <I::Nodes as NodeTests>::FLOAT && (packet.one_origin() || packet.one_octant());
+    let mut lanes: Option<Groups> = None;
+    let frustum = culls.then(|| frustum_of(packet, mask, &mut lanes)).flatten();
+    let Some((frustum, t_end)) = frustum else {
+        let walk = |r: &Ray, c: &mut RayCounters| trace_bvh8::<I, P>(scene, bvh, r, probe, c);
+        return ray_by_ray(packet, hits, counters, walk);
+    };
+    let mut walk = Walk::<I, N> { frustum, lanes, preps: Preps::new(), mask, t_end, c: PacketCounters::default() };
+    let mut stack: heapless::Vec<Entry, STACK> = heapless::Vec::new();
+    let mut current: Entry = (0, 0, 0.0, [0.0; 6]);
+    loop {
+        let (index, count, leaf_t, leaf_box) = current;
+        walk.c.visits += 1;
+        if count == 0 {
+            if let Some(next) = walk.inner(bvh.node(index, probe), &mut stack) {
+                current = next;
+                continue;
+            }
+        } else {
+            let leaf = LeafVisit { scene, bvh, packet, first: index, count };
+            walk.leaf::<P>(leaf, &leaf_box, leaf_t, hits, probe);
+        }
+        // The next entry whose bound is not beyond every ray's best hit.
+        loop {
+            let Some(entry) = stack.pop() else {
+                counters.add(&walk.c);
+                return;
+            };
+            if entry.2 <= walk.t_end {
+                current = entry;
+                break;
+            }
+        }
+    }
+}
+
+/// The packet's frustum and the largest end of its rays, straight from the arrays where
+/// every lane is active, else from its lanes in registers (made in `lanes`); `None` if
+/// some direction has a zero component.
+#[inline(always)]
+fn frustum_of<const N: usize>(packet: &RayPacket<N>, mask: u64, lanes: &mut Option<Groups>) -> Option<(Frustum, f32)> {
+    let full = N <= 64 && mask == u64::MAX >> (64 - N.clamp(1, 64));
+    if let Some(f) = full.then(|| Frustum::from_full_packet(packet)).flatten() {
+        return Some(f);
+    }
+    let q = Groups::fill(lanes, packet, N.div_ceil(4), mask);
+    let t_end = q.largest_end();
+    Frustum::new(q, N.div_ceil(4), mask).map(|f| (f, t_end))
+}
+
+/// The walk's state: the frustum, the lanes in registers (made when a leaf first needs
+/// them), the rays' intersection constants, how far any ray still looks, the counters.
+struct Walk<I: Intersector, const N: usize> {
+    frustum: Frustum,
+    lanes: Option<Groups>,
+    preps: Preps<I, N>,
+    mask: u64,
+    t_end: f32,
+    c: PacketCounters,
+}
+
+impl<I: Intersector, const N: usize> Walk<I, N> {
+    /// Groups of four lanes in a packet of `N`.
+    const GROUPS: usize = N.div_ceil(4);
+
+    /// An inner node: its eight boxes culled by the frustum, the needed children pushed
+    /// farthest first but the nearest, which is returned as the next entry.
+    #[inline(always)]
+    fn inner(&mut self, node: &Bvh8Node, stack: &mut heapless::Vec<Entry, STACK>) -> Option<Entry> {
+        self.c.active_lanes += self.mask.count_ones() as u64;
+        let (child_t, needed) = self.frustum.slab8(node, self.t_end);
+        let (order, n) = nearest_first(needed, &child_t);
+        if n == 0 {
+            return None;
+        }
+        let entry = |k: usize| {
+            let k = k & 7;
+            let b = [node.min_x[k], node.min_y[k], node.min_z[k], node.max_x[k], node.max_y[k], node.max_z[k]];
+            (node.child[k], node.count[k], child_t[k], b)
+        };
+        for &k in order.get(1..n).unwrap_or_default().iter().rev() {
+            // Cannot overflow: at most seven pushes per level of a tree of bounded depth.
+            let _ = stack.push(entry(k));
+        }
+        Some(entry(order[0]))
+    }
+
+    /// A leaf (`leaf`, its box `leaf_box` entered at `leaf_t`): the rays that enter its
+    /// box test its triangles, and the groups that did update their ends.
+    #[inline(always)]
+    fn leaf<P: MemoryProbe>(
+        &mut self,
+        leaf: LeafVisit<'_, '_, Bvh8Node, N>,
+        leaf_box: &[f32; 6],
+        leaf_t: f32,
+        hits: &mut PacketHits<N>,
+        probe: &mut P,
+    ) {
+        let (packet, mask, groups) = (leaf.packet, self.mask, Self::GROUPS);
+        let q = match self.lanes {
+            Some(ref mut q) => q,
+            None => Groups::fill(&mut self.lanes, packet, groups, mask),
+        };
+        let origin = self.frustum.origin();
+        let enter = leaf_entries(q, groups, mask, leaf_box, leaf_t, origin);
+        self.c.active_lanes += enter.count_ones() as u64;
+        if enter == 0 {
+            return;
+        }
+        self.preps.fours.prepare(packet, q, mask, enter);
+        let shared = origin
+            .map(Vec3::from)
+            .is_some_and(|o| test_leaf_shared::<I, P, Bvh8Node, N>(&leaf, enter, o, &mut self.preps, hits, probe));
+        if !shared {
+            test_leaf::<I, P, Bvh8Node, N>(&leaf, enter, &mut self.preps, hits, probe);
+        }
+        self.c.tri_tests += leaf.count as u64 * enter.count_ones() as u64;
+        // The ends of the groups that entered, all four lanes from their hits.
+        for g in Lanes(groups_of(enter)) {
+            let end = |k: usize| {
+                let i = (4 * g + k).min(N - 1);
+                hits[i].map_or(packet.t_max[i], |h: Hit| h.t)
+            };
+            if let Some(e) = q.ends.get_mut(g) {
+                *e = Vec4::new(end(0), end(1), end(2), end(3));
+                q.update_end(g, mask);
+            }
+        }
+        self.t_end = q.largest_end();
+    }
+}
