@@ -134,6 +134,10 @@ def time_batch(rp, harness, tris_p, images, rays_k, query, embree_modes, threads
         # The frustum packets are for coherent rays: on the bounce they run at 0.1
         # Mrays/s (the bunny), and would take the run's whole time.
         raypipe_modes += [(f"bvh4 packets of {p}", images["bvh4"], p) for p in ("16", "64")]
+        if query == "closest":
+            # The 8-wide BVH's packet walk is closest-hit only (its shadow packets would
+            # go ray by ray).
+            raypipe_modes += [(f"bvh8 packets of {p}", images["bvh8"], p) for p in ("16", "64")]
     pin = "1" if threads == 1 else None
     times = {m[0]: [] for m in raypipe_modes}
     times.update({f"embree {m}": [] for m in embree_modes})
