@@ -145,8 +145,9 @@ pub(in crate::packet) fn keep_lane<I: Intersector, const N: usize, const L: usiz
     tri: impl FnOnce() -> I::Triangle,
 ) {
     let LaneOutcome { hits: r, lane: k, ray: i } = outcome;
-    let ray = packet.ray(i);
-    if let Some(hit) = r.lane_hit::<I>(k, &ray, prim, || ones.get(packet, i), tri) {
+    let i = i.min(N - 1);
+    let range = (packet.t_min[i], packet.t_max[i]);
+    if let Some(hit) = r.lane_hit_in::<I>(k, range, prim, || ones.get(packet, i), tri) {
         keep_closest(&mut hits[i], hit);
     }
 }
