@@ -224,8 +224,14 @@ impl<const N: usize> RayPacket<N> {
     /// rays, a light's, a hemisphere of rays from one hit); true for no active ray.
     #[inline]
     pub fn one_origin(&self) -> bool {
+        self.one_origin_in(self.live())
+    }
+
+    /// [`RayPacket::one_origin`] for the live lanes of `mask` only.
+    #[inline]
+    pub fn one_origin_in(&self, mask: u64) -> bool {
         let o = |i: usize| [self.ox[i].to_bits(), self.oy[i].to_bits(), self.oz[i].to_bits()];
-        self.all_live_lanes_agree(o)
+        self.lanes_agree(mask & self.live(), o)
     }
 
     /// True when, on each axis, every active ray's direction has one sign (a negative
@@ -233,13 +239,12 @@ impl<const N: usize> RayPacket<N> {
     #[inline]
     pub fn one_octant(&self) -> bool {
         let signs = |i: usize| [self.dx[i].to_bits() >> 31, self.dy[i].to_bits() >> 31, self.dz[i].to_bits() >> 31];
-        self.all_live_lanes_agree(signs)
+        self.lanes_agree(self.live(), signs)
     }
 
-    /// True when `key` is the same for every active lane (true for none).
+    /// True when `key` is the same for every lane of `live` (true for none).
     #[inline(always)]
-    fn all_live_lanes_agree(&self, key: impl Fn(usize) -> [u32; 3]) -> bool {
-        let live = self.live();
+    fn lanes_agree(&self, live: u64, key: impl Fn(usize) -> [u32; 3]) -> bool {
         let first = live.trailing_zeros() as usize;
         if first >= N {
             return true;
@@ -523,7 +528,8 @@ mod tests {
             assert!(p.one_origin() && p.one_octant(), "{n} lanes");
             for odd in [0, n / 2, n - 1] {
                 let mut q = rays;
-                q[odd] = Ray::new(Vec3::new(1.0, 1.0, f32::from_bits(1.0f32.to_bits() + 1)), Vec3::new(1.0, -1.0, -0.5));
+                q[odd] =
+                    Ray::new(Vec3::new(1.0, 1.0, f32::from_bits(1.0f32.to_bits() + 1)), Vec3::new(1.0, -1.0, -0.5));
                 p.fill(&q[..n]);
                 assert!(!p.one_origin() && !p.one_octant(), "{n} lanes, lane {odd} differs");
             }

@@ -61,9 +61,7 @@ pub fn occluded_bvh4_packet_cached<I: Intersector, P: MemoryProbe, const N: usiz
     }
     let mut found = None;
     if live & !blocked != 0 {
-        let mut rest = *packet;
-        rest.active = live & !blocked;
-        blocked |= occluded_packet_walk::<I, P, N>(scene, bvh, &rest, &mut found, probe, counters);
+        blocked |= occluded_packet_walk::<I, P, N>(scene, bvh, packet, live & !blocked, &mut found, probe, counters);
     }
     if !good {
         match found {

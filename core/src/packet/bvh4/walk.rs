@@ -86,7 +86,7 @@ pub fn trace_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
         let walk = |r: &Ray, c: &mut RayCounters| trace_bvh4::<I, P>(scene, bvh, r, probe, c);
         return ray_by_ray(packet, hits, counters, walk);
     }
-    walk_packet::<I, P, N, false>(scene, bvh, packet, hits, None, &mut None, probe, counters);
+    walk_packet::<I, P, N, false>(scene, bvh, packet, packet.live(), hits, None, &mut None, probe, counters);
 }
 
 /// The any-hit query for a packet: bit `i` of the result is set when ray `i` is blocked
@@ -108,58 +108,63 @@ pub fn occluded_bvh4_packet<I: Intersector, P: MemoryProbe, const N: usize>(
     probe: &mut P,
     counters: &mut PacketCounters,
 ) -> u64 {
-    occluded_packet_walk::<I, P, N>(scene, bvh, packet, &mut None, probe, counters)
+    occluded_packet_walk::<I, P, N>(scene, bvh, packet, packet.live(), &mut None, probe, counters)
 }
 
-/// [`occluded_bvh4_packet`]'s walks, which set `found` to the last leaf where they found
-/// a ray blocked.
+/// [`occluded_bvh4_packet`]'s walks for the lanes of `live` (live lanes of `packet`: the
+/// rays a caller still asks about, so that it need not copy the packet to narrow its
+/// mask), which set `found` to the last leaf where they found a ray blocked.
 #[inline(always)]
 pub(super) fn occluded_packet_walk<I: Intersector, P: MemoryProbe, const N: usize>(
     scene: &SceneView<'_>,
     bvh: &Bvh4View<'_>,
     packet: &RayPacket<N>,
+    live: u64,
     found: &mut Option<(u32, u32)>,
     probe: &mut P,
     counters: &mut PacketCounters,
 ) -> u64 {
+    let live = live & packet.live();
     if !<I::Nodes as NodeTests>::FLOAT {
         let any = |r: &Ray, c: &mut RayCounters| occluded_bvh4::<I, P>(scene, bvh, r, probe, c);
-        return occluded_ray_by_ray(packet, counters, any);
+        let mut rest = *packet;
+        rest.active = live;
+        return occluded_ray_by_ray(&rest, counters, any);
     }
     let mut apex = None;
-    if !packet.one_origin() {
-        apex = shadow_pyramid(scene, packet);
+    if !packet.one_origin_in(live) {
+        apex = shadow_pyramid(scene, packet, live);
         if apex.is_none() {
-            return occluded_many_origins::<I, P, N>(scene, bvh, packet, found, probe, counters);
+            return occluded_many_origins::<I, P, N>(scene, bvh, packet, live, found, probe, counters);
         }
     }
     let mut hits = [None; N];
-    walk_packet::<I, P, N, true>(scene, bvh, packet, &mut hits, apex.as_mut(), found, probe, counters);
+    walk_packet::<I, P, N, true>(scene, bvh, packet, live, &mut hits, apex.as_mut(), found, probe, counters);
     let mut blocked = 0u64;
     for (i, h) in hits.iter().enumerate() {
         blocked |= (h.is_some() as u64) << i;
     }
-    blocked & packet.live()
+    blocked & live
 }
 
-/// The pyramid from the one point where the packet's rays end, if they do, it is narrow
+/// The pyramid from the one point where the rays of `live` end, if they do, it is narrow
 /// (see [`Apex::new`]) and the packet is of the largest size.
 #[inline(always)]
-fn shadow_pyramid<const N: usize>(scene: &SceneView<'_>, packet: &RayPacket<N>) -> Option<Apex> {
+fn shadow_pyramid<const N: usize>(scene: &SceneView<'_>, packet: &RayPacket<N>, live: u64) -> Option<Apex> {
     // Only the largest packets: in packets of 16 the many-origin walk tests four groups
     // of rays per box, and the pyramid measured 0.7–0.75× its rate on Sponza and Lost
     // Empire.
     if N < MAX_PACKET {
         return None;
     }
-    Apex::new(packet, packet.live(), scene.bounds())
+    Apex::new(packet, live, scene.bounds())
 }
 
 /// Whether [`occluded_bvh4_packet`] culls `packet` by the pyramid from its rays' one end:
 /// for the equivalence suites, which must be seen to reach that walk.
 #[doc(hidden)]
 pub fn takes_shadow_pyramid<const N: usize>(scene: &SceneView<'_>, packet: &RayPacket<N>) -> bool {
-    !packet.one_origin() && shadow_pyramid(scene, packet).is_some()
+    !packet.one_origin() && shadow_pyramid(scene, packet, packet.live()).is_some()
 }
 
 /// The packet walk; with `ANY`, a ray that hits something in a leaf leaves the packet
@@ -172,6 +177,7 @@ fn walk_packet<I: Intersector, P: MemoryProbe, const N: usize, const ANY: bool>(
     scene: &SceneView<'_>,
     bvh: &Bvh4View<'_>,
     packet: &RayPacket<N>,
+    mask: u64,
     hits: &mut PacketHits<N>,
     apex: Option<&mut Apex>,
     found: &mut Option<(u32, u32)>,
@@ -179,7 +185,6 @@ fn walk_packet<I: Intersector, P: MemoryProbe, const N: usize, const ANY: bool>(
     counters: &mut PacketCounters,
 ) {
     *hits = [None; N];
-    let mask = packet.live();
     if mask == 0 {
         return;
     }
