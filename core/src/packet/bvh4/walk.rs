@@ -190,7 +190,10 @@ fn walk_packet<I: Intersector, P: MemoryProbe, const N: usize, const ANY: bool>(
     }
     // Each ray's exact box test, where the frustum cannot serve.
     let mut boxes: Option<[RayBox; N]> = None;
-    let mut walk = PacketWalk::<I, N>::start(packet, mask, &mut boxes, apex);
+    // The lanes and the ray constants live here, built in place: moved into the walk
+    // record whole, their kilobytes were copied once more per packet.
+    let (mut lanes, mut preps) = (None, Preps::<I, N>::new());
+    let mut walk = PacketWalk::<I, N>::start(packet, mask, &mut boxes, apex, &mut lanes, &mut preps);
     // (child or first entry, leaf count or 0, entry bound, leaf box as min xyz, max xyz)
     let mut stack: heapless::Vec<(u32, u32, f32, [f32; 6]), STACK> = heapless::Vec::new();
     let mut current = (0u32, 0u32, [0f32; 6], 0f32);
@@ -240,8 +243,8 @@ fn walk_packet<I: Intersector, P: MemoryProbe, const N: usize, const ANY: bool>(
 /// counters.
 struct PacketWalk<'b, I: Intersector, const N: usize> {
     cull: Cull<'b, N>,
-    lanes: Option<Groups>,
-    preps: Preps<I, N>,
+    lanes: &'b mut Option<Groups>,
+    preps: &'b mut Preps<I, N>,
     mask: u64,
     /// How far any ray of the packet still looks.
     t_end: f32,
@@ -255,23 +258,27 @@ impl<'b, I: Intersector, const N: usize> PacketWalk<'b, I, N> {
     /// The walk of the rays of `mask`: culled by `apex` if given, else by the frustum
     /// where one bounds them, else ray by ray with the exact tests kept in `boxes`.
     #[inline(always)]
-    fn start(packet: &RayPacket<N>, mask: u64, boxes: &'b mut Option<[RayBox; N]>, apex: Option<&'b mut Apex>) -> Self {
+    fn start(
+        packet: &RayPacket<N>,
+        mask: u64,
+        boxes: &'b mut Option<[RayBox; N]>,
+        apex: Option<&'b mut Apex>,
+        lanes: &'b mut Option<Groups>,
+        preps: &'b mut Preps<I, N>,
+    ) -> Self {
         let groups = Self::GROUPS;
         if let Some(apex) = apex {
             // Its rays have no zero direction component (see `Apex::new`).
-            let mut lanes: Option<Groups> = None;
-            let t_end = Groups::fill(&mut lanes, packet, groups, mask).largest_end();
-            let preps = Preps::<I, N>::new();
+            let t_end = Groups::fill(lanes, packet, groups, mask).largest_end();
             return PacketWalk { cull: Cull::Apex(apex), lanes, preps, mask, t_end, c: PacketCounters::default() };
         }
         let full = N <= 64 && mask == u64::MAX >> (64 - N.clamp(1, 64));
         // The lanes in SIMD registers with their reciprocals: computed when the first leaf
         // needs them, if the frustum can do without (see `Frustum::from_full_packet`).
-        let mut lanes: Option<Groups> = None;
         let (cull, t_end): (Cull<N>, f32) = match full.then(|| Frustum::from_full_packet(packet)).flatten() {
             Some((f, t_end)) => (Cull::Frustum(f), t_end),
             None => {
-                let q = Groups::fill(&mut lanes, packet, groups, mask);
+                let q = Groups::fill(lanes, packet, groups, mask);
                 let t_end = q.largest_end();
                 match Frustum::new(q, groups, mask) {
                     Some(f) => (Cull::Frustum(f), t_end),
@@ -279,9 +286,8 @@ impl<'b, I: Intersector, const N: usize> PacketWalk<'b, I, N> {
                 }
             }
         };
-        // The watertight constants are computed the first time a ray enters a leaf: most
-        // rays of a frame never do.
-        let preps = Preps::<I, N>::new();
+        // The watertight constants (`preps`) are computed the first time a ray enters a
+        // leaf: most rays of a frame never do.
         PacketWalk { cull, lanes, preps, mask, t_end, c: PacketCounters::default() }
     }
 
@@ -353,9 +359,9 @@ impl<'b, I: Intersector, const N: usize> PacketWalk<'b, I, N> {
         probe: &mut P,
     ) {
         let (packet, mask, groups) = (leaf.packet, self.mask, Self::GROUPS);
-        let q = match self.lanes {
+        let q = match *self.lanes {
             Some(ref mut q) => q,
-            None => Groups::fill(&mut self.lanes, packet, groups, mask),
+            None => Groups::fill(self.lanes, packet, groups, mask),
         };
         let enter = match &self.cull {
             Cull::Exact(boxes) => {
@@ -382,11 +388,11 @@ impl<'b, I: Intersector, const N: usize> PacketWalk<'b, I, N> {
             Cull::Frustum(f) => f
                 .origin()
                 .map(Vec3::from)
-                .is_some_and(|o| test_leaf_shared::<I, P, Bvh4Node, N>(&leaf, enter, o, &mut self.preps, hits, probe)),
+                .is_some_and(|o| test_leaf_shared::<I, P, Bvh4Node, N>(&leaf, enter, o, self.preps, hits, probe)),
             Cull::Apex(_) | Cull::Exact(_) => false,
         };
         if !shared {
-            test_leaf::<I, P, Bvh4Node, N>(&leaf, enter, &mut self.preps, hits, probe);
+            test_leaf::<I, P, Bvh4Node, N>(&leaf, enter, self.preps, hits, probe);
         }
         self.c.tri_tests += leaf.count as u64 * enter.count_ones() as u64;
         if ANY {

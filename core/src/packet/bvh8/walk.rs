@@ -47,26 +47,28 @@ pub fn trace_bvh8_packet<I: Intersector, P: MemoryProbe, const N: usize>(
         return;
     }
     let culls = <I::Nodes as NodeTests>::FLOAT && (packet.one_origin() || packet.one_octant());
-    let mut lanes: Option<Groups> = None;
-    let frustum = culls.then(|| frustum_of(packet, mask, &mut lanes)).flatten();
+    // Built in place, its lanes filled there: moved in whole, the walk's kilobytes of
+    // lanes and constants were copied once more per packet.
+    let mut walk = Walk::<I, N> { lanes: None, preps: Preps::new(), mask, t_end: 0.0, c: PacketCounters::default() };
+    let frustum = culls.then(|| frustum_of(packet, mask, &mut walk.lanes)).flatten();
     let Some((frustum, t_end)) = frustum else {
         let walk = |r: &Ray, c: &mut RayCounters| trace_bvh8::<I, P>(scene, bvh, r, probe, c);
         return ray_by_ray(packet, hits, counters, walk);
     };
-    let mut walk = Walk::<I, N> { frustum, lanes, preps: Preps::new(), mask, t_end, c: PacketCounters::default() };
+    walk.t_end = t_end;
     let mut stack: heapless::Vec<Entry, STACK> = heapless::Vec::new();
     let mut current: Entry = (0, 0, 0.0, [0.0; 6]);
     loop {
         let (index, count, leaf_t, leaf_box) = current;
         walk.c.visits += 1;
         if count == 0 {
-            if let Some(next) = walk.inner(bvh.node(index, probe), &mut stack) {
+            if let Some(next) = walk.inner(&frustum, bvh.node(index, probe), &mut stack) {
                 current = next;
                 continue;
             }
         } else {
             let leaf = LeafVisit { scene, bvh, packet, first: index, count };
-            walk.leaf::<P>(leaf, &leaf_box, leaf_t, hits, probe);
+            walk.leaf::<P>(&frustum, leaf, &leaf_box, leaf_t, hits, probe);
         }
         // The next entry whose bound is not beyond every ray's best hit.
         loop {
@@ -96,10 +98,9 @@ fn frustum_of<const N: usize>(packet: &RayPacket<N>, mask: u64, lanes: &mut Opti
     Frustum::new(q, N.div_ceil(4), mask).map(|f| (f, t_end))
 }
 
-/// The walk's state: the frustum, the lanes in registers (made when a leaf first needs
-/// them), the rays' intersection constants, how far any ray still looks, the counters.
+/// The walk's state: the lanes in registers (made when a leaf first needs them), the
+/// rays' intersection constants, how far any ray still looks, the counters.
 struct Walk<I: Intersector, const N: usize> {
-    frustum: Frustum,
     lanes: Option<Groups>,
     preps: Preps<I, N>,
     mask: u64,
@@ -111,12 +112,12 @@ impl<I: Intersector, const N: usize> Walk<I, N> {
     /// Groups of four lanes in a packet of `N`.
     const GROUPS: usize = N.div_ceil(4);
 
-    /// An inner node: its eight boxes culled by the frustum, the needed children pushed
+    /// An inner node: its eight boxes culled by `frustum`, the needed children pushed
     /// farthest first but the nearest, which is returned as the next entry.
     #[inline(always)]
-    fn inner(&mut self, node: &Bvh8Node, stack: &mut heapless::Vec<Entry, STACK>) -> Option<Entry> {
+    fn inner(&mut self, frustum: &Frustum, node: &Bvh8Node, stack: &mut heapless::Vec<Entry, STACK>) -> Option<Entry> {
         self.c.active_lanes += self.mask.count_ones() as u64;
-        let (child_t, needed) = self.frustum.slab8(node, self.t_end);
+        let (child_t, needed) = frustum.slab8(node, self.t_end);
         let (order, n) = nearest_first(needed, &child_t);
         if n == 0 {
             return None;
@@ -138,6 +139,7 @@ impl<I: Intersector, const N: usize> Walk<I, N> {
     #[inline(always)]
     fn leaf<P: MemoryProbe>(
         &mut self,
+        frustum: &Frustum,
         leaf: LeafVisit<'_, '_, Bvh8Node, N>,
         leaf_box: &[f32; 6],
         leaf_t: f32,
@@ -149,7 +151,7 @@ impl<I: Intersector, const N: usize> Walk<I, N> {
             Some(ref mut q) => q,
             None => Groups::fill(&mut self.lanes, packet, groups, mask),
         };
-        let origin = self.frustum.origin();
+        let origin = frustum.origin();
         let enter = leaf_entries(q, groups, mask, leaf_box, leaf_t, origin);
         self.c.active_lanes += enter.count_ones() as u64;
         if enter == 0 {
