@@ -55,9 +55,11 @@ pub(super) fn leaf_blocks16<I: Intersector, P: MemoryProbe, const N: usize>(
         }
         let prim = bvh.prim(e, probe);
         for k in Lanes(u64::from(decide)) {
-            let ray = packet.ray(k.min(N - 1));
-            let prep = || preps.and_then(|p| p.get(k).copied().flatten()).unwrap_or_else(|| I::prepare(&ray));
-            let hit = r.lane_hit::<I>(k, &ray, prim, prep, || tri);
+            // The lane's interval is all a decided lane needs: its whole `Ray` only for
+            // the one-ray constants of an undecided lane without any.
+            let i = k.min(N - 1);
+            let prep = || preps.and_then(|p| p.get(k).copied().flatten()).unwrap_or_else(|| I::prepare(&packet.ray(i)));
+            let hit = r.lane_hit_in::<I>(k, (packet.t_min[i], packet.t_max[i]), prim, prep, || tri);
             blocked |= u32::from(hit.is_some()) << k;
         }
         if blocked == lanes {
