@@ -6,6 +6,7 @@
 use raypipe::scene::{self, Accel, BuildOptions};
 use raypipe_core::packet::bvh::trace_bvh_packet;
 use raypipe_core::packet::bvh4::trace_bvh4_packet;
+use raypipe_core::packet::bvh8::trace_bvh8_packet;
 use raypipe_core::packet::grid::trace_grid_packet;
 use raypipe_core::packet::kdtree::trace_kdtree_packet;
 use raypipe_core::packet::step::trace_packet_steps;
@@ -57,11 +58,12 @@ fn every_kernel_on<const N: usize>() {
             Accel::Bvh4 => {
                 trace_bvh4_packet::<Watertight, _, N>(&view, view.bvh4().unwrap(), &p, &mut hits, &mut NoProbe, c)
             }
+            Accel::Bvh8 => {
+                trace_bvh8_packet::<Watertight, _, N>(&view, view.bvh8().unwrap(), &p, &mut hits, &mut NoProbe, c)
+            }
             _ => {}
         }
-        if accel != Accel::Bvh8 {
-            assert_eq!(hits.to_vec(), want, "{accel:?}, N = {N}");
-        }
+        assert_eq!(hits.to_vec(), want, "{accel:?}, N = {N}");
         // The step kernels (the hardware model's) with stray bits too.
         let rays: [Ray; N] = core::array::from_fn(|i| p.ray(i));
         let mut step_hits = [None; N];
