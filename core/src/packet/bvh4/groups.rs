@@ -1,7 +1,8 @@
 //! The packet regrouped as SIMD registers of four lanes, with their reciprocal
 //! directions and best-hit ends: what a leaf's box and triangle tests read.
 
-use crate::packet::{RayPacket, MAX_PACKET};
+use crate::hit::Hit;
+use crate::packet::{Lanes, PacketHits, RayPacket, MAX_PACKET};
 use crate::traverse::boxes::slab::recip4;
 use glam::{BVec4A, Vec4};
 
@@ -99,6 +100,31 @@ impl Groups {
     pub(in crate::packet) fn update_end(&mut self, g: usize, mask: u64) {
         let act = GROUP_LANES[((mask >> (4 * g)) & 0xF) as usize];
         self.group_end[g] = Vec4::select(act, self.ends[g], Vec4::NEG_INFINITY).max_element();
+    }
+
+    /// After a leaf: the ends of the groups with a lane in `entered`, all four lanes from
+    /// their hits (the other lanes' hits are unchanged, and inactive lanes have none:
+    /// their ends stay their rays' ends), with the active lanes of `mask`; returns how far
+    /// any ray of the packet still looks.
+    #[inline(always)]
+    pub(in crate::packet) fn update_ends<const N: usize>(
+        &mut self,
+        entered: u64,
+        mask: u64,
+        hits: &PacketHits<N>,
+        packet: &RayPacket<N>,
+    ) -> f32 {
+        for g in Lanes(groups_of(entered)) {
+            let end = |k: usize| {
+                let i = (4 * g + k).min(N - 1);
+                hits[i].map_or(packet.t_max[i], |h: Hit| h.t)
+            };
+            if let Some(e) = self.ends.get_mut(g) {
+                *e = Vec4::new(end(0), end(1), end(2), end(3));
+                self.update_end(g, mask);
+            }
+        }
+        self.largest_end()
     }
 }
 

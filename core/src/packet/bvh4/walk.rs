@@ -6,9 +6,7 @@ use crate::counters::RayCounters;
 use crate::hit::Hit;
 use crate::image::{Bvh4Node, Bvh4View, SceneView, MAX_WIDE_DEPTH};
 use crate::intersect::triangle::Intersector;
-use crate::packet::{
-    occluded_ray_by_ray, ray_by_ray, Lanes, LanesOf, PacketCounters, PacketHits, RayPacket, MAX_PACKET,
-};
+use crate::packet::{occluded_ray_by_ray, ray_by_ray, LanesOf, PacketCounters, PacketHits, RayPacket, MAX_PACKET};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::traverse::boxes::datapath::NodeTests;
@@ -19,7 +17,7 @@ use glam::{BVec4A, Vec3, Vec3A, Vec4};
 
 use super::apex::Apex;
 use super::frustum::Frustum;
-use super::groups::{groups_of, Groups};
+use super::groups::Groups;
 use super::leaf::{leaf_entries, test_leaf, test_leaf_shared, LeafVisit};
 use super::many_origins::occluded_many_origins;
 use super::prepared::Preps;
@@ -405,20 +403,6 @@ impl<'b, I: Intersector, const N: usize> PacketWalk<'b, I, N> {
                 p.shrink(self.mask);
             }
         }
-        let mask = self.mask;
-        // The ends of the groups that entered, all four lanes from their hits (the other
-        // lanes' hits are unchanged, and inactive lanes have none: their ends stay their
-        // rays' ends).
-        for g in Lanes(groups_of(enter)) {
-            let end = |k: usize| {
-                let i = (4 * g + k).min(N - 1);
-                hits[i].map_or(packet.t_max[i], |h: Hit| h.t)
-            };
-            if let Some(e) = q.ends.get_mut(g) {
-                *e = Vec4::new(end(0), end(1), end(2), end(3));
-                q.update_end(g, mask);
-            }
-        }
-        self.t_end = q.largest_end();
+        self.t_end = q.update_ends(enter, self.mask, hits, packet);
     }
 }

@@ -3,20 +3,19 @@
 //! tested by the rays that enter its box.
 
 use crate::counters::RayCounters;
-use crate::hit::Hit;
 use crate::image::{Bvh8Node, Bvh8View, SceneView};
 use crate::intersect::triangle::Intersector;
 use crate::packet::bvh4::frustum::Frustum;
-use crate::packet::bvh4::groups::{groups_of, Groups};
+use crate::packet::bvh4::groups::Groups;
 use crate::packet::bvh4::leaf::{leaf_entries, test_leaf, test_leaf_shared, LeafVisit};
 use crate::packet::bvh4::prepared::Preps;
 use crate::packet::bvh4::walk::nearest_first;
-use crate::packet::{ray_by_ray, Lanes, PacketCounters, PacketHits, RayPacket};
+use crate::packet::{ray_by_ray, PacketCounters, PacketHits, RayPacket};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::traverse::boxes::datapath::NodeTests;
 use crate::traverse::wide_bvh::node8::trace_bvh8;
-use glam::{Vec3, Vec4};
+use glam::Vec3;
 
 /// Stack entries: up to seven pushed per level of the tree.
 const STACK: usize = 7 * crate::image::MAX_WIDE_DEPTH as usize + 8;
@@ -165,17 +164,6 @@ impl<I: Intersector, const N: usize> Walk<I, N> {
             test_leaf::<I, P, Bvh8Node, N>(&leaf, enter, &mut self.preps, hits, probe);
         }
         self.c.tri_tests += leaf.count as u64 * enter.count_ones() as u64;
-        // The ends of the groups that entered, all four lanes from their hits.
-        for g in Lanes(groups_of(enter)) {
-            let end = |k: usize| {
-                let i = (4 * g + k).min(N - 1);
-                hits[i].map_or(packet.t_max[i], |h: Hit| h.t)
-            };
-            if let Some(e) = q.ends.get_mut(g) {
-                *e = Vec4::new(end(0), end(1), end(2), end(3));
-                q.update_end(g, mask);
-            }
-        }
-        self.t_end = q.largest_end();
+        self.t_end = q.update_ends(enter, mask, hits, packet);
     }
 }
