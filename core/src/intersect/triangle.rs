@@ -193,16 +193,18 @@ impl<const L: usize> LaneHits<L> {
     pub fn lane_hit_in<I: Intersector>(
         &self,
         k: usize,
-        (t_min, t_max): (f32, f32),
+        interval: (f32, f32),
         prim: u32,
         prep: impl FnOnce() -> I::Prepared,
         tri: impl FnOnce() -> I::Triangle,
     ) -> Option<Hit> {
         let k = k % L;
-        let (t, u, v) =
-            if self.redo & (1 << k) != 0 { I::intersect(&prep(), &tri())? } else { (self.t[k], self.u[k], self.v[k]) };
-        // As `in_range`: written so NaN is rejected.
-        (t >= t_min && t <= t_max).then_some(Hit { t, u, v, prim })
+        let result = if self.redo & (1 << k) != 0 {
+            I::intersect(&prep(), &tri())
+        } else {
+            Some((self.t[k], self.u[k], self.v[k]))
+        };
+        in_interval(interval, result, prim)
     }
 }
 
@@ -235,7 +237,13 @@ pub fn test_triangle<I: Intersector>(
 /// An intersection result as a hit of triangle `prim`, if it lies in `[t_min, t_max]`.
 #[inline(always)]
 pub fn in_range(ray: &Ray, result: Option<(f32, f32, f32)>, prim: u32) -> Option<Hit> {
+    in_interval((ray.t_min, ray.t_max), result, prim)
+}
+
+/// [`in_range`] for a ray given by its interval `(t_min, t_max)` alone.
+#[inline(always)]
+pub fn in_interval((t_min, t_max): (f32, f32), result: Option<(f32, f32, f32)>, prim: u32) -> Option<Hit> {
     let (t, u, v) = result?;
     // Written so NaN is rejected.
-    (t >= ray.t_min && t <= ray.t_max).then_some(Hit { t, u, v, prim })
+    (t >= t_min && t <= t_max).then_some(Hit { t, u, v, prim })
 }

@@ -324,11 +324,22 @@ pub fn ray_by_ray<const N: usize>(
 pub fn occluded_ray_by_ray<const N: usize>(
     packet: &RayPacket<N>,
     counters: &mut PacketCounters,
+    blocked: impl FnMut(&Ray, &mut crate::counters::RayCounters) -> bool,
+) -> u64 {
+    occluded_lanes_ray_by_ray(packet, packet.live(), counters, blocked)
+}
+
+/// [`occluded_ray_by_ray`] for the live lanes of `lanes` only.
+#[inline]
+pub fn occluded_lanes_ray_by_ray<const N: usize>(
+    packet: &RayPacket<N>,
+    lanes: u64,
+    counters: &mut PacketCounters,
     mut blocked: impl FnMut(&Ray, &mut crate::counters::RayCounters) -> bool,
 ) -> u64 {
     let mut c = crate::counters::RayCounters::default();
     let mut mask = 0u64;
-    for i in LanesOf::<N>(packet.live()) {
+    for i in LanesOf::<N>(lanes & packet.live()) {
         mask |= (blocked(&packet.ray(i), &mut c) as u64) << i;
     }
     counters.add_rays(&c);

@@ -98,6 +98,24 @@ impl Frustum {
         Some((Frustum { olo, ohi, ilo, ihi, t_min, one_origin }, t_end))
     }
 
+    /// The frustum of the rays of `mask` (live lanes of `p`), and the largest end of
+    /// those rays: straight from the arrays where every lane is active
+    /// ([`Frustum::from_full_packet`]), else from the lanes in registers, made in `lanes`;
+    /// no frustum where a direction has a zero component.
+    #[inline(always)]
+    pub(in crate::packet) fn of_packet<const N: usize>(
+        p: &RayPacket<N>,
+        mask: u64,
+        lanes: &mut Option<Groups>,
+    ) -> (Option<Frustum>, f32) {
+        let full = N <= 64 && mask == u64::MAX >> (64 - N.clamp(1, 64));
+        if let Some((f, t_end)) = full.then(|| Frustum::from_full_packet(p)).flatten() {
+            return (Some(f), t_end);
+        }
+        let q = Groups::fill(lanes, p, N.div_ceil(4), mask);
+        (Frustum::new(q, N.div_ceil(4), mask), q.largest_end())
+    }
+
     /// The packet's one origin, if all its rays start at one point.
     #[inline(always)]
     pub(in crate::packet) fn origin(&self) -> Option<[f32; 3]> {

@@ -121,6 +121,28 @@ pub(in crate::packet) fn test_leaf<I: Intersector, P: MemoryProbe, W: WideNode, 
     }
 }
 
+/// The triangles of `leaf` against the rays of `enter`, which entered its box: their
+/// constants made first (from the lanes `q` of the packet's active lanes `mask`), then
+/// the one-origin test where the rays share `origin` and the test has that form, else
+/// groups of four ([`test_leaf`]).
+#[inline(always)]
+pub(in crate::packet) fn test_entered<I: Intersector, P: MemoryProbe, W: WideNode, const N: usize>(
+    leaf: &LeafVisit<'_, '_, W, N>,
+    enter: u64,
+    (q, mask): (&Groups, u64),
+    origin: Option<[f32; 3]>,
+    preps: &mut Preps<I, N>,
+    hits: &mut PacketHits<N>,
+    probe: &mut P,
+) {
+    preps.fours.prepare(leaf.packet, q, mask, enter);
+    let shared =
+        origin.map(Vec3::from).is_some_and(|o| test_leaf_shared::<I, P, W, N>(leaf, enter, o, preps, hits, probe));
+    if !shared {
+        test_leaf::<I, P, W, N>(leaf, enter, preps, hits, probe);
+    }
+}
+
 /// One lane of a multi-lane test's outcome, and the packet ray it belongs to.
 #[derive(Clone, Copy)]
 pub(in crate::packet) struct LaneOutcome<'r, const L: usize> {

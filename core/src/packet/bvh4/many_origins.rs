@@ -12,11 +12,13 @@
 
 use glam::Vec4;
 
+use crate::counters::RayCounters;
 use crate::hit::Hit;
 use crate::image::{Bvh4Node, Bvh4View, SceneView};
 use crate::intersect::triangle::Intersector;
-use crate::packet::{Lanes, LanesOf, PacketCounters, RayPacket};
+use crate::packet::{occluded_lanes_ray_by_ray, Lanes, LanesOf, PacketCounters, RayPacket};
 use crate::probe::MemoryProbe;
+use crate::ray::Ray;
 use crate::traverse::wide_bvh::node4::occluded_bvh4;
 use crate::traverse::wide_bvh::test_wide_leaf;
 
@@ -185,26 +187,6 @@ impl RayGroups {
     }
 }
 
-/// The rays of `exact` (a zero direction component) by the single-ray walk, which has
-/// the exact rule: bit `i` set when ray `i` is blocked.
-#[inline(always)]
-fn occluded_exact<I: Intersector, P: MemoryProbe, const N: usize>(
-    scene: &SceneView<'_>,
-    bvh: &Bvh4View<'_>,
-    packet: &RayPacket<N>,
-    exact: u64,
-    probe: &mut P,
-    c: &mut PacketCounters,
-) -> u64 {
-    let mut blocked = 0u64;
-    for i in LanesOf::<N>(exact) {
-        let mut rc = crate::counters::RayCounters::default();
-        blocked |= (occluded_bvh4::<I, P>(scene, bvh, &packet.ray(i), probe, &mut rc) as u64) << i;
-        c.add_rays(&rc);
-    }
-    blocked
-}
-
 /// Bit `i` set when ray `i` of `live` (live lanes of `packet`) is blocked within its interval: exactly
 /// [`occluded_bvh4`] for each ray, for rays of any origins (see the module's text).
 pub(super) fn occluded_many_origins<I: Intersector, P: MemoryProbe, const N: usize>(
@@ -219,7 +201,9 @@ pub(super) fn occluded_many_origins<I: Intersector, P: MemoryProbe, const N: usi
     let mut slot = None;
     let (q, exact) = RayGroups::fill(&mut slot, packet, live);
     let mut c = PacketCounters::default();
-    let mut blocked = occluded_exact::<I, P, N>(scene, bvh, packet, exact, probe, &mut c);
+    // Rays with a zero direction component: the single-ray walk, which has the exact rule.
+    let any = |r: &Ray, rc: &mut RayCounters| occluded_bvh4::<I, P>(scene, bvh, r, probe, rc);
+    let mut blocked = occluded_lanes_ray_by_ray(packet, exact, &mut c, any);
     let blocks = scene.has_tri_blocks();
     let mut todo = live & !exact;
     // Each ray's intersection constants, made at its first leaf (most rays reach few).

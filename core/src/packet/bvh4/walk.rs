@@ -6,19 +6,21 @@ use crate::counters::RayCounters;
 use crate::hit::Hit;
 use crate::image::{Bvh4Node, Bvh4View, SceneView, MAX_WIDE_DEPTH};
 use crate::intersect::triangle::Intersector;
-use crate::packet::{occluded_ray_by_ray, ray_by_ray, LanesOf, PacketCounters, PacketHits, RayPacket, MAX_PACKET};
+use crate::packet::{
+    occluded_lanes_ray_by_ray, ray_by_ray, LanesOf, PacketCounters, PacketHits, RayPacket, MAX_PACKET,
+};
 use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::traverse::boxes::datapath::NodeTests;
 use crate::traverse::boxes::slab::RayBox;
 use crate::traverse::wide_bvh::node4::slab4_exact;
 use crate::traverse::wide_bvh::node4::{occluded_bvh4, trace_bvh4};
-use glam::{BVec4A, Vec3, Vec3A, Vec4};
+use glam::{BVec4A, Vec3A, Vec4};
 
 use super::apex::Apex;
 use super::frustum::Frustum;
 use super::groups::Groups;
-use super::leaf::{leaf_entries, test_leaf, test_leaf_shared, LeafVisit};
+use super::leaf::{leaf_entries, test_entered, LeafVisit};
 use super::many_origins::occluded_many_origins;
 use super::prepared::Preps;
 
@@ -125,9 +127,7 @@ pub(super) fn occluded_packet_walk<I: Intersector, P: MemoryProbe, const N: usiz
     let live = live & packet.live();
     if !<I::Nodes as NodeTests>::FLOAT {
         let any = |r: &Ray, c: &mut RayCounters| occluded_bvh4::<I, P>(scene, bvh, r, probe, c);
-        let mut rest = *packet;
-        rest.active = live;
-        return occluded_ray_by_ray(&rest, counters, any);
+        return occluded_lanes_ray_by_ray(packet, live, counters, any);
     }
     let mut apex = None;
     if !packet.one_origin_in(live) {
@@ -270,19 +270,12 @@ impl<'b, I: Intersector, const N: usize> PacketWalk<'b, I, N> {
             let t_end = Groups::fill(lanes, packet, groups, mask).largest_end();
             return PacketWalk { cull: Cull::Apex(apex), lanes, preps, mask, t_end, c: PacketCounters::default() };
         }
-        let full = N <= 64 && mask == u64::MAX >> (64 - N.clamp(1, 64));
         // The lanes in SIMD registers with their reciprocals: computed when the first leaf
         // needs them, if the frustum can do without (see `Frustum::from_full_packet`).
-        let (cull, t_end): (Cull<N>, f32) = match full.then(|| Frustum::from_full_packet(packet)).flatten() {
-            Some((f, t_end)) => (Cull::Frustum(f), t_end),
-            None => {
-                let q = Groups::fill(lanes, packet, groups, mask);
-                let t_end = q.largest_end();
-                match Frustum::new(q, groups, mask) {
-                    Some(f) => (Cull::Frustum(f), t_end),
-                    None => (Cull::Exact(boxes.insert(core::array::from_fn(|i| RayBox::new(&packet.ray(i))))), t_end),
-                }
-            }
+        let (frustum, t_end) = Frustum::of_packet(packet, mask, lanes);
+        let cull = match frustum {
+            Some(f) => Cull::Frustum(f),
+            None => Cull::Exact(boxes.insert(core::array::from_fn(|i| RayBox::new(&packet.ray(i))))),
         };
         // The watertight constants (`preps`) are computed the first time a ray enters a
         // leaf: most rays of a frame never do.
@@ -381,17 +374,11 @@ impl<'b, I: Intersector, const N: usize> PacketWalk<'b, I, N> {
         if enter == 0 {
             return;
         }
-        self.preps.fours.prepare(packet, q, mask, enter);
-        let shared = match &self.cull {
-            Cull::Frustum(f) => f
-                .origin()
-                .map(Vec3::from)
-                .is_some_and(|o| test_leaf_shared::<I, P, Bvh4Node, N>(&leaf, enter, o, self.preps, hits, probe)),
-            Cull::Apex(_) | Cull::Exact(_) => false,
+        let origin = match &self.cull {
+            Cull::Frustum(f) => f.origin(),
+            Cull::Apex(_) | Cull::Exact(_) => None,
         };
-        if !shared {
-            test_leaf::<I, P, Bvh4Node, N>(&leaf, enter, self.preps, hits, probe);
-        }
+        test_entered::<I, P, Bvh4Node, N>(&leaf, enter, (q, mask), origin, self.preps, hits, probe);
         self.c.tri_tests += leaf.count as u64 * enter.count_ones() as u64;
         if ANY {
             for i in LanesOf::<N>(enter) {

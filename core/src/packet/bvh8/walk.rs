@@ -7,7 +7,7 @@ use crate::image::{Bvh8Node, Bvh8View, SceneView};
 use crate::intersect::triangle::Intersector;
 use crate::packet::bvh4::frustum::Frustum;
 use crate::packet::bvh4::groups::Groups;
-use crate::packet::bvh4::leaf::{leaf_entries, test_leaf, test_leaf_shared, LeafVisit};
+use crate::packet::bvh4::leaf::{leaf_entries, test_entered, LeafVisit};
 use crate::packet::bvh4::prepared::Preps;
 use crate::packet::bvh4::walk::nearest_first;
 use crate::packet::{ray_by_ray, PacketCounters, PacketHits, RayPacket};
@@ -15,10 +15,11 @@ use crate::probe::MemoryProbe;
 use crate::ray::Ray;
 use crate::traverse::boxes::datapath::NodeTests;
 use crate::traverse::wide_bvh::node8::trace_bvh8;
-use glam::Vec3;
+use crate::traverse::wide_bvh::stack_capacity;
 
-/// Stack entries: up to seven pushed per level of the tree.
-const STACK: usize = 7 * crate::image::MAX_WIDE_DEPTH as usize + 8;
+/// Stack entries: up to seven pushed per level of the tree (the single-ray walk's
+/// capacity rule).
+const STACK: usize = stack_capacity(8);
 
 /// (child or first entry, leaf count or 0, entry bound, child box as min xyz, max xyz)
 type Entry = (u32, u32, f32, [f32; 6]);
@@ -49,8 +50,8 @@ pub fn trace_bvh8_packet<I: Intersector, P: MemoryProbe, const N: usize>(
     // Built in place, its lanes filled there: moved in whole, the walk's kilobytes of
     // lanes and constants were copied once more per packet.
     let mut walk = Walk::<I, N> { lanes: None, preps: Preps::new(), mask, t_end: 0.0, c: PacketCounters::default() };
-    let frustum = culls.then(|| frustum_of(packet, mask, &mut walk.lanes)).flatten();
-    let Some((frustum, t_end)) = frustum else {
+    let frustum = culls.then(|| Frustum::of_packet(packet, mask, &mut walk.lanes));
+    let Some((Some(frustum), t_end)) = frustum else {
         let walk = |r: &Ray, c: &mut RayCounters| trace_bvh8::<I, P>(scene, bvh, r, probe, c);
         return ray_by_ray(packet, hits, counters, walk);
     };
@@ -81,20 +82,6 @@ pub fn trace_bvh8_packet<I: Intersector, P: MemoryProbe, const N: usize>(
             }
         }
     }
-}
-
-/// The packet's frustum and the largest end of its rays, straight from the arrays where
-/// every lane is active, else from its lanes in registers (made in `lanes`); `None` if
-/// some direction has a zero component.
-#[inline(always)]
-fn frustum_of<const N: usize>(packet: &RayPacket<N>, mask: u64, lanes: &mut Option<Groups>) -> Option<(Frustum, f32)> {
-    let full = N <= 64 && mask == u64::MAX >> (64 - N.clamp(1, 64));
-    if let Some(f) = full.then(|| Frustum::from_full_packet(packet)).flatten() {
-        return Some(f);
-    }
-    let q = Groups::fill(lanes, packet, N.div_ceil(4), mask);
-    let t_end = q.largest_end();
-    Frustum::new(q, N.div_ceil(4), mask).map(|f| (f, t_end))
 }
 
 /// The walk's state: the lanes in registers (made when a leaf first needs them), the
@@ -156,13 +143,7 @@ impl<I: Intersector, const N: usize> Walk<I, N> {
         if enter == 0 {
             return;
         }
-        self.preps.fours.prepare(packet, q, mask, enter);
-        let shared = origin
-            .map(Vec3::from)
-            .is_some_and(|o| test_leaf_shared::<I, P, Bvh8Node, N>(&leaf, enter, o, &mut self.preps, hits, probe));
-        if !shared {
-            test_leaf::<I, P, Bvh8Node, N>(&leaf, enter, &mut self.preps, hits, probe);
-        }
+        test_entered::<I, P, Bvh8Node, N>(&leaf, enter, (q, mask), origin, &mut self.preps, hits, probe);
         self.c.tri_tests += leaf.count as u64 * enter.count_ones() as u64;
         self.t_end = q.update_ends(enter, mask, hits, packet);
     }
