@@ -252,9 +252,14 @@ impl<const N: usize> RayPacket<N> {
         let want = key(first);
         if live == u64::MAX >> (64 - N.clamp(1, 64)) {
             // Every lane active (most packets): one pass without early exit or masks,
-            // which the compiler turns into SIMD compares (a lane-by-lane loop of array
-            // compares was 2% of the conference room's eye-ray packet time).
-            return (0..N).fold(true, |same, i| same & (key(i) == want));
+            // the differing bits gathered by `|` (SIMD-friendly: a lane-by-lane loop of
+            // array compares was 2% of the conference room's eye-ray packet time, and a
+            // fold of array compares still about 800 instructions per packet of 64).
+            let diff = (0..N).fold([0u32; 3], |d, i| {
+                let k = key(i);
+                [d[0] | (k[0] ^ want[0]), d[1] | (k[1] ^ want[1]), d[2] | (k[2] ^ want[2])]
+            });
+            return diff == [0; 3];
         }
         LanesOf::<N>(live).all(|i| key(i) == want)
     }
