@@ -1,7 +1,9 @@
 //! The packet's any-hit query with the shadow cache
 //! ([`crate::traverse::wide_bvh::last_occluder`]): every ray first tests the leaf where
-//! the last packet found a ray blocked, and only the rays it does not block take the
-//! packet walk, which keeps in the cache a leaf where it found one.
+//! the last packet found a ray blocked, the rays it does not block a second leaf where a
+//! walk found rays blocked lately, and only the rays neither blocks take the packet walk,
+//! which keeps in the cache a leaf where it found one. (The second leaf: Sibenik's shadow
+//! packets of 16, 1.05× on one core; Sponza's 1.02×, the sports car's 1.04×.)
 
 use crate::counters::RayCounters;
 use crate::image::{Bvh4View, SceneView};
@@ -30,25 +32,15 @@ pub fn occluded_bvh4_packet_cached<I: Intersector, P: MemoryProbe, const N: usiz
     let test = cache.to_test().filter(|_| <I::Nodes as NodeTests>::FLOAT);
     if let Some(leaf) = test {
         let mut c = RayCounters::default();
-        // The single ray's leaf test, sixteen or four rays at once: the one the walks end
-        // with, so a hit here is a hit they would find (the structure is conservative).
         let valid = packet.valid_lanes();
-        let mut rest = valid;
-        if let Some((shear, covered)) = shear16::<I, N>(packet, valid as u32) {
-            let lanes = valid as u32 & covered;
-            let hit = leaf_blocks16::<I, P, N>(scene, bvh, packet, &shear, lanes, leaf, None, probe);
-            blocked |= u64::from(hit);
-            rest &= !u64::from(lanes);
-            c.leaves = c.leaves.saturating_add(lanes.count_ones());
-            c.tri_tests = c.tri_tests.saturating_add(leaf.1.saturating_mul(lanes.count_ones()));
-        }
-        for g in (0..N).step_by(4) {
-            let lanes = ((rest >> g) & 0xF) as u32;
-            if lanes == 0 {
-                continue;
-            }
-            let rays: [Ray; 4] = core::array::from_fn(|k| packet.ray(g + k));
-            blocked |= u64::from(leaf_blocks_in_group::<I, P>(scene, bvh, &rays, lanes, leaf, probe, &mut c)) << g;
+        let shear = shear16::<I, N>(packet, valid as u32);
+        blocked = leaf_blocks_packet::<I, P, N>(scene, bvh, packet, (valid, shear.as_ref()), leaf, probe, &mut c);
+        // A second chance for the rays the first leaf let through.
+        let rest = valid & !blocked;
+        if let Some(second) = cache.second().filter(|_| rest != 0) {
+            let b = leaf_blocks_packet::<I, P, N>(scene, bvh, packet, (rest, shear.as_ref()), second, probe, &mut c);
+            cache.second_voted(b != 0);
+            blocked |= b;
         }
         counters.add_rays(&c);
     }
@@ -63,11 +55,53 @@ pub fn occluded_bvh4_packet_cached<I: Intersector, P: MemoryProbe, const N: usiz
     if live & !blocked != 0 {
         blocked |= occluded_packet_walk::<I, P, N>(scene, bvh, packet, live & !blocked, &mut found, probe, counters);
     }
-    if !good {
-        match found {
-            Some((first, count)) => cache.blocked_in(first, count, tested),
-            None => cache.free(tested),
+    match found {
+        Some((first, count)) if !good => {
+            if let Some(old) = cache.leaf().filter(|&l| l != (first, count)) {
+                cache.also_blocked_in(old);
+            }
+            cache.blocked_in(first, count, tested);
         }
+        Some(leaf) => cache.also_blocked_in(leaf),
+        None if !good => cache.free(tested),
+        None => {}
+    }
+    blocked
+}
+
+/// The rays of `lanes` that `leaf` blocks, by the single ray's leaf test (the one the
+/// walks end with, so a hit here is a hit they would find: the structure is
+/// conservative): sixteen rays at once with their constants `shear` for the lanes it
+/// covers, four at once (or one by one) for the others.
+#[inline(always)]
+fn leaf_blocks_packet<I: Intersector, P: MemoryProbe, const N: usize>(
+    scene: &SceneView<'_>,
+    bvh: &Bvh4View<'_>,
+    packet: &RayPacket<N>,
+    (lanes, shear): (u64, Option<&(I::Prepared16, u32)>),
+    leaf: (u32, u32),
+    probe: &mut P,
+    c: &mut RayCounters,
+) -> u64 {
+    let mut blocked = 0u64;
+    let mut rest = lanes;
+    if let Some((shear, covered)) = shear {
+        let wide = lanes as u32 & covered;
+        if wide != 0 {
+            let hit = leaf_blocks16::<I, P, N>(scene, bvh, packet, shear, wide, leaf, None, probe);
+            blocked |= u64::from(hit);
+            rest &= !u64::from(wide);
+            c.leaves = c.leaves.saturating_add(wide.count_ones());
+            c.tri_tests = c.tri_tests.saturating_add(leaf.1.saturating_mul(wide.count_ones()));
+        }
+    }
+    for g in (0..N).step_by(4) {
+        let group = ((rest >> g) & 0xF) as u32;
+        if group == 0 {
+            continue;
+        }
+        let rays: [Ray; 4] = core::array::from_fn(|k| packet.ray(g + k));
+        blocked |= u64::from(leaf_blocks_in_group::<I, P>(scene, bvh, &rays, group, leaf, probe, c)) << g;
     }
     blocked
 }

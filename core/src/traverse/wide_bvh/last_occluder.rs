@@ -38,12 +38,16 @@ use super::test_wide_leaf;
 pub struct LastOccluder {
     leaf: Option<(u32, u32)>,
     trust: u8,
+    /// A packet's second chance: another leaf where a walk recently found rays blocked,
+    /// and its own trust (as `trust`).
+    second: Option<(u32, u32)>,
+    second_trust: u8,
 }
 
 impl Default for LastOccluder {
     /// Empty, and trusted as soon as it holds a leaf: coherent rays gain from the second.
     fn default() -> Self {
-        LastOccluder { leaf: None, trust: Self::TEST_FROM }
+        LastOccluder { leaf: None, trust: Self::TEST_FROM, second: None, second_trust: Self::TEST_FROM }
     }
 }
 
@@ -56,6 +60,36 @@ impl LastOccluder {
     #[inline(always)]
     pub fn leaf(&self) -> Option<(u32, u32)> {
         self.leaf
+    }
+
+    /// The packets' second leaf to test, where the first did not block all their rays:
+    /// another leaf a walk found rays blocked in (packets of shadow rays from a block of
+    /// pixels meet two or three occluders, a wall and the floor).
+    #[inline(always)]
+    pub fn second(&self) -> Option<(u32, u32)> {
+        self.second.filter(|&s| Some(s) != self.leaf && self.second_trust >= Self::TEST_FROM)
+    }
+
+    /// A vote on the second leaf: a test of it blocked some of the packet's rays (`up`),
+    /// or did not.
+    /// (The conference room's packets that the first leaf does not answer hold rays that
+    /// reach the light: a second leaf tested for them cost 3% of its shadow rays' rate.)
+    #[inline(always)]
+    pub(crate) fn second_voted(&mut self, up: bool) {
+        let t = self.second_trust;
+        self.second_trust = if up { (t + 1).min(Self::MOST) } else { t.saturating_sub(1) };
+    }
+
+    /// A packet's walk found rays blocked in `leaf`: kept as the second leaf if it is not
+    /// the first (made by [`LastOccluder::blocked_in`], which calls this with the leaf it
+    /// replaces).
+    #[inline(always)]
+    pub(crate) fn also_blocked_in(&mut self, leaf: (u32, u32)) {
+        if Some(leaf) != self.leaf && Some(leaf) != self.second {
+            // A new leaf: tested at once, its trust its own.
+            self.second = Some(leaf);
+            self.second_trust = Self::TEST_FROM;
+        }
     }
 
     /// The leaf to test before the walk: the cached one, while it is trusted.
@@ -250,5 +284,31 @@ mod tests {
         assert_eq!((c.leaf(), c.to_test()), (Some((16, 4)), None));
         c.tested(true);
         assert_eq!(c.to_test(), Some((16, 4)));
+    }
+
+    /// The packets' second leaf: another leaf a walk found rays blocked in, never the
+    /// first, tested while its tests block rays, trusted afresh when it is replaced.
+    #[test]
+    fn keeps_a_second_leaf_for_packets() {
+        let mut c = LastOccluder::default();
+        assert_eq!(c.second(), None, "empty");
+        c.blocked_in(8, 4, false);
+        c.also_blocked_in((8, 4));
+        assert_eq!(c.second(), None, "the first leaf is not the second");
+        c.also_blocked_in((20, 3));
+        assert_eq!((c.to_test(), c.second()), (Some((8, 4)), Some((20, 3))));
+        c.second_voted(false);
+        assert_eq!(c.second(), None, "one miss from the threshold");
+        c.also_blocked_in((20, 3));
+        assert_eq!(c.second(), None, "the same leaf keeps its trust");
+        c.also_blocked_in((24, 2));
+        assert_eq!(c.second(), Some((24, 2)), "a new leaf is trusted afresh");
+        c.second_voted(true);
+        c.second_voted(true);
+        c.second_voted(false);
+        assert_eq!(c.second(), Some((24, 2)), "saturated at three, one miss leaves two");
+        // The walk makes the second leaf the first: it is not tested twice.
+        c.blocked_in(24, 2, false);
+        assert_eq!((c.leaf(), c.second()), (Some((24, 2)), None));
     }
 }
