@@ -251,10 +251,8 @@ impl<const N: usize> RayPacket<N> {
         }
         let want = key(first);
         if live == u64::MAX >> (64 - N.clamp(1, 64)) {
-            // Every lane active (most packets): one pass without early exit or masks,
-            // the differing bits gathered by `|` (SIMD-friendly: a lane-by-lane loop of
-            // array compares was 2% of the conference room's eye-ray packet time, and a
-            // fold of array compares still about 800 instructions per packet of 64).
+            // Every lane (most packets): one pass, differing bits gathered by `|` in SIMD
+            // registers (a fold of array compares: ~800 instructions per 64 lanes).
             let diff = (0..N).fold([0u32; 3], |d, i| {
                 let k = key(i);
                 [d[0] | (k[0] ^ want[0]), d[1] | (k[1] ^ want[1]), d[2] | (k[2] ^ want[2])]
