@@ -56,13 +56,7 @@ pub fn occluded_bvh4_packet_cached<I: Intersector, P: MemoryProbe, const N: usiz
         blocked |= occluded_packet_walk::<I, P, N>(scene, bvh, packet, live & !blocked, &mut found, probe, counters);
     }
     match found {
-        Some((first, count)) if !good => {
-            if let Some(old) = cache.leaf().filter(|&l| l != (first, count)) {
-                cache.also_blocked_in(old);
-            }
-            cache.blocked_in(first, count, tested);
-        }
-        Some(leaf) => cache.also_blocked_in(leaf),
+        Some(leaf) => cache.packet_blocked_in(leaf, !good, tested),
         None if !good => cache.free(tested),
         None => {}
     }

@@ -76,15 +76,27 @@ impl LastOccluder {
     /// reach the light: a second leaf tested for them cost 3% of its shadow rays' rate.)
     #[inline(always)]
     pub(crate) fn second_voted(&mut self, up: bool) {
-        let t = self.second_trust;
-        self.second_trust = if up { (t + 1).min(Self::MOST) } else { t.saturating_sub(1) };
+        self.second_trust = counted(self.second_trust, up);
     }
 
-    /// A packet's walk found rays blocked in `leaf`: kept as the second leaf if it is not
-    /// the first (made by [`LastOccluder::blocked_in`], which calls this with the leaf it
-    /// replaces).
+    /// A packet's walk found rays blocked in `leaf`: with `replace`, it becomes the first
+    /// leaf ([`LastOccluder::blocked_in`], `tested` as there) and the first the second;
+    /// else it is kept as the second.
     #[inline(always)]
-    pub(crate) fn also_blocked_in(&mut self, leaf: (u32, u32)) {
+    pub(crate) fn packet_blocked_in(&mut self, leaf: (u32, u32), replace: bool, tested: bool) {
+        if !replace {
+            self.also_blocked_in(leaf);
+            return;
+        }
+        if let Some(old) = self.leaf.filter(|&l| l != leaf) {
+            self.also_blocked_in(old);
+        }
+        self.blocked_in(leaf.0, leaf.1, tested);
+    }
+
+    /// `leaf` kept as the second leaf if it is not the first.
+    #[inline(always)]
+    fn also_blocked_in(&mut self, leaf: (u32, u32)) {
         if Some(leaf) != self.leaf && Some(leaf) != self.second {
             // A new leaf: tested at once, its trust its own.
             self.second = Some(leaf);
@@ -100,7 +112,7 @@ impl LastOccluder {
 
     #[inline(always)]
     fn vote(&mut self, up: bool) {
-        self.trust = if up { (self.trust + 1).min(Self::MOST) } else { self.trust.saturating_sub(1) };
+        self.trust = counted(self.trust, up);
     }
 
     /// The outcome of a ray's test of the cached leaf.
@@ -127,6 +139,16 @@ impl LastOccluder {
         if !tested {
             self.vote(false);
         }
+    }
+}
+
+/// A two-bit saturating counter `trust` after a vote `up` or down.
+#[inline(always)]
+fn counted(trust: u8, up: bool) -> u8 {
+    if up {
+        (trust + 1).min(LastOccluder::MOST)
+    } else {
+        trust.saturating_sub(1)
     }
 }
 
@@ -293,15 +315,15 @@ mod tests {
         let mut c = LastOccluder::default();
         assert_eq!(c.second(), None, "empty");
         c.blocked_in(8, 4, false);
-        c.also_blocked_in((8, 4));
+        c.packet_blocked_in((8, 4), false, false);
         assert_eq!(c.second(), None, "the first leaf is not the second");
-        c.also_blocked_in((20, 3));
+        c.packet_blocked_in((20, 3), false, false);
         assert_eq!((c.to_test(), c.second()), (Some((8, 4)), Some((20, 3))));
         c.second_voted(false);
         assert_eq!(c.second(), None, "one miss from the threshold");
-        c.also_blocked_in((20, 3));
+        c.packet_blocked_in((20, 3), false, false);
         assert_eq!(c.second(), None, "the same leaf keeps its trust");
-        c.also_blocked_in((24, 2));
+        c.packet_blocked_in((24, 2), false, false);
         assert_eq!(c.second(), Some((24, 2)), "a new leaf is trusted afresh");
         c.second_voted(true);
         c.second_voted(true);
@@ -310,5 +332,8 @@ mod tests {
         // The walk makes the second leaf the first: it is not tested twice.
         c.blocked_in(24, 2, false);
         assert_eq!((c.leaf(), c.second()), (Some((24, 2)), None));
+        // A packet's walk replaces the first leaf: the first becomes the second.
+        c.packet_blocked_in((30, 4), true, false);
+        assert_eq!((c.leaf(), c.second()), (Some((30, 4)), Some((24, 2))));
     }
 }
