@@ -35,11 +35,11 @@ pub fn thread_pool(threads: Option<usize>) -> Result<Arc<rayon::ThreadPool>> {
 /// iterator); one thread runs on the caller's. Rayon's `par_iter` splits the items
 /// into halves per worker first and steals later: on 256 chunks of one image, whose
 /// cost varies a hundredfold between sky and geometry, Sponza's 8×8 packets ran on two
-/// threads at 26 Mrays/s against 20 on one. Taking chunk by chunk from a rayon scope
-/// gave 37, from plain scoped threads 40 (2.0×), measured in turn. The helpers are the
-/// kept pool's workers (`threads − 1` of them), not threads started per call: a batch of
-/// 78 thousand shadow rays lasts 3 ms on two threads, and starting a thread with a fresh
-/// stack cost the sports car's 4% of it (1.87× to 1.95× over one thread).
+/// threads at 26 Mrays/s against 20 on one; taking chunk by chunk, 40 (2.0×). The helpers
+/// are a kept pool's `threads − 1` workers, in a scope on the caller's thread, not
+/// threads started per call: a batch of 78 thousand shadow rays lasts 3 ms on two
+/// threads, and starting a thread with a fresh stack cost the sports car 4% of it (1.87×
+/// to 1.95× over one thread).
 pub fn for_each_claimed<T: Send>(
     threads: Option<usize>,
     items: impl Iterator<Item = T> + Send,
