@@ -5,8 +5,9 @@ use std::path::Path;
 use crate::render::packets::PacketSize;
 use crate::render::tracer::IntersectorKind;
 use crate::render::{Algorithm, RenderOptions};
+use crate::study::batch_stats::{gather_batch, BatchQuery};
 use crate::study::scene_stats;
-use anyhow::Result;
+use anyhow::{anyhow, Result};
 use raypipe_core::image::CameraRecord;
 use raypipe_core::DataClass;
 use raypipe_core::SceneView;
@@ -17,6 +18,7 @@ use super::args::AlgoArgs;
 use super::args::CameraArgs;
 use super::args::RunArgs;
 use super::args::StructureArgs;
+use super::trace::Query;
 use clap::Args;
 use std::path::PathBuf;
 
@@ -44,16 +46,31 @@ pub struct StatsArgs {
     pub cost_image: Option<PathBuf>,
     #[command(flatten)]
     pub cache: super::args::CacheArgs,
+    /// The statistics of a ray batch instead of the view's primary rays: a .npy array
+    /// as `trace --rays` reads it (N × 6 or N × 8), each ray traced alone by the kernel
+    /// `trace` runs on single rays.
+    #[arg(long, value_name = "NPY", conflicts_with_all = ["cost_image", "packet"])]
+    pub rays: Option<PathBuf>,
+    /// With --rays: what each ray asks (the any-hit query keeps the shadow cache, as
+    /// `trace --query any` does).
+    #[arg(long, value_enum, default_value_t = Query::Closest, requires = "rays")]
+    pub query: Query,
 }
 
 pub(crate) fn cmd_stats(a: StatsArgs) -> Result<()> {
     a.run.check()?;
     if let Some(path) = a.scene.as_deref().filter(|p| crate::input::bricked::is_bricked(p)) {
+        if a.rays.is_some() {
+            anyhow::bail!("{}: --rays needs a scene image or a mesh, not a bricked scene", path.display());
+        }
         return super::bricked_study::stats(path, &a.camera, &a.run, &a.cache, a.packet);
     }
     let scene = load_scene(a.scene.as_deref(), &a.structure, &a.camera)?;
     warn(&scene);
     let view = scene.view()?;
+    if let Some(rays) = &a.rays {
+        return batch_stats(&scene.name, &view, rays, a.query, &a.run);
+    }
     let cam = camera_for(&view, &a.camera)?;
     let kind = IntersectorKind::resolve(a.run.intersector, &view);
     let opts = RenderOptions {
@@ -94,6 +111,35 @@ pub(crate) fn cmd_stats(a: StatsArgs) -> Result<()> {
         a.algo.apply(&mut algo_opts)?;
         print_algorithm(&view, &cam, &algo_opts)?;
     }
+    Ok(())
+}
+
+/// `stats --rays`: the counters of a ray batch, per ray.
+fn batch_stats(name: &str, view: &SceneView<'_>, path: &Path, query: Query, run: &RunArgs) -> Result<()> {
+    let array = crate::input::npy::read_f32_2d(path)?;
+    let (rays, invalid) =
+        crate::render::batch::rays_from_array(&array).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+    let kind = IntersectorKind::resolve(run.intersector, view);
+    let q = match query {
+        Query::Closest => BatchQuery::Closest,
+        Query::Any => BatchQuery::Any,
+    };
+    let s = gather_batch(view, &rays, &invalid, q, kind, run.threads)?;
+    let not_rays = invalid.iter().filter(|b| **b).count();
+    let (node, leaf) = if view.grid().is_some() { ("voxels", "non-empty voxels") } else { ("nodes", "leaves") };
+    let what = if q == BatchQuery::Any { "rays blocked" } else { "rays that hit" };
+    println!("scene                     {name} ({} triangles)", view.triangle_count());
+    println!("structure                 {}", structure_summary(view));
+    println!("rays                      {} from {} ({not_rays} rows are not rays)", s.rays, path.display());
+    println!("{what:<25} {:.2}%", 100.0 * s.hits as f64 / s.rays.max(1) as f64);
+    println!("{:<25} avg {:.2}, max {}", format!("{node} visited per ray"), s.per_ray(s.total.nodes), s.max_nodes);
+    println!("{:<25} avg {:.2}", format!("{leaf} per ray"), s.per_ray(s.total.leaves));
+    println!("triangles tested per ray  avg {:.2}, max {}", s.per_ray(s.total.tri_tests), s.max_tri_tests);
+    let per_class = |v: &[u64; 4]| -> Vec<String> {
+        DataClass::ALL.iter().map(|c| format!("{} {:.2}", c.name(), s.per_ray(v[*c as usize]))).collect()
+    };
+    println!("reads per ray             {}", per_class(&s.bytes.reads).join(", "));
+    println!("bytes read per ray        {}", per_class(&s.bytes.bytes).join(", "));
     Ok(())
 }
 

@@ -1,6 +1,7 @@
 //! Measuring scenes and models: statistics, benchmarks, the fixed-point comparison, sweeps, plots, report diffs and cost images.
 
 pub mod animation_report;
+pub mod batch_stats;
 pub mod bench;
 pub mod cluster;
 pub mod cost_image;

@@ -54,7 +54,7 @@ pub struct TotalCounters {
 }
 
 impl SceneStats {
-    fn add_ray(&mut self, c: &RayCounters, hit: bool, missed_bounds: bool) {
+    pub(crate) fn add_ray(&mut self, c: &RayCounters, hit: bool, missed_bounds: bool) {
         self.rays += 1;
         self.hits += hit as u64;
         self.missed_bounds += missed_bounds as u64;
@@ -66,7 +66,7 @@ impl SceneStats {
         self.max_tri_tests = self.max_tri_tests.max(c.tri_tests);
     }
 
-    fn merge(mut self, o: SceneStats) -> SceneStats {
+    pub(crate) fn merge(mut self, o: SceneStats) -> SceneStats {
         self.rays += o.rays;
         self.hits += o.hits;
         self.missed_bounds += o.missed_bounds;
@@ -224,7 +224,7 @@ pub struct AlgoCosts {
 }
 
 impl AlgoCosts {
-    fn merge(mut self, o: AlgoCosts) -> AlgoCosts {
+    pub(crate) fn merge(mut self, o: AlgoCosts) -> AlgoCosts {
         self.pixels += o.pixels;
         for (a, b) in self.rays.iter_mut().zip(o.rays) {
             *a += b;
