@@ -213,6 +213,8 @@ def main():
     ap.add_argument("--path-size", default="512x512", help="the path-traced frame's size")
     ap.add_argument("--path-samples", type=int, default=4, help="the path-traced frame's samples per pixel")
     ap.add_argument("--builds", action="store_true", help="also time every structure's build beside Embree's")
+    ap.add_argument("--keep", metavar="DIR",
+                    help="keep each scene's triangles, rays and images in DIR/SCENE (for bench/embree/visits.sh)")
     ap.add_argument("--raypipe", default=os.path.join(HERE, "..", "target", "release", "raypipe"))
     a = ap.parse_args()
     if not shutil.which("gcc") or not os.path.exists("/usr/include/embree3/rtcore.h"):
@@ -248,6 +250,12 @@ def main():
             rays, tris = np.load(rays_p), np.load(tris_p)
             primary_hits = np.load(hits_p)
             secondary_rays(tmp, rays, primary_hits, tris)
+            if a.keep:
+                # The scene's inputs for later runs (bench/embree/visits.sh, raypipe trace).
+                kept = os.path.join(a.keep, name)
+                os.makedirs(kept, exist_ok=True)
+                for f in ["tris.npy", "primary.npy", "shadow.npy", "bounce.npy", "bvh4.rpsi", "bvh8.rpsi"]:
+                    shutil.copy(os.path.join(tmp, f), kept)
             if a.builds and mesh is not None:
                 builds.extend(time_builds(rp, harness, mesh, name, tris_p, rays_p, tmp, a))
             kinds = [("primary", "closest", ["intersect1", "intersect16", "intersect1M"]),
