@@ -6,14 +6,18 @@
 //! has, so the host detects them and says so once ([`assume_avx`], `raypipe`'s
 //! `isa::report_cpu`). Until then, and on other architectures, every kernel runs its
 //! portable form. Either form gives the same bits (each AVX form has a test comparing it
-//! with the portable one lane for lane).
+//! with the portable one lane for lane), but for the fused node test, which is
+//! conservative as the portable one is (tested against an exact `f64` box test): it may
+//! let a walk visit a node more, never lose a hit.
 //!
 //! The AVX forms are `#[target_feature(enable = "avx")]` functions, which are unsafe to
 //! call. Each is reached only through a safe function of this module that takes an
 //! [`Avx`] token, and a token exists only once the host has reported AVX: holding one is
 //! the proof every `unsafe` block here relies on. The forms:
 //!
-//! * `slab8`: the 8-wide BVH's node test (one register per plane, one move-mask);
+//! * `slab8`: the 8-wide BVH's node test (one register per plane, one move-mask), and
+//!   with an [`AvxFma`] token (AVX and FMA) its fused form, one multiply-subtract per
+//!   plane — conservative like the portable form, not bit for bit the same;
 //! * `leaf_entries`: which rays of a packet enter a leaf's box, eight lanes at a time;
 //! * `transpose`: eight rays into a packet's lanes by one 8×8 transpose;
 //! * `watertight8`: the watertight test on eight rays against a leaf's shared
@@ -42,6 +46,8 @@ static AVX: AtomicBool = AtomicBool::new(false);
 
 #[cfg(target_arch = "x86_64")]
 static AVX512: AtomicBool = AtomicBool::new(false);
+#[cfg(target_arch = "x86_64")]
+static FMA: AtomicBool = AtomicBool::new(false);
 
 /// Proof that the CPU has AVX: made only by [`Avx::reported`] once the host has called
 /// [`assume_avx`] (or, in the unit tests, by asking the operating system). The AVX
@@ -137,4 +143,47 @@ pub unsafe fn assume_avx512(on: bool) {
 #[inline(always)]
 pub fn has_avx512() -> bool {
     Avx512::reported().is_some()
+}
+
+/// Proof that the CPU has AVX and FMA: made only by [`AvxFma::reported`] once the host
+/// has called [`assume_avx`] and [`assume_fma`] (or, in the unit tests, by asking the
+/// operating system).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct AvxFma(());
+
+impl AvxFma {
+    /// The token, if the host has reported AVX and FMA; `None` until then and on every
+    /// other architecture.
+    #[inline(always)]
+    pub fn reported() -> Option<AvxFma> {
+        #[cfg(target_arch = "x86_64")]
+        if AVX.load(Ordering::Relaxed) && FMA.load(Ordering::Relaxed) {
+            return Some(AvxFma(()));
+        }
+        None
+    }
+
+    /// The token, if the operating system says this CPU has AVX and FMA (unit tests).
+    #[cfg(test)]
+    pub(crate) fn detected() -> Option<AvxFma> {
+        extern crate std;
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx") && std::is_x86_feature_detected!("fma") {
+            return Some(AvxFma(()));
+        }
+        None
+    }
+}
+
+/// Records that the CPU has FMA (with AVX: [`assume_avx`]), so that the 8-wide node test
+/// may take its fused form; `false` takes it back, for comparisons.
+///
+/// # Safety
+///
+/// With `on`, the CPU this process runs on must support FMA
+/// (`is_x86_feature_detected!("fma")`).
+#[cfg(target_arch = "x86_64")]
+#[allow(unsafe_code)]
+pub unsafe fn assume_fma(on: bool) {
+    FMA.store(on, Ordering::Relaxed);
 }

@@ -1,7 +1,7 @@
 //! The 8-wide BVH's node test in AVX ([`crate::traverse::wide_bvh::node8::slab8`]'s fast form):
 //! eight child boxes against one ray, one register per plane.
 
-use super::Avx;
+use super::{Avx, AvxFma};
 use crate::image::Bvh8Node;
 use crate::traverse::boxes::wide_slab::{NodeRay, OCTANTS};
 
@@ -15,24 +15,6 @@ pub(crate) fn slab8(avx: Avx, r: &NodeRay, n: &Bvh8Node, t0: f32, t1: f32, out: 
     #[allow(unsafe_code)]
     unsafe {
         slab8_avx(r, n, t0, t1, out)
-    }
-}
-
-/// [`slab8`] for a ray of octant `O` (`O < 8`), its planes' offsets constants.
-#[inline(always)]
-pub(crate) fn slab8_in<const O: usize>(
-    avx: Avx,
-    r: &NodeRay,
-    n: &Bvh8Node,
-    t0: f32,
-    t1: f32,
-    out: &mut [f32; 8],
-) -> u32 {
-    let Avx(()) = avx;
-    // SAFETY: an `Avx` token exists only where the CPU has AVX (see `Avx`).
-    #[allow(unsafe_code)]
-    unsafe {
-        slab8_avx_in::<O>(r, n, t0, t1, out)
     }
 }
 
@@ -51,20 +33,6 @@ pub(crate) fn slab8_in<const O: usize>(
 unsafe fn slab8_avx(r: &NodeRay, n: &Bvh8Node, t0: f32, t1: f32, out: &mut [f32; 8]) -> u32 {
     // SAFETY: the caller's (AVX).
     unsafe { slab8_avx_rows(r, n, t0, t1, out, r.rows.near8, r.rows.far8) }
-}
-
-/// [`slab8_avx`] for a ray of octant `O` (`O < 8`): its planes' offsets are constants.
-///
-/// # Safety
-///
-/// The CPU must support AVX.
-#[allow(unsafe_code)]
-#[target_feature(enable = "avx")]
-#[inline]
-unsafe fn slab8_avx_in<const O: usize>(r: &NodeRay, n: &Bvh8Node, t0: f32, t1: f32, out: &mut [f32; 8]) -> u32 {
-    let rows = &OCTANTS[O % 8];
-    // SAFETY: the caller's (AVX).
-    unsafe { slab8_avx_rows(r, n, t0, t1, out, rows.near8, rows.far8) }
 }
 
 /// [`slab8_avx`] with the near and far planes' byte offsets given.
@@ -95,7 +63,7 @@ unsafe fn slab8_avx_rows(
     // the compiler folds into the operations that use them.
     let l = &r.lanes8;
     // SAFETY: each `Lanes8` is eight f32 aligned to 32 bytes.
-    let lane = |k: usize| unsafe { _mm256_load_ps(l[k % 9].0.as_ptr()) };
+    let lane = |k: usize| unsafe { _mm256_load_ps(l[k % 12].0.as_ptr()) };
     let (o, inv, inv_far) = ([lane(0), lane(1), lane(2)], [lane(3), lane(4), lane(5)], [lane(6), lane(7), lane(8)]);
     let dist = |off: u32, a: usize, inv: &[__m256; 3]| _mm256_mul_ps(_mm256_sub_ps(row(off), o[a]), inv[a]);
     let tn = _mm256_max_ps(
@@ -105,6 +73,85 @@ unsafe fn slab8_avx_rows(
     let tf = _mm256_min_ps(
         _mm256_min_ps(dist(far[0], 0, &inv_far), dist(far[1], 1, &inv_far)),
         _mm256_min_ps(dist(far[2], 2, &inv_far), _mm256_set1_ps(t1)),
+    );
+    let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u32;
+    // SAFETY: `out` holds eight f32, and `storeu` needs no alignment.
+    unsafe { _mm256_storeu_ps(out.as_mut_ptr(), tn) };
+    mask
+}
+
+/// The fused form of [`slab8`] (one multiply-subtract per plane, see
+/// `FusedOffsets`): for a ray whose `NodeRay::fma8` is set.
+#[inline(always)]
+pub(crate) fn slab8_fused(fma: AvxFma, r: &NodeRay, n: &Bvh8Node, t0: f32, t1: f32, out: &mut [f32; 8]) -> u32 {
+    let AvxFma(()) = fma;
+    // SAFETY: an `AvxFma` token exists only where the CPU has AVX and FMA.
+    #[allow(unsafe_code)]
+    unsafe {
+        slab8_fused_rows(r, n, t0, t1, out, r.rows.near8, r.rows.far8)
+    }
+}
+
+/// [`slab8_fused`] for a ray of octant `O` (`O < 8`): its planes' offsets are constants.
+#[inline(always)]
+pub(crate) fn slab8_fused_in<const O: usize>(
+    fma: AvxFma,
+    r: &NodeRay,
+    n: &Bvh8Node,
+    t0: f32,
+    t1: f32,
+    out: &mut [f32; 8],
+) -> u32 {
+    let AvxFma(()) = fma;
+    let rows = &OCTANTS[O % 8];
+    // SAFETY: an `AvxFma` token exists only where the CPU has AVX and FMA.
+    #[allow(unsafe_code)]
+    unsafe {
+        slab8_fused_rows(r, n, t0, t1, out, rows.near8, rows.far8)
+    }
+}
+
+/// [`slab8_fused`] with the near and far planes' byte offsets given: `p·inv − o·inv` per
+/// plane, the offsets `o·inv` padded (rows 0–2 and 9–11 of `NodeRay::lanes8`).
+///
+/// # Safety
+///
+/// The CPU must support AVX and FMA.
+#[allow(unsafe_code)]
+#[target_feature(enable = "avx,fma")]
+#[inline]
+unsafe fn slab8_fused_rows(
+    r: &NodeRay,
+    n: &Bvh8Node,
+    t0: f32,
+    t1: f32,
+    out: &mut [f32; 8],
+    near: [u32; 3],
+    far: [u32; 3],
+) -> u32 {
+    use core::arch::x86_64::*;
+    let bytes: &[u8; 256] = bytemuck::cast_ref(n);
+    // SAFETY: `off & 0xE0` is at most 224, so the 32 bytes read lie inside the node's
+    // 256; `loadu` needs no alignment.
+    let row = |off: u32| unsafe { _mm256_loadu_ps(bytes.as_ptr().add(off as usize & 0xE0).cast::<f32>()) };
+    let l = &r.lanes8;
+    // SAFETY: each `Lanes8` is eight f32 aligned to 32 bytes.
+    let lane = |k: usize| unsafe { _mm256_load_ps(l[k % 12].0.as_ptr()) };
+    let (on, inv, inv_far, of) = (
+        [lane(0), lane(1), lane(2)],
+        [lane(3), lane(4), lane(5)],
+        [lane(6), lane(7), lane(8)],
+        [lane(9), lane(10), lane(11)],
+    );
+    let near_t = |off: u32, a: usize| _mm256_fmsub_ps(row(off), inv[a], on[a]);
+    let far_t = |off: u32, a: usize| _mm256_fmsub_ps(row(off), inv_far[a], of[a]);
+    let tn = _mm256_max_ps(
+        _mm256_max_ps(near_t(near[0], 0), near_t(near[1], 1)),
+        _mm256_max_ps(near_t(near[2], 2), _mm256_set1_ps(t0)),
+    );
+    let tf = _mm256_min_ps(
+        _mm256_min_ps(far_t(far[0], 0), far_t(far[1], 1)),
+        _mm256_min_ps(far_t(far[2], 2), _mm256_set1_ps(t1)),
     );
     let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u32;
     // SAFETY: `out` holds eight f32, and `storeu` needs no alignment.

@@ -1,7 +1,9 @@
 //! The instruction set the host's hot loops run with, chosen at run time: the kernels in
 //! core are written over plain arrays and SIMD types, and a loop compiled for AVX2 turns
 //! the 8-wide BVH's node test into one register per plane. The kernels give the same bits
-//! either way: they use no fused multiply-add, and Rust never contracts `a * b + c`.
+//! either way: Rust never contracts `a * b + c`, and the one fused form, the 8-wide node
+//! test's (`RAYPIPE_FMA=0` turns it off), is conservative, so it changes which nodes a
+//! walk visits, never the hit.
 
 /// Runs `f`, compiled for AVX2 where the CPU has it (`f` is inlined into the AVX2
 /// build), else as built (SSE2 on x86-64).
@@ -29,6 +31,7 @@ fn has_avx2_set() -> bool {
         && std::is_x86_feature_detected!("bmi2")
         && std::is_x86_feature_detected!("lzcnt")
         && std::is_x86_feature_detected!("popcnt")
+        && std::is_x86_feature_detected!("fma")
 }
 
 /// Tells core which optional instruction sets the CPU has (a `no_std` library cannot
@@ -45,6 +48,7 @@ pub fn report_cpu() {
             unsafe { raypipe_core::simd::assume_avx() }
         }
     }
+    set_fma(std::env::var_os("RAYPIPE_FMA").is_none_or(|v| v != "0"));
     set_avx512(std::env::var_os("RAYPIPE_AVX512").is_none_or(|v| v != "0"));
 }
 
@@ -66,8 +70,25 @@ pub fn set_avx512(on: bool) -> bool {
     }
 }
 
+/// Lets the 8-wide node test take its fused form (`on`, where the CPU has FMA) or keeps
+/// it on the unfused one; returns whether it now takes it. For comparisons.
+pub fn set_fma(on: bool) -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        let on = on && std::is_x86_feature_detected!("fma");
+        // SAFETY: with `on`, the CPU has FMA (checked above).
+        unsafe { raypipe_core::simd::assume_fma(on) }
+        on
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let _ = on;
+        false
+    }
+}
+
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx,avx2,bmi1,bmi2,lzcnt,popcnt")]
+#[target_feature(enable = "avx,avx2,bmi1,bmi2,lzcnt,popcnt,fma")]
 unsafe fn avx2<R>(f: impl FnOnce() -> R) -> R {
     f()
 }

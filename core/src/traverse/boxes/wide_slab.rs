@@ -27,12 +27,44 @@ pub struct NodeRay {
     /// The 8-wide node test may take its AVX form (the token, where the CPU has AVX and
     /// no direction component is zero). Decided once per ray rather than at each node.
     pub(crate) avx8: Option<crate::simd::Avx>,
-    /// For that form, the origin, `inv` and `inv_far` of [`RayBox`] as eight lanes each
-    /// (x, y, z of each), written once per ray: the node test takes them as memory
-    /// operands, where splatting them at each node took nine of its instructions. Only
-    /// on x86-64 (288 bytes a ray that an embedded stack need not carry).
+    /// The 8-wide node test may take its fused form (AVX and FMA, no zero direction
+    /// component, and the origin's products finite): see [`FusedOffsets`].
+    pub(crate) fma8: Option<crate::simd::AvxFma>,
+    /// For the AVX forms, as eight lanes each (x, y, z of each): rows 0–2 the origin (the
+    /// fused form: the near planes' offsets), 3–5 `inv` and 6–8 `inv_far` of [`RayBox`],
+    /// 9–11 the far planes' offsets (fused form only), written once per ray: the node
+    /// test takes them as memory operands, where splatting them at each node took nine
+    /// of its instructions. Only on x86-64 (384 bytes a ray that an embedded stack need
+    /// not carry).
     #[cfg(target_arch = "x86_64")]
-    pub(crate) lanes8: [Lanes8; 9],
+    pub(crate) lanes8: [Lanes8; 12],
+}
+
+/// The fused node test's per-ray offsets: a plane `p` at distance `p·inv − o·inv`, one
+/// multiply-subtract (Embree's form), where `(p − o)·inv` takes a subtraction and a
+/// product. The product `o·inv` is rounded once, an error absolute in the distance (up
+/// to half an ulp of `o·inv`, however near the plane), where the other roundings are
+/// relative: so the near planes' offset is raised and the far planes' lowered by
+/// `|o·inv|·2⁻²¹`, at least twice that error after its own rounding, and the relative
+/// roundings — the reciprocal and the fused operation's one, against the subtraction and
+/// product's two — stay within the far side's growth (`inv_far`, Ize 2013). A box the
+/// ray touches is never rejected; the entry distances differ from the unfused test's in
+/// the last bits, so the walk may visit a node more, never a hit less.
+pub(crate) struct FusedOffsets {
+    pub(crate) near: Vec3A,
+    pub(crate) far: Vec3A,
+}
+
+impl FusedOffsets {
+    /// The offsets for `rb`, or `None` where a product is not finite (a far origin with
+    /// a nearly axis-parallel direction: the unfused test then).
+    #[inline(always)]
+    pub(crate) fn new(rb: &RayBox) -> Option<FusedOffsets> {
+        const PAD: f32 = 1.0 / (1u32 << 21) as f32;
+        let (n, f) = (rb.origin * rb.inv, rb.origin * rb.inv_far);
+        let (near, far) = (n + n.abs() * PAD, f - f.abs() * PAD);
+        (near.is_finite() && far.is_finite()).then_some(FusedOffsets { near, far })
+    }
 }
 
 /// Eight copies of one value, aligned as one AVX register.
@@ -81,18 +113,31 @@ impl NodeRay {
     /// Precomputes the slab constants and the octant.
     #[inline]
     pub fn new(ray: &Ray) -> NodeRay {
+        NodeRay::with_fma(ray, crate::simd::AvxFma::reported())
+    }
+
+    /// [`NodeRay::new`] with the fused node test allowed by `fma` (the tests compare the
+    /// forms on one ray).
+    #[inline(always)]
+    pub(crate) fn with_fma(ray: &Ray, fma: Option<crate::simd::AvxFma>) -> NodeRay {
         let rb = RayBox::new(ray);
         let neg = rb.inv.cmplt(Vec3A::ZERO).bitmask() as usize;
         let avx8 = crate::simd::Avx::reported().filter(|_| rb.zero_axes == 0);
+        let fused = fma.filter(|_| rb.zero_axes == 0).and_then(|f| FusedOffsets::new(&rb).map(|o| (f, o)));
         #[cfg(target_arch = "x86_64")]
         let lanes8 = {
-            let (o, inv, far) = (rb.origin, rb.inv, rb.inv_far);
-            [o.x, o.y, o.z, inv.x, inv.y, inv.z, far.x, far.y, far.z].map(|v| Lanes8([v; 8]))
+            let (inv, far) = (rb.inv, rb.inv_far);
+            let (o, p) = match &fused {
+                Some((_, off)) => (off.near, off.far),
+                None => (rb.origin, Vec3A::ZERO),
+            };
+            [o.x, o.y, o.z, inv.x, inv.y, inv.z, far.x, far.y, far.z, p.x, p.y, p.z].map(|v| Lanes8([v; 8]))
         };
         NodeRay {
             rows: OCTANTS[neg & 7],
             rb,
             avx8,
+            fma8: fused.map(|(f, _)| f),
             #[cfg(target_arch = "x86_64")]
             lanes8,
         }

@@ -373,7 +373,7 @@ fn walk_octant<N: WideSlab, const C: usize, I: Intersector, P: MemoryProbe, cons
     // near and far planes at fixed offsets (reading the ray's six offsets and masking
     // them took 12 of a node's 62 instructions on Sponza). Coherent rays keep to one or
     // two of the eight walks.
-    let (best, leaf) = if N::OCTANT_FORMS && r.avx8.is_some() {
+    let (best, leaf) = if N::OCTANT_FORMS && r.fma8.is_some() {
         match r.octant() {
             0 => walk::<N, C, I, P, 0, ANY>(scene, bvh, ray, &r, probe, counters),
             1 => walk::<N, C, I, P, 1, ANY>(scene, bvh, ray, &r, probe, counters),
