@@ -26,6 +26,8 @@ pub struct NodeRay {
     pub(crate) rb: RayBox,
     /// The 8-wide node test may take its AVX form (the token, where the CPU has AVX and
     /// no direction component is zero). Decided once per ray rather than at each node.
+    // Read by the x86-64 node tests only.
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
     pub(crate) avx8: Option<crate::simd::Avx>,
     /// The 8-wide node test may take its fused form (AVX and FMA, no zero direction
     /// component, and the origin's products finite): see [`FusedOffsets`].
@@ -50,6 +52,8 @@ pub struct NodeRay {
 /// product's two — stay within the far side's growth (`inv_far`, Ize 2013). A box the
 /// ray touches is never rejected; the entry distances differ from the unfused test's in
 /// the last bits, so the walk may visit a node more, never a hit less.
+// Read by the x86-64 node test only (no other target makes an `AvxFma` token).
+#[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
 pub(crate) struct FusedOffsets {
     pub(crate) near: Vec3A,
     pub(crate) far: Vec3A,
