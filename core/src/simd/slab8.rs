@@ -53,27 +53,69 @@ unsafe fn slab8_avx_rows(
     far: [u32; 3],
 ) -> u32 {
     use core::arch::x86_64::*;
-    // The node's planes as rows of eight lanes: min x, y, z, then max x, y, z, at byte
-    // offsets 0, 32, … 160 (`NodeRay::near8`, `far8`).
+    // SAFETY (both): the caller's (AVX).
+    let (row, lane) = (|off: u32| unsafe { node_row(n, off) }, |k: usize| unsafe { ray_row(r, k) });
+    let (o, inv, inv_far) = ([lane(0), lane(1), lane(2)], [lane(3), lane(4), lane(5)], [lane(6), lane(7), lane(8)]);
+    let dist = |off: u32, a: usize, inv: &[__m256; 3]| _mm256_mul_ps(_mm256_sub_ps(row(off), o[a]), inv[a]);
+    // SAFETY: the caller's (AVX).
+    unsafe {
+        entry_mask(
+            [dist(near[0], 0, &inv), dist(near[1], 1, &inv), dist(near[2], 2, &inv)],
+            [dist(far[0], 0, &inv_far), dist(far[1], 1, &inv_far), dist(far[2], 2, &inv_far)],
+            (t0, t1),
+            out,
+        )
+    }
+}
+
+/// The node's row at byte offset `off` (masked into the node): eight lanes of one plane
+/// (min x, y, z, then max x, y, z at offsets 0, 32, … 160: `NodeRay::near8`, `far8`).
+///
+/// # Safety
+///
+/// The CPU must support AVX.
+#[allow(unsafe_code)]
+#[target_feature(enable = "avx")]
+#[inline]
+unsafe fn node_row(n: &Bvh8Node, off: u32) -> core::arch::x86_64::__m256 {
     let bytes: &[u8; 256] = bytemuck::cast_ref(n);
     // SAFETY: `off & 0xE0` is at most 224, so the 32 bytes read lie inside the node's
     // 256; `loadu` needs no alignment.
-    let row = |off: u32| unsafe { _mm256_loadu_ps(bytes.as_ptr().add(off as usize & 0xE0).cast::<f32>()) };
-    // The ray's lanes, splatted once per ray (`NodeRay::lanes8`); aligned loads, which
-    // the compiler folds into the operations that use them.
-    let l = &r.lanes8;
+    unsafe { core::arch::x86_64::_mm256_loadu_ps(bytes.as_ptr().add(off as usize & 0xE0).cast::<f32>()) }
+}
+
+/// Row `k` of the ray's lanes, splatted once per ray (`NodeRay::lanes8`): an aligned
+/// load, which the compiler folds into the operation that uses it.
+///
+/// # Safety
+///
+/// The CPU must support AVX.
+#[allow(unsafe_code)]
+#[target_feature(enable = "avx")]
+#[inline]
+unsafe fn ray_row(r: &NodeRay, k: usize) -> core::arch::x86_64::__m256 {
     // SAFETY: each `Lanes8` is eight f32 aligned to 32 bytes.
-    let lane = |k: usize| unsafe { _mm256_load_ps(l[k % 12].0.as_ptr()) };
-    let (o, inv, inv_far) = ([lane(0), lane(1), lane(2)], [lane(3), lane(4), lane(5)], [lane(6), lane(7), lane(8)]);
-    let dist = |off: u32, a: usize, inv: &[__m256; 3]| _mm256_mul_ps(_mm256_sub_ps(row(off), o[a]), inv[a]);
-    let tn = _mm256_max_ps(
-        _mm256_max_ps(dist(near[0], 0, &inv), dist(near[1], 1, &inv)),
-        _mm256_max_ps(dist(near[2], 2, &inv), _mm256_set1_ps(t0)),
-    );
-    let tf = _mm256_min_ps(
-        _mm256_min_ps(dist(far[0], 0, &inv_far), dist(far[1], 1, &inv_far)),
-        _mm256_min_ps(dist(far[2], 2, &inv_far), _mm256_set1_ps(t1)),
-    );
+    unsafe { core::arch::x86_64::_mm256_load_ps(r.lanes8[k % 12].0.as_ptr()) }
+}
+
+/// The slab test's end, from each axis' near and far planes' distances: the entry
+/// distances within `[t0, t1]` to `out`, and the mask of the boxes entered.
+///
+/// # Safety
+///
+/// The CPU must support AVX.
+#[allow(unsafe_code)]
+#[target_feature(enable = "avx")]
+#[inline]
+unsafe fn entry_mask(
+    near: [core::arch::x86_64::__m256; 3],
+    far: [core::arch::x86_64::__m256; 3],
+    (t0, t1): (f32, f32),
+    out: &mut [f32; 8],
+) -> u32 {
+    use core::arch::x86_64::*;
+    let tn = _mm256_max_ps(_mm256_max_ps(near[0], near[1]), _mm256_max_ps(near[2], _mm256_set1_ps(t0)));
+    let tf = _mm256_min_ps(_mm256_min_ps(far[0], far[1]), _mm256_min_ps(far[2], _mm256_set1_ps(t1)));
     let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u32;
     // SAFETY: `out` holds eight f32, and `storeu` needs no alignment.
     unsafe { _mm256_storeu_ps(out.as_mut_ptr(), tn) };
@@ -130,31 +172,16 @@ unsafe fn slab8_fused_rows(
     far: [u32; 3],
 ) -> u32 {
     use core::arch::x86_64::*;
-    let bytes: &[u8; 256] = bytemuck::cast_ref(n);
-    // SAFETY: `off & 0xE0` is at most 224, so the 32 bytes read lie inside the node's
-    // 256; `loadu` needs no alignment.
-    let row = |off: u32| unsafe { _mm256_loadu_ps(bytes.as_ptr().add(off as usize & 0xE0).cast::<f32>()) };
-    let l = &r.lanes8;
-    // SAFETY: each `Lanes8` is eight f32 aligned to 32 bytes.
-    let lane = |k: usize| unsafe { _mm256_load_ps(l[k % 12].0.as_ptr()) };
+    // SAFETY (both): the caller's (AVX and FMA).
+    let (row, lane) = (|off: u32| unsafe { node_row(n, off) }, |k: usize| unsafe { ray_row(r, k) });
     let (on, inv, inv_far, of) = (
         [lane(0), lane(1), lane(2)],
         [lane(3), lane(4), lane(5)],
         [lane(6), lane(7), lane(8)],
         [lane(9), lane(10), lane(11)],
     );
-    let near_t = |off: u32, a: usize| _mm256_fmsub_ps(row(off), inv[a], on[a]);
-    let far_t = |off: u32, a: usize| _mm256_fmsub_ps(row(off), inv_far[a], of[a]);
-    let tn = _mm256_max_ps(
-        _mm256_max_ps(near_t(near[0], 0), near_t(near[1], 1)),
-        _mm256_max_ps(near_t(near[2], 2), _mm256_set1_ps(t0)),
-    );
-    let tf = _mm256_min_ps(
-        _mm256_min_ps(far_t(far[0], 0), far_t(far[1], 1)),
-        _mm256_min_ps(far_t(far[2], 2), _mm256_set1_ps(t1)),
-    );
-    let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u32;
-    // SAFETY: `out` holds eight f32, and `storeu` needs no alignment.
-    unsafe { _mm256_storeu_ps(out.as_mut_ptr(), tn) };
-    mask
+    let near_t = |a: usize| _mm256_fmsub_ps(row(near[a]), inv[a], on[a]);
+    let far_t = |a: usize| _mm256_fmsub_ps(row(far[a]), inv_far[a], of[a]);
+    // SAFETY: the caller's (AVX).
+    unsafe { entry_mask([near_t(0), near_t(1), near_t(2)], [far_t(0), far_t(1), far_t(2)], (t0, t1), out) }
 }
