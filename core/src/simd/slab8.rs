@@ -53,8 +53,10 @@ unsafe fn slab8_avx_rows(
     far: [u32; 3],
 ) -> u32 {
     use core::arch::x86_64::*;
-    // SAFETY (both): the caller's (AVX).
-    let (row, lane) = (|off: u32| unsafe { node_row(n, off) }, |k: usize| unsafe { ray_row(r, k) });
+    // SAFETY: the caller's (AVX).
+    let row = |off: u32| unsafe { node_row(n, off) };
+    // SAFETY: the caller's (AVX).
+    let lane = |k: usize| unsafe { ray_row(r, k) };
     let (o, inv, inv_far) = ([lane(0), lane(1), lane(2)], [lane(3), lane(4), lane(5)], [lane(6), lane(7), lane(8)]);
     let dist = |off: u32, a: usize, inv: &[__m256; 3]| _mm256_mul_ps(_mm256_sub_ps(row(off), o[a]), inv[a]);
     // SAFETY: the caller's (AVX).
@@ -172,8 +174,10 @@ unsafe fn slab8_fused_rows(
     far: [u32; 3],
 ) -> u32 {
     use core::arch::x86_64::*;
-    // SAFETY (both): the caller's (AVX and FMA).
-    let (row, lane) = (|off: u32| unsafe { node_row(n, off) }, |k: usize| unsafe { ray_row(r, k) });
+    // SAFETY: the caller's (AVX and FMA).
+    let row = |off: u32| unsafe { node_row(n, off) };
+    // SAFETY: the caller's (AVX and FMA).
+    let lane = |k: usize| unsafe { ray_row(r, k) };
     let (on, inv, inv_far, of) = (
         [lane(0), lane(1), lane(2)],
         [lane(3), lane(4), lane(5)],
