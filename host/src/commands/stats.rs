@@ -7,7 +7,7 @@ use crate::render::tracer::IntersectorKind;
 use crate::render::{Algorithm, RenderOptions};
 use crate::study::batch_stats::{gather_batch, BatchQuery};
 use crate::study::scene_stats;
-use anyhow::{anyhow, Result};
+use anyhow::Result;
 use raypipe_core::image::CameraRecord;
 use raypipe_core::DataClass;
 use raypipe_core::SceneView;
@@ -116,9 +116,7 @@ pub(crate) fn cmd_stats(a: StatsArgs) -> Result<()> {
 
 /// `stats --rays`: the counters of a ray batch, per ray.
 fn batch_stats(name: &str, view: &SceneView<'_>, path: &Path, query: Query, run: &RunArgs) -> Result<()> {
-    let array = crate::input::npy::read_f32_2d(path)?;
-    let (rays, invalid) =
-        crate::render::batch::rays_from_array(&array).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+    let (rays, invalid) = crate::render::batch::read_rays(path)?;
     let kind = IntersectorKind::resolve(run.intersector, view);
     let q = match query {
         Query::Closest => BatchQuery::Closest,

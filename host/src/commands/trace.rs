@@ -1,12 +1,12 @@
 //! `raypipe trace`: traces a batch of rays from a file and writes their hits (or their
 //! occlusion), with the fields asked for.
 
-use crate::render::batch::{incoherent_share, rays_from_array};
+use crate::render::batch::{incoherent_share, read_rays};
 use crate::render::packets::PacketSize;
 use crate::render::tracer::IntersectorKind;
 use crate::scene;
 use crate::study::bench::median;
-use anyhow::{anyhow, bail, Result};
+use anyhow::{bail, Result};
 use rayon::prelude::*;
 use raypipe_core::shade::ray_cone::RayCone;
 use raypipe_core::shade::surface::Surface;
@@ -140,9 +140,8 @@ pub(crate) fn cmd_trace(a: TraceArgs) -> Result<()> {
     if crate::input::bricked::is_bricked(&a.scene) {
         return super::trace_bricked::cmd_trace_bricked(&a, &fields);
     }
-    let array = crate::input::npy::read_f32_2d(&a.rays)?;
+    let (rays, invalid) = read_rays(&a.rays)?;
     let name = a.rays.display();
-    let (rays, invalid) = rays_from_array(&array).map_err(|e| anyhow!("{name}: {e}"))?;
     let scene = scene::load(Some(&a.scene), &a.structure.options())?;
     warn(&scene);
     let view = scene.view()?;

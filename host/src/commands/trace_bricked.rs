@@ -4,14 +4,14 @@
 
 use std::time::Instant;
 
-use anyhow::{anyhow, Result};
+use anyhow::Result;
 use rayon::prelude::*;
 use raypipe_core::traverse::two_level::BrickHit;
 use raypipe_core::Ray;
 
 use super::trace::{pack_record, Field, Query, TraceArgs};
 use crate::input::bricked::BrickedScene;
-use crate::render::batch::rays_from_array;
+use crate::render::batch::read_rays;
 use crate::render::bricked::brick_cache::with_cache;
 use crate::render::bricked::brick_tracer::{BrickTracer, TraceStats};
 use crate::render::tracer::IntersectorKind;
@@ -21,9 +21,7 @@ const CHUNK: usize = 16 * 1024;
 
 /// Traces `a.rays` through the bricked scene `a.scene`.
 pub(crate) fn cmd_trace_bricked(a: &TraceArgs, fields: &[Field]) -> Result<()> {
-    let array = crate::input::npy::read_f32_2d(&a.rays)?;
-    let name = a.rays.display();
-    let (rays, invalid) = rays_from_array(&array).map_err(|e| anyhow!("{name}: {e}"))?;
+    let (rays, invalid) = read_rays(&a.rays)?;
     let scene = BrickedScene::open(&a.scene)?;
     let (first, _) = scene.load(0)?;
     let kind = IntersectorKind::resolve(a.run.intersector, first.view());

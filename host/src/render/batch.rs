@@ -36,6 +36,12 @@ fn prefetch_packet(rays: &[Ray], first: usize, n: usize) {
     }
 }
 
+/// The rays of the `.npy` file at `path` ([`rays_from_array`]); an error names the file.
+pub fn read_rays(path: &std::path::Path) -> Result<(Vec<Ray>, Vec<bool>)> {
+    let array = crate::input::npy::read_f32_2d(path)?;
+    rays_from_array(&array).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
+}
+
 /// Rays from an (N, 6) or (N, 8) array, and which rows could not be rays (NaN or
 /// infinite values, a zero direction, an empty, NaN or negative interval): those are
 /// traced as an empty ray that hits nothing, and the caller reports them as misses.
