@@ -36,7 +36,8 @@ fn has_avx2_set() -> bool {
 
 /// Tells core which optional instruction sets the CPU has (a `no_std` library cannot
 /// ask): with AVX, the 8-wide BVH's node test and the packets' leaf entry test run as
-/// AVX intrinsics; with AVX-512 F, shadow packets of 16 test their rays sixteen lanes at
+/// AVX intrinsics, the node test fused where the CPU has FMA (`RAYPIPE_FMA=0` keeps it
+/// unfused); with AVX-512 F, shadow packets of 16 test their rays sixteen lanes at
 /// a time (`RAYPIPE_AVX512=0` in the environment keeps them on the AVX and portable
 /// forms, for comparisons). Cheap (the detection is cached); the tracing drivers call it
 /// first.
@@ -57,12 +58,7 @@ pub fn report_cpu() {
 /// equivalence suites, which hold both forms to the single-ray answers.
 pub fn set_avx512(on: bool) -> bool {
     #[cfg(target_arch = "x86_64")]
-    {
-        let on = on && std::is_x86_feature_detected!("avx512f");
-        // SAFETY: with `on`, the CPU has AVX-512 F (checked above).
-        unsafe { raypipe_core::simd::assume_avx512(on) }
-        on
-    }
+    return switch(on && std::is_x86_feature_detected!("avx512f"), raypipe_core::simd::assume_avx512);
     #[cfg(not(target_arch = "x86_64"))]
     {
         let _ = on;
@@ -74,17 +70,22 @@ pub fn set_avx512(on: bool) -> bool {
 /// it on the unfused one; returns whether it now takes it. For comparisons.
 pub fn set_fma(on: bool) -> bool {
     #[cfg(target_arch = "x86_64")]
-    {
-        let on = on && std::is_x86_feature_detected!("fma");
-        // SAFETY: with `on`, the CPU has FMA (checked above).
-        unsafe { raypipe_core::simd::assume_fma(on) }
-        on
-    }
+    return switch(on && std::is_x86_feature_detected!("fma"), raypipe_core::simd::assume_fma);
     #[cfg(not(target_arch = "x86_64"))]
     {
         let _ = on;
         false
     }
+}
+
+/// Sets one of core's switches to `on`, which the caller has checked the CPU supports
+/// where it is true; returns it.
+#[cfg(target_arch = "x86_64")]
+fn switch(on: bool, assume: unsafe fn(bool)) -> bool {
+    // SAFETY: with `on`, the CPU has the feature (the callers check it), as each
+    // `assume_*` requires.
+    unsafe { assume(on) };
+    on
 }
 
 #[cfg(target_arch = "x86_64")]
