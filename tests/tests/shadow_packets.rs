@@ -3,7 +3,7 @@
 //! still its single-ray any-hit answer.
 
 use proptest::prelude::*;
-use raypipe::platform::isa::set_avx512;
+use raypipe::platform::isa::{set_avx16, set_avx512};
 use raypipe::render::tracer::{occluded_packet, trace};
 use raypipe::scene::{Accel, TriangleLayout};
 use raypipe_core::camera::{Camera, EyeRays};
@@ -60,9 +60,10 @@ fn check_blocks<const N: usize>(view: &SceneView<'_>, cam: &Camera, light: Vec3)
             let mut packet = RayPacket::<N>::new();
             packet.fill(&shadow);
             pyramids += takes_shadow_pyramid(view, &packet) as usize;
-            // With the AVX-512 forms where the CPU has them, and without.
-            for wide in [true, false] {
-                let wide = set_avx512(wide);
+            // In sixteen lanes with AVX-512 and with AVX where the CPU has them, and in
+            // groups of four.
+            for (w512, w16) in [(true, true), (false, true), (false, false)] {
+                let wide = (set_avx512(w512), set_avx16(w16));
                 let blocked = occluded_packet::<Watertight, _, N>(
                     view,
                     &packet,
@@ -73,7 +74,7 @@ fn check_blocks<const N: usize>(view: &SceneView<'_>, cam: &Camera, light: Vec3)
                 for (i, r) in shadow.iter().enumerate() {
                     let single = occluded::<Watertight, _>(view, r, &mut NoProbe, &mut RayCounters::default());
                     let got = blocked & (1 << i) != 0;
-                    prop_assert_eq!(got, single, "packet of {}, lane {}, AVX-512 {}: {:?}", N, i, wide, r);
+                    prop_assert_eq!(got, single, "packet of {}, lane {}, (AVX-512, AVX) {:?}: {:?}", N, i, wide, r);
                 }
             }
         }

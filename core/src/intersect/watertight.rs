@@ -46,7 +46,7 @@ impl Intersector for Watertight {
     /// same bits as one by one).
     #[inline(always)]
     fn prepare_rays16(org: &[[f32; 16]; 3], dir: &[[f32; 16]; 3], lanes: u32) -> Option<(ShearedRays16, u32)> {
-        let avx512 = crate::simd::Avx512::reported()?;
+        let wide = crate::simd::Wide16::reported()?;
         let lead = lanes.trailing_zeros() as usize % 16;
         let k = axis_order(Vec3::new(dir[0][lead], dir[1][lead], dir[2][lead]));
         let [kx, ky, kz] = k.map(|a| a.min(2));
@@ -76,7 +76,7 @@ impl Intersector for Watertight {
                 core::array::from_fn(|i| 1.0 / dz[i]),
             ],
             k,
-            avx512,
+            wide,
         };
         Some((out, covered & lanes))
     }
@@ -91,7 +91,7 @@ impl Intersector for Watertight {
                 [p[k0 & 3], p[k1 & 3], p[k2 & 3]]
             };
             let v = [frame(&v[0]), frame(&v[1]), frame(&v[2])];
-            crate::simd::rays16::watertight16(r.avx512, &r.org, &r.s, &v, out);
+            crate::simd::rays16::watertight16(r.wide, &r.org, &r.s, &v, out);
         }
         #[cfg(not(target_arch = "x86_64"))]
         {
@@ -394,7 +394,16 @@ pub struct ShearedRays16 {
     org: [[f32; 16]; 3],
     s: [[f32; 16]; 3],
     k: [usize; 3],
-    avx512: crate::simd::Avx512,
+    wide: crate::simd::Wide16,
+}
+
+impl ShearedRays16 {
+    /// The same constants for the sixteen-lane test's form `wide` (tests compare the
+    /// forms).
+    #[cfg(test)]
+    pub(crate) fn in_form(self, wide: crate::simd::Wide16) -> ShearedRays16 {
+        ShearedRays16 { wide, ..self }
+    }
 }
 
 /// The shear constants of two groups of four rays as the eight lanes of the AVX test.

@@ -1,5 +1,5 @@
-//! The one module of raypipe-core with `unsafe` code: the x86-64 AVX forms of four
-//! kernels and the AVX-512 forms of two, and the switches that let them run. Every other
+//! The one module of raypipe-core with `unsafe` code: the x86-64 AVX forms of six
+//! kernels and the AVX-512 forms of two of them, and the switches that let them run. Every other
 //! module is `#[forbid(unsafe_code)]` (see `lib.rs`).
 //!
 //! A `no_std` library cannot ask the operating system which instruction sets the CPU
@@ -23,9 +23,10 @@
 //! * `watertight8`: the watertight test on eight rays against a leaf's shared
 //!   triangles;
 //!
-//! and, with an [`Avx512`] token (AVX-512 F), `rays16`: sixteen rays of many origins
-//! against a 4-wide node's boxes and against one triangle (shadow packets of 16, as
-//! Embree's `rtcOccluded16` tests sixteen rays per instruction).
+//! and, with a [`Wide16`] token, `rays16`: sixteen rays of many origins against a 4-wide
+//! node's boxes and against one triangle (shadow packets of 16, as Embree's
+//! `rtcOccluded16` tests sixteen rays at once): in one AVX-512 register per quantity
+//! where the CPU has AVX-512 F, else in two AVX registers.
 
 #[cfg(target_arch = "x86_64")]
 pub(crate) mod leaf_entries;
@@ -48,6 +49,9 @@ static AVX: AtomicBool = AtomicBool::new(false);
 static AVX512: AtomicBool = AtomicBool::new(false);
 #[cfg(target_arch = "x86_64")]
 static FMA: AtomicBool = AtomicBool::new(false);
+// Set by `assume_avx16`: the sixteen-lane tests may take their AVX form.
+#[cfg(target_arch = "x86_64")]
+static AVX16: AtomicBool = AtomicBool::new(false);
 
 /// Proof that the CPU has AVX: made only by [`Avx::reported`] once the host has called
 /// [`assume_avx`] (or, in the unit tests, by asking the operating system). The AVX
@@ -143,6 +147,53 @@ pub unsafe fn assume_avx512(on: bool) {
 #[inline(always)]
 pub fn has_avx512() -> bool {
     Avx512::reported().is_some()
+}
+
+/// Proof that the sixteen-lane tests (`rays16`) may run, and in which form: with AVX-512
+/// F one register per quantity, with AVX two (lanes 0–7 and 8–15). Both forms take the
+/// four-lane forms' operations lane by lane, hence the same bits.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Wide16 {
+    /// AVX-512 F: sixteen lanes per instruction.
+    Avx512(Avx512),
+    /// AVX: eight lanes per instruction, each test run on both halves.
+    Avx(Avx),
+}
+
+impl Wide16 {
+    /// The widest form the host has reported: AVX-512, or AVX where [`assume_avx16`]
+    /// allows it; `None` otherwise and on every other architecture.
+    #[inline(always)]
+    pub fn reported() -> Option<Wide16> {
+        if let Some(t) = Avx512::reported() {
+            return Some(Wide16::Avx512(t));
+        }
+        #[cfg(target_arch = "x86_64")]
+        if AVX16.load(Ordering::Relaxed) {
+            return Avx::reported().map(Wide16::Avx);
+        }
+        None
+    }
+
+    /// The forms the operating system says this CPU can run (unit tests).
+    #[cfg(test)]
+    pub(crate) fn detected_forms() -> [Option<Wide16>; 2] {
+        [Avx512::detected().map(Wide16::Avx512), Avx::detected().map(Wide16::Avx)]
+    }
+}
+
+/// Lets the sixteen-lane tests take their AVX form (two registers per quantity) where
+/// the CPU has no AVX-512 (`on`), or keeps such packets on the four-lane groups; for
+/// comparisons.
+///
+/// # Safety
+///
+/// With `on`, the CPU this process runs on must support AVX
+/// (`is_x86_feature_detected!("avx")`).
+#[cfg(target_arch = "x86_64")]
+#[allow(unsafe_code)]
+pub unsafe fn assume_avx16(on: bool) {
+    AVX16.store(on, Ordering::Relaxed);
 }
 
 /// Proof that the CPU has AVX and FMA: made only by [`AvxFma::reported`] once the host

@@ -1,10 +1,11 @@
-//! Sixteen rays of many origins in AVX-512 registers, one register per quantity: a
-//! 4-wide node's boxes and one triangle tested for all sixteen at once, as Embree's
-//! `rtcOccluded16` does. Lane by lane the four-lane forms' operations in the same order
+//! Sixteen rays of many origins in SIMD registers: a 4-wide node's boxes and one
+//! triangle tested for all sixteen at once, as Embree's `rtcOccluded16` does — in one
+//! AVX-512 register per quantity, or in two AVX registers (lanes 0–7, then 8–15) where
+//! the CPU has no AVX-512. Lane by lane the four-lane forms' operations in the same order
 //! (`packet::bvh4::many_origins`, `intersect::watertight`), hence the same bits, with
-//! four times the lanes per instruction.
+//! four (AVX: two) times the lanes per instruction.
 
-use super::Avx512;
+use super::{Avx, Avx512, Wide16};
 use crate::image::Bvh4Node;
 use crate::intersect::triangle::LaneHits;
 use glam::Vec4;
@@ -27,12 +28,22 @@ pub(crate) struct BoxLanes<'a> {
 /// (one register returned: an array written lane by lane and read whole stalled the
 /// caller on the store).
 #[inline(always)]
-pub(crate) fn boxes16(avx512: Avx512, rays: &BoxLanes<'_>, node: &Bvh4Node) -> u64 {
-    let Avx512(()) = avx512;
-    // SAFETY: an `Avx512` token exists only where the CPU has AVX-512 F.
-    #[allow(unsafe_code)]
-    unsafe {
-        boxes16_avx512(rays, node)
+pub(crate) fn boxes16(wide: Wide16, rays: &BoxLanes<'_>, node: &Bvh4Node) -> u64 {
+    match wide {
+        Wide16::Avx512(Avx512(())) => {
+            // SAFETY: an `Avx512` token exists only where the CPU has AVX-512 F.
+            #[allow(unsafe_code)]
+            unsafe {
+                boxes16_avx512(rays, node)
+            }
+        }
+        Wide16::Avx(Avx(())) => {
+            // SAFETY: an `Avx` token exists only where the CPU has AVX.
+            #[allow(unsafe_code)]
+            unsafe {
+                boxes8_avx(rays, node, 0) | boxes8_avx(rays, node, 1)
+            }
+        }
     }
 }
 
@@ -83,6 +94,57 @@ unsafe fn boxes16_avx512(rays: &BoxLanes<'_>, node: &Bvh4Node) -> u64 {
     out
 }
 
+/// [`boxes16`]'s lanes `8h .. 8h + 8` with AVX (`h`: 0 or 1), in the same bits of the
+/// result as the sixteen-lane form's.
+///
+/// # Safety
+///
+/// The CPU must support AVX.
+#[allow(unsafe_code)]
+#[target_feature(enable = "avx")]
+unsafe fn boxes8_avx(rays: &BoxLanes<'_>, node: &Bvh4Node, h: usize) -> u64 {
+    use core::arch::x86_64::*;
+    let h = h & 1;
+    // SAFETY: each array holds sixteen `Vec4`s in a row; its first 16 floats are the
+    // lanes, of which this reads eight from lane 8h.
+    let load = |v: &[Vec4; 16]| unsafe { _mm256_loadu_ps((v.as_ptr() as *const f32).add(8 * h)) };
+    let o = [load(&rays.org[0]), load(&rays.org[1]), load(&rays.org[2])];
+    let inv = [load(&rays.inv[0]), load(&rays.inv[1]), load(&rays.inv[2])];
+    let inv_far = [load(&rays.inv_far[0]), load(&rays.inv_far[1]), load(&rays.inv_far[2])];
+    let (t0, t1) = (load(rays.t0), load(rays.t1));
+    let lo = [&node.min_x, &node.min_y, &node.min_z];
+    let hi = [&node.max_x, &node.max_y, &node.max_z];
+    let mut out = 0u64;
+    for k in 0..4 {
+        // Empty slots hold inverted boxes: never entered.
+        if node.min_x[k] > node.max_x[k] {
+            continue;
+        }
+        let mut near = [_mm256_setzero_ps(); 3];
+        let mut far = [_mm256_setzero_ps(); 3];
+        for a in 0..3 {
+            let plane = |p: &[f32; 4]| _mm256_sub_ps(_mm256_set1_ps(p[k]), o[a]);
+            match rays.octant {
+                Some(neg) => {
+                    let (n, f) = if neg[a] { (hi[a], lo[a]) } else { (lo[a], hi[a]) };
+                    near[a] = _mm256_mul_ps(plane(n), inv[a]);
+                    far[a] = _mm256_mul_ps(plane(f), inv_far[a]);
+                }
+                None => {
+                    let (l, h) = (plane(lo[a]), plane(hi[a]));
+                    near[a] = _mm256_min_ps(_mm256_mul_ps(l, inv[a]), _mm256_mul_ps(h, inv[a]));
+                    far[a] = _mm256_max_ps(_mm256_mul_ps(l, inv_far[a]), _mm256_mul_ps(h, inv_far[a]));
+                }
+            }
+        }
+        let tn = _mm256_max_ps(_mm256_max_ps(near[0], near[1]), _mm256_max_ps(near[2], t0));
+        let tf = _mm256_min_ps(_mm256_min_ps(far[0], far[1]), _mm256_min_ps(far[2], t1));
+        let m = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u32 & 0xFF;
+        out |= u64::from(m) << (16 * k + 8 * h);
+    }
+    out
+}
+
 /// The watertight test of sixteen rays of one frame (per axis of the frame their origins
 /// `org` and the shear `s`: `sx`, `sy`, `sz`) against the triangle whose vertices `v` are
 /// given in the frame's axis order: lane by lane the four-lane test's verdicts and bits
@@ -92,17 +154,29 @@ unsafe fn boxes16_avx512(rays: &BoxLanes<'_>, node: &Bvh4Node) -> u64 {
 /// time).
 #[inline(always)]
 pub(crate) fn watertight16(
-    avx512: Avx512,
+    wide: Wide16,
     org: &[[f32; 16]; 3],
     s: &[[f32; 16]; 3],
     v: &[[f32; 3]; 3],
     out: &mut LaneHits<16>,
 ) {
-    let Avx512(()) = avx512;
-    // SAFETY: an `Avx512` token exists only where the CPU has AVX-512 F.
-    #[allow(unsafe_code)]
-    unsafe {
-        watertight16_avx512(org, s, v, out)
+    match wide {
+        Wide16::Avx512(Avx512(())) => {
+            // SAFETY: an `Avx512` token exists only where the CPU has AVX-512 F.
+            #[allow(unsafe_code)]
+            unsafe {
+                watertight16_avx512(org, s, v, out)
+            }
+        }
+        Wide16::Avx(Avx(())) => {
+            (out.hit, out.redo) = (0, 0);
+            // SAFETY: an `Avx` token exists only where the CPU has AVX.
+            #[allow(unsafe_code)]
+            unsafe {
+                watertight8_avx(org, s, v, out, 0);
+                watertight8_avx(org, s, v, out, 1);
+            }
+        }
     }
 }
 
@@ -170,6 +244,83 @@ unsafe fn watertight16_avx512(org: &[[f32; 16]; 3], s: &[[f32; 16]; 3], v: &[[f3
     }
 }
 
+/// [`watertight16`]'s lanes `8h .. 8h + 8` with AVX (`h`: 0 or 1): their bits of `hit`
+/// and `redo` added to `out`'s, their distances and barycentrics written where one hits.
+///
+/// # Safety
+///
+/// The CPU must support AVX.
+#[allow(unsafe_code)]
+#[target_feature(enable = "avx")]
+unsafe fn watertight8_avx(
+    org: &[[f32; 16]; 3],
+    s: &[[f32; 16]; 3],
+    v: &[[f32; 3]; 3],
+    out: &mut LaneHits<16>,
+    h: usize,
+) {
+    use core::arch::x86_64::*;
+    let at = 8 * (h & 1);
+    // SAFETY: each row holds sixteen floats, of which this reads eight from lane `at`
+    // (at most 8); `loadu` needs no alignment.
+    let load = |a: &[f32; 16]| unsafe { _mm256_loadu_ps(a.as_ptr().add(at)) };
+    let o = [load(&org[0]), load(&org[1]), load(&org[2])];
+    let (sx, sy, sz) = (load(&s[0]), load(&s[1]), load(&s[2]));
+    // Vertices relative to each ray's origin (`intersect_rays4`'s `rel`).
+    let rel = |p: &[f32; 3]| {
+        [
+            _mm256_sub_ps(_mm256_set1_ps(p[0]), o[0]),
+            _mm256_sub_ps(_mm256_set1_ps(p[1]), o[1]),
+            _mm256_sub_ps(_mm256_set1_ps(p[2]), o[2]),
+        ]
+    };
+    let (a, b, c) = (rel(&v[0]), rel(&v[1]), rel(&v[2]));
+    // `shear_edges` with the frame's axes 0, 1, 2.
+    let ax = _mm256_sub_ps(a[0], _mm256_mul_ps(sx, a[2]));
+    let ay = _mm256_sub_ps(a[1], _mm256_mul_ps(sy, a[2]));
+    let bx = _mm256_sub_ps(b[0], _mm256_mul_ps(sx, b[2]));
+    let by = _mm256_sub_ps(b[1], _mm256_mul_ps(sy, b[2]));
+    let cx = _mm256_sub_ps(c[0], _mm256_mul_ps(sx, c[2]));
+    let cy = _mm256_sub_ps(c[1], _mm256_mul_ps(sy, c[2]));
+    // `edges`.
+    let eu = _mm256_sub_ps(_mm256_mul_ps(cx, by), _mm256_mul_ps(cy, bx));
+    let ev = _mm256_sub_ps(_mm256_mul_ps(ax, cy), _mm256_mul_ps(ay, cx));
+    let ew = _mm256_sub_ps(_mm256_mul_ps(bx, ay), _mm256_mul_ps(by, ax));
+    // `lanes`, with the predicates of the sixteen-lane form.
+    let zero = _mm256_setzero_ps();
+    macro_rules! any {
+        ($p:ident) => {
+            _mm256_movemask_ps(_mm256_or_ps(
+                _mm256_or_ps(_mm256_cmp_ps::<$p>(eu, zero), _mm256_cmp_ps::<$p>(ev, zero)),
+                _mm256_cmp_ps::<$p>(ew, zero),
+            )) as u32
+        };
+    }
+    let redo = any!(_CMP_EQ_OQ);
+    let (neg, pos) = (any!(_CMP_LT_OQ), any!(_CMP_GT_OQ));
+    let det = _mm256_add_ps(_mm256_add_ps(eu, ev), ew);
+    let nonzero = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_NEQ_UQ>(det, zero)) as u32;
+    let hit = !(neg & pos) & nonzero & !redo & 0xFF;
+    out.hit |= hit << at;
+    out.redo |= (redo & 0xFF) << at;
+    if hit == 0 {
+        return;
+    }
+    // `scaled_distance`, then the division.
+    let t_scaled = _mm256_add_ps(
+        _mm256_add_ps(_mm256_mul_ps(eu, _mm256_mul_ps(sz, a[2])), _mm256_mul_ps(ev, _mm256_mul_ps(sz, b[2]))),
+        _mm256_mul_ps(ew, _mm256_mul_ps(sz, c[2])),
+    );
+    let inv = _mm256_div_ps(_mm256_set1_ps(1.0), det);
+    // SAFETY: each array holds sixteen floats, of which this writes eight from lane
+    // `at`; `storeu` needs no alignment.
+    unsafe {
+        _mm256_storeu_ps(out.t.as_mut_ptr().add(at), _mm256_mul_ps(t_scaled, inv));
+        _mm256_storeu_ps(out.u.as_mut_ptr().add(at), _mm256_mul_ps(ev, inv));
+        _mm256_storeu_ps(out.v.as_mut_ptr().add(at), _mm256_mul_ps(ew, inv));
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use crate::intersect::triangle::Intersector;
@@ -178,20 +329,30 @@ mod tests {
     use crate::test_lcg::Lcg;
     use glam::Vec3;
 
-    /// Where this CPU has AVX-512: sixteen rays of many origins made ready at once take,
-    /// lane by lane, the frame and constants of [`Watertight::prepare`], cover exactly
-    /// the lanes of the first lane's frame, and against a triangle give the one-ray
-    /// test's verdicts and bits (lanes left undecided where an edge function is zero).
+    /// In each form this CPU has (AVX-512, AVX): sixteen rays of many origins made ready
+    /// at once take, lane by lane, the frame and constants of [`Watertight::prepare`],
+    /// cover exactly the lanes of the first lane's frame, and against a triangle give the
+    /// one-ray test's verdicts and bits (lanes left undecided where an edge function is
+    /// zero).
     #[test]
     fn sixteen_rays_of_many_origins_match_the_one_ray_test() {
-        if super::Avx512::detected().is_none() {
+        if super::Avx::detected().is_none() {
             return;
         }
-        // SAFETY: the CPU has AVX-512 F (detected above).
+        // SAFETY: the CPU has AVX (detected above); AVX-512 is reported only where the
+        // operating system says this CPU has it.
         #[allow(unsafe_code)]
         unsafe {
-            super::super::assume_avx512(true)
+            super::super::assume_avx();
+            super::super::assume_avx16(true);
+            super::super::assume_avx512(super::Avx512::detected().is_some());
         };
+        for form in super::Wide16::detected_forms().into_iter().flatten() {
+            match_the_one_ray_test_in(form);
+        }
+    }
+
+    fn match_the_one_ray_test_in(form: super::Wide16) {
         let mut g = Lcg(29);
         let (mut checked, mut hit, mut redo, mut left_out) = (0, 0, 0, 0);
         for case in 0..4000 {
@@ -210,8 +371,9 @@ mod tests {
             let dir = core::array::from_fn(|a| core::array::from_fn(|i| rays[i].dir[a]));
             let lanes = [0xFFFF, 0x0F0F, 0x8001, 0x0040][case % 4];
             let Some((prep, covered)) = Watertight::prepare_rays16(&org, &dir, lanes) else {
-                panic!("case {case}: no sixteen-lane form on a CPU with AVX-512");
+                panic!("case {case}: no sixteen-lane form on a CPU with AVX");
             };
+            let prep = prep.in_form(form);
             let own = rays.map(|r| Watertight::prepare(&r));
             let lead = &own[lanes.trailing_zeros() as usize];
             assert_ne!(covered & (1 << lanes.trailing_zeros()), 0, "case {case}: the first lane left out");

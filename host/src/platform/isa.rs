@@ -37,9 +37,10 @@ fn has_avx2_set() -> bool {
 /// Tells core which optional instruction sets the CPU has (a `no_std` library cannot
 /// ask): with AVX, the 8-wide BVH's node test and the packets' leaf entry test run as
 /// AVX intrinsics, the node test fused where the CPU has FMA (`RAYPIPE_FMA=0` keeps it
-/// unfused); with AVX-512 F, shadow packets of 16 test their rays sixteen lanes at
-/// a time (`RAYPIPE_AVX512=0` in the environment keeps them on the AVX and portable
-/// forms, for comparisons). Cheap (the detection is cached); the tracing drivers call it
+/// unfused); shadow packets of 16 test their rays sixteen lanes at a time, in one
+/// AVX-512 register per quantity with AVX-512 F (`RAYPIPE_AVX512=0` in the environment
+/// keeps them off it), else in two AVX registers (`RAYPIPE_AVX16=0` keeps them on groups
+/// of four lanes), for comparisons. Cheap (the detection is cached); the tracing drivers call it
 /// first.
 pub fn report_cpu() {
     #[cfg(target_arch = "x86_64")]
@@ -51,6 +52,20 @@ pub fn report_cpu() {
     }
     set_fma(std::env::var_os("RAYPIPE_FMA").is_none_or(|v| v != "0"));
     set_avx512(std::env::var_os("RAYPIPE_AVX512").is_none_or(|v| v != "0"));
+    set_avx16(std::env::var_os("RAYPIPE_AVX16").is_none_or(|v| v != "0"));
+}
+
+/// Lets shadow packets of 16 test their rays sixteen lanes at a time in two AVX registers
+/// where the CPU has AVX but not AVX-512 (`on`), or keeps them on groups of four lanes;
+/// returns whether the AVX form may now run. For the equivalence suites and comparisons.
+pub fn set_avx16(on: bool) -> bool {
+    #[cfg(target_arch = "x86_64")]
+    return switch(on && std::is_x86_feature_detected!("avx"), raypipe_core::simd::assume_avx16);
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let _ = on;
+        false
+    }
 }
 
 /// Lets the kernels take their AVX-512 forms (`on`, where the CPU has AVX-512 F) or

@@ -27,7 +27,7 @@ use super::rays16::{leaf_blocks16, shear16};
 use super::walk::STACK;
 #[cfg(target_arch = "x86_64")]
 use crate::simd::rays16::{boxes16, BoxLanes};
-use crate::simd::Avx512;
+use crate::simd::Wide16;
 use crate::traverse::boxes::clip::SLAB_GROWTH;
 use crate::traverse::boxes::slab::recip4;
 
@@ -155,12 +155,12 @@ impl RayGroups {
     }
 
     /// The rays of `rays` that enter each of `node`'s four boxes: sixteen lanes at once
-    /// where `wide` holds the AVX-512 token (packets of up to 16), else group by group.
+    /// where `wide` holds a sixteen-lane token (packets of up to 16), else group by group.
     #[inline(always)]
-    fn node_entries(&self, node: &Bvh4Node, rays: u64, wide: Option<Avx512>) -> [u64; 4] {
+    fn node_entries(&self, node: &Bvh4Node, rays: u64, wide: Option<Wide16>) -> [u64; 4] {
         let mut enter = [0u64; 4];
         #[cfg(target_arch = "x86_64")]
-        if let Some(avx512) = wide {
+        if let Some(wide) = wide {
             let lanes = BoxLanes {
                 org: &self.org,
                 inv: &self.inv,
@@ -169,7 +169,7 @@ impl RayGroups {
                 t1: &self.t1,
                 octant: self.octant,
             };
-            let m = boxes16(avx512, &lanes, node);
+            let m = boxes16(wide, &lanes, node);
             for (k, enter) in enter.iter_mut().enumerate() {
                 *enter = (m >> (16 * k)) & 0xFFFF & rays;
             }
@@ -208,9 +208,9 @@ pub(super) fn occluded_many_origins<I: Intersector, P: MemoryProbe, const N: usi
     let mut todo = live & !exact;
     // Each ray's intersection constants, made at its first leaf (most rays reach few).
     let mut preps = [None::<I::Prepared>; N];
-    // Packets of up to 16 where the CPU has AVX-512: nodes and leaves sixteen lanes at
+    // Packets of up to 16 where the CPU has AVX: nodes and leaves sixteen lanes at
     // a time; the sixteen-lane constants made at the first leaf that needs them.
-    let wide = Avx512::reported().filter(|_| N <= 16);
+    let wide = Wide16::reported().filter(|_| N <= 16);
     let mut wide16: Option<Option<(I::Prepared16, u32)>> = None;
     // (child or first entry, leaf count or 0, the rays that enter it)
     let mut stack: heapless::Vec<(u32, u32, u64), STACK> = heapless::Vec::new();
@@ -355,17 +355,18 @@ mod tests {
         );
     }
 
-    /// Where this CPU has AVX-512: the sixteen-lane node test lets exactly the rays of
-    /// the four-lane groups' test into each box, for packets of one octant and of many,
-    /// rays with intervals, boxes flat or empty, and any subset of the rays.
+    /// In each of its forms this CPU has (AVX-512, AVX), the sixteen-lane node test lets
+    /// exactly the rays of the four-lane groups' test into each box, for packets of one
+    /// octant and of many, rays with intervals, boxes flat or empty, and any subset of the
+    /// rays.
     #[test]
     fn sixteen_lane_boxes_match_the_groups_test() {
-        #[cfg(target_arch = "x86_64")]
-        let Some(avx512) = Avx512::detected() else {
-            return;
-        };
-        #[cfg(not(target_arch = "x86_64"))]
-        let avx512: Avx512 = return;
+        for form in crate::simd::Wide16::detected_forms().into_iter().flatten() {
+            sixteen_lane_boxes_match_in(form);
+        }
+    }
+
+    fn sixteen_lane_boxes_match_in(form: Wide16) {
         let mut g = Lcg(41);
         let (mut checked, mut entered, mut one_octant) = (0, 0, 0);
         for case in 0..3000 {
@@ -412,8 +413,8 @@ mod tests {
             }
             let rays_in = mask & !exact;
             let groups = q.node_entries(&node, rays_in, None);
-            let wide = q.node_entries(&node, rays_in, Some(avx512));
-            assert_eq!(wide, groups, "case {case}");
+            let wide = q.node_entries(&node, rays_in, Some(form));
+            assert_eq!(wide, groups, "case {case} ({form:?})");
             checked += 1;
             entered += groups.iter().map(|m| m.count_ones()).sum::<u32>();
         }

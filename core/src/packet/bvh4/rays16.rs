@@ -1,4 +1,4 @@
-//! A packet of up to sixteen rays in one AVX-512 register per quantity: their watertight
+//! A packet of up to sixteen rays in one AVX-512 register per quantity (or two AVX ones): their watertight
 //! constants made at once, and a leaf's triangles each read once and tested against all
 //! of them (as Embree's `rtcOccluded16` does), lane by lane the one-ray test's bits.
 
@@ -7,7 +7,7 @@ use crate::intersect::leaf_blocks::entry_triangle;
 use crate::intersect::triangle::{Intersector, LaneHits};
 use crate::packet::{Lanes, RayPacket};
 use crate::probe::MemoryProbe;
-use crate::simd::has_avx512;
+use crate::simd::Wide16;
 
 /// The sixteen-lane constants of the rays of `lanes` that share the first one's frame,
 /// and the lanes they cover; `None` for packets of more than 16 rays, and where the test
@@ -17,7 +17,7 @@ pub(super) fn shear16<I: Intersector, const N: usize>(
     packet: &RayPacket<N>,
     lanes: u32,
 ) -> Option<(I::Prepared16, u32)> {
-    if N > 16 || !has_avx512() {
+    if N > 16 || Wide16::reported().is_none() {
         return None;
     }
     let row = |a: &[f32; N]| -> [f32; 16] { core::array::from_fn(|i| a.get(i).copied().unwrap_or(0.0)) };
