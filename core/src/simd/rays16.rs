@@ -41,7 +41,7 @@ pub(crate) fn boxes16(wide: Wide16, rays: &BoxLanes<'_>, node: &Bvh4Node) -> u64
             // SAFETY: an `Avx` token exists only where the CPU has AVX.
             #[allow(unsafe_code)]
             unsafe {
-                boxes8_avx(rays, node, 0) | boxes8_avx(rays, node, 1)
+                boxes16_avx(rays, node)
             }
         }
     }
@@ -94,6 +94,18 @@ unsafe fn boxes16_avx512(rays: &BoxLanes<'_>, node: &Bvh4Node) -> u64 {
     out
 }
 
+/// [`boxes16`] with AVX: both halves in one call.
+///
+/// # Safety
+///
+/// The CPU must support AVX.
+#[allow(unsafe_code)]
+#[target_feature(enable = "avx")]
+unsafe fn boxes16_avx(rays: &BoxLanes<'_>, node: &Bvh4Node) -> u64 {
+    // SAFETY: the caller's CPU supports AVX, as this function's contract requires.
+    unsafe { boxes8_avx(rays, node, 0) | boxes8_avx(rays, node, 1) }
+}
+
 /// [`boxes16`]'s lanes `8h .. 8h + 8` with AVX (`h`: 0 or 1), in the same bits of the
 /// result as the sixteen-lane form's.
 ///
@@ -101,6 +113,7 @@ unsafe fn boxes16_avx512(rays: &BoxLanes<'_>, node: &Bvh4Node) -> u64 {
 ///
 /// The CPU must support AVX.
 #[allow(unsafe_code)]
+#[inline]
 #[target_feature(enable = "avx")]
 unsafe fn boxes8_avx(rays: &BoxLanes<'_>, node: &Bvh4Node, h: usize) -> u64 {
     use core::arch::x86_64::*;
@@ -169,12 +182,10 @@ pub(crate) fn watertight16(
             }
         }
         Wide16::Avx(Avx(())) => {
-            (out.hit, out.redo) = (0, 0);
             // SAFETY: an `Avx` token exists only where the CPU has AVX.
             #[allow(unsafe_code)]
             unsafe {
-                watertight8_avx(org, s, v, out, 0);
-                watertight8_avx(org, s, v, out, 1);
+                watertight16_avx(org, s, v, out)
             }
         }
     }
@@ -244,6 +255,22 @@ unsafe fn watertight16_avx512(org: &[[f32; 16]; 3], s: &[[f32; 16]; 3], v: &[[f3
     }
 }
 
+/// [`watertight16`] with AVX: both halves in one call.
+///
+/// # Safety
+///
+/// The CPU must support AVX.
+#[allow(unsafe_code)]
+#[target_feature(enable = "avx")]
+unsafe fn watertight16_avx(org: &[[f32; 16]; 3], s: &[[f32; 16]; 3], v: &[[f32; 3]; 3], out: &mut LaneHits<16>) {
+    (out.hit, out.redo) = (0, 0);
+    // SAFETY: the caller's CPU supports AVX, as this function's contract requires.
+    unsafe {
+        watertight8_avx(org, s, v, out, 0);
+        watertight8_avx(org, s, v, out, 1);
+    }
+}
+
 /// [`watertight16`]'s lanes `8h .. 8h + 8` with AVX (`h`: 0 or 1): their bits of `hit`
 /// and `redo` added to `out`'s, their distances and barycentrics written where one hits.
 ///
@@ -251,6 +278,7 @@ unsafe fn watertight16_avx512(org: &[[f32; 16]; 3], s: &[[f32; 16]; 3], v: &[[f3
 ///
 /// The CPU must support AVX.
 #[allow(unsafe_code)]
+#[inline]
 #[target_feature(enable = "avx")]
 unsafe fn watertight8_avx(
     org: &[[f32; 16]; 3],
