@@ -14,7 +14,7 @@ use crate::ray::Ray;
 use crate::traverse::boxes::datapath::NodeTests;
 use crate::traverse::wide_bvh::last_occluder::{leaf_blocks4, test_leaf_alone, LastOccluder};
 
-use super::rays16::{leaf_blocks16, shear16};
+use super::rays16::{leaf_blocks16, shear16_at};
 use super::walk::occluded_packet_walk;
 
 /// [`super::occluded_bvh4_packet`] with the shadow cache `cache`: bit `i` set when ray
@@ -33,12 +33,22 @@ pub fn occluded_bvh4_packet_cached<I: Intersector, P: MemoryProbe, const N: usiz
     if let Some(leaf) = test {
         let mut c = RayCounters::default();
         let valid = packet.valid_lanes();
-        let shear = shear16::<I, N>(packet, valid as u32);
-        blocked = leaf_blocks_packet::<I, P, N>(scene, bvh, packet, (valid, shear.as_ref()), leaf, probe, &mut c);
+        // Each sixteen rays' constants (packets of 64: four chunks), where the CPU has
+        // a sixteen-lane form. (A packet of 16 built three empty chunks more, and ran at
+        // half its rate.)
+        let (one, four);
+        let shear: &[ChunkShear<I>] = if N <= 16 {
+            one = [shear16_at::<I, N>(packet, 0, valid as u32)];
+            &one
+        } else {
+            four = core::array::from_fn::<_, CHUNKS, _>(|k| shear16_at::<I, N>(packet, k, (valid >> (16 * k)) as u32));
+            &four
+        };
+        blocked = leaf_blocks_packet::<I, P, N>(scene, bvh, packet, (valid, shear), leaf, probe, &mut c);
         // A second chance for the rays the first leaf let through.
         let rest = valid & !blocked;
         if let Some(second) = cache.second().filter(|_| rest != 0) {
-            let b = leaf_blocks_packet::<I, P, N>(scene, bvh, packet, (rest, shear.as_ref()), second, probe, &mut c);
+            let b = leaf_blocks_packet::<I, P, N>(scene, bvh, packet, (rest, shear), second, probe, &mut c);
             cache.second_voted(b != 0);
             blocked |= b;
         }
@@ -63,28 +73,36 @@ pub fn occluded_bvh4_packet_cached<I: Intersector, P: MemoryProbe, const N: usiz
     blocked
 }
 
+/// Chunks of sixteen rays in the largest packet (64 rays).
+const CHUNKS: usize = 4;
+
+/// A chunk's sixteen-lane constants and the lanes they cover (see `shear16_at`).
+type ChunkShear<I> = Option<(<I as Intersector>::Prepared16, u32)>;
+
 /// The rays of `lanes` that `leaf` blocks, by the single ray's leaf test (the one the
 /// walks end with, so a hit here is a hit they would find: the structure is
-/// conservative): sixteen rays at once with their constants `shear` for the lanes it
-/// covers, four at once (or one by one) for the others.
+/// conservative): sixteen rays at once with their chunk's constants `shear` for the lanes
+/// they cover, four at once (or one by one) for the others.
 #[inline(always)]
 fn leaf_blocks_packet<I: Intersector, P: MemoryProbe, const N: usize>(
     scene: &SceneView<'_>,
     bvh: &Bvh4View<'_>,
     packet: &RayPacket<N>,
-    (lanes, shear): (u64, Option<&(I::Prepared16, u32)>),
+    (lanes, shear): (u64, &[ChunkShear<I>]),
     leaf: (u32, u32),
     probe: &mut P,
     c: &mut RayCounters,
 ) -> u64 {
     let mut blocked = 0u64;
     let mut rest = lanes;
-    if let Some((shear, covered)) = shear {
-        let wide = lanes as u32 & covered;
+    for (k, s) in shear.iter().enumerate() {
+        let Some((shear, covered)) = s else { continue };
+        let base = 16 * k;
+        let wide = (lanes >> base) as u32 & covered;
         if wide != 0 {
-            let hit = leaf_blocks16::<I, P, N>(scene, bvh, packet, shear, wide, leaf, None, probe);
-            blocked |= u64::from(hit);
-            rest &= !u64::from(wide);
+            let hit = leaf_blocks16::<I, P, N>(scene, bvh, packet, shear, (wide, base), leaf, None, probe);
+            blocked |= u64::from(hit) << base;
+            rest &= !(u64::from(wide) << base);
             c.leaves = c.leaves.saturating_add(wide.count_ones());
             c.tri_tests = c.tri_tests.saturating_add(leaf.1.saturating_mul(wide.count_ones()));
         }

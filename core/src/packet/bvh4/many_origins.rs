@@ -248,8 +248,16 @@ pub(super) fn occluded_many_origins<I: Intersector, P: MemoryProbe, const N: usi
                         let lanes = rays as u32 & *covered;
                         if lanes.count_ones() >= WIDE_LEAF_RAYS {
                             let leaf = (index, count);
-                            let b =
-                                leaf_blocks16::<I, P, N>(scene, bvh, packet, shear, lanes, leaf, Some(&preps), probe);
+                            let b = leaf_blocks16::<I, P, N>(
+                                scene,
+                                bvh,
+                                packet,
+                                shear,
+                                (lanes, 0),
+                                leaf,
+                                Some(&preps),
+                                probe,
+                            );
                             c.tri_tests += u64::from(count) * u64::from(lanes.count_ones());
                             if b != 0 {
                                 blocked |= u64::from(b);

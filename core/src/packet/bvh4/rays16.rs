@@ -17,17 +17,31 @@ pub(super) fn shear16<I: Intersector, const N: usize>(
     packet: &RayPacket<N>,
     lanes: u32,
 ) -> Option<(I::Prepared16, u32)> {
-    if N > 16 || Wide16::reported().is_none() {
+    if N > 16 {
         return None;
     }
-    let row = |a: &[f32; N]| -> [f32; 16] { core::array::from_fn(|i| a.get(i).copied().unwrap_or(0.0)) };
+    shear16_at::<I, N>(packet, 0, lanes)
+}
+
+/// [`shear16`] for the sixteen rays of `packet` from ray `16 · chunk` (bit `k` of
+/// `lanes`: ray `16 · chunk + k`), of a packet of any size; `None` past its end.
+#[inline(always)]
+pub(super) fn shear16_at<I: Intersector, const N: usize>(
+    packet: &RayPacket<N>,
+    chunk: usize,
+    lanes: u32,
+) -> Option<(I::Prepared16, u32)> {
+    let base = chunk.checked_mul(16).filter(|&b| b < N)?;
+    Wide16::reported()?;
+    let row = |a: &[f32; N]| -> [f32; 16] { core::array::from_fn(|i| a.get(base + i).copied().unwrap_or(0.0)) };
     let org = [row(&packet.ox), row(&packet.oy), row(&packet.oz)];
     let dir = [row(&packet.dx), row(&packet.dy), row(&packet.dz)];
     I::prepare_rays16(&org, &dir, lanes & 0xFFFF)
 }
 
-/// The rays of `lanes` (bits 0–15, all covered by `shear`) that `leaf` blocks: each of
-/// its triangles read once and tested against the sixteen lanes
+/// The rays of `lanes` (bits 0–15, all covered by `shear`; bit `k`: ray `base + k` of
+/// `packet`) that `leaf` blocks: each of its triangles read once and tested against the
+/// sixteen lanes
 /// ([`Intersector::intersect_rays16`]; a lane it leaves undecided gets the one-ray test
 /// with the ray's constants from `preps`, if given), until every such ray is blocked.
 #[allow(clippy::too_many_arguments)]
@@ -37,7 +51,7 @@ pub(super) fn leaf_blocks16<I: Intersector, P: MemoryProbe, const N: usize>(
     bvh: &Bvh4View<'_>,
     packet: &RayPacket<N>,
     shear: &I::Prepared16,
-    lanes: u32,
+    (lanes, base): (u32, usize),
     (first, count): (u32, u32),
     preps: Option<&[Option<I::Prepared>; N]>,
     probe: &mut P,
@@ -57,8 +71,8 @@ pub(super) fn leaf_blocks16<I: Intersector, P: MemoryProbe, const N: usize>(
         for k in Lanes(u64::from(decide)) {
             // The lane's interval is all a decided lane needs: its whole `Ray` only for
             // the one-ray constants of an undecided lane without any.
-            let i = k.min(N - 1);
-            let prep = || preps.and_then(|p| p.get(k).copied().flatten()).unwrap_or_else(|| I::prepare(&packet.ray(i)));
+            let i = (base + k).min(N - 1);
+            let prep = || preps.and_then(|p| p.get(i).copied().flatten()).unwrap_or_else(|| I::prepare(&packet.ray(i)));
             let hit = r.lane_hit_in::<I>(k, (packet.t_min[i], packet.t_max[i]), prim, prep, || tri);
             blocked |= u32::from(hit.is_some()) << k;
         }
