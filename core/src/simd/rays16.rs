@@ -47,6 +47,52 @@ pub(crate) fn boxes16(wide: Wide16, rays: &BoxLanes<'_>, node: &Bvh4Node) -> u64
     }
 }
 
+/// The box test of [`boxes16`] in the lanes one register holds, written once for both
+/// instruction sets: `$load` reads a row of the lanes, `$set1`, `$sub`, `$mul`, `$min`,
+/// `$max` and `$zero` are the register width's intrinsics, `$mask` turns `tn ≤ tf` into
+/// the lanes' bits and `$at` is the first lane's bit in box 0's sixteen.
+macro_rules! boxes_in_register {
+    ($rays:expr, $node:expr, $load:expr, $set1:ident, $sub:ident, $mul:ident, $min:ident, $max:ident,
+     $zero:ident, $mask:expr, $at:expr) => {{
+        let (rays, node): (&BoxLanes<'_>, &Bvh4Node) = ($rays, $node);
+        let load = $load;
+        let o = [load(&rays.org[0]), load(&rays.org[1]), load(&rays.org[2])];
+        let inv = [load(&rays.inv[0]), load(&rays.inv[1]), load(&rays.inv[2])];
+        let inv_far = [load(&rays.inv_far[0]), load(&rays.inv_far[1]), load(&rays.inv_far[2])];
+        let (t0, t1) = (load(rays.t0), load(rays.t1));
+        let lo = [&node.min_x, &node.min_y, &node.min_z];
+        let hi = [&node.max_x, &node.max_y, &node.max_z];
+        let mut out = 0u64;
+        for k in 0..4 {
+            // Empty slots hold inverted boxes: never entered.
+            if node.min_x[k] > node.max_x[k] {
+                continue;
+            }
+            let mut near = [$zero(); 3];
+            let mut far = [$zero(); 3];
+            for a in 0..3 {
+                let plane = |p: &[f32; 4]| $sub($set1(p[k]), o[a]);
+                match rays.octant {
+                    Some(neg) => {
+                        let (n, f) = if neg[a] { (hi[a], lo[a]) } else { (lo[a], hi[a]) };
+                        near[a] = $mul(plane(n), inv[a]);
+                        far[a] = $mul(plane(f), inv_far[a]);
+                    }
+                    None => {
+                        let (l, h) = (plane(lo[a]), plane(hi[a]));
+                        near[a] = $min($mul(l, inv[a]), $mul(h, inv[a]));
+                        far[a] = $max($mul(l, inv_far[a]), $mul(h, inv_far[a]));
+                    }
+                }
+            }
+            let tn = $max($max(near[0], near[1]), $max(near[2], t0));
+            let tf = $min($min(far[0], far[1]), $min(far[2], t1));
+            out |= u64::from($mask(tn, tf)) << (16 * k + $at);
+        }
+        out
+    }};
+}
+
 /// [`boxes16`] with AVX-512 F enabled.
 ///
 /// # Safety
@@ -58,40 +104,20 @@ unsafe fn boxes16_avx512(rays: &BoxLanes<'_>, node: &Bvh4Node) -> u64 {
     use core::arch::x86_64::*;
     // SAFETY: each array holds sixteen `Vec4`s in a row; the first four are 16 floats.
     let load = |v: &[Vec4; 16]| unsafe { _mm512_loadu_ps(v.as_ptr() as *const f32) };
-    let o = [load(&rays.org[0]), load(&rays.org[1]), load(&rays.org[2])];
-    let inv = [load(&rays.inv[0]), load(&rays.inv[1]), load(&rays.inv[2])];
-    let inv_far = [load(&rays.inv_far[0]), load(&rays.inv_far[1]), load(&rays.inv_far[2])];
-    let (t0, t1) = (load(rays.t0), load(rays.t1));
-    let lo = [&node.min_x, &node.min_y, &node.min_z];
-    let hi = [&node.max_x, &node.max_y, &node.max_z];
-    let mut out = 0u64;
-    for k in 0..4 {
-        // Empty slots hold inverted boxes: never entered.
-        if node.min_x[k] > node.max_x[k] {
-            continue;
-        }
-        let mut near = [_mm512_setzero_ps(); 3];
-        let mut far = [_mm512_setzero_ps(); 3];
-        for a in 0..3 {
-            let plane = |p: &[f32; 4]| _mm512_sub_ps(_mm512_set1_ps(p[k]), o[a]);
-            match rays.octant {
-                Some(neg) => {
-                    let (n, f) = if neg[a] { (hi[a], lo[a]) } else { (lo[a], hi[a]) };
-                    near[a] = _mm512_mul_ps(plane(n), inv[a]);
-                    far[a] = _mm512_mul_ps(plane(f), inv_far[a]);
-                }
-                None => {
-                    let (l, h) = (plane(lo[a]), plane(hi[a]));
-                    near[a] = _mm512_min_ps(_mm512_mul_ps(l, inv[a]), _mm512_mul_ps(h, inv[a]));
-                    far[a] = _mm512_max_ps(_mm512_mul_ps(l, inv_far[a]), _mm512_mul_ps(h, inv_far[a]));
-                }
-            }
-        }
-        let tn = _mm512_max_ps(_mm512_max_ps(near[0], near[1]), _mm512_max_ps(near[2], t0));
-        let tf = _mm512_min_ps(_mm512_min_ps(far[0], far[1]), _mm512_min_ps(far[2], t1));
-        out |= u64::from(_mm512_cmp_ps_mask::<_CMP_LE_OQ>(tn, tf)) << (16 * k);
-    }
-    out
+    let mask = |tn, tf| _mm512_cmp_ps_mask::<_CMP_LE_OQ>(tn, tf);
+    boxes_in_register!(
+        rays,
+        node,
+        load,
+        _mm512_set1_ps,
+        _mm512_sub_ps,
+        _mm512_mul_ps,
+        _mm512_min_ps,
+        _mm512_max_ps,
+        _mm512_setzero_ps,
+        mask,
+        0
+    )
 }
 
 /// [`boxes16`] with AVX: both halves in one call.
@@ -121,41 +147,20 @@ unsafe fn boxes8_avx(rays: &BoxLanes<'_>, node: &Bvh4Node, h: usize) -> u64 {
     // SAFETY: each array holds sixteen `Vec4`s in a row; its first 16 floats are the
     // lanes, of which this reads eight from lane 8h.
     let load = |v: &[Vec4; 16]| unsafe { _mm256_loadu_ps((v.as_ptr() as *const f32).add(8 * h)) };
-    let o = [load(&rays.org[0]), load(&rays.org[1]), load(&rays.org[2])];
-    let inv = [load(&rays.inv[0]), load(&rays.inv[1]), load(&rays.inv[2])];
-    let inv_far = [load(&rays.inv_far[0]), load(&rays.inv_far[1]), load(&rays.inv_far[2])];
-    let (t0, t1) = (load(rays.t0), load(rays.t1));
-    let lo = [&node.min_x, &node.min_y, &node.min_z];
-    let hi = [&node.max_x, &node.max_y, &node.max_z];
-    let mut out = 0u64;
-    for k in 0..4 {
-        // Empty slots hold inverted boxes: never entered.
-        if node.min_x[k] > node.max_x[k] {
-            continue;
-        }
-        let mut near = [_mm256_setzero_ps(); 3];
-        let mut far = [_mm256_setzero_ps(); 3];
-        for a in 0..3 {
-            let plane = |p: &[f32; 4]| _mm256_sub_ps(_mm256_set1_ps(p[k]), o[a]);
-            match rays.octant {
-                Some(neg) => {
-                    let (n, f) = if neg[a] { (hi[a], lo[a]) } else { (lo[a], hi[a]) };
-                    near[a] = _mm256_mul_ps(plane(n), inv[a]);
-                    far[a] = _mm256_mul_ps(plane(f), inv_far[a]);
-                }
-                None => {
-                    let (l, h) = (plane(lo[a]), plane(hi[a]));
-                    near[a] = _mm256_min_ps(_mm256_mul_ps(l, inv[a]), _mm256_mul_ps(h, inv[a]));
-                    far[a] = _mm256_max_ps(_mm256_mul_ps(l, inv_far[a]), _mm256_mul_ps(h, inv_far[a]));
-                }
-            }
-        }
-        let tn = _mm256_max_ps(_mm256_max_ps(near[0], near[1]), _mm256_max_ps(near[2], t0));
-        let tf = _mm256_min_ps(_mm256_min_ps(far[0], far[1]), _mm256_min_ps(far[2], t1));
-        let m = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u32 & 0xFF;
-        out |= u64::from(m) << (16 * k + 8 * h);
-    }
-    out
+    let mask = |tn, tf| _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u32 & 0xFF;
+    boxes_in_register!(
+        rays,
+        node,
+        load,
+        _mm256_set1_ps,
+        _mm256_sub_ps,
+        _mm256_mul_ps,
+        _mm256_min_ps,
+        _mm256_max_ps,
+        _mm256_setzero_ps,
+        mask,
+        8 * h
+    )
 }
 
 /// The watertight test of sixteen rays of one frame (per axis of the frame their origins
