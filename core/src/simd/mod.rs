@@ -28,6 +28,36 @@
 //! `rtcOccluded16` tests sixteen rays at once): in one AVX-512 register per quantity
 //! where the CPU has AVX-512 F, else in two AVX registers.
 
+/// The watertight test's edge functions `[U, V, W]` (`intersect::watertight`'s
+/// `shear_edges` with the frame's axes 0, 1, 2: Woop et al. 2013, Fig. 1 lines 15–29) in
+/// the intrinsics of one register width, `$sub` and `$mul`, on vertices `$a`, `$b`, `$c`
+/// relative to the rays' origins and the shear `$sx`, `$sy`: the operations of the
+/// one-ray test in its order, hence its bits in every lane. Written once for the AVX and
+/// AVX-512 forms.
+#[cfg(target_arch = "x86_64")]
+macro_rules! watertight_edges {
+    ($sub:ident, $mul:ident, $a:expr, $b:expr, $c:expr, $sx:expr, $sy:expr) => {{
+        let (a, b, c, sx, sy) = ($a, $b, $c, $sx, $sy);
+        let ax = $sub(a[0], $mul(sx, a[2]));
+        let ay = $sub(a[1], $mul(sy, a[2]));
+        let bx = $sub(b[0], $mul(sx, b[2]));
+        let by = $sub(b[1], $mul(sy, b[2]));
+        let cx = $sub(c[0], $mul(sx, c[2]));
+        let cy = $sub(c[1], $mul(sy, c[2]));
+        [$sub($mul(cx, by), $mul(cy, bx)), $sub($mul(ax, cy), $mul(ay, cx)), $sub($mul(bx, ay), $mul(by, ax))]
+    }};
+}
+
+/// The watertight test's scaled distance (`scaled_distance`: `U·sz·az + V·sz·bz +
+/// W·sz·cz`, in that order) in the intrinsics `$add` and `$mul` of one register width.
+#[cfg(target_arch = "x86_64")]
+macro_rules! watertight_scaled_distance {
+    ($add:ident, $mul:ident, [$eu:expr, $ev:expr, $ew:expr], [$az:expr, $bz:expr, $cz:expr], $sz:expr) => {{
+        let sz = $sz;
+        $add($add($mul($eu, $mul(sz, $az)), $mul($ev, $mul(sz, $bz))), $mul($ew, $mul(sz, $cz)))
+    }};
+}
+
 #[cfg(target_arch = "x86_64")]
 pub(crate) mod leaf_entries;
 #[cfg(target_arch = "x86_64")]

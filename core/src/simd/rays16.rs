@@ -218,17 +218,7 @@ unsafe fn watertight16_avx512(org: &[[f32; 16]; 3], s: &[[f32; 16]; 3], v: &[[f3
         ]
     };
     let (a, b, c) = (rel(&v[0]), rel(&v[1]), rel(&v[2]));
-    // `shear_edges` with the frame's axes 0, 1, 2.
-    let ax = _mm512_sub_ps(a[0], _mm512_mul_ps(sx, a[2]));
-    let ay = _mm512_sub_ps(a[1], _mm512_mul_ps(sy, a[2]));
-    let bx = _mm512_sub_ps(b[0], _mm512_mul_ps(sx, b[2]));
-    let by = _mm512_sub_ps(b[1], _mm512_mul_ps(sy, b[2]));
-    let cx = _mm512_sub_ps(c[0], _mm512_mul_ps(sx, c[2]));
-    let cy = _mm512_sub_ps(c[1], _mm512_mul_ps(sy, c[2]));
-    // `edges`.
-    let eu = _mm512_sub_ps(_mm512_mul_ps(cx, by), _mm512_mul_ps(cy, bx));
-    let ev = _mm512_sub_ps(_mm512_mul_ps(ax, cy), _mm512_mul_ps(ay, cx));
-    let ew = _mm512_sub_ps(_mm512_mul_ps(bx, ay), _mm512_mul_ps(by, ax));
+    let [eu, ev, ew] = watertight_edges!(_mm512_sub_ps, _mm512_mul_ps, a, b, c, sx, sy);
     // `lanes`: glam's cmpeq, cmplt, cmpgt and cmpne give the results of EQ_OQ, LT_OQ,
     // GT_OQ and NEQ_UQ (the signalling forms differ in exceptions only).
     let zero = _mm512_setzero_ps();
@@ -247,10 +237,7 @@ unsafe fn watertight16_avx512(org: &[[f32; 16]; 3], s: &[[f32; 16]; 3], v: &[[f3
         return;
     }
     // `scaled_distance`, then the division.
-    let t_scaled = _mm512_add_ps(
-        _mm512_add_ps(_mm512_mul_ps(eu, _mm512_mul_ps(sz, a[2])), _mm512_mul_ps(ev, _mm512_mul_ps(sz, b[2]))),
-        _mm512_mul_ps(ew, _mm512_mul_ps(sz, c[2])),
-    );
+    let t_scaled = watertight_scaled_distance!(_mm512_add_ps, _mm512_mul_ps, [eu, ev, ew], [a[2], b[2], c[2]], sz);
     let inv = _mm512_div_ps(_mm512_set1_ps(1.0), det);
     // SAFETY: each array holds sixteen floats; `storeu` needs no alignment.
     unsafe {
@@ -308,17 +295,7 @@ unsafe fn watertight8_avx(
         ]
     };
     let (a, b, c) = (rel(&v[0]), rel(&v[1]), rel(&v[2]));
-    // `shear_edges` with the frame's axes 0, 1, 2.
-    let ax = _mm256_sub_ps(a[0], _mm256_mul_ps(sx, a[2]));
-    let ay = _mm256_sub_ps(a[1], _mm256_mul_ps(sy, a[2]));
-    let bx = _mm256_sub_ps(b[0], _mm256_mul_ps(sx, b[2]));
-    let by = _mm256_sub_ps(b[1], _mm256_mul_ps(sy, b[2]));
-    let cx = _mm256_sub_ps(c[0], _mm256_mul_ps(sx, c[2]));
-    let cy = _mm256_sub_ps(c[1], _mm256_mul_ps(sy, c[2]));
-    // `edges`.
-    let eu = _mm256_sub_ps(_mm256_mul_ps(cx, by), _mm256_mul_ps(cy, bx));
-    let ev = _mm256_sub_ps(_mm256_mul_ps(ax, cy), _mm256_mul_ps(ay, cx));
-    let ew = _mm256_sub_ps(_mm256_mul_ps(bx, ay), _mm256_mul_ps(by, ax));
+    let [eu, ev, ew] = watertight_edges!(_mm256_sub_ps, _mm256_mul_ps, a, b, c, sx, sy);
     // `lanes`, with the predicates of the sixteen-lane form.
     let zero = _mm256_setzero_ps();
     macro_rules! any {
@@ -340,10 +317,7 @@ unsafe fn watertight8_avx(
         return;
     }
     // `scaled_distance`, then the division.
-    let t_scaled = _mm256_add_ps(
-        _mm256_add_ps(_mm256_mul_ps(eu, _mm256_mul_ps(sz, a[2])), _mm256_mul_ps(ev, _mm256_mul_ps(sz, b[2]))),
-        _mm256_mul_ps(ew, _mm256_mul_ps(sz, c[2])),
-    );
+    let t_scaled = watertight_scaled_distance!(_mm256_add_ps, _mm256_mul_ps, [eu, ev, ew], [a[2], b[2], c[2]], sz);
     let inv = _mm256_div_ps(_mm256_set1_ps(1.0), det);
     // SAFETY: each array holds sixteen floats, of which this writes eight from lane
     // `at`; `storeu` needs no alignment.

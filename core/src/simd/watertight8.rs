@@ -58,17 +58,7 @@ unsafe fn shared8_avx(tris: &SharedTris, n: usize, pairs: &[SharedShear], mut fo
             let (sx, sy, sz) = unsafe {
                 (_mm256_loadu_ps(p.s[0].as_ptr()), _mm256_loadu_ps(p.s[1].as_ptr()), _mm256_loadu_ps(p.s[2].as_ptr()))
             };
-            // `shear_edges` with the frame's axes 0, 1, 2.
-            let ax = _mm256_sub_ps(a[0], _mm256_mul_ps(sx, a[2]));
-            let ay = _mm256_sub_ps(a[1], _mm256_mul_ps(sy, a[2]));
-            let bx = _mm256_sub_ps(b[0], _mm256_mul_ps(sx, b[2]));
-            let by = _mm256_sub_ps(b[1], _mm256_mul_ps(sy, b[2]));
-            let cx = _mm256_sub_ps(c[0], _mm256_mul_ps(sx, c[2]));
-            let cy = _mm256_sub_ps(c[1], _mm256_mul_ps(sy, c[2]));
-            // `edges`.
-            let eu = _mm256_sub_ps(_mm256_mul_ps(cx, by), _mm256_mul_ps(cy, bx));
-            let ev = _mm256_sub_ps(_mm256_mul_ps(ax, cy), _mm256_mul_ps(ay, cx));
-            let ew = _mm256_sub_ps(_mm256_mul_ps(bx, ay), _mm256_mul_ps(by, ax));
+            let [eu, ev, ew] = watertight_edges!(_mm256_sub_ps, _mm256_mul_ps, a, b, c, sx, sy);
             // `lanes`: glam's cmpeq, cmplt, cmpgt and cmpne are the predicates EQ_OQ,
             // LT_OS, GT_OS and NEQ_UQ.
             macro_rules! any {
@@ -90,13 +80,8 @@ unsafe fn shared8_avx(tris: &SharedTris, n: usize, pairs: &[SharedShear], mut fo
             let mut o = Hits8 { hit, redo, ..Hits8::default() };
             if hit != 0 {
                 // `scaled_distance`, then the division.
-                let t_scaled = _mm256_add_ps(
-                    _mm256_add_ps(
-                        _mm256_mul_ps(eu, _mm256_mul_ps(sz, a[2])),
-                        _mm256_mul_ps(ev, _mm256_mul_ps(sz, b[2])),
-                    ),
-                    _mm256_mul_ps(ew, _mm256_mul_ps(sz, c[2])),
-                );
+                let t_scaled =
+                    watertight_scaled_distance!(_mm256_add_ps, _mm256_mul_ps, [eu, ev, ew], [a[2], b[2], c[2]], sz);
                 let inv = _mm256_div_ps(_mm256_set1_ps(1.0), det);
                 // SAFETY: each array holds eight floats; `storeu` needs no alignment.
                 unsafe {

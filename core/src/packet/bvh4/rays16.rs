@@ -1,6 +1,7 @@
-//! A packet of up to sixteen rays in one AVX-512 register per quantity (or two AVX ones): their watertight
-//! constants made at once, and a leaf's triangles each read once and tested against all
-//! of them (as Embree's `rtcOccluded16` does), lane by lane the one-ray test's bits.
+//! A packet of up to sixteen rays in one AVX-512 register per quantity (or two AVX
+//! ones): their watertight constants made at once, and a leaf's triangles each read once
+//! and tested against all of them (as Embree's `rtcOccluded16` does), lane by lane the
+//! one-ray test's bits.
 
 use crate::image::{Bvh4View, SceneView};
 use crate::intersect::leaf_blocks::entry_triangle;
