@@ -129,22 +129,26 @@ def time_batch(rp, harness, tris_p, images, rays_k, query, embree_modes, threads
     how many rays' answers differ. Returns (rays, medians, raypipe best, Embree best,
     rays that differ)."""
     n = len(np.load(rays_k, mmap_mode="r"))
-    raypipe_modes = [(f"{acc} single", images[acc], "1") for acc in ("bvh4", "bvh8")]
+    raypipe_modes = [(f"{acc} single", images[acc], "1", []) for acc in ("bvh4", "bvh8")]
     if coherent:
         # The frustum packets are for coherent rays: on the bounce they run at 0.1
         # Mrays/s (the bunny), and would take the run's whole time.
-        raypipe_modes += [(f"bvh4 packets of {p}", images["bvh4"], p) for p in ("16", "64")]
+        raypipe_modes += [(f"bvh4 packets of {p}", images["bvh4"], p, []) for p in ("16", "64")]
         if query == "closest":
             # The 8-wide BVH's packet walk is closest-hit only (its shadow packets would
             # go ray by ray).
-            raypipe_modes += [(f"bvh8 packets of {p}", images["bvh8"], p) for p in ("16", "64")]
+            raypipe_modes += [(f"bvh8 packets of {p}", images["bvh8"], p, []) for p in ("16", "64")]
+    else:
+        # What `trace`'s reordering of incoherent rays buys: the same path in the file's
+        # order.
+        raypipe_modes += [("bvh8 single, input order", images["bvh8"], "1", ["--order", "input"])]
     pin = "1" if threads == 1 else None
     times = {m[0]: [] for m in raypipe_modes}
     times.update({f"embree {m}": [] for m in embree_modes})
     for _ in range(rounds):
-        for label, image, packet in raypipe_modes:
+        for label, image, packet, extra in raypipe_modes:
             out = run([rp, "trace", image, "--rays", rays_k, "--hits", os.path.join(tmp, "h.npy"), "--query", query,
-                       "--threads", str(threads), "--runs", "3", "--packet", packet], pin)
+                       "--threads", str(threads), "--runs", "3", "--packet", packet, *extra], pin)
             times[label].append(float(re.search(r"\(([0-9.]+) Mrays/s\)", out).group(1)))
         for m in embree_modes:
             out = run([harness, tris_p, rays_k, m, str(threads), "3", "medium"], pin)

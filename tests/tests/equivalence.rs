@@ -354,17 +354,28 @@ fn packet_matches_single<const N: usize>(view: &SceneView<'_>, rays: &[Ray]) -> 
 /// The host's ray-batch driver (`raypipe trace`), whose single-ray loop runs the AVX2
 /// build of the kernels where the CPU has it, returns the bits of [`trace`] ray by ray,
 /// into a fresh output and into one reused across batches (longer, and holding other
-/// records, before each).
+/// records, before each), in every order it may trace single rays in, on one thread and
+/// two.
 fn batch_matches_single(view: &SceneView<'_>, rays: &[Ray]) -> Result<(), TestCaseError> {
     use raypipe::input::npy::HitRecord;
-    use raypipe::render::batch::{occluded_batch, trace_batch, trace_batch_into};
+    use raypipe::render::batch::{occluded_batch, trace_batch, trace_batch_into, BatchOptions, BatchScratch};
     use raypipe::render::packets::PacketSize;
+    use raypipe::render::ray_order::RayOrder;
     use raypipe::render::tracer::IntersectorKind;
     let stale = HitRecord { t: 1.0, u: 0.25, v: 0.5, prim: 7 };
     let mut reused = vec![stale; rays.len() + 3];
-    for packet in [PacketSize::Single, PacketSize::P64] {
-        let fresh = trace_batch(view, rays, IntersectorKind::Watertight, packet, Some(1)).unwrap();
-        trace_batch_into(view, rays, IntersectorKind::Watertight, packet, Some(1), &mut reused).unwrap();
+    let mut scratch = BatchScratch::default();
+    let runs = [
+        (PacketSize::Single, RayOrder::Input, 1),
+        (PacketSize::Single, RayOrder::Direction, 1),
+        (PacketSize::Single, RayOrder::Direction, 2),
+        (PacketSize::Single, RayOrder::Auto, 2),
+        (PacketSize::P64, RayOrder::Direction, 1),
+    ];
+    for (packet, order, threads) in runs {
+        let opts = BatchOptions { kind: IntersectorKind::Watertight, packet, order, threads: Some(threads) };
+        let fresh = trace_batch(view, rays, opts).unwrap();
+        trace_batch_into(view, rays, opts, &mut reused, &mut scratch).unwrap();
         prop_assert_eq!(fresh.len(), rays.len());
         prop_assert_eq!(reused.len(), rays.len());
         for ((r, h), h2) in rays.iter().zip(&fresh).zip(&reused) {
@@ -373,18 +384,18 @@ fn batch_matches_single(view: &SceneView<'_>, rays: &[Ray]) -> Result<(), TestCa
                 (s.t.to_bits(), s.u.to_bits(), s.v.to_bits(), s.prim as i32)
             });
             let got = (h.t.to_bits(), h.u.to_bits(), h.v.to_bits(), h.prim);
-            prop_assert_eq!(got, want, "{:?} batch for {:?}", packet, r);
+            prop_assert_eq!(got, want, "{:?} batch, {:?} order, {} threads, for {:?}", packet, order, threads, r);
             let got = (h2.t.to_bits(), h2.u.to_bits(), h2.v.to_bits(), h2.prim);
-            prop_assert_eq!(got, want, "{:?} batch into a reused output for {:?}", packet, r);
+            prop_assert_eq!(got, want, "{:?} batch into a reused output, {:?} order, for {:?}", packet, order, r);
         }
         reused.push(stale);
         // The any-hit batch, with every third ray marked invalid (reported unblocked).
         let invalid: Vec<bool> = (0..rays.len()).map(|i| i % 3 == 1).collect();
-        let blocked = occluded_batch(view, rays, &invalid, IntersectorKind::Watertight, packet, Some(1)).unwrap();
+        let blocked = occluded_batch(view, rays, &invalid, opts).unwrap();
         prop_assert_eq!(blocked.len(), rays.len());
         for ((r, b), bad) in rays.iter().zip(&blocked).zip(&invalid) {
             let hit = trace::<Watertight, _>(view, r, &mut NoProbe, &mut RayCounters::default());
-            prop_assert_eq!(*b, !bad && hit.is_some(), "{:?} any-hit batch for {:?}", packet, r);
+            prop_assert_eq!(*b, !bad && hit.is_some(), "{:?} any-hit batch, {:?} order, for {:?}", packet, order, r);
         }
     }
     Ok(())

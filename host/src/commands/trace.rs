@@ -1,8 +1,10 @@
 //! `raypipe trace`: traces a batch of rays from a file and writes their hits (or their
 //! occlusion), with the fields asked for.
 
+use crate::render::batch::BatchOptions;
 use crate::render::batch::{incoherent_share, read_rays};
 use crate::render::packets::PacketSize;
+use crate::render::ray_order::RayOrder;
 use crate::render::tracer::IntersectorKind;
 use crate::scene;
 use crate::study::bench::median;
@@ -55,6 +57,10 @@ pub struct TraceArgs {
     /// Trace consecutive rays in packets of this many (1 = single rays); hits are the same.
     #[arg(long, value_enum, default_value_t = PacketSize::Single)]
     pub packet: PacketSize,
+    /// The order single rays are traced in: auto groups an incoherent batch's rays by
+    /// direction (octant and dominant axis) first; hits are the same, in the file's order.
+    #[arg(long, value_enum, default_value_t = RayOrder::Auto)]
+    pub order: RayOrder,
     #[command(flatten)]
     pub cache: super::args::CacheArgs,
 }
@@ -164,15 +170,16 @@ pub(crate) fn cmd_trace(a: TraceArgs) -> Result<()> {
         }
     }
     let kind = IntersectorKind::resolve(a.run.intersector, &view);
+    let opts = BatchOptions { kind, packet: a.packet, order: a.order, threads: a.run.threads };
     let mut times = Vec::new();
     let (data, fields_out, n_hit) = match a.query {
         Query::Closest => {
             // One output for all runs, as a caller tracing batch after batch keeps one:
             // only the first run pays for touching fresh pages.
-            let mut hits = Vec::new();
+            let (mut hits, mut scratch) = (Vec::new(), crate::render::batch::BatchScratch::default());
             for _ in 0..a.runs {
                 let start = Instant::now();
-                crate::render::batch::trace_batch_into(&view, &rays, kind, a.packet, a.run.threads, &mut hits)?;
+                crate::render::batch::trace_batch_into(&view, &rays, opts, &mut hits, &mut scratch)?;
                 times.push(start.elapsed().as_secs_f64());
             }
             let data = closest_records(&view, &rays, &hits, &invalid, &fields);
@@ -183,7 +190,7 @@ pub(crate) fn cmd_trace(a: TraceArgs) -> Result<()> {
             let mut blocked = Vec::new();
             for _ in 0..a.runs {
                 let start = Instant::now();
-                blocked = crate::render::batch::occluded_batch(&view, &rays, &invalid, kind, a.packet, a.run.threads)?;
+                blocked = crate::render::batch::occluded_batch(&view, &rays, &invalid, opts)?;
                 times.push(start.elapsed().as_secs_f64());
             }
             let n_hit = blocked.iter().filter(|b| **b).count();

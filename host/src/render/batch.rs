@@ -15,6 +15,7 @@ use raypipe_core::packet::{PacketCounters, RayPacket};
 use raypipe_core::traverse::wide_bvh::last_occluder::LastOccluder;
 
 use crate::render::packets::PacketSize;
+use crate::render::ray_order::{RayOrder, Reordered};
 use crate::render::tracer::{occluded_each, occluded_packet, trace_each, trace_packet, IntersectorKind};
 use crate::with_intersector;
 
@@ -94,16 +95,29 @@ pub fn incoherent_share(rays: &[Ray], n: usize) -> f64 {
     bad as f64 / total as f64
 }
 
+/// How a batch is traced: the intersector, the packet size, the order of single rays,
+/// and the threads (all cores when `None`).
+#[derive(Clone, Copy, Debug)]
+pub struct BatchOptions {
+    pub kind: IntersectorKind,
+    pub packet: PacketSize,
+    pub order: RayOrder,
+    pub threads: Option<usize>,
+}
+
+/// What a caller tracing batch after batch keeps besides the output: the reordered
+/// rays and their hits in tracing order ([`RayOrder`]), whose fresh pages would be
+/// faulted in again for every batch.
+#[derive(Debug, Default)]
+pub struct BatchScratch {
+    order: Reordered,
+    hits: Vec<HitRecord>,
+}
+
 /// Closest hit of every ray.
-pub fn trace_batch(
-    scene: &SceneView<'_>,
-    rays: &[Ray],
-    kind: IntersectorKind,
-    packet: PacketSize,
-    threads: Option<usize>,
-) -> Result<Vec<HitRecord>> {
+pub fn trace_batch(scene: &SceneView<'_>, rays: &[Ray], opts: BatchOptions) -> Result<Vec<HitRecord>> {
     let mut out = Vec::new();
-    trace_batch_into(scene, rays, kind, packet, threads, &mut out)?;
+    trace_batch_into(scene, rays, opts, &mut out, &mut BatchScratch::default())?;
     Ok(out)
 }
 
@@ -112,16 +126,24 @@ pub fn trace_batch(
 /// does not pay the first touch of fresh pages for every batch (16 bytes a ray; about
 /// 1.6 ms per million rays on this project's benchmark machine, a twentieth of a
 /// bunny's 8×8-packet trace).
+/// Single rays go in the order `opts.order` makes, through `scratch`'s buffers.
 pub fn trace_batch_into(
     scene: &SceneView<'_>,
     rays: &[Ray],
-    kind: IntersectorKind,
-    packet: PacketSize,
-    threads: Option<usize>,
+    opts: BatchOptions,
     out: &mut Vec<HitRecord>,
+    scratch: &mut BatchScratch,
 ) -> Result<()> {
-    with_intersector!(kind, I => match packet.usable_for(scene) {
-        PacketSize::Single => trace_with::<I, 1>(scene, rays, threads, out),
+    let threads = opts.threads;
+    with_intersector!(opts.kind, I => match opts.packet.usable_for(scene) {
+        PacketSize::Single => {
+            if scratch.order.sort(rays, opts.order) {
+                trace_with::<I, 1>(scene, scratch.order.rays(), threads, &mut scratch.hits)?;
+                scratch.order.restore(&scratch.hits, out);
+                return Ok(());
+            }
+            trace_with::<I, 1>(scene, rays, threads, out)
+        }
         PacketSize::P4 => trace_with::<I, 4>(scene, rays, threads, out),
         PacketSize::P16 => trace_with::<I, 16>(scene, rays, threads, out),
         PacketSize::P64 => trace_with::<I, 64>(scene, rays, threads, out),
@@ -131,31 +153,33 @@ pub fn trace_batch_into(
 /// Whether each ray is blocked within its interval (the any-hit query of shadow rays),
 /// rays marked `invalid` reported unblocked. With packets, runs of `N` consecutive rays
 /// are traced as one packet (on the 4-wide BVH; ray by ray on the other structures).
-pub fn occluded_batch(
-    scene: &SceneView<'_>,
-    rays: &[Ray],
-    invalid: &[bool],
-    kind: IntersectorKind,
-    packet: PacketSize,
-    threads: Option<usize>,
-) -> Result<Vec<bool>> {
-    with_intersector!(kind, I => match packet {
-        PacketSize::Single => occluded_with::<I, 1>(scene, rays, invalid, threads),
-        PacketSize::P4 => occluded_with::<I, 4>(scene, rays, invalid, threads),
-        PacketSize::P16 => occluded_with::<I, 16>(scene, rays, invalid, threads),
-        PacketSize::P64 => occluded_with::<I, 64>(scene, rays, invalid, threads),
+pub fn occluded_batch(scene: &SceneView<'_>, rays: &[Ray], invalid: &[bool], opts: BatchOptions) -> Result<Vec<bool>> {
+    let (order, threads) = (opts.order, opts.threads);
+    with_intersector!(opts.kind, I => match opts.packet {
+        PacketSize::Single => occluded_with::<I, 1>(scene, rays, invalid, order, threads),
+        PacketSize::P4 => occluded_with::<I, 4>(scene, rays, invalid, order, threads),
+        PacketSize::P16 => occluded_with::<I, 16>(scene, rays, invalid, order, threads),
+        PacketSize::P64 => occluded_with::<I, 64>(scene, rays, invalid, order, threads),
     })
 }
 
-/// Chunks of `CHUNK` rays per task, each run of `N` rays one packet.
+/// Chunks of `CHUNK` rays per task, each run of `N` rays one packet; single rays in
+/// the order `order` makes.
 fn occluded_with<I: Intersector, const N: usize>(
     scene: &SceneView<'_>,
     rays: &[Ray],
     invalid: &[bool],
+    order: RayOrder,
     threads: Option<usize>,
 ) -> Result<Vec<bool>> {
     crate::platform::isa::report_cpu();
     let mut out = vec![false; rays.len()];
+    let mut r = Reordered::default();
+    if N == 1 && r.sort(rays, order) {
+        let traced = occluded_with::<I, 1>(scene, r.rays(), &r.apply(invalid), RayOrder::Input, threads)?;
+        r.restore(&traced, &mut out);
+        return Ok(out);
+    }
     let chunks = out.chunks_mut(CHUNK).zip(rays.chunks(CHUNK)).zip(invalid.chunks(CHUNK));
     for_each_claimed(threads, chunks, |((out, chunk), bad)| {
         if N == 1 {

@@ -9,6 +9,7 @@ pub mod gbuffer;
 pub mod instanced;
 pub mod packets;
 pub mod ray_log;
+pub mod ray_order;
 pub mod shading;
 pub mod tracer;
 pub mod view_check;

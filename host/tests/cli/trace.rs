@@ -177,6 +177,17 @@ fn ray_queries_fields_and_invalid_rays() {
     assert!(o.status.success() && stderr(&o).contains("incoherent"), "{}", stderr(&o));
     let o = raypipe(d, &["trace", obj, "--rays", "scattered.npy", "--hits", "s.npy"]);
     assert!(o.status.success() && !stderr(&o).contains("incoherent"), "{}", stderr(&o));
+    // Single rays grouped by direction before the trace: the same records, in the file's
+    // order, whatever the order asked for.
+    let given = read_hits(&d.join("s.npy"));
+    for order in ["input", "direction", "auto"] {
+        let o = raypipe(d, &["trace", obj, "--rays", "scattered.npy", "--hits", "o.npy", "--order", order]);
+        assert!(o.status.success(), "--order {order}: {}", stderr(&o));
+        let got = read_hits(&d.join("o.npy"));
+        assert!(got.len() == given.len() && got.iter().zip(&given).all(|(a, b)| format!("{a:?}") == format!("{b:?}")));
+    }
+    let o = raypipe(d, &["trace", obj, "--rays", "scattered.npy", "--hits", "o.npy", "--order", "sorted"]);
+    assert!(!o.status.success() && stderr(&o).contains("--order"), "{}", stderr(&o));
 }
 
 #[test]
