@@ -137,10 +137,9 @@ pub fn trace_batch_into(
     let threads = opts.threads;
     with_intersector!(opts.kind, I => match opts.packet.usable_for(scene) {
         PacketSize::Single => {
-            if scratch.order.sort(rays, opts.order) {
+            if scratch.order.sort(rays, opts.order, threads)? {
                 trace_with::<I, 1>(scene, scratch.order.rays(), threads, &mut scratch.hits)?;
-                scratch.order.restore(&scratch.hits, out);
-                return Ok(());
+                return scratch.order.restore(&scratch.hits, out, threads);
             }
             trace_with::<I, 1>(scene, rays, threads, out)
         }
@@ -175,9 +174,9 @@ fn occluded_with<I: Intersector, const N: usize>(
     crate::platform::isa::report_cpu();
     let mut out = vec![false; rays.len()];
     let mut r = Reordered::default();
-    if N == 1 && r.sort(rays, order) {
+    if N == 1 && r.sort(rays, order, threads)? {
         let traced = occluded_with::<I, 1>(scene, r.rays(), &r.apply(invalid), RayOrder::Input, threads)?;
-        r.restore(&traced, &mut out);
+        r.restore(&traced, &mut out, threads)?;
         return Ok(out);
     }
     let chunks = out.chunks_mut(CHUNK).zip(rays.chunks(CHUNK)).zip(invalid.chunks(CHUNK));

@@ -11,9 +11,13 @@
 //! Each ray's hit is the same, bit for bit, in any order: the walk of one ray reads
 //! nothing another ray wrote. The order changes only when each ray is traced.
 
+use std::mem::MaybeUninit;
+
+use anyhow::Result;
 use raypipe_core::{Ray, Vec3};
 
 use crate::platform::huge_pages;
+use crate::platform::thread_pools::for_each_claimed;
 
 /// How a batch of single rays is ordered before it is traced.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
@@ -41,6 +45,15 @@ const INCOHERENT_SHARE: f64 = 0.25;
 
 /// Batches smaller than this are traced as given: the sort has nothing to win.
 const MIN_RAYS: usize = 1024;
+
+/// The fewest rays a part of the sort takes on a thread of its own.
+const MIN_PART: usize = 1 << 16;
+
+/// The most parts the sort cuts a batch into (each keeps 24 output streams open).
+const MAX_PARTS: usize = 16;
+
+/// Rays per task when the hits are put back.
+const RESTORE_CHUNK: usize = 1 << 16;
 
 /// The direction class of `d`: its octant (the signs of its components) and its
 /// dominant axis.
@@ -88,9 +101,10 @@ pub struct Reordered {
 }
 
 impl Reordered {
-    /// Sorts `rays` into this workspace in the order `order` makes; false when they are
-    /// to be traced as given (and the workspace holds no batch).
-    pub fn sort(&mut self, rays: &[Ray], order: RayOrder) -> bool {
+    /// Sorts `rays` into this workspace in the order `order` makes, on `threads`
+    /// threads (all cores when `None`); false when they are to be traced as given (and
+    /// the workspace holds no batch).
+    pub fn sort(&mut self, rays: &[Ray], order: RayOrder, threads: Option<usize>) -> Result<bool> {
         self.rays.clear();
         self.pos.clear();
         let sort = match order {
@@ -100,48 +114,80 @@ impl Reordered {
         };
         // Positions are `u32` (half the bytes of `usize` to stream); a batch this large
         // is traced as given.
-        sort && rays.len() <= u32::MAX as usize && self.by_class(rays)
+        if !sort || rays.len() > u32::MAX as usize {
+            return Ok(false);
+        }
+        self.by_class(rays, threads)
     }
 
-    /// A stable counting sort of `rays` by direction class; false if it failed (it
-    /// cannot: see the end).
-    fn by_class(&mut self, rays: &[Ray]) -> bool {
+    /// A stable counting sort of `rays` by direction class, the batch cut into one part
+    /// per thread: each part counts its classes, then moves its rays into its own range
+    /// of each class's (part 0's rays of a class first, then part 1's, …). False if it
+    /// failed (it cannot: see the end).
+    fn by_class(&mut self, rays: &[Ray], threads: Option<usize>) -> Result<bool> {
         let n = rays.len();
+        let threads = threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |t| t.get()));
+        let parts = if n < MIN_PART * 2 { 1 } else { threads.clamp(1, MAX_PARTS) };
+        let part = n.div_ceil(parts).max(1);
         reserve(&mut self.classes, n);
-        self.classes.extend(rays.iter().map(|r| class(r.dir) as u8));
-        let mut count = [0usize; CLASSES];
-        for &c in &self.classes {
-            count[c as usize] += 1;
-        }
-        let (mut start, mut end) = ([0usize; CLASSES], [0usize; CLASSES]);
+        self.classes.resize(n, 0);
+        let mut counts = vec![[0usize; CLASSES]; parts];
+        let work = self.classes.chunks_mut(part).zip(rays.chunks(part)).zip(counts.iter_mut());
+        for_each_claimed(Some(parts), work, |((classes, rays), count)| {
+            for (c, r) in classes.iter_mut().zip(rays) {
+                *c = class(r.dir) as u8;
+                count[*c as usize] += 1;
+            }
+        })?;
+        // Each part's first position in each class.
+        let mut start = vec![[0usize; CLASSES]; parts];
         let mut sum = 0;
         for c in 0..CLASSES {
-            (start[c], sum) = (sum, sum + count[c]);
-            end[c] = sum;
+            for (s, count) in start.iter_mut().zip(&counts) {
+                (s[c], sum) = (sum, sum + count[c]);
+            }
         }
         reserve(&mut self.pos, n);
+        self.pos.resize(n, 0);
         reserve(&mut self.rays, n);
-        // Each ray is written once, into the spare capacity (filling it first would
-        // write the 32 bytes of every ray twice).
-        let slots = &mut self.rays.spare_capacity_mut()[..n];
-        for (r, &c) in rays.iter().zip(&self.classes) {
-            let s = &mut start[c as usize];
-            self.pos.push(*s as u32);
-            if let Some(slot) = slots.get_mut(*s) {
-                slot.write(*r);
+        // The spare capacity cut into each part's range of each class, in position order.
+        let mut rest = &mut self.rays.spare_capacity_mut()[..n];
+        let mut ranges: Vec<Vec<&mut [MaybeUninit<Ray>]>> = (0..parts).map(|_| Vec::with_capacity(CLASSES)).collect();
+        for c in 0..CLASSES {
+            for (range, count) in ranges.iter_mut().zip(&counts) {
+                let len = count[c].min(rest.len());
+                let (this, after) = std::mem::take(&mut rest).split_at_mut(len);
+                range.push(this);
+                rest = after;
             }
-            *s += 1;
         }
-        // Class `c`'s rays went to positions `end[c] − count[c] .. end[c]` in turn; the
-        // ranges tile `0 .. n`. Each cursor at its range's end: every position written.
-        if start != end {
+        let mut filled = vec![[0usize; CLASSES]; parts];
+        let work = ranges
+            .into_iter()
+            .zip(rays.chunks(part).zip(self.classes.chunks(part)))
+            .zip(self.pos.chunks_mut(part).zip(&start))
+            .zip(filled.iter_mut());
+        for_each_claimed(Some(parts), work, |(((mut ranges, (rays, classes)), (pos, start)), fill)| {
+            for ((r, &c), p) in rays.iter().zip(classes).zip(pos) {
+                let c = c as usize % CLASSES;
+                *p = (start[c] + fill[c]) as u32;
+                // Counted only when written: the count is what proves the range full.
+                if let Some(slot) = ranges.get_mut(c).and_then(|range| range.get_mut(fill[c])) {
+                    slot.write(*r);
+                    fill[c] += 1;
+                }
+            }
+        })?;
+        // Each part wrote as many rays of each class as its range holds, and the ranges
+        // tile `0 .. n`.
+        if filled != counts || sum != n || !rest.is_empty() {
             self.pos.clear();
-            return false;
+            return Ok(false);
         }
         // SAFETY: the capacity is at least `n` (reserved above), and the first `n` slots
-        // are written (each class's range in full, and the ranges tile `0 .. n`).
+        // are written: the ranges tile them, and each was filled to its length.
         unsafe { self.rays.set_len(n) };
-        true
+        Ok(true)
     }
 
     /// The rays in tracing order.
@@ -165,15 +211,31 @@ impl Reordered {
     }
 
     /// `traced` (one per ray, in tracing order) back in the batch's order, into `out`,
-    /// replacing its contents (and keeping its memory where it is large enough); empty
-    /// when `traced` is not one per ray.
-    pub fn restore<T: Copy>(&self, traced: &[T], out: &mut Vec<T>) {
+    /// replacing its contents (and keeping its memory where it is large enough), on
+    /// `threads` threads; empty when `traced` is not one per ray.
+    pub fn restore<T: Copy + Send + Sync>(&self, traced: &[T], out: &mut Vec<T>, threads: Option<usize>) -> Result<()> {
         out.clear();
-        if traced.len() != self.pos.len() {
-            return;
+        let n = self.pos.len();
+        if traced.len() != n {
+            return Ok(());
         }
-        reserve(out, traced.len());
-        out.extend(self.pos.iter().filter_map(|&p| traced.get(p as usize).copied()));
+        reserve(out, n);
+        let work = out.spare_capacity_mut()[..n].chunks_mut(RESTORE_CHUNK).zip(self.pos.chunks(RESTORE_CHUNK));
+        for_each_claimed(threads, work, |(out, pos)| {
+            for (o, &p) in out.iter_mut().zip(pos) {
+                if let Some(t) = traced.get(p as usize) {
+                    o.write(*t);
+                }
+            }
+        })?;
+        // Every position came from the sort, which checked it against the batch's length.
+        if self.pos.iter().all(|&p| (p as usize) < n) {
+            // SAFETY: the capacity is at least `n`, and each of the first `n` slots is
+            // written: the output's chunks pair with the positions' chunks of the same
+            // lengths, and every position is in range (checked just above).
+            unsafe { out.set_len(n) };
+        }
+        Ok(())
     }
 }
 
@@ -217,7 +279,7 @@ mod tests {
     fn the_order_is_a_stable_permutation_by_class() {
         let rays = scattered(5000);
         let mut r = Reordered::default();
-        assert!(r.sort(&rays, RayOrder::Direction), "sorted on request");
+        assert!(r.sort(&rays, RayOrder::Direction, Some(1)).unwrap(), "sorted on request");
         let mut seen = vec![false; rays.len()];
         for (i, &p) in r.pos.iter().enumerate() {
             assert!(!seen[p as usize], "position {p} twice");
@@ -238,31 +300,48 @@ mod tests {
         let ids: Vec<usize> = (0..rays.len()).collect();
         let traced = r.apply(&ids);
         let mut back = vec![usize::MAX; 3];
-        r.restore(&traced, &mut back);
+        r.restore(&traced, &mut back, Some(1)).unwrap();
         assert_eq!(back, ids);
         assert!(r.apply(&ids[1..]).is_empty(), "a list of another length");
-        r.restore(&traced[1..], &mut back);
+        r.restore(&traced[1..], &mut back, Some(1)).unwrap();
         assert!(back.is_empty(), "results of another length");
         // The workspace sorts the next batch the same, from its kept buffers.
         let again = scattered(4000);
-        assert!(r.sort(&again, RayOrder::Direction));
+        assert!(r.sort(&again, RayOrder::Direction, Some(1)).unwrap());
         let mut fresh = Reordered::default();
-        assert!(fresh.sort(&again, RayOrder::Direction));
+        assert!(fresh.sort(&again, RayOrder::Direction, Some(1)).unwrap());
         assert_eq!((r.rays(), &r.pos), (fresh.rays(), &fresh.pos));
+    }
+
+    #[test]
+    fn every_part_count_sorts_alike() {
+        // Parts of at least `MIN_PART` rays each: one, two and three threads.
+        let rays = scattered(3 * MIN_PART + 17);
+        let mut one = Reordered::default();
+        assert!(one.sort(&rays, RayOrder::Direction, Some(1)).unwrap());
+        for threads in [2, 3] {
+            let mut more = Reordered::default();
+            assert!(more.sort(&rays, RayOrder::Direction, Some(threads)).unwrap());
+            assert!(more.rays() == one.rays() && more.pos == one.pos, "{threads} threads");
+            let ids: Vec<u32> = (0..rays.len() as u32).collect();
+            let mut back = Vec::new();
+            more.restore(&more.apply(&ids), &mut back, Some(threads)).unwrap();
+            assert_eq!(back, ids);
+        }
     }
 
     #[test]
     fn auto_sorts_scattered_rays_only() {
         let rays = scattered(5000);
         let mut r = Reordered::default();
-        assert!(r.sort(&rays, RayOrder::Auto));
-        assert!(!r.sort(&rays, RayOrder::Input));
+        assert!(r.sort(&rays, RayOrder::Auto, None).unwrap());
+        assert!(!r.sort(&rays, RayOrder::Input, None).unwrap());
         assert!(r.rays().is_empty(), "no batch held when traced as given");
-        assert!(!r.sort(&rays[..100], RayOrder::Auto), "a small batch");
+        assert!(!r.sort(&rays[..100], RayOrder::Auto, None).unwrap(), "a small batch");
         // A camera's rays: directions sweep smoothly, crossing a class boundary rarely.
         let eye: Vec<Ray> = (0..5000)
             .map(|i| ray(Vec3::new((i % 100) as f32 / 50.0 - 1.0, (i / 100) as f32 / 25.0 - 1.0, -1.0)))
             .collect();
-        assert!(!r.sort(&eye, RayOrder::Auto));
+        assert!(!r.sort(&eye, RayOrder::Auto, None).unwrap());
     }
 }
