@@ -123,7 +123,8 @@ def time_builds(rp, harness, mesh, name, tris_p, rays_p, tmp, a):
     return out
 
 
-def time_batch(rp, harness, tris_p, images, rays_k, query, embree_modes, threads, rounds, tmp, coherent=True):
+def time_batch(rp, harness, tris_p, images, rays_k, query, embree_modes, threads, rounds, tmp, coherent=True,
+               scattered=False):
     """Medians (Mrays/s) of raypipe's paths and Embree's `embree_modes` on one batch of
     rays, rounds interleaved, one core pinned if `threads` is 1; the best of each side;
     how many rays' answers differ. Returns (rays, medians, raypipe best, Embree best,
@@ -138,7 +139,7 @@ def time_batch(rp, harness, tris_p, images, rays_k, query, embree_modes, threads
             # The 8-wide BVH's packet walk is closest-hit only (its shadow packets would
             # go ray by ray).
             raypipe_modes += [(f"bvh8 packets of {p}", images["bvh8"], p, []) for p in ("16", "64")]
-    else:
+    if scattered or not coherent:
         # What `trace`'s reordering of incoherent rays buys: the same path in the file's
         # order.
         raypipe_modes += [("bvh8 single, input order", images["bvh8"], "1", ["--order", "input"])]
@@ -269,7 +270,8 @@ def main():
                 rays_k = os.path.join(tmp, f"{kind}.npy")
                 for threads in [int(t) for t in a.threads.split(",")]:
                     rows.append((name, kind, threads, *time_batch(rp, harness, tris_p, images, rays_k, query,
-                                                                  embree_modes, threads, a.rounds, tmp)))
+                                                                  embree_modes, threads, a.rounds, tmp,
+                                                                  scattered=kind == "bounce")))
             if "path" in a.kinds.split(","):
                 frames.extend(time_path(rp, harness, tris_p, images, cam, name, rows, tmp, a))
     print("| scene | rays | threads | raypipe best (Mrays/s) | Embree best (Mrays/s) | ratio | rays that differ |")

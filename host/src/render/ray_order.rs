@@ -8,8 +8,10 @@
 //! neighbours'. Finer keys (directions on a cube map of 4×4 or 8×8 cells per face, or an
 //! origin Morton code) traced no faster, and cost more to sort.
 //!
-//! Each ray's hit is the same, bit for bit, in any order: the walk of one ray reads
-//! nothing another ray wrote. The order changes only when each ray is traced.
+//! Each ray's answer is the same, bit for bit, in any order: a closest-hit walk reads
+//! nothing another ray wrote, and the shadow cache an any-hit ray may test first (the
+//! leaf that blocked an earlier ray) changes its work, never its answer. The order
+//! changes only when each ray is traced.
 
 use std::mem::MaybeUninit;
 
