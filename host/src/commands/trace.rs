@@ -1,8 +1,7 @@
 //! `raypipe trace`: traces a batch of rays from a file and writes their hits (or their
 //! occlusion), with the fields asked for.
 
-use crate::render::batch::BatchOptions;
-use crate::render::batch::{incoherent_share, read_rays};
+use crate::render::batch::{incoherent_share, read_rays, BatchOptions, BatchScratch};
 use crate::render::packets::PacketSize;
 use crate::render::ray_order::RayOrder;
 use crate::render::tracer::IntersectorKind;
@@ -176,7 +175,7 @@ pub(crate) fn cmd_trace(a: TraceArgs) -> Result<()> {
         Query::Closest => {
             // One output for all runs, as a caller tracing batch after batch keeps one:
             // only the first run pays for touching fresh pages.
-            let (mut hits, mut scratch) = (Vec::new(), crate::render::batch::BatchScratch::default());
+            let (mut hits, mut scratch) = (Vec::new(), BatchScratch::default());
             for _ in 0..a.runs {
                 let start = Instant::now();
                 crate::render::batch::trace_batch_into(&view, &rays, opts, &mut hits, &mut scratch)?;

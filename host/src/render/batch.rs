@@ -125,8 +125,8 @@ pub fn trace_batch(scene: &SceneView<'_>, rays: &[Ray], opts: BatchOptions) -> R
 /// where it is large enough: a caller tracing batch after batch keeps one output, and
 /// does not pay the first touch of fresh pages for every batch (16 bytes a ray; about
 /// 1.6 ms per million rays on this project's benchmark machine, a twentieth of a
-/// bunny's 8×8-packet trace).
-/// Single rays go in the order `opts.order` makes, through `scratch`'s buffers.
+/// bunny's 8×8-packet trace). Single rays go in the order `opts.order` makes, through
+/// `scratch`'s buffers, which the caller keeps likewise.
 pub fn trace_batch_into(
     scene: &SceneView<'_>,
     rays: &[Ray],
@@ -152,33 +152,35 @@ pub fn trace_batch_into(
 /// Whether each ray is blocked within its interval (the any-hit query of shadow rays),
 /// rays marked `invalid` reported unblocked. With packets, runs of `N` consecutive rays
 /// are traced as one packet (on the 4-wide BVH; ray by ray on the other structures).
+/// Single rays go in the order `opts.order` makes.
 pub fn occluded_batch(scene: &SceneView<'_>, rays: &[Ray], invalid: &[bool], opts: BatchOptions) -> Result<Vec<bool>> {
-    let (order, threads) = (opts.order, opts.threads);
+    let threads = opts.threads;
     with_intersector!(opts.kind, I => match opts.packet {
-        PacketSize::Single => occluded_with::<I, 1>(scene, rays, invalid, order, threads),
-        PacketSize::P4 => occluded_with::<I, 4>(scene, rays, invalid, order, threads),
-        PacketSize::P16 => occluded_with::<I, 16>(scene, rays, invalid, order, threads),
-        PacketSize::P64 => occluded_with::<I, 64>(scene, rays, invalid, order, threads),
+        PacketSize::Single => {
+            let mut order = Reordered::default();
+            if order.sort(rays, opts.order, threads)? {
+                let traced = occluded_with::<I, 1>(scene, order.rays(), &order.apply(invalid), threads)?;
+                let mut out = Vec::new();
+                order.restore(&traced, &mut out, threads)?;
+                return Ok(out);
+            }
+            occluded_with::<I, 1>(scene, rays, invalid, threads)
+        }
+        PacketSize::P4 => occluded_with::<I, 4>(scene, rays, invalid, threads),
+        PacketSize::P16 => occluded_with::<I, 16>(scene, rays, invalid, threads),
+        PacketSize::P64 => occluded_with::<I, 64>(scene, rays, invalid, threads),
     })
 }
 
-/// Chunks of `CHUNK` rays per task, each run of `N` rays one packet; single rays in
-/// the order `order` makes.
+/// Chunks of `CHUNK` rays per task, each run of `N` rays one packet.
 fn occluded_with<I: Intersector, const N: usize>(
     scene: &SceneView<'_>,
     rays: &[Ray],
     invalid: &[bool],
-    order: RayOrder,
     threads: Option<usize>,
 ) -> Result<Vec<bool>> {
     crate::platform::isa::report_cpu();
     let mut out = vec![false; rays.len()];
-    let mut r = Reordered::default();
-    if N == 1 && r.sort(rays, order, threads)? {
-        let traced = occluded_with::<I, 1>(scene, r.rays(), &r.apply(invalid), RayOrder::Input, threads)?;
-        r.restore(&traced, &mut out, threads)?;
-        return Ok(out);
-    }
     let chunks = out.chunks_mut(CHUNK).zip(rays.chunks(CHUNK)).zip(invalid.chunks(CHUNK));
     for_each_claimed(threads, chunks, |((out, chunk), bad)| {
         if N == 1 {
