@@ -98,6 +98,8 @@ fn incoherent(rays: &[Ray]) -> bool {
 #[derive(Debug, Default)]
 pub struct Reordered {
     rays: Vec<Ray>,
+    // Empty, or a permutation of `0 .. rays.len()`: only a sort that checked every range
+    // full leaves it filled (`by_class`), and `restore` relies on that.
     pos: Vec<u32>,
     classes: Vec<u8>,
 }
@@ -169,7 +171,7 @@ impl Reordered {
             .zip(rays.chunks(part).zip(self.classes.chunks(part)))
             .zip(self.pos.chunks_mut(part).zip(&start))
             .zip(filled.iter_mut());
-        for_each_claimed(Some(parts), work, |(((mut ranges, (rays, classes)), (pos, start)), fill)| {
+        let moved = for_each_claimed(Some(parts), work, |(((mut ranges, (rays, classes)), (pos, start)), fill)| {
             for ((r, &c), p) in rays.iter().zip(classes).zip(pos) {
                 let c = c as usize % CLASSES;
                 *p = (start[c] + fill[c]) as u32;
@@ -179,12 +181,12 @@ impl Reordered {
                     fill[c] += 1;
                 }
             }
-        })?;
+        });
         // Each part wrote as many rays of each class as its range holds, and the ranges
-        // tile `0 .. n`.
-        if filled != counts || sum != n || !rest.is_empty() {
+        // tile `0 .. n`; else (or if the threads did not run) no permutation is kept.
+        if moved.is_err() || filled != counts || sum != n || !rest.is_empty() {
             self.pos.clear();
-            return Ok(false);
+            return moved.map(|()| false);
         }
         // SAFETY: the capacity is at least `n` (reserved above), and the first `n` slots
         // are written: the ranges tile them, and each was filled to its length.
@@ -230,13 +232,11 @@ impl Reordered {
                 }
             }
         })?;
-        // Every position came from the sort, which checked it against the batch's length.
-        if self.pos.iter().all(|&p| (p as usize) < n) {
-            // SAFETY: the capacity is at least `n`, and each of the first `n` slots is
-            // written: the output's chunks pair with the positions' chunks of the same
-            // lengths, and every position is in range (checked just above).
-            unsafe { out.set_len(n) };
-        }
+        // SAFETY: the capacity is at least `n`, and each of the first `n` slots is written:
+        // the output's chunks pair with the positions' chunks of the same lengths, and
+        // every position is below `n` (`pos` holds a permutation of `0 .. n`, see its
+        // field), so `traced.get` finds each.
+        unsafe { out.set_len(n) };
         Ok(())
     }
 }
