@@ -3,7 +3,9 @@
 //! the helpers they share. The command-line suite lives in `host/tests/cli.rs`, because
 //! cargo tells only the binary's own package where the built `raypipe` is.
 
+pub mod hw_configs;
 pub mod instanced_soup;
+pub mod soup_rays;
 
 use std::path::{Path, PathBuf};
 
