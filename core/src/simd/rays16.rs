@@ -26,9 +26,10 @@ pub(crate) struct BoxLanes<'a> {
 
 /// The rays that enter each of `node`'s four boxes: box `k`'s in bits `16k .. 16k + 16`
 /// (one register returned: an array written lane by lane and read whole stalled the
-/// caller on the store).
+/// caller on the store). Lanes outside `live` may be left out: the AVX form skips a half
+/// of eight lanes without a live ray.
 #[inline(always)]
-pub(crate) fn boxes16(wide: Wide16, rays: &BoxLanes<'_>, node: &Bvh4Node) -> u64 {
+pub(crate) fn boxes16(wide: Wide16, rays: &BoxLanes<'_>, node: &Bvh4Node, live: u32) -> u64 {
     match wide {
         Wide16::Avx512(Avx512(())) => {
             // SAFETY: an `Avx512` token exists only where the CPU has AVX-512 F.
@@ -41,7 +42,7 @@ pub(crate) fn boxes16(wide: Wide16, rays: &BoxLanes<'_>, node: &Bvh4Node) -> u64
             // SAFETY: an `Avx` token exists only where the CPU has AVX.
             #[allow(unsafe_code)]
             unsafe {
-                boxes16_avx(rays, node)
+                boxes16_avx(rays, node, live)
             }
         }
     }
@@ -120,16 +121,24 @@ unsafe fn boxes16_avx512(rays: &BoxLanes<'_>, node: &Bvh4Node) -> u64 {
     )
 }
 
-/// [`boxes16`] with AVX: both halves in one call.
+/// [`boxes16`] with AVX: the halves with a ray of `live` in one call. (A packet's rays
+/// part ways as it descends: skipping the half without one took the bunny's shadow
+/// packets of 16 from 222 to 208 million instructions.)
 ///
 /// # Safety
 ///
 /// The CPU must support AVX.
 #[allow(unsafe_code)]
 #[target_feature(enable = "avx")]
-unsafe fn boxes16_avx(rays: &BoxLanes<'_>, node: &Bvh4Node) -> u64 {
-    // SAFETY: the caller's CPU supports AVX, as this function's contract requires.
-    unsafe { boxes8_avx(rays, node, 0) | boxes8_avx(rays, node, 1) }
+unsafe fn boxes16_avx(rays: &BoxLanes<'_>, node: &Bvh4Node, live: u32) -> u64 {
+    let mut out = 0;
+    for h in 0..2 {
+        if (live >> (8 * h)) & 0xFF != 0 {
+            // SAFETY: the caller's CPU supports AVX, as this function's contract requires.
+            out |= unsafe { boxes8_avx(rays, node, h) };
+        }
+    }
+    out
 }
 
 /// [`boxes16`]'s lanes `8h .. 8h + 8` with AVX (`h`: 0 or 1), in the same bits of the
