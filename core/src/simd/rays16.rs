@@ -121,9 +121,9 @@ unsafe fn boxes16_avx512(rays: &BoxLanes<'_>, node: &Bvh4Node) -> u64 {
     )
 }
 
-/// [`boxes16`] with AVX: the halves with a ray of `live` in one call. (A packet's rays
-/// part ways as it descends: skipping the half without one took the bunny's shadow
-/// packets of 16 from 222 to 208 million instructions.)
+/// [`boxes16`] with AVX, in one call: each half of eight lanes that holds a ray of
+/// `live`. (A packet's rays part ways as it descends: skipping a half without one took
+/// the bunny's shadow packets of 16 from 222 to 208 million instructions.)
 ///
 /// # Safety
 ///
