@@ -285,7 +285,7 @@ fn batch_matches_single(view: &SceneView<'_>, rays: &[Ray]) -> Result<(), TestCa
         reused.push(stale);
         // The any-hit batch, with every third ray marked invalid (reported unblocked).
         let invalid: Vec<bool> = (0..rays.len()).map(|i| i % 3 == 1).collect();
-        let blocked = occluded_batch(view, rays, &invalid, opts).unwrap();
+        let blocked = occluded_batch(view, rays, &invalid, opts, &mut scratch).unwrap();
         prop_assert_eq!(blocked.len(), rays.len());
         for ((r, b), bad) in rays.iter().zip(&blocked).zip(&invalid) {
             let hit = trace::<Watertight, _>(view, r, &mut NoProbe, &mut RayCounters::default());

@@ -186,10 +186,10 @@ pub(crate) fn cmd_trace(a: TraceArgs) -> Result<()> {
             (data, fields.iter().map(|f| f.descr()).collect::<Vec<_>>(), n_hit)
         }
         Query::Any => {
-            let mut blocked = Vec::new();
+            let (mut blocked, mut scratch) = (Vec::new(), BatchScratch::default());
             for _ in 0..a.runs {
                 let start = Instant::now();
-                blocked = crate::render::batch::occluded_batch(&view, &rays, &invalid, opts)?;
+                blocked = crate::render::batch::occluded_batch(&view, &rays, &invalid, opts, &mut scratch)?;
                 times.push(start.elapsed().as_secs_f64());
             }
             let n_hit = blocked.iter().filter(|b| **b).count();

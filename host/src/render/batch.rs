@@ -152,12 +152,19 @@ pub fn trace_batch_into(
 /// Whether each ray is blocked within its interval (the any-hit query of shadow rays),
 /// rays marked `invalid` reported unblocked. With packets, runs of `N` consecutive rays
 /// are traced as one packet (on the 4-wide BVH; ray by ray on the other structures).
-/// Single rays go in the order `opts.order` makes.
-pub fn occluded_batch(scene: &SceneView<'_>, rays: &[Ray], invalid: &[bool], opts: BatchOptions) -> Result<Vec<bool>> {
+/// Single rays go in the order `opts.order` makes, through `scratch`'s buffers, which a
+/// caller tracing batch after batch keeps (as for [`trace_batch_into`]).
+pub fn occluded_batch(
+    scene: &SceneView<'_>,
+    rays: &[Ray],
+    invalid: &[bool],
+    opts: BatchOptions,
+    scratch: &mut BatchScratch,
+) -> Result<Vec<bool>> {
     let threads = opts.threads;
     with_intersector!(opts.kind, I => match opts.packet {
         PacketSize::Single => {
-            let mut order = Reordered::default();
+            let order = &mut scratch.order;
             if order.sort(rays, opts.order, threads)? {
                 let traced = occluded_with::<I, 1>(scene, order.rays(), &order.apply(invalid), threads)?;
                 let mut out = Vec::new();
