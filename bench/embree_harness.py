@@ -132,8 +132,9 @@ def time_batch(rp, harness, tris_p, images, rays_k, query, embree_modes, threads
     n = len(np.load(rays_k, mmap_mode="r"))
     raypipe_modes = [(f"{acc} single", images[acc], "1", []) for acc in ("bvh4", "bvh8")]
     if coherent:
-        # The frustum packets are for coherent rays: on the bounce they run at 0.1
-        # Mrays/s (the bunny), and would take the run's whole time.
+        # The frustum packets are for coherent rays: a batch marked incoherent (the
+        # path-traced frame's secondary rays) leaves them out, where they ran at 0.1
+        # Mrays/s (the bunny) and would take the run's whole time.
         raypipe_modes += [(f"bvh4 packets of {p}", images["bvh4"], p, []) for p in ("16", "64")]
         if query == "closest":
             # The 8-wide BVH's packet walk is closest-hit only (its shadow packets would
